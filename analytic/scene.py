@@ -1,0 +1,854 @@
+"""Scene files: one TOML description drives every engine.
+
+A scene is data only: it is parsed with :mod:`tomllib` and validated into frozen dataclasses; nothing
+in it is ever evaluated. Every error is a :class:`ValueError` whose message starts with the dotted
+name of the offending field and shows the offending value, e.g.
+``masses.mass[1]: must be positive (got -3.0)``.
+
+Units are SI. Frames: vectors marked *body* are in BR's principal axes at its centre of mass C
+(the paper's xyz); vectors marked *inertial* are in XYZ with Z up. Quaternions are w-first.
+Mass and control indices in files are 1-based, as in the paper (masses 1, 2, 4 of Example 2); the
+loaded records hold 0-based indices.
+
+See ``validation/scenes/paper_example1.toml`` for a fully commented example of every table.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import tomllib
+import warnings
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from analytic.effects import (
+    CONTROL_EFFECTS,
+    Effect,
+    MjIntegrator,
+    ShapeKind,
+    SolverMethod,
+    SpringModel,
+    Weighting,
+)
+
+# Quaternion norm tolerances on load (issue 2): silently exact below, renormalised with a warning up
+# to the refusal bound, refused above it unless the scene asks to start off the manifold (Eq. 58).
+QUAT_NORMALISE_TOL = 1e-12
+QUAT_REFUSE_TOL = 1e-3
+# A reference-frame matrix may be rounded (the paper prints Eq. 63 to 4 digits, orthogonal to ~1e-4);
+# it is replaced by the nearest rotation, and refused when further than this from orthogonal.
+ROTATION_REFUSE_TOL = 1e-2
+AXIS_REFUSE_TOL = 1e-3
+
+
+def _frozen(a: np.ndarray) -> np.ndarray:
+    a = np.array(a, dtype=float)
+    a.setflags(write=False)
+    return a
+
+
+# ----------------------------------------------------------------------------------------------
+# Records
+# ----------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class BodyShape:
+    """Pictures of BR for viewers; massless, never used by the dynamics.
+
+    ``box_center`` (body, m) and ``box_rotation`` (body-from-box rotation, 3x3) place the box;
+    the hollow cylinder is centred on C with its axis along ``cylinder_axis`` (body). The rod runs
+    along ``a`` from ``d + rod_start·a`` for ``rod_length`` metres.
+    """
+
+    kind: ShapeKind = ShapeKind.NONE
+    box_half_sizes: np.ndarray = field(default_factory=lambda: _frozen(np.zeros(3)))
+    box_center: np.ndarray = field(default_factory=lambda: _frozen(np.zeros(3)))
+    box_rotation: np.ndarray = field(default_factory=lambda: _frozen(np.eye(3)))
+    cylinder_radius: float = 0.0
+    cylinder_length: float = 0.0
+    cylinder_thickness: float = 0.0
+    cylinder_axis: np.ndarray = field(default_factory=lambda: _frozen([1.0, 0.0, 0.0]))
+    rod_radius: float = 0.05
+    rod_start: float = 0.0
+    rod_length: float = 1.0
+
+
+@dataclass(frozen=True)
+class Body:
+    """The rigid body BR (body B plus rod R).
+
+    Attributes:
+        mass: ``m_BR``, kg.
+        inertia: principal moments ``J = diag(J_x, J_y, J_z)`` about C, kg·m², shape (3,).
+        shape: pictures only.
+    """
+
+    mass: float
+    inertia: np.ndarray
+    shape: BodyShape = field(default_factory=BodyShape)
+
+
+@dataclass(frozen=True)
+class Rod:
+    """The rod line along which the masses slide.
+
+    Attributes:
+        axis: unit vector ``a`` in body axes, shape (3,).
+        offset: ``d``, the vector from C to the reference point O' on the rod, body axes, m, shape (3,).
+    """
+
+    axis: np.ndarray
+    offset: np.ndarray
+
+
+@dataclass(frozen=True)
+class Masses:
+    """The n sliding masses.
+
+    Attributes:
+        mass: ``m``, kg, shape (n,).
+        p_e: equilibrium positions along the rod from O', m, shape (n,).
+        inertia: each mass's rotational inertia about its own centre, in body axes (the
+            ``P_iᵀ J_i P_i`` of Remark 1, Eq. 54), kg·m², shape (n, 3, 3); zeros for point masses.
+    """
+
+    mass: np.ndarray
+    p_e: np.ndarray
+    inertia: np.ndarray
+
+    @property
+    def n(self) -> int:
+        return int(self.mass.shape[0])
+
+
+@dataclass(frozen=True)
+class Springs:
+    """The n+1 spring elements of Eq. (38): spring i joins mass i-1 and mass i (0-based: spring 0
+    joins O'-side end and mass 0, spring n joins mass n-1 and the far end).
+
+    Attributes:
+        k_linear: ``k^l``, N/m, shape (n+1,).
+        k_cubic: ``k^n``, N/m³, shape (n+1,).
+    """
+
+    k_linear: np.ndarray
+    k_cubic: np.ndarray
+
+
+@dataclass(frozen=True)
+class InitialState:
+    """State at t = 0 in the paper's coordinates.
+
+    Attributes:
+        R, Rdot: position (m) and velocity (m/s) of C, inertial, shape (3,).
+        u: attitude quaternion (w first), body -> inertial, shape (4,).
+        omega: body-axis angular velocity, rad/s, shape (3,).
+        p, pdot: mass positions (m) and velocities (m/s) along the rod from O', shape (n,).
+    """
+
+    R: np.ndarray
+    Rdot: np.ndarray
+    u: np.ndarray
+    omega: np.ndarray
+    p: np.ndarray
+    pdot: np.ndarray
+
+    @property
+    def udot(self) -> np.ndarray:
+        """``u̇(0)`` from ``ω(0)``: ``u̇ = Hᵀω / (4|u|²)`` (= ¼Hᵀω for unit u; Eq. 12 inverted)."""
+        u = self.u
+        H = np.array(
+            [
+                [-u[1], u[0], u[3], -u[2]],
+                [-u[2], -u[3], u[0], u[1]],
+                [-u[3], u[2], -u[1], u[0]],
+            ]
+        )
+        return 2.0 * H.T @ self.omega / (4.0 * float(u @ u))
+
+    def q0(self) -> np.ndarray:
+        """``q(0) = [R, u, p]`` (Eq. 44), shape (n+7,)."""
+        return np.concatenate([self.R, self.u, self.p])
+
+    def qdot0(self) -> np.ndarray:
+        """``q̇(0) = [Ṙ, u̇, ṗ]``, shape (n+7,)."""
+        return np.concatenate([self.Rdot, self.udot, self.pdot])
+
+
+@dataclass(frozen=True)
+class Stabilization:
+    """Baumgarte parameters of the quaternion-norm constraint, Eq. (58): ``φ̈ + δ1 φ̇ + δ2 φ = 0``."""
+
+    delta1: float = 0.5
+    delta2: float = 8.0
+
+
+@dataclass(frozen=True)
+class OmegaTrack:
+    """Angular-velocity requirement ``ω̄_i(t) = b_i cos(σ_i t)`` (Eq. 76) on the chosen components.
+
+    Attributes:
+        components: 0-based body axes controlled (Remark 4), tuple of distinct ints in 0..2.
+        b: amplitudes, rad/s, shape (3,) (all three stored; only ``components`` are enforced).
+        sigma: frequencies, rad/s, shape (3,).
+        gain: the matrix ``P`` of Eq. (B6) for the velocity-level error ``e = Hu̇ - ω̄``, restricted to
+            ``components``, shape (k, k); ``γ I`` for the paper's Eq. (84).
+    """
+
+    components: tuple[int, ...]
+    b: np.ndarray
+    sigma: np.ndarray
+    gain: np.ndarray
+
+
+@dataclass(frozen=True)
+class MassTrack:
+    """Mass-position requirement ``p̄_i = p_e,i + l_i cos(λ_i t)`` (Eq. 75) for a subset of masses.
+
+    Attributes:
+        indices: 0-based indices of the controlled masses (Remark 4), shape (k,).
+        l: amplitudes, m, shape (k,).
+        lam: frequencies λ, rad/s, shape (k,).
+        alpha, beta: error-dynamics gains of Eq. (78), 1/s and 1/s², shape (k,).
+    """
+
+    indices: tuple[int, ...]
+    l: np.ndarray
+    lam: np.ndarray
+    alpha: np.ndarray
+    beta: np.ndarray
+
+
+@dataclass(frozen=True)
+class Control:
+    """Control requirements and the cost weighting of Appendix B."""
+
+    weighting: Weighting = Weighting.M_INV
+    omega: OmegaTrack | None = None
+    masses: MassTrack | None = None
+
+
+@dataclass(frozen=True)
+class ExternalTorque:
+    """A given body-axis torque (Remark 2): ``τ_g(t) = constant + amplitude·cos(frequency·t)``, N·m."""
+
+    constant: np.ndarray
+    amplitude: np.ndarray
+    frequency: float = 0.0
+
+    def at(self, t: float) -> np.ndarray:
+        return self.constant + self.amplitude * math.cos(self.frequency * t)
+
+
+@dataclass(frozen=True)
+class SolverSettings:
+    """Analytic-engine integration settings (scipy ``solve_ivp``)."""
+
+    method: SolverMethod = SolverMethod.DOP853
+    rtol: float = 1e-12
+    atol: float = 1e-13
+    max_step: float = math.inf
+
+
+@dataclass(frozen=True)
+class OutputSettings:
+    """Horizon and sampling shared by every engine."""
+
+    t_end: float = 20.0
+    rate: float = 100.0
+
+    def times(self) -> np.ndarray:
+        """Output times ``0, 1/rate, ..., t_end`` (t_end included), s."""
+        n = int(round(self.t_end * self.rate))
+        t = np.arange(n + 1) / self.rate
+        t[-1] = self.t_end
+        return t
+
+
+@dataclass(frozen=True)
+class MujocoSettings:
+    """MuJoCo-twin settings."""
+
+    integrator: MjIntegrator = MjIntegrator.RK4
+    timestep: float = 2.5e-4
+    spring_model: SpringModel = SpringModel.TENDON
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A validated scene. Build one with :func:`load_scene` or :func:`scene_from_dict`."""
+
+    name: str
+    description: str
+    effects: frozenset[Effect]
+    body: Body
+    rod: Rod
+    masses: Masses
+    springs: Springs
+    gravity: np.ndarray
+    initial: InitialState
+    stabilization: Stabilization
+    control: Control
+    external_torque: ExternalTorque | None
+    solver: SolverSettings
+    output: OutputSettings
+    mujoco: MujocoSettings
+    source: str = ""
+    extra: Mapping[str, Any] = field(default_factory=dict)
+
+    @property
+    def n(self) -> int:
+        """Number of sliding masses."""
+        return self.masses.n
+
+    def has(self, effect: Effect) -> bool:
+        return effect in self.effects
+
+    @property
+    def controlled(self) -> bool:
+        return bool(self.effects & CONTROL_EFFECTS)
+
+    def replace(self, **changes: Any) -> Scene:
+        """A copy with top-level fields replaced (e.g. ``output=OutputSettings(t_end=60)``)."""
+        return dataclasses.replace(self, **changes)
+
+    def with_effects(self, effects: set[Effect] | frozenset[Effect]) -> Scene:
+        """A copy with another effect set, validated like a loaded scene."""
+        new = dataclasses.replace(self, effects=frozenset(effects))
+        _check_effects_consistent(new)
+        return new
+
+
+# ----------------------------------------------------------------------------------------------
+# Reading helpers: every value passes through one of these, so every error names its field.
+# ----------------------------------------------------------------------------------------------
+
+
+class _Table:
+    """A TOML table being read: tracks its dotted path and which keys were consumed."""
+
+    def __init__(self, data: Any, path: str):
+        if not isinstance(data, Mapping):
+            raise ValueError(f"{path or 'scene'}: must be a table (got {data!r})")
+        self.data = data
+        self.path = path
+        self.used: set[str] = set()
+
+    def name(self, key: str) -> str:
+        return f"{self.path}.{key}" if self.path else key
+
+    def has(self, key: str) -> bool:
+        return key in self.data
+
+    def raw(self, key: str, default: Any = ...) -> Any:
+        self.used.add(key)
+        if key not in self.data:
+            if default is ...:
+                raise ValueError(f"{self.name(key)}: missing required key")
+            return default
+        return self.data[key]
+
+    def table(self, key: str, required: bool = True) -> _Table | None:
+        if key not in self.data:
+            if required:
+                raise ValueError(f"{self.name(key)}: missing required table")
+            self.used.add(key)
+            return None
+        return _Table(self.raw(key), self.name(key))
+
+    def number(self, key: str, default: Any = ..., *, positive=False, nonneg=False) -> float:
+        v = self.raw(key, default)
+        return _as_number(v, self.name(key), positive=positive, nonneg=nonneg)
+
+    def vector(self, key: str, length: int | None = None, default: Any = ..., **kw) -> np.ndarray:
+        v = self.raw(key, default)
+        return _as_vector(v, self.name(key), length, **kw)
+
+    def string(self, key: str, default: Any = ...) -> str:
+        v = self.raw(key, default)
+        if not isinstance(v, str):
+            raise ValueError(f"{self.name(key)}: must be a string (got {v!r})")
+        return v
+
+    def boolean(self, key: str, default: Any = ...) -> bool:
+        v = self.raw(key, default)
+        if not isinstance(v, bool):
+            raise ValueError(f"{self.name(key)}: must be true or false (got {v!r})")
+        return v
+
+    def enum(self, key: str, kind: type, default: Any = ...):
+        v = self.raw(key, default)
+        if isinstance(v, kind):
+            return v
+        try:
+            return kind(v)
+        except ValueError:
+            allowed = ", ".join(repr(e.value) for e in kind)
+            raise ValueError(f"{self.name(key)}: unknown value {v!r} (allowed: {allowed})") from None
+
+    def finish(self) -> None:
+        extra = sorted(set(self.data) - self.used)
+        if extra:
+            raise ValueError(f"{self.name(extra[0])}: unknown key (got {self.data[extra[0]]!r})")
+
+
+def _as_number(v: Any, name: str, *, positive=False, nonneg=False) -> float:
+    if isinstance(v, bool) or not isinstance(v, int | float):
+        raise ValueError(f"{name}: must be a number (got {v!r})")
+    x = float(v)
+    if not math.isfinite(x):
+        raise ValueError(f"{name}: must be finite (got {v!r})")
+    if positive and not x > 0:
+        raise ValueError(f"{name}: must be positive (got {v!r})")
+    if nonneg and not x >= 0:
+        raise ValueError(f"{name}: must be non-negative (got {v!r})")
+    return x
+
+
+def _as_vector(v: Any, name: str, length: int | None = None, *, positive=False, nonneg=False):
+    if isinstance(v, np.ndarray):
+        v = v.tolist()
+    if not isinstance(v, list | tuple):
+        raise ValueError(f"{name}: must be a list of numbers (got {v!r})")
+    if length is not None and len(v) != length:
+        raise ValueError(f"{name}: must have {length} entries (got {len(v)}: {v!r})")
+    out = [
+        _as_number(x, f"{name}[{i}]", positive=positive, nonneg=nonneg) for i, x in enumerate(v)
+    ]
+    return _frozen(np.array(out, dtype=float).reshape(len(out)))
+
+
+def _as_matrix(v: Any, name: str, rows: int, cols: int) -> np.ndarray:
+    if not isinstance(v, list | tuple) or len(v) != rows:
+        raise ValueError(f"{name}: must be a {rows}x{cols} list of rows (got {v!r})")
+    return _frozen(np.array([_as_vector(r, f"{name}[{i}]", cols) for i, r in enumerate(v)]))
+
+
+def _unit(v: np.ndarray, name: str) -> np.ndarray:
+    nrm = float(np.linalg.norm(v))
+    if nrm == 0.0:
+        raise ValueError(f"{name}: must be a nonzero vector (got {v.tolist()!r})")
+    if abs(nrm - 1.0) > AXIS_REFUSE_TOL:
+        raise ValueError(f"{name}: must be a unit vector (got norm {nrm!r} for {v.tolist()!r})")
+    # Printed axes are rounded (Example 1's a has |a| = 0.99997): normalised silently.
+    return _frozen(v / nrm)
+
+
+def _direction(v: np.ndarray, name: str) -> np.ndarray:
+    """Any nonzero vector, scaled to unit length (rotation axes)."""
+    nrm = float(np.linalg.norm(v))
+    if nrm == 0.0:
+        raise ValueError(f"{name}: must be a nonzero vector (got {v.tolist()!r})")
+    return _frozen(v / nrm)
+
+
+def _nearest_rotation(m: np.ndarray, name: str) -> np.ndarray:
+    """The rotation nearest ``m`` (polar decomposition); refuses a matrix far from one."""
+    U, s, Vt = np.linalg.svd(m)
+    if np.max(np.abs(s - 1.0)) > ROTATION_REFUSE_TOL or np.linalg.det(m) <= 0:
+        raise ValueError(f"{name}: must be a rotation matrix (singular values {s.tolist()!r})")
+    return U @ Vt
+
+
+def _indices(v: Any, name: str, upper: int) -> tuple[int, ...]:
+    """1-based indices in the file, 0-based in the record; distinct and in range."""
+    if not isinstance(v, list | tuple) or not v:
+        raise ValueError(f"{name}: must be a non-empty list of 1-based indices (got {v!r})")
+    out = []
+    for i, x in enumerate(v):
+        if isinstance(x, bool) or not isinstance(x, int) or not 1 <= x <= upper:
+            raise ValueError(f"{name}[{i}]: must be an integer in 1..{upper} (got {x!r})")
+        out.append(x - 1)
+    if len(set(out)) != len(out):
+        raise ValueError(f"{name}: indices must be distinct (got {v!r})")
+    return tuple(out)
+
+
+# ----------------------------------------------------------------------------------------------
+# Parsing
+# ----------------------------------------------------------------------------------------------
+
+
+def load_scene(path: str | Path) -> Scene:
+    """Read and validate a scene file (TOML). Raises ``ValueError`` naming the field on bad input."""
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise ValueError(f"scene: file not found (got {str(path)!r})") from None
+    except (IsADirectoryError, PermissionError, UnicodeDecodeError) as exc:
+        raise ValueError(f"scene: cannot read {str(path)!r} ({exc.__class__.__name__})") from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ValueError(f"scene: not valid TOML in {str(path)!r} ({exc})") from None
+    return scene_from_dict(data, source=str(p))
+
+
+def scene_from_dict(data: Mapping[str, Any], source: str = "") -> Scene:
+    """Validate a scene given as nested dicts (the parsed TOML)."""
+    top = _Table(data, "")
+
+    meta = top.table("scene")
+    name = meta.string("name")
+    description = meta.string("description", "")
+    effects_raw = meta.raw("effects")
+    if not isinstance(effects_raw, list):
+        raise ValueError(f"scene.effects: must be a list of effect names (got {effects_raw!r})")
+    effects = set()
+    for i, e in enumerate(effects_raw):
+        try:
+            effects.add(Effect(e))
+        except ValueError:
+            allowed = ", ".join(repr(x.value) for x in Effect)
+            raise ValueError(
+                f"scene.effects[{i}]: unknown effect {e!r} (allowed: {allowed})"
+            ) from None
+    meta.finish()
+
+    body = _parse_body(top.table("body"))
+    rod = _parse_rod(top.table("rod"))
+    masses = _parse_masses(top.table("masses", required=False), rod.axis)
+    n = masses.n
+    springs = _parse_springs(top.table("springs", required=False), n)
+
+    g_tab = top.table("gravity", required=False)
+    gravity = _frozen(np.array([0.0, 0.0, -9.81]))
+    if g_tab is not None:
+        gravity = g_tab.vector("vector", 3)
+        g_tab.finish()
+
+    initial = _parse_initial(top.table("initial"), n)
+
+    s_tab = top.table("stabilization", required=False)
+    stab = Stabilization()
+    if s_tab is not None:
+        stab = Stabilization(
+            delta1=s_tab.number("delta1", 0.5, nonneg=True),
+            delta2=s_tab.number("delta2", 8.0, nonneg=True),
+        )
+        s_tab.finish()
+
+    control = _parse_control(top.table("control", required=False), n)
+    ext = _parse_external_torque(top.table("external_torque", required=False))
+    solver = _parse_solver(top.table("solver", required=False))
+    output = _parse_output(top.table("output", required=False))
+    mj = _parse_mujoco(top.table("mujoco", required=False))
+
+    # Tables that later layers own (e.g. [thresholds]) are kept verbatim but must be tables.
+    extra = {}
+    for key in ("thresholds",):
+        if top.has(key):
+            extra[key] = dict(top.table(key).data)
+    top.finish()
+
+    scene = Scene(
+        name=name,
+        description=description,
+        effects=frozenset(effects),
+        body=body,
+        rod=rod,
+        masses=masses,
+        springs=springs,
+        gravity=gravity,
+        initial=initial,
+        stabilization=stab,
+        control=control,
+        external_torque=ext,
+        solver=solver,
+        output=output,
+        mujoco=mj,
+        source=source,
+        extra=extra,
+    )
+    _check_effects_consistent(scene)
+    return scene
+
+
+def _parse_body(t: _Table) -> Body:
+    mass = t.number("mass", positive=True)
+    inertia = t.vector("inertia", 3, positive=True)
+    j = np.sort(inertia)
+    if j[2] > j[0] + j[1] * (1 + 1e-12):
+        raise ValueError(
+            f"body.inertia: principal moments violate the triangle inequality (got {inertia.tolist()!r})"
+        )
+    shape = BodyShape()
+    st = t.table("shape", required=False)
+    if st is not None:
+        shape = _parse_shape(st)
+    t.finish()
+    return Body(mass=mass, inertia=inertia, shape=shape)
+
+
+def _parse_shape(t: _Table) -> BodyShape:
+    kind = t.enum("kind", ShapeKind)
+    kw: dict[str, Any] = {"kind": kind}
+    if kind is ShapeKind.BOX_AND_ROD:
+        kw["box_half_sizes"] = t.vector("box_half_sizes", 3, positive=True)
+        kw["box_center"] = t.vector("box_center", 3, _frozen(np.zeros(3)))
+        if t.has("box_rotation"):
+            kw["box_rotation"] = _frozen(
+                _nearest_rotation(
+                    _as_matrix(t.raw("box_rotation"), t.name("box_rotation"), 3, 3),
+                    t.name("box_rotation"),
+                )
+            )
+    elif kind is ShapeKind.HOLLOW_CYLINDER_AND_ROD:
+        kw["cylinder_radius"] = t.number("cylinder_radius", positive=True)
+        kw["cylinder_length"] = t.number("cylinder_length", positive=True)
+        kw["cylinder_thickness"] = t.number("cylinder_thickness", positive=True)
+        kw["cylinder_axis"] = _direction(t.vector("cylinder_axis", 3), t.name("cylinder_axis"))
+    if kind is not ShapeKind.NONE:
+        kw["rod_radius"] = t.number("rod_radius", 0.05, positive=True)
+        kw["rod_start"] = t.number("rod_start", 0.0)
+        kw["rod_length"] = t.number("rod_length", 1.0, positive=True)
+    t.finish()
+    return BodyShape(**kw)
+
+
+def _parse_rod(t: _Table) -> Rod:
+    axis = _unit(t.vector("axis", 3), t.name("axis"))
+    offset = t.vector("offset", 3)
+    t.finish()
+    return Rod(axis=axis, offset=offset)
+
+
+def _parse_masses(t: _Table | None, axis: np.ndarray) -> Masses:
+    if t is None:
+        z = _frozen(np.zeros(0))
+        return Masses(mass=z, p_e=z, inertia=_frozen(np.zeros((0, 3, 3))))
+    m = t.vector("mass", positive=True)
+    n = m.shape[0]
+    p_e = t.vector("p_e", n)
+    inertia = np.zeros((n, 3, 3))
+    has_ring = t.has("ring_radius")
+    has_axi = t.has("inertia_axial") or t.has("inertia_transverse")
+    has_full = t.has("inertia_body")
+    if has_ring + has_axi + has_full > 1:
+        raise ValueError(
+            f"{t.name('ring_radius')}: give one of ring_radius, inertia_axial/inertia_transverse, "
+            f"inertia_body (got {sorted(k for k in t.data if k.startswith(('ring', 'inertia')))!r})"
+        )
+    aa = np.outer(axis, axis)
+    if has_ring:
+        # A thin ring about the rod: axial m r², transverse m r²/2 -> m r²/2 (I + a aᵀ) (ERRATA, Eq. 62).
+        r = t.vector("ring_radius", n, nonneg=True)
+        inertia = (m * r**2 / 2)[:, None, None] * (np.eye(3) + aa)[None]
+    elif has_axi:
+        ia = t.vector("inertia_axial", n, nonneg=True)
+        it = t.vector("inertia_transverse", n, nonneg=True)
+        for i in range(n):
+            if ia[i] > 2 * it[i] * (1 + 1e-12):
+                raise ValueError(
+                    f"{t.name('inertia_axial')}[{i}]: exceeds twice the transverse moment "
+                    f"(got {ia[i]!r} > 2 x {it[i]!r})"
+                )
+        inertia = it[:, None, None] * (np.eye(3) - aa)[None] + ia[:, None, None] * aa[None]
+    elif has_full:
+        raw = t.raw("inertia_body")
+        if not isinstance(raw, list) or len(raw) != n:
+            raise ValueError(f"{t.name('inertia_body')}: must hold {n} 3x3 matrices (got {raw!r})")
+        for i, mat in enumerate(raw):
+            name = f"{t.name('inertia_body')}[{i}]"
+            J = _as_matrix(mat, name, 3, 3)
+            if not np.allclose(J, J.T, rtol=1e-12, atol=0):
+                raise ValueError(f"{name}: must be symmetric (got {J.tolist()!r})")
+            if np.min(np.linalg.eigvalsh(J)) < 0:
+                raise ValueError(f"{name}: must be positive semidefinite (got {J.tolist()!r})")
+            inertia[i] = J
+    t.finish()
+    return Masses(mass=m, p_e=p_e, inertia=_frozen(inertia))
+
+
+def _parse_springs(t: _Table | None, n: int) -> Springs:
+    if t is None:
+        z = _frozen(np.zeros(n + 1))
+        return Springs(k_linear=z, k_cubic=z)
+    kl = t.vector("k_linear", n + 1, _frozen(np.zeros(n + 1)), nonneg=True)
+    kn = t.vector("k_cubic", n + 1, _frozen(np.zeros(n + 1)), nonneg=True)
+    t.finish()
+    return Springs(k_linear=kl, k_cubic=kn)
+
+
+def _parse_initial(t: _Table, n: int) -> InitialState:
+    R = t.vector("R", 3, _frozen(np.zeros(3)))
+    Rdot = t.vector("Rdot", 3, _frozen(np.zeros(3)))
+    omega = t.vector("omega", 3, _frozen(np.zeros(3)))
+    p = t.vector("p", n) if n else _frozen(np.zeros(0))
+    pdot = t.vector("pdot", n, _frozen(np.zeros(n)))
+    u = _parse_attitude(t.table("attitude"))
+    t.finish()
+    return InitialState(R=R, Rdot=Rdot, u=u, omega=omega, p=p, pdot=pdot)
+
+
+def _parse_attitude(t: _Table) -> np.ndarray:
+    """Quaternion (w first) or axis-angle composed with a reference-from-principal rotation.
+
+    ``S(u(0)) = Rot(axis, angle) · reference_from_principal`` (ERRATA: Example 1 needs the principal
+    -> block rotation ``P`` of Eq. 63 here).
+    """
+    allow_off = t.boolean("allow_off_manifold", False)
+    if t.has("quaternion"):
+        for k in ("axis", "angle", "angle_deg", "reference_from_principal"):
+            if t.has(k):
+                raise ValueError(f"{t.name(k)}: give either quaternion or axis-angle, not both")
+        u = np.array(t.vector("quaternion", 4))
+        nrm = float(np.linalg.norm(u))
+        if nrm == 0.0:
+            raise ValueError(f"{t.name('quaternion')}: must be nonzero (got {u.tolist()!r})")
+        if not allow_off:
+            if abs(nrm - 1.0) > QUAT_REFUSE_TOL:
+                raise ValueError(
+                    f"{t.name('quaternion')}: norm {nrm!r} is off the unit sphere by more than "
+                    f"{QUAT_REFUSE_TOL} (set allow_off_manifold = true to start off it on purpose)"
+                )
+            if abs(nrm - 1.0) > QUAT_NORMALISE_TOL:
+                warnings.warn(
+                    f"{t.name('quaternion')}: norm {nrm!r} normalised to 1", stacklevel=4
+                )
+                u = u / nrm
+        t.finish()
+        return _frozen(u)
+    axis = _direction(t.vector("axis", 3), t.name("axis"))
+    if t.has("angle") and t.has("angle_deg"):
+        raise ValueError(f"{t.name('angle')}: give angle (rad) or angle_deg, not both")
+    if t.has("angle_deg"):
+        angle = math.radians(t.number("angle_deg"))
+    else:
+        angle = t.number("angle")
+    ref = np.eye(3)
+    if t.has("reference_from_principal"):
+        name = t.name("reference_from_principal")
+        ref = _nearest_rotation(_as_matrix(t.raw("reference_from_principal"), name, 3, 3), name)
+    t.finish()
+    if allow_off:
+        raise ValueError(f"{t.name('allow_off_manifold')}: only meaningful with a quaternion")
+    rot = Rotation.from_rotvec(axis * angle) * Rotation.from_matrix(ref)
+    u = rot.as_quat(scalar_first=True)
+    return _frozen(u / np.linalg.norm(u))
+
+
+def _parse_control(t: _Table | None, n: int) -> Control:
+    if t is None:
+        return Control()
+    weighting = t.enum("weighting", Weighting, Weighting.M_INV)
+    omega = None
+    ot = t.table("omega", required=False)
+    if ot is not None:
+        comps = (
+            _indices(ot.raw("components"), ot.name("components"), 3)
+            if ot.has("components")
+            else (0, 1, 2)
+        )
+        b = ot.vector("b", 3)
+        sigma = ot.vector("sigma", 3)
+        k = len(comps)
+        if ot.has("gamma") and ot.has("gain"):
+            raise ValueError(f"{ot.name('gain')}: give gamma or gain, not both")
+        if ot.has("gain"):
+            gain = _as_matrix(ot.raw("gain"), ot.name("gain"), k, k)
+            if not np.allclose(gain, gain.T, rtol=1e-12, atol=0) or np.min(
+                np.linalg.eigvalsh(gain)
+            ) <= 0:
+                raise ValueError(
+                    f"{ot.name('gain')}: must be symmetric positive definite (got {gain.tolist()!r})"
+                )
+        else:
+            gain = _frozen(ot.number("gamma", positive=True) * np.eye(k))
+        ot.finish()
+        omega = OmegaTrack(components=comps, b=b, sigma=sigma, gain=_frozen(gain))
+    masses = None
+    mt = t.table("masses", required=False)
+    if mt is not None:
+        if n == 0:
+            raise ValueError(f"{mt.path}: there are no masses to control (n = 0)")
+        idx = _indices(mt.raw("indices"), mt.name("indices"), n) if mt.has("indices") else tuple(
+            range(n)
+        )
+        k = len(idx)
+        masses = MassTrack(
+            indices=idx,
+            l=mt.vector("l", k),
+            lam=mt.vector("lambda", k),
+            alpha=mt.vector("alpha", k, positive=True),
+            beta=mt.vector("beta", k, positive=True),
+        )
+        mt.finish()
+    t.finish()
+    return Control(weighting=weighting, omega=omega, masses=masses)
+
+
+def _parse_external_torque(t: _Table | None) -> ExternalTorque | None:
+    if t is None:
+        return None
+    z = _frozen(np.zeros(3))
+    et = ExternalTorque(
+        constant=t.vector("constant", 3, z),
+        amplitude=t.vector("amplitude", 3, z),
+        frequency=t.number("frequency", 0.0),
+    )
+    t.finish()
+    return et
+
+
+def _parse_solver(t: _Table | None) -> SolverSettings:
+    if t is None:
+        return SolverSettings()
+    s = SolverSettings(
+        method=t.enum("method", SolverMethod, SolverMethod.DOP853),
+        rtol=t.number("rtol", 1e-12, positive=True),
+        atol=t.number("atol", 1e-13, positive=True),
+        max_step=t.number("max_step", positive=True) if t.has("max_step") else math.inf,
+    )
+    t.finish()
+    return s
+
+
+def _parse_output(t: _Table | None) -> OutputSettings:
+    if t is None:
+        return OutputSettings()
+    o = OutputSettings(
+        t_end=t.number("t_end", 20.0, positive=True), rate=t.number("rate", 100.0, positive=True)
+    )
+    t.finish()
+    return o
+
+
+def _parse_mujoco(t: _Table | None) -> MujocoSettings:
+    if t is None:
+        return MujocoSettings()
+    m = MujocoSettings(
+        integrator=t.enum("integrator", MjIntegrator, MjIntegrator.RK4),
+        timestep=t.number("timestep", 2.5e-4, positive=True),
+        spring_model=t.enum("spring_model", SpringModel, SpringModel.TENDON),
+    )
+    t.finish()
+    return m
+
+
+def _check_effects_consistent(scene: Scene) -> None:
+    """An effect that is on must have its data; control indices must fit n."""
+    e = scene.effects
+    if Effect.CONTROL_OMEGA in e and scene.control.omega is None:
+        raise ValueError("control.omega: effect 'control.omega' is on but [control.omega] is missing")
+    if Effect.CONTROL_MASSES in e and scene.control.masses is None:
+        raise ValueError(
+            "control.masses: effect 'control.masses' is on but [control.masses] is missing"
+        )
+    if Effect.EXTERNAL_TORQUE in e and scene.external_torque is None:
+        raise ValueError(
+            "external_torque: effect 'external_torque' is on but [external_torque] is missing"
+        )
+    if scene.control.masses is not None and max(scene.control.masses.indices) >= scene.n:
+        raise ValueError(
+            f"control.masses.indices: refer to masses beyond n = {scene.n} "
+            f"(got {[i + 1 for i in scene.control.masses.indices]!r})"
+        )
