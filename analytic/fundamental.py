@@ -1,0 +1,128 @@
+"""The fundamental equation of constrained motion (Udwadia-Kalaba), Eqs. (48), (74), (89), (B10).
+
+Given the unconstrained system ``M q̈ = Q`` (Eq. 50), the modeling constraint ``a_mᵀ q̈ = b_m``
+(Eqs. 56-59, one row) and control constraints ``A_c q̈ = b_c`` (Eqs. 80, 85, Remark 4), return the
+constrained acceleration and the generalized constraint/control force ``Q^C = M q̈ - Q``.
+
+Two properties are required here that the paper's printed form does not have:
+
+* **M may be singular along u.** A rigid body alone (n = 0, or every mass at C) has
+  ``M u = 0`` along the quaternion direction. Following Udwadia & Phohomsiri (Proc. R. Soc. A 462,
+  2006) / Udwadia & Schutte (2010), the modeling constraint is added to the mass matrix:
+  ``M_α = M + α a_m a_mᵀ``, ``Q_α = Q + α a_m b_m``. Because ``a_mᵀ q̈ = b_m`` always holds, this adds
+  zero to the equations of motion, and ``M_α`` is positive definite whenever ``[M; a_mᵀ]`` has full
+  column rank (the condition for the motion to be unique at all).
+* **A may be rank deficient** (redundant or conflicting requirements). The control constraints are
+  imposed on the system that already obeys the modeling constraint (its constrained compliance
+  ``K = M_α⁻¹ - y yᵀ/s``, ``y = M_α⁻¹ a_m``, ``s = a_mᵀ y``, is independent of α), and the
+  Moore-Penrose inverse gives the least-squares compromise; the part of ``A_c q̈ = b_c`` that cannot be
+  met is returned as ``residual``. The quaternion constraint is never traded against the control.
+
+For the cost ``J = Q_cᵀ N Q_c`` (Appendix B) with ``W = N⁻¹``, the control force on the
+norm-constrained system is ``Q_c = W Z (Zᵀ W Z)⁺ r`` with ``Z = K A_cᵀ`` and ``r = b_c - A_c a``
+(Eq. B10 restricted to the control rows); for ``N = M⁻¹`` (Gauss, ``W = M``) ``Zᵀ M Z = A_c K A_cᵀ``
+and this is Eq. (89). Only ``W`` is ever needed, so no weighting requires inverting M.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.linalg import cho_factor, cho_solve
+
+from analytic.effects import Weighting
+
+# Relative eigenvalue cut-off of the Moore-Penrose inverse of the (symmetric PSD) constraint Gram
+# matrix: eigenvalues below PINV_RCOND x the largest are treated as zero (rank deficiency). Round-off
+# in the Gram matrix is ~1e-16 x cond(M); 1e-10 separates a truly redundant requirement from a merely
+# ill-conditioned one for mass ratios up to ~1e6 (the hard-case range).
+PINV_RCOND = 1e-10
+
+
+@dataclass(frozen=True)
+class FundamentalSolution:
+    """Result of one evaluation of the fundamental equation.
+
+    Attributes:
+        qddot: constrained acceleration, shape (nq,).
+        QC: total generalized constraint force ``M q̈ - Q`` (the paper's Q^C of Eq. 89, including the
+            part along u from the norm constraint), shape (nq,).
+        lambda_m: multiplier of the modeling constraint alone (uncontrolled part), scalar.
+        residual: ``A_c q̈ - b_c``, the unattainable part of the control requirements, shape (k,).
+        rank: numerical rank of the control Gram matrix (k when every requirement is independent).
+    """
+
+    qddot: np.ndarray
+    QC: np.ndarray
+    lambda_m: float
+    residual: np.ndarray
+    rank: int
+
+
+def pinv_psd(G: np.ndarray, rcond: float = PINV_RCOND) -> tuple[np.ndarray, int]:
+    """Moore-Penrose inverse of a symmetric positive semidefinite matrix, and its numerical rank."""
+    w, V = np.linalg.eigh(G)
+    wmax = float(np.max(np.abs(w))) if w.size else 0.0
+    keep = w > rcond * wmax
+    inv = (V[:, keep] / w[keep]) @ V[:, keep].T
+    return inv, int(np.count_nonzero(keep))
+
+
+def solve(
+    M: np.ndarray,
+    Q: np.ndarray,
+    a_m: np.ndarray,
+    b_m: float,
+    A_c: np.ndarray,
+    b_c: np.ndarray,
+    weighting: Weighting = Weighting.M_INV,
+) -> FundamentalSolution:
+    """Constrained acceleration for ``M q̈ = Q`` under ``a_mᵀ q̈ = b_m`` and ``A_c q̈ = b_c``.
+
+    Args:
+        M: mass matrix, shape (nq, nq), symmetric PSD with ``[M; a_mᵀ]`` of full column rank.
+        Q: generalized force, shape (nq,).
+        a_m: modeling-constraint row, shape (nq,).
+        b_m: its right-hand side.
+        A_c: control rows, shape (k, nq), k >= 0.
+        b_c: their right-hand sides, shape (k,).
+        weighting: the cost matrix N of Appendix B.
+
+    Raises:
+        numpy.linalg.LinAlgError: when ``[M; a_mᵀ]`` is rank deficient (the motion is not unique).
+    """
+    nq = Q.shape[0]
+    alpha = np.trace(M) / nq
+    Ma = M + alpha * np.outer(a_m, a_m)
+    Qa = Q + (alpha * b_m) * a_m
+    c = cho_factor(Ma, lower=False, check_finite=False)
+    k = A_c.shape[0]
+    X = cho_solve(c, np.column_stack([Qa, a_m, A_c.T]), check_finite=False)
+    a0, y, Y = X[:, 0], X[:, 1], X[:, 2:]
+    s = float(a_m @ y)
+    lambda_m = (b_m - float(a_m @ a0)) / s
+    acc = a0 + lambda_m * y  # Eq. (60): the uncontrolled, norm-constrained acceleration
+    if k == 0:
+        return FundamentalSolution(acc, lambda_m * a_m, lambda_m, np.zeros(0), 0)
+
+    Ay = A_c @ y
+    Z = Y - np.outer(y, Ay / s)  # K A_cᵀ, shape (nq, k)
+    r = b_c - A_c @ acc
+    if weighting is Weighting.M_INV:
+        G = A_c @ Z  # A_c K A_cᵀ = Zᵀ M Z
+        Ginv, rank = pinv_psd(0.5 * (G + G.T))
+        mu = Ginv @ r
+        qddot = acc + Z @ mu
+        Qc = A_c.T @ mu  # applied control force; M K Qc differs from it only along a_m
+    else:
+        WZ = M @ (M @ Z) if weighting is Weighting.M_INV2 else Z  # W = N⁻¹: M² or I
+        G = Z.T @ WZ
+        Ginv, rank = pinv_psd(0.5 * (G + G.T))
+        Qc = WZ @ (Ginv @ r)
+        v = cho_solve(c, Qc, check_finite=False)
+        qddot = acc + v - y * (float(a_m @ v) / s)  # q̈ = a + K Q_c
+    # Q^C = M q̈ - Q = a_m λ_m + (I - a_m yᵀ/s) Q_c, assembled without cancellation.
+    QC = Qc + a_m * (lambda_m - float(y @ Qc) / s)
+    residual = A_c @ qddot - b_c
+    return FundamentalSolution(qddot, QC, lambda_m, residual, rank)

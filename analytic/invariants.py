@@ -1,0 +1,78 @@
+"""Invariants of the tumbling system and their balances (Sec. V, Fig. 8; ERRATA conventions).
+
+Computed from the state alone, in the paper's coordinates, for any engine's samples:
+
+* quaternion norm error ``e_u = uᵀu - 1``;
+* total linear momentum ``P = m_BR Ṙ + Σ m_i ṙ_i``;
+* total angular momentum about the system centre of mass ``c``, inertial:
+  ``L = S J ω + m_BR (R - c)×Ṙ + Σ m_i (r_i - c)×ṙ_i`` (J including the masses' own inertia
+  when that effect is on, Remark 1);
+* energy ``E = T + U`` with T of Eq. (45) and U of Eq. (46) restricted to the scene's effects.
+
+The paper's S(u) (Eq. 11) is used throughout, so on the unit sphere these are the physical values.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from analytic.effects import Effect
+from analytic.kinematics import S_batch, T_H
+from analytic.model import TumblingModel, spring_energy
+from analytic.trajectory import Invariants
+
+
+def mass_kinematics(model: TumblingModel, q: np.ndarray, qdot: np.ndarray):
+    """Inertial positions and velocities of the masses, shapes (N, n, 3) each, and S (N, 3, 3)."""
+    u, ud = q[:, 3:7], qdot[:, 3:7]
+    p, pd = q[:, 7:], qdot[:, 7:]
+    Sm = S_batch(u)
+    Sa = Sm @ model.a
+    Sd = Sm @ model.d
+    La_ud = np.einsum("rck,nk,nc->nr", model.T_a, u, ud)  # L_a u̇ = Ṡa
+    Ld_ud = np.einsum("rck,nk,nc->nr", model.T_d, u, ud)  # L_d u̇ = Ṡd
+    R, Rd = q[:, None, :3], qdot[:, None, :3]
+    r = R + p[:, :, None] * Sa[:, None, :] + Sd[:, None, :]  # Eq. (21)
+    rd = Rd + pd[:, :, None] * Sa[:, None, :] + p[:, :, None] * La_ud[:, None, :] + Ld_ud[:, None, :]
+    return r, rd, Sm
+
+
+def compute_invariants(
+    model: TumblingModel,
+    t: np.ndarray,
+    q: np.ndarray,
+    qdot: np.ndarray,
+    work: np.ndarray,
+    angular_impulse: np.ndarray,
+    linear_impulse: np.ndarray,
+) -> Invariants:
+    """Invariants for N samples. ``work`` (N,), impulses (N, 3) are integrals since t = 0."""
+    m, m_BR, m_T = model.m, model.m_BR, model.m_T
+    u, ud = q[:, 3:7], qdot[:, 3:7]
+    R, Rd = q[:, :3], qdot[:, :3]
+    r, rd, Sm = mass_kinematics(model, q, qdot)
+    omega = np.einsum("rck,nk,nc->nr", T_H, u, ud)
+
+    P = m_BR * Rd + np.einsum("i,nij->nj", m, rd)
+    c = (m_BR * R + np.einsum("i,nij->nj", m, r)) / m_T
+    L = np.einsum("nij,jk,nk->ni", Sm, model.J, omega)
+    L += m_BR * np.cross(R - c, Rd)
+    L += np.einsum("i,nij->nj", m, np.cross(r - c[:, None, :], rd))
+
+    T = 0.5 * m_BR * np.sum(Rd * Rd, axis=1) + 0.5 * np.einsum("ni,ij,nj->n", omega, model.J, omega)
+    T += 0.5 * np.einsum("i,nij,nij->n", m, rd, rd)
+    U = spring_energy(model, q[:, 7:])
+    P_expected = P[0] + linear_impulse
+    if model.scene.has(Effect.GRAVITY):
+        g = model.g
+        U = U - m_BR * (R @ g) - np.einsum("i,nij,j->n", m, r, g)
+        P_expected = P_expected + m_T * np.outer(t - t[0], g)
+    return Invariants(
+        quat_norm_error=np.sum(u * u, axis=1) - 1.0,
+        linear_momentum=P,
+        linear_momentum_expected=P_expected,
+        angular_momentum=L,
+        angular_impulse=angular_impulse,
+        energy=T + U,
+        work=work,
+    )

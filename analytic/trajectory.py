@@ -1,0 +1,186 @@
+"""One record type for the trajectories of every engine, so every comparison is engine-agnostic.
+
+All arrays are per output sample (N samples) in the paper's coordinates (Eq. 44):
+``q = [R (3), u (4, w first), p (n)]``. Units SI; frames as stated per field.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from dataclasses import asdict, dataclass, field
+from enum import StrEnum
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+
+class Engine(StrEnum):
+    ANALYTIC = "analytic"
+    MUJOCO = "mujoco"
+
+
+class RunStatus(StrEnum):
+    OK = "ok"
+    FAILED = "failed"
+
+
+@dataclass(frozen=True)
+class Invariants:
+    """Invariants and their balances per sample.
+
+    Attributes:
+        quat_norm_error: ``e_u = uᵀu - 1`` (the paper's measure), shape (N,).
+        linear_momentum: total linear momentum, inertial, kg·m/s, shape (N, 3).
+        linear_momentum_expected: ``P(0) + m_T g t + ∫F_C dt`` (gravity and a force at C), (N, 3).
+        angular_momentum: total angular momentum about the system centre of mass, inertial,
+            kg·m²/s, shape (N, 3).
+        angular_impulse: ``∫ S(u)(τ + τ_given) dt`` since t = 0, inertial, N·m·s, shape (N, 3).
+        energy: kinetic + gravitational + spring energy of the scene's effects, J, shape (N,).
+        work: work done by the control (``τ·ω + F·ṗ + F_C·Ṙ``) and the given torque since t = 0,
+            J, shape (N,).
+    """
+
+    quat_norm_error: np.ndarray
+    linear_momentum: np.ndarray
+    linear_momentum_expected: np.ndarray
+    angular_momentum: np.ndarray
+    angular_impulse: np.ndarray
+    energy: np.ndarray
+    work: np.ndarray
+
+    def angular_momentum_balance(self) -> np.ndarray:
+        """``L(t) - L(0) - ∫S τ dt``, shape (N, 3): zero for exact dynamics."""
+        return self.angular_momentum - self.angular_momentum[0] - self.angular_impulse
+
+    def energy_balance(self) -> np.ndarray:
+        """``E(t) - E(0) - W(t)``, shape (N,): zero for exact dynamics."""
+        return self.energy - self.energy[0] - self.work
+
+    def linear_momentum_balance(self) -> np.ndarray:
+        return self.linear_momentum - self.linear_momentum_expected
+
+
+@dataclass(frozen=True)
+class Tracking:
+    """Tracking errors of the controlled components (empty arrays when uncontrolled).
+
+    Attributes:
+        omega_components: 0-based body axes tracked.
+        e_omega: ``ω - ω̄`` on those axes, rad/s, shape (N, k_ω).
+        mass_indices: 0-based masses tracked.
+        e_p: ``p - p̄`` for those masses, m, shape (N, k_p).
+    """
+
+    omega_components: tuple[int, ...]
+    e_omega: np.ndarray
+    mass_indices: tuple[int, ...]
+    e_p: np.ndarray
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """A run of one scene on one engine.
+
+    Attributes:
+        engine: which plant produced it.
+        scene: the scene's name.
+        t: sample times, s, shape (N,).
+        q, qdot, qddot: coordinates and derivatives (Eq. 44), shape (N, n+7).
+        QC: generalized control force (Eq. 89), shape (N, n+7).
+        torque: body-axis control torque, N·m, shape (N, 3).
+        rod_forces: rod force on each mass, N, shape (N, n).
+        force_at_C: force at C, inertial, N, shape (N, 3).
+        residual_norm: norm of the unattainable part of the requirements, shape (N,).
+        invariants, tracking: see :class:`Invariants`, :class:`Tracking`.
+        status: ``ok`` or ``failed`` (a failed run keeps the samples it reached).
+        message: why it failed, or a note.
+        info: engine metadata (solver, tolerances, evaluation counts, wall time ...).
+    """
+
+    engine: Engine
+    scene: str
+    t: np.ndarray
+    q: np.ndarray
+    qdot: np.ndarray
+    qddot: np.ndarray
+    QC: np.ndarray
+    torque: np.ndarray
+    rod_forces: np.ndarray
+    force_at_C: np.ndarray
+    residual_norm: np.ndarray
+    invariants: Invariants
+    tracking: Tracking
+    status: RunStatus = RunStatus.OK
+    message: str = ""
+    info: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def n(self) -> int:
+        return self.q.shape[1] - 7
+
+    @property
+    def R(self) -> np.ndarray:
+        return self.q[:, :3]
+
+    @property
+    def u(self) -> np.ndarray:
+        return self.q[:, 3:7]
+
+    @property
+    def p(self) -> np.ndarray:
+        return self.q[:, 7:]
+
+    @property
+    def omega(self) -> np.ndarray:
+        """Body-axis angular velocity ``ω = H u̇``, rad/s, shape (N, 3)."""
+        from analytic.kinematics import omega_of
+
+        return omega_of(self.u, self.qdot[:, 3:7])
+
+    def to_arrays(self) -> dict[str, np.ndarray]:
+        """Flat name -> array mapping (for ``.npz``)."""
+        out = {
+            "t": self.t,
+            "q": self.q,
+            "qdot": self.qdot,
+            "qddot": self.qddot,
+            "QC": self.QC,
+            "torque": self.torque,
+            "rod_forces": self.rod_forces,
+            "force_at_C": self.force_at_C,
+            "residual_norm": self.residual_norm,
+            "omega": self.omega,
+            "e_omega": self.tracking.e_omega,
+            "e_p": self.tracking.e_p,
+        }
+        for k, v in asdict(self.invariants).items():
+            out[f"invariants.{k}"] = v
+        return out
+
+    def save_npz(self, path: str | Path) -> Path:
+        """Write the arrays and metadata atomically (temporary file, then rename)."""
+        path = Path(path)
+        meta = {
+            "engine": self.engine.value,
+            "scene": self.scene,
+            "status": self.status.value,
+            "message": self.message,
+            "info": self.info,
+            "omega_components": list(self.tracking.omega_components),
+            "mass_indices": list(self.tracking.mass_indices),
+        }
+        arrays = self.to_arrays()
+        arrays["meta_json"] = np.array(json.dumps(meta, default=str))
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+        try:
+            with os.fdopen(fd, "wb") as f:
+                np.savez(f, **arrays)
+            os.replace(tmp, path)
+        except BaseException:
+            Path(tmp).unlink(missing_ok=True)
+            raise
+        return path
