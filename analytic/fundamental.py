@@ -48,6 +48,8 @@ class FundamentalSolution:
         qddot: constrained acceleration, shape (nq,).
         QC: total generalized constraint force ``M q̈ - Q`` (the paper's Q^C of Eq. 89, including the
             part along u from the norm constraint), shape (nq,).
+        Qc: the applied control force alone (without the norm-constraint reaction), shape (nq,);
+            ``QC`` and ``Qc`` differ only along ``a_m``.
         lambda_m: multiplier of the modeling constraint alone (uncontrolled part), scalar.
         residual: ``A_c q̈ - b_c``, the unattainable part of the control requirements, shape (k,).
         rank: numerical rank of the control Gram matrix (k when every requirement is independent).
@@ -55,6 +57,7 @@ class FundamentalSolution:
 
     qddot: np.ndarray
     QC: np.ndarray
+    Qc: np.ndarray
     lambda_m: float
     residual: np.ndarray
     rank: int
@@ -104,7 +107,7 @@ def solve(
     lambda_m = (b_m - float(a_m @ a0)) / s
     acc = a0 + lambda_m * y  # Eq. (60): the uncontrolled, norm-constrained acceleration
     if k == 0:
-        return FundamentalSolution(acc, lambda_m * a_m, lambda_m, np.zeros(0), 0)
+        return FundamentalSolution(acc, lambda_m * a_m, np.zeros(nq), lambda_m, np.zeros(0), 0)
 
     Ay = A_c @ y
     Z = Y - np.outer(y, Ay / s)  # K A_cᵀ, shape (nq, k)
@@ -125,4 +128,4 @@ def solve(
     # Q^C = M q̈ - Q = a_m λ_m + (I - a_m yᵀ/s) Q_c, assembled without cancellation.
     QC = Qc + a_m * (lambda_m - float(y @ Qc) / s)
     residual = A_c @ qddot - b_c
-    return FundamentalSolution(qddot, QC, lambda_m, residual, rank)
+    return FundamentalSolution(qddot, QC, Qc, lambda_m, residual, rank)

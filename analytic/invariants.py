@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from analytic.effects import Effect
-from analytic.kinematics import S_batch, T_H
+from analytic.kinematics import T_H, S_batch
 from analytic.model import TumblingModel, spring_energy
 from analytic.trajectory import Invariants
 
@@ -33,7 +33,9 @@ def mass_kinematics(model: TumblingModel, q: np.ndarray, qdot: np.ndarray):
     Ld_ud = np.einsum("rck,nk,nc->nr", model.T_d, u, ud)  # L_d u̇ = Ṡd
     R, Rd = q[:, None, :3], qdot[:, None, :3]
     r = R + p[:, :, None] * Sa[:, None, :] + Sd[:, None, :]  # Eq. (21)
-    rd = Rd + pd[:, :, None] * Sa[:, None, :] + p[:, :, None] * La_ud[:, None, :] + Ld_ud[:, None, :]
+    rd = (
+        Rd + pd[:, :, None] * Sa[:, None, :] + p[:, :, None] * La_ud[:, None, :] + Ld_ud[:, None, :]
+    )
     return r, rd, Sm
 
 

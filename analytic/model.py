@@ -24,7 +24,7 @@ import numpy as np
 
 from analytic import fundamental
 from analytic.effects import Effect
-from analytic.kinematics import S, T_H, tensor_along
+from analytic.kinematics import T_H, S, tensor_along
 from analytic.scene import Scene
 
 
@@ -204,7 +204,9 @@ class TumblingModel:
         if self.n:
             Sa = k.Sa
             # -{(Sa)ᵀL̇_a u̇}(p∘m) - 2{(Sa)ᵀL_a u̇}(m∘ṗ) - {(Sa)ᵀL̇_d u̇}m, Eq. (52) third row
-            Q[7:] = -m * ((2.0 * float(Sa @ Lau)) * pd + float(Sa @ Lad_u) * k.p + float(Sa @ Ldd_u))
+            Q[7:] = -m * (
+                (2.0 * float(Sa @ Lau)) * pd + float(Sa @ Lad_u) * k.p + float(Sa @ Ldd_u)
+            )
         return Q
 
     def _q_gravity(self, t: float, k: _Kin, Q: np.ndarray) -> None:
@@ -257,7 +259,9 @@ class TumblingModel:
         u, ud = q[3:7], qdot[3:7]
         a_m = np.zeros(self.nq)
         a_m[3:7] = u
-        b_m = -self.delta1 * float(u @ ud) - 0.5 * self.delta2 * (float(u @ u) - 1.0) - float(ud @ ud)
+        b_m = (
+            -self.delta1 * float(u @ ud) - 0.5 * self.delta2 * (float(u @ u) - 1.0) - float(ud @ ud)
+        )
         return a_m, b_m
 
     def requirements(self, t: float) -> dict[str, np.ndarray]:
@@ -331,12 +335,12 @@ class TumblingModel:
         else:
             A_c, b_c = np.zeros((0, self.nq)), np.zeros(0)
         sol = fundamental.solve(M, Q, a_m, b_m, A_c, b_c, self.weighting)
-        QC = sol.QC
+        Qc = sol.Qc  # = QC up to the norm-constraint reaction along [0, u, 0], which H u = 0 removes
         ctrl = ControlOutput(
-            QC=QC,
-            torque=0.25 * (k.Hm @ QC[3:7]),  # τ = ¼ H Q^C_u (ERRATA: Q^C_u = Hᵀτ + c u)
-            rod_forces=QC[7:].copy(),
-            force_at_C=QC[:3].copy(),
+            QC=sol.QC,
+            torque=0.25 * (k.Hm @ Qc[3:7]),  # τ = ¼ H Q^C_u (ERRATA: Q^C_u = Hᵀτ + c u)
+            rod_forces=Qc[7:].copy(),
+            force_at_C=Qc[:3].copy(),
             residual=sol.residual,
             rank=sol.rank,
         )

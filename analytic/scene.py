@@ -266,7 +266,7 @@ class OutputSettings:
 
     def times(self) -> np.ndarray:
         """Output times ``0, 1/rate, ..., t_end`` (t_end included), s."""
-        n = int(round(self.t_end * self.rate))
+        n = round(self.t_end * self.rate)
         t = np.arange(n + 1) / self.rate
         t[-1] = self.t_end
         return t
@@ -391,7 +391,9 @@ class _Table:
             return kind(v)
         except ValueError:
             allowed = ", ".join(repr(e.value) for e in kind)
-            raise ValueError(f"{self.name(key)}: unknown value {v!r} (allowed: {allowed})") from None
+            raise ValueError(
+                f"{self.name(key)}: unknown value {v!r} (allowed: {allowed})"
+            ) from None
 
     def finish(self) -> None:
         extra = sorted(set(self.data) - self.used)
@@ -419,9 +421,7 @@ def _as_vector(v: Any, name: str, length: int | None = None, *, positive=False, 
         raise ValueError(f"{name}: must be a list of numbers (got {v!r})")
     if length is not None and len(v) != length:
         raise ValueError(f"{name}: must have {length} entries (got {len(v)}: {v!r})")
-    out = [
-        _as_number(x, f"{name}[{i}]", positive=positive, nonneg=nonneg) for i, x in enumerate(v)
-    ]
+    out = [_as_number(x, f"{name}[{i}]", positive=positive, nonneg=nonneg) for i, x in enumerate(v)]
     return _frozen(np.array(out, dtype=float).reshape(len(out)))
 
 
@@ -711,9 +711,7 @@ def _parse_attitude(t: _Table) -> np.ndarray:
                     f"{QUAT_REFUSE_TOL} (set allow_off_manifold = true to start off it on purpose)"
                 )
             if abs(nrm - 1.0) > QUAT_NORMALISE_TOL:
-                warnings.warn(
-                    f"{t.name('quaternion')}: norm {nrm!r} normalised to 1", stacklevel=4
-                )
+                warnings.warn(f"{t.name('quaternion')}: norm {nrm!r} normalised to 1", stacklevel=4)
                 u = u / nrm
         t.finish()
         return _frozen(u)
@@ -755,9 +753,10 @@ def _parse_control(t: _Table | None, n: int) -> Control:
             raise ValueError(f"{ot.name('gain')}: give gamma or gain, not both")
         if ot.has("gain"):
             gain = _as_matrix(ot.raw("gain"), ot.name("gain"), k, k)
-            if not np.allclose(gain, gain.T, rtol=1e-12, atol=0) or np.min(
-                np.linalg.eigvalsh(gain)
-            ) <= 0:
+            if (
+                not np.allclose(gain, gain.T, rtol=1e-12, atol=0)
+                or np.min(np.linalg.eigvalsh(gain)) <= 0
+            ):
                 raise ValueError(
                     f"{ot.name('gain')}: must be symmetric positive definite (got {gain.tolist()!r})"
                 )
@@ -770,8 +769,10 @@ def _parse_control(t: _Table | None, n: int) -> Control:
     if mt is not None:
         if n == 0:
             raise ValueError(f"{mt.path}: there are no masses to control (n = 0)")
-        idx = _indices(mt.raw("indices"), mt.name("indices"), n) if mt.has("indices") else tuple(
-            range(n)
+        idx = (
+            _indices(mt.raw("indices"), mt.name("indices"), n)
+            if mt.has("indices")
+            else tuple(range(n))
         )
         k = len(idx)
         masses = MassTrack(
@@ -838,7 +839,9 @@ def _check_effects_consistent(scene: Scene) -> None:
     """An effect that is on must have its data; control indices must fit n."""
     e = scene.effects
     if Effect.CONTROL_OMEGA in e and scene.control.omega is None:
-        raise ValueError("control.omega: effect 'control.omega' is on but [control.omega] is missing")
+        raise ValueError(
+            "control.omega: effect 'control.omega' is on but [control.omega] is missing"
+        )
     if Effect.CONTROL_MASSES in e and scene.control.masses is None:
         raise ValueError(
             "control.masses: effect 'control.masses' is on but [control.masses] is missing"
