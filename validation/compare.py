@@ -224,7 +224,8 @@ class Comparison:
             "t_end": float(self.t[-1]) if self.t.size else None,
             "checks": [c.to_dict() for c in self.checks],
             "summaries": {
-                s.key: {"label": s.label, "unit": s.unit, **s.summary.to_dict()} for s in self.series
+                s.key: {"label": s.label, "unit": s.unit, **s.summary.to_dict()}
+                for s in self.series
             },
             "notes": list(self.notes),
         }
@@ -269,7 +270,9 @@ def _common(a: Trajectory, b: Trajectory) -> int:
         return 0
     same = np.abs(a.t[:n] - b.t[:n]) <= TIME_MATCH_TOL * np.maximum(1.0, np.abs(a.t[:n]))
     if not same[0]:
-        raise ValueError(f"t: the two trajectories start at different times ({a.t[0]} vs {b.t[0]} s)")
+        raise ValueError(
+            f"t: the two trajectories start at different times ({a.t[0]} vs {b.t[0]} s)"
+        )
     return int(np.argmin(same)) if not same.all() else n
 
 
@@ -288,13 +291,33 @@ def difference_series(a: Trajectory, b: Trajectory) -> tuple[Series, ...]:
     D, S = Group.DIFFERENCE, Subject.BOTH
     rows = [
         ("position_C", "position of C |R_a − R_m|", "m", _norm(qa[:, :3] - qb[:, :3])),
-        ("attitude", "attitude angle of conj(u_a)⊗u_m", "rad", attitude_angle(qa[:, 3:7], qb[:, 3:7])),
+        (
+            "attitude",
+            "attitude angle of conj(u_a)⊗u_m",
+            "rad",
+            attitude_angle(qa[:, 3:7], qb[:, 3:7]),
+        ),
         ("rod_positions", "rod positions max_i |p_a − p_m|", "m", _maxabs(qa[:, 7:] - qb[:, 7:])),
         ("velocity_C", "velocity of C |Ṙ_a − Ṙ_m|", "m/s", _norm(va[:, :3] - vb[:, :3])),
-        ("rod_velocities", "rod velocities max_i |ṗ_a − ṗ_m|", "m/s", _maxabs(va[:, 7:] - vb[:, 7:])),
-        ("angular_velocity", "body angular velocity |ω_a − ω_m|", "rad/s", _norm(a.omega[:k] - b.omega[:k])),
+        (
+            "rod_velocities",
+            "rod velocities max_i |ṗ_a − ṗ_m|",
+            "m/s",
+            _maxabs(va[:, 7:] - vb[:, 7:]),
+        ),
+        (
+            "angular_velocity",
+            "body angular velocity |ω_a − ω_m|",
+            "rad/s",
+            _norm(a.omega[:k] - b.omega[:k]),
+        ),
         ("control_torque", "control torque |τ_a − τ_m|", "N·m", _norm(a.torque[:k] - b.torque[:k])),
-        ("rod_forces", "rod forces max_i |F_a − F_m|", "N", _maxabs(a.rod_forces[:k] - b.rod_forces[:k])),
+        (
+            "rod_forces",
+            "rod forces max_i |F_a − F_m|",
+            "N",
+            _maxabs(a.rod_forces[:k] - b.rod_forces[:k]),
+        ),
     ]
     return tuple(Series(f"diff.{n}", lab, u, D, S, t, v) for n, lab, u, v in rows)
 
@@ -335,7 +358,9 @@ def _tracking_law(traj: Trajectory, scene: Any) -> tuple[np.ndarray | None, np.n
         l, lam = np.asarray(mt.l)[pos], np.asarray(mt.lam)[pos]
         # p̄ = p_e + l cos(λ t) (Eq. 75), so ė(t0) = ṗ(t0) + l λ sin(λ t0).
         edot0 = traj.qdot[0, 7 + np.array(tr.mass_indices)] + l * lam * np.sin(lam * t[0])
-        ref = mass_error_reference(t, tr.e_p[0], edot0, np.asarray(mt.alpha)[pos], np.asarray(mt.beta)[pos])
+        ref = mass_error_reference(
+            t, tr.e_p[0], edot0, np.asarray(mt.alpha)[pos], np.asarray(mt.beta)[pos]
+        )
         dev_p = _maxabs(tr.e_p - ref)
     return dev_w, dev_p
 
@@ -388,9 +413,7 @@ def plant_series(traj: Trajectory, scene: Any = None) -> tuple[Series, ...]:
 # ----------------------------------------------------------------------------------------------
 
 
-def _bound_check(
-    th: Threshold, subject: Subject, series: Series, scale: float = 1.0
-) -> Check:
+def _bound_check(th: Threshold, subject: Subject, series: Series, scale: float = 1.0) -> Check:
     s = series.summary
     if th.relative:
         scale = max(float(scale), th.floor)
@@ -399,21 +422,40 @@ def _bound_check(
         scale = 1.0
         value = s.max
     passed = bool(np.isfinite(value) and value <= th.value)
-    return Check(th.name, subject, float(value), th.value, th.unit, passed, th.reason, series.key, scale, s.t_max)
+    return Check(
+        th.name,
+        subject,
+        float(value),
+        th.value,
+        th.unit,
+        passed,
+        th.reason,
+        series.key,
+        scale,
+        s.t_max,
+    )
 
 
 def _completed_check(traj: Trajectory, t_end: float | None) -> Check:
     reached = float(traj.t[-1]) if traj.t.size else math.nan
     horizon = float(t_end) if t_end is not None else reached
     ok = traj.status is RunStatus.OK and traj.t.size > 0 and reached >= horizon - TIME_MATCH_TOL
-    reason = "the run reached its horizon" if ok else f"the run did not finish: {traj.message or traj.status.value}"
+    reason = (
+        "the run reached its horizon"
+        if ok
+        else f"the run did not finish: {traj.message or traj.status.value}"
+    )
     return Check("completed", Subject(traj.engine.value), reached, horizon, "s", bool(ok), reason)
 
 
 def _scale_max(x: np.ndarray) -> float:
     if x.size == 0:
         return 0.0
-    v = _norm(x) if x.ndim == 2 and x.shape[1] > 1 else np.abs(x).reshape(x.shape[0], -1).max(axis=1)
+    v = (
+        _norm(x)
+        if x.ndim == 2 and x.shape[1] > 1
+        else np.abs(x).reshape(x.shape[0], -1).max(axis=1)
+    )
     return float(np.max(v)) if v.size else 0.0
 
 
@@ -449,21 +491,43 @@ def compare(
     for p in plants:
         checks.append(_completed_check(p, t_end))
         if p.status is not RunStatus.OK:
-            notes.append(f"{p.engine.value} run failed: {p.message} (compared up to t = {p.t[-1]:.6g} s)"
-                         if p.t.size else f"{p.engine.value} run failed before its first sample: {p.message}")
+            notes.append(
+                f"{p.engine.value} run failed: {p.message} (compared up to t = {p.t[-1]:.6g} s)"
+                if p.t.size
+                else f"{p.engine.value} run failed before its first sample: {p.message}"
+            )
 
     if mujoco is not None:
         diffs = difference_series(analytic, mujoco)
         series.extend(diffs)
         by = {s.name: s for s in diffs}
         k = by["position_C"].t.shape[0]
-        for name in ("position_C", "attitude", "rod_positions", "velocity_C", "rod_velocities", "angular_velocity"):
+        for name in (
+            "position_C",
+            "attitude",
+            "rod_positions",
+            "velocity_C",
+            "rod_velocities",
+            "angular_velocity",
+        ):
             checks.append(_bound_check(th[name], Subject.BOTH, by[name]))
-        checks.append(_bound_check(th["control_torque"], Subject.BOTH, by["control_torque"],
-                                   _scale_max(analytic.torque[:k])))
+        checks.append(
+            _bound_check(
+                th["control_torque"],
+                Subject.BOTH,
+                by["control_torque"],
+                _scale_max(analytic.torque[:k]),
+            )
+        )
         if analytic.n:
-            checks.append(_bound_check(th["rod_forces"], Subject.BOTH, by["rod_forces"],
-                                       _scale_max(analytic.rod_forces[:k])))
+            checks.append(
+                _bound_check(
+                    th["rod_forces"],
+                    Subject.BOTH,
+                    by["rod_forces"],
+                    float(np.max(np.abs(analytic.rod_forces[:k]), initial=0.0)),
+                )
+            )
     else:
         notes.append("no MuJoCo trajectory: only the analytic plant's own checks were made")
 
@@ -480,10 +544,19 @@ def compare(
             checks.append(_bound_check(th["tracking_p"], subj, by["e_p_law"]))
         inv = p.invariants
         checks.append(_bound_check(th["quat_norm"], subj, by["quat_norm"]))
-        checks.append(_bound_check(th["linear_momentum"], subj, by["linear_momentum"],
-                                   _scale_max(inv.linear_momentum)))
-        checks.append(_bound_check(th["angular_momentum"], subj, by["angular_momentum"],
-                                   _scale_max(inv.angular_momentum)))
+        checks.append(
+            _bound_check(
+                th["linear_momentum"], subj, by["linear_momentum"], _scale_max(inv.linear_momentum)
+            )
+        )
+        checks.append(
+            _bound_check(
+                th["angular_momentum"],
+                subj,
+                by["angular_momentum"],
+                _scale_max(inv.angular_momentum),
+            )
+        )
         e_scale = max(_scale_max(inv.energy), _scale_max(inv.work))
         checks.append(_bound_check(th["energy"], subj, by["energy"], e_scale))
 

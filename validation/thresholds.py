@@ -57,7 +57,9 @@ class Threshold:
     source: str = "default"
 
     def __post_init__(self) -> None:
-        if not (isinstance(self.value, int | float) and math.isfinite(self.value) and self.value >= 0):
+        if not (
+            isinstance(self.value, int | float) and math.isfinite(self.value) and self.value >= 0
+        ):
             raise ValueError(
                 f"thresholds.{self.name}: must be a finite non-negative number (got {self.value!r})"
             )
@@ -75,7 +77,9 @@ DEFAULTS: Mapping[str, Threshold] = {
     t.name: t
     for t in (
         # ---- analytic vs MuJoCo: the state ----
-        Threshold("position_C", 1e-6, "m", f"max |R_a - R_m| (position of C, inertial): {_RK4_DOP}"),
+        Threshold(
+            "position_C", 1e-6, "m", f"max |R_a - R_m| (position of C, inertial): {_RK4_DOP}"
+        ),
         Threshold(
             "attitude",
             1e-6,
@@ -175,7 +179,9 @@ DEFAULTS: Mapping[str, Threshold] = {
 }
 
 
-def thresholds_for(scene: Any = None, overrides: Mapping[str, Any] | None = None) -> dict[str, Threshold]:
+def thresholds_for(
+    scene: Any = None, overrides: Mapping[str, Any] | None = None
+) -> dict[str, Threshold]:
     """The thresholds in force for ``scene``: the defaults, replaced by the scene's ``[thresholds]``.
 
     Args:
@@ -220,8 +226,12 @@ def _override(base: Threshold, spec: Any) -> Threshold:
         raise ValueError(f"{name}: must be a number (got {spec!r})")
     if not (math.isfinite(spec) and spec >= 0):
         raise ValueError(f"{name}: must be a finite non-negative number (got {spec!r})")
-    return replace(base, value=float(spec), reason=f"{reason} (default {base.value:g}: {base.reason})",
-                   source="scene")
+    return replace(
+        base,
+        value=float(spec),
+        reason=f"{reason} (default {base.value:g}: {base.reason})",
+        source="scene",
+    )
 
 
 __all__ = ["DEFAULTS", "Threshold", "thresholds_for"]
