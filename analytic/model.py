@@ -335,7 +335,9 @@ class TumblingModel:
         else:
             A_c, b_c = np.zeros((0, self.nq)), np.zeros(0)
         sol = fundamental.solve(M, Q, a_m, b_m, A_c, b_c, self.weighting)
-        Qc = sol.Qc  # = QC up to the norm-constraint reaction along [0, u, 0], which H u = 0 removes
+        Qc = (
+            sol.Qc
+        )  # = QC up to the norm-constraint reaction along [0, u, 0], which H u = 0 removes
         ctrl = ControlOutput(
             QC=sol.QC,
             torque=0.25 * (k.Hm @ Qc[3:7]),  # τ = ¼ H Q^C_u (ERRATA: Q^C_u = Hᵀτ + c u)

@@ -682,7 +682,7 @@ def _parse_initial(t: _Table, n: int) -> InitialState:
     R = t.vector("R", 3, _frozen(np.zeros(3)))
     Rdot = t.vector("Rdot", 3, _frozen(np.zeros(3)))
     omega = t.vector("omega", 3, _frozen(np.zeros(3)))
-    p = t.vector("p", n) if n else _frozen(np.zeros(0))
+    p = t.vector("p", n) if n else t.vector("p", 0, _frozen(np.zeros(0)))
     pdot = t.vector("pdot", n, _frozen(np.zeros(n)))
     u = _parse_attitude(t.table("attitude"))
     t.finish()

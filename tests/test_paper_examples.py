@@ -49,9 +49,10 @@ def test_uncontrolled_momentum_and_energy_conserved(uncontrolled):
     assert rel_L <= th.DRIFT_UNCONTROLLED
     assert rel_E <= th.DRIFT_UNCONTROLLED
     # Linear momentum changes only by gravity: P(t) = P(0) + m_T g t (independent closed form).
-    assert np.max(np.abs(iv.linear_momentum_balance())) / np.max(
-        np.abs(iv.linear_momentum)
-    ) <= th.DRIFT_UNCONTROLLED
+    assert (
+        np.max(np.abs(iv.linear_momentum_balance())) / np.max(np.abs(iv.linear_momentum))
+        <= th.DRIFT_UNCONTROLLED
+    )
     # No control acts: the control outputs are exactly zero.
     assert not np.any(tr.torque) and not np.any(tr.rod_forces) and not np.any(tr.force_at_C)
 

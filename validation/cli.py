@@ -6,16 +6,22 @@ traceback. Outputs are written atomically.
 
 from __future__ import annotations
 
-import argparse
-import json
-import sys
-import warnings
-from pathlib import Path
+import os
 
-from analytic.effects import SolverMethod
-from analytic.trajectory import RunStatus
-from validation.progress import Progress
-from validation.scenes import DEFAULT_SIMULATE_SCENE, builtin_names, resolve_scene
+# Small dense matrices only: one BLAS thread (see tests/conftest.py for the measurement).
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import argparse  # noqa: E402
+import json  # noqa: E402
+import sys  # noqa: E402
+import warnings  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+from analytic.effects import SolverMethod  # noqa: E402
+from analytic.trajectory import RunStatus  # noqa: E402
+from validation.progress import Progress  # noqa: E402
+from validation.scenes import DEFAULT_SIMULATE_SCENE, builtin_names, resolve_scene  # noqa: E402
 
 EXIT_FAILED = 1  # a run or a check failed
 EXIT_USAGE = 2  # bad input (scene, arguments)
