@@ -2,7 +2,7 @@
 
 The state integrated is ``y = [q, q̇, W, I_L (3), I_P (3)]``: the paper's coordinates plus the work of
 the control and given torque (``Ẇ = τ·ω + F·ṗ + F_C·Ṙ + τ_g·ω``), the angular impulse of the
-external torques (``İ_L = S(u)(τ + τ_g)``) and the impulse of a force at C, so that the momentum
+external moments about the system centre of mass c (``İ_L = S(u)(τ + τ_g) + (R - c)×F_C``) and the impulse of a force at C, so that the momentum
 and energy balances are integrated to the same tolerance as the motion.
 
 Steps are taken one at a time with scipy's ``OdeSolver`` classes (what ``solve_ivp`` does
@@ -59,7 +59,11 @@ def _rhs(model: TumblingModel) -> Callable[[float, np.ndarray], np.ndarray]:
             + float(c.rod_forces @ qd[7:])
             + float(c.force_at_C @ qd[:3])
         )
-        out[2 * nq + 1 : 2 * nq + 4] = S(u) @ (c.torque + tau_g)
+        Sm = S(u)
+        # External moments about the system centre of mass c: the body torques, and a force at C
+        # acting at R, with R - c = -(Σ m_i (r_i - R))/m_T = -(μ1 Sa + μ0 Sd)/m_T.
+        R_minus_c = -(float(model.m @ q[7:]) * (Sm @ model.a) + model.mu0 * (Sm @ model.d)) / model.m_T
+        out[2 * nq + 1 : 2 * nq + 4] = Sm @ (c.torque + tau_g) + np.cross(R_minus_c, c.force_at_C)
         out[2 * nq + 4 : 2 * nq + 7] = c.force_at_C
         if not np.all(np.isfinite(out)):
             raise _NonFinite(f"non-finite acceleration at t = {t:.6g} s")

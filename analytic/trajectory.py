@@ -37,7 +37,8 @@ class Invariants:
         linear_momentum_expected: ``P(0) + m_T g t + ∫F_C dt`` (gravity and a force at C), (N, 3).
         angular_momentum: total angular momentum about the system centre of mass, inertial,
             kg·m²/s, shape (N, 3).
-        angular_impulse: ``∫ S(u)(τ + τ_given) dt`` since t = 0, inertial, N·m·s, shape (N, 3).
+        angular_impulse: ``∫ S(u)(τ + τ_given) + (R - c)×F_C dt`` since t = 0 (the external
+            moments about the system centre of mass c), inertial, N·m·s, shape (N, 3).
         energy: kinetic + gravitational + spring energy of the scene's effects, J, shape (N,).
         work: work done by the control (``τ·ω + F·ṗ + F_C·Ṙ``) and the given torque since t = 0,
             J, shape (N,).
