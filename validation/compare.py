@@ -554,7 +554,7 @@ def compare(
                 th["angular_momentum"],
                 subj,
                 by["angular_momentum"],
-                _scale_max(inv.angular_momentum),
+                max(_scale_max(inv.angular_momentum), _scale_max(inv.angular_impulse)),
             )
         )
         e_scale = max(_scale_max(inv.energy), _scale_max(inv.work))

@@ -161,7 +161,7 @@ DEFAULTS: Mapping[str, Threshold] = {
             "angular_momentum",
             1e-8,
             "1",
-            "max |L - L(0) - ∫S τ dt| / max |L|: angular momentum about the system CoM changes only "
+            "max |L - L(0) - ∫S τ dt| / max(|L|, |∫S τ dt|): angular momentum about the system CoM changes only "
             "by the impulse of the control torque; integration error ~1e-10 relative",
             relative=True,
             floor=1.0,  # kg·m²/s
