@@ -1,0 +1,77 @@
+"""MuJoCo's process-global callbacks, installed only for the duration of a ``with`` block.
+
+MuJoCo 4.0 (../shared/notes/mujoco-4.md): Python ``mjcb_*`` callbacks are global, compiling a model
+fails while one is installed, and with RK4 ``mjcb_control`` / ``mjcb_act_bias`` run at each of the
+four stages (a force computed there keeps RK4 fourth order; one set once per step is first order).
+:class:`installed` sets them after the model has been compiled and always removes them, also when
+the body of the ``with`` raises. Nesting is refused (two twins cannot share the global slots).
+"""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Callable
+
+import mujoco
+
+_lock = threading.Lock()
+_active = False
+
+
+def spring_user_bias(m: mujoco.MjModel, d: mujoco.MjData, i: int) -> float:
+    """``mjcb_act_bias`` for the spring actuators of :mod:`model_xml.builder`: the affine part
+    ``b0 + b1 L`` plus the cubic term ``b3 (L - b4)³`` (``b = actuator_biasprm[i]``), N."""
+    b = m.actuator_biasprm[i]
+    L = d.actuator_length[i]
+    x = L - b[4]
+    return float(b[0] + b[1] * L + b[2] * d.actuator_velocity[i] + b[3] * x * x * x)
+
+
+class installed:
+    """Context manager: ``with installed(control=f, act_bias=g): mj_step(...)``.
+
+    Args:
+        control: ``f(model, data)`` for ``mjcb_control`` or None.
+        act_bias: ``g(model, data, actuator_id) -> float`` for ``mjcb_act_bias`` or None.
+    """
+
+    def __init__(
+        self,
+        control: Callable[[mujoco.MjModel, mujoco.MjData], None] | None = None,
+        act_bias: Callable[[mujoco.MjModel, mujoco.MjData, int], float] | None = None,
+    ):
+        self.control = control
+        self.act_bias = act_bias
+
+    def __enter__(self) -> installed:
+        global _active
+        with _lock:
+            if _active:
+                raise RuntimeError("mj_bridge callbacks are already installed (they are global)")
+            _active = True
+        try:
+            if self.control is not None:
+                mujoco.set_mjcb_control(self.control)
+            if self.act_bias is not None:
+                mujoco.set_mjcb_act_bias(self.act_bias)
+        except BaseException:
+            self._remove()
+            raise
+        return self
+
+    def _remove(self) -> None:
+        global _active
+        try:
+            mujoco.set_mjcb_control(None)
+            mujoco.set_mjcb_act_bias(None)
+        finally:
+            with _lock:
+                _active = False
+
+    def __exit__(self, *exc) -> None:
+        self._remove()
+
+
+def any_installed() -> bool:
+    """Whether a MuJoCo control or act-bias callback is currently set (any source)."""
+    return mujoco.get_mjcb_control() is not None or mujoco.get_mjcb_act_bias() is not None

@@ -1,0 +1,340 @@
+"""A compiled MuJoCo twin of one scene: state maps, forward dynamics in paper coordinates, the
+analytic controller inside MuJoCo's integrator, and the same law computed from MuJoCo's matrices.
+
+Notation as in the paper (Koganti & Udwadia 2017) for paper quantities; MuJoCo names for MuJoCo's.
+Frames: ``τ`` (torque) and ``ω`` in the paper's body axes (BR's principal axes at C); MuJoCo's
+``qvel[3:6]`` is in BR's *MuJoCo body frame*, rotated from those by ``iquat`` (identity unless a
+:class:`model_xml.BodyFrame` was given).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import StrEnum
+
+import mujoco
+import numpy as np
+
+from analytic.effects import Effect, MjIntegrator, SpringModel, Weighting
+from analytic.model import ControlOutput, TumblingModel
+from analytic.scene import Scene
+from mj_bridge.callbacks import installed, spring_user_bias
+from model_xml import (
+    BODY,
+    TORQUE_ACTUATORS,
+    BodyFrame,
+    build_spec,
+    force_actuator_name,
+    spring_actuator_name,
+    spring_tendons,
+)
+from model_xml.builder import _INTEGRATORS
+from model_xml.rotations import quat_to_mat
+from model_xml.state import mujoco_to_paper_acc, mujoco_to_paper_state, paper_to_mujoco_state
+
+
+class ControllerSource(StrEnum):
+    """Which implementation of the (same) control law drives the MuJoCo plant."""
+
+    ANALYTIC = "analytic"
+    """``analytic.TumblingModel.acceleration`` at MuJoCo's state (the paper's Eq. 89)."""
+    MUJOCO = "mujoco"
+    """Udwadia–Kalaba from MuJoCo's own ``M`` and forces (Gauss weighting only)."""
+
+
+@dataclass(frozen=True)
+class MjControl:
+    """The control law evaluated from MuJoCo's matrices at one state.
+
+    Attributes:
+        torque: body-axis control torque, N·m, shape (3,).
+        rod_forces: force along the rod on each mass, N, shape (n,).
+        qacc: MuJoCo's controlled acceleration (MuJoCo coordinates), shape (n+6,).
+        residual: ``A qacc - b``, the unattainable part of the requirements, shape (k,).
+    """
+
+    torque: np.ndarray
+    rod_forces: np.ndarray
+    qacc: np.ndarray
+    residual: np.ndarray
+
+
+class _Accumulator:
+    """Work and impulse integrals accumulated per integrator stage with the scheme's weights."""
+
+    def __init__(self, weights: tuple[float, ...]):
+        self.weights = weights
+        self.h = 0.0
+        self.active = False
+        self.calls = 0
+        self.work = 0.0
+        self.angular_impulse = np.zeros(3)
+        self.linear_impulse = np.zeros(3)
+
+    def add(self, power: float, torque_world: np.ndarray, force: np.ndarray) -> None:
+        w = self.h * self.weights[self.calls % len(self.weights)]
+        self.calls += 1
+        self.work += w * power
+        self.angular_impulse += w * torque_world
+        self.linear_impulse += w * force
+
+
+_STAGE_WEIGHTS = {
+    MjIntegrator.RK4: (1 / 6, 1 / 3, 1 / 3, 1 / 6),
+    MjIntegrator.EULER: (1.0,),
+    MjIntegrator.IMPLICIT: (1.0,),
+    MjIntegrator.IMPLICITFAST: (1.0,),
+}
+
+
+class Twin:
+    """The scene's MuJoCo model and data, plus the analytic model of the same scene.
+
+    Args:
+        scene: a validated scene.
+        integrator: overrides ``scene.mujoco.integrator``.
+        dt: overrides ``scene.mujoco.timestep``, s.
+        body_frame: BR's MuJoCo body frame relative to C (default: at C).
+        controller: which implementation of the control law runs in the callback.
+    """
+
+    def __init__(
+        self,
+        scene: Scene,
+        integrator: MjIntegrator | str | None = None,
+        dt: float | None = None,
+        body_frame: BodyFrame | None = None,
+        controller: ControllerSource | str = ControllerSource.ANALYTIC,
+    ):
+        self.scene = scene
+        self.integrator = _as_enum(
+            MjIntegrator,
+            scene.mujoco.integrator if integrator is None else integrator,
+            "integrator",
+        )
+        self.controller = _as_enum(ControllerSource, controller, "controller")
+        self.dt = float(scene.mujoco.timestep if dt is None else dt)
+        if not (np.isfinite(self.dt) and self.dt > 0):
+            raise ValueError(f"dt: must be a positive finite time step in s (got {dt!r})")
+        self.model = TumblingModel(scene)
+        self.n = scene.n
+        self.m = build_spec(scene, body_frame).compile()
+        self.m.opt.integrator = int(_INTEGRATORS[self.integrator])
+        self.m.opt.timestep = self.dt
+        self.d = mujoco.MjData(self.m)
+        self.body_id = self.m.body(BODY).id
+        self.ipos = self.m.body_ipos[self.body_id].copy()
+        self.iquat = self.m.body_iquat[self.body_id].copy()
+        self.R_I = quat_to_mat(self.iquat)  # paper body axes -> MuJoCo body frame
+        self.controlled = scene.controlled
+        self.has_torque = scene.has(Effect.EXTERNAL_TORQUE)
+        if self.controller is ControllerSource.MUJOCO and self.controlled:
+            if scene.control.weighting is not Weighting.M_INV:
+                raise ValueError(
+                    "control.weighting: the MuJoCo-coordinate Udwadia–Kalaba law is implemented for "
+                    f"Gauss's weighting M^-1 only (coordinate-invariant); got {scene.control.weighting.value!r}"
+                )
+        self.torque_ids = (
+            np.array([self.m.actuator(nm).id for nm in TORQUE_ACTUATORS])
+            if (self.controlled or self.has_torque)
+            else None
+        )
+        self.force_ids = (
+            np.array([self.m.actuator(force_actuator_name(i)).id for i in range(self.n)], dtype=int)
+            if self.controlled
+            else None
+        )
+        tendons = spring_tendons(scene)
+        self.spring_act_ids = (
+            np.array(
+                [self.m.actuator(spring_actuator_name(j)).id for j in range(len(tendons))],
+                dtype=int,
+            )
+            if scene.mujoco.spring_model is SpringModel.ACTUATOR
+            else np.zeros(0, dtype=int)
+        )
+        self.needs_act_bias = any(sp.k_cubic != 0.0 for sp in tendons) and len(self.spring_act_ids)
+        self.needs_control_cb = self.controlled or self.has_torque
+        self.acc = _Accumulator(_STAGE_WEIGHTS[self.integrator])
+        self.last_control: ControlOutput | None = None
+        self._M = np.zeros((self.m.nv, self.m.nv))
+
+    # ------------------------------------------------------------------------------------------
+    # State
+    # ------------------------------------------------------------------------------------------
+
+    def to_mujoco(self, q: np.ndarray, qdot: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Paper ``(q, q̇)`` -> ``(qpos, qvel)`` of this model."""
+        return paper_to_mujoco_state(q, qdot, self.ipos, self.iquat)
+
+    def to_paper(self, qpos: np.ndarray, qvel: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(qpos, qvel)`` -> paper ``(q, q̇)``."""
+        return mujoco_to_paper_state(qpos, qvel, self.ipos, self.iquat)
+
+    def set_state(self, t: float, q: np.ndarray, qdot: np.ndarray) -> None:
+        qpos, qvel = self.to_mujoco(q, qdot)
+        self.d.qpos[:] = qpos
+        self.d.qvel[:] = qvel
+        self.d.time = float(t)
+
+    def state(self) -> tuple[np.ndarray, np.ndarray]:
+        return self.to_paper(self.d.qpos, self.d.qvel)
+
+    def callbacks(self) -> installed:
+        """The context manager installing this twin's callbacks (control, user bias) as needed."""
+        return installed(
+            control=self._control_callback if self.needs_control_cb else None,
+            act_bias=spring_user_bias if self.needs_act_bias else None,
+        )
+
+    # ------------------------------------------------------------------------------------------
+    # The controller inside MuJoCo's integrator
+    # ------------------------------------------------------------------------------------------
+
+    def _write_controls(self, torque: np.ndarray, rod: np.ndarray, force_C: np.ndarray) -> None:
+        d = self.d
+        if self.torque_ids is not None:
+            d.ctrl[self.torque_ids] = torque
+        if self.force_ids is not None:
+            d.ctrl[self.force_ids] = rod
+            d.xfrc_applied[self.body_id, :3] = force_C  # world force at C (zero for Gauss)
+
+    def _control_callback(self, m: mujoco.MjModel, d: mujoco.MjData) -> None:
+        t = d.time
+        q, qd = mujoco_to_paper_state(d.qpos, d.qvel, self.ipos, self.iquat)
+        tau_g = self.model.given_torque(t)
+        if self.controlled:
+            if self.controller is ControllerSource.ANALYTIC:
+                _, c = self.model.acceleration(t, q, qd)
+                self.last_control = c
+                tau, rod, fC = c.torque, c.rod_forces, c.force_at_C
+            else:
+                mc = self._uk_from_data(t, in_callback=True)
+                tau, rod, fC = mc.torque, mc.rod_forces, np.zeros(3)
+                self.last_control = ControlOutput(
+                    QC=np.zeros(self.n + 7), torque=tau, rod_forces=rod, force_at_C=fC,
+                    residual=mc.residual, rank=len(mc.residual),
+                )  # fmt: skip
+        else:
+            tau, rod, fC = np.zeros(3), np.zeros(self.n), np.zeros(3)
+        tau_tot = tau + tau_g
+        self._write_controls(tau_tot, rod, fC)
+        if self.acc.active:
+            omega = self.R_I.T @ d.qvel[3:6]
+            power = float(tau_tot @ omega) + float(rod @ qd[7:]) + float(fC @ qd[:3])
+            self.acc.add(power, quat_to_mat(q[3:7]) @ tau_tot, fC)
+
+    # ------------------------------------------------------------------------------------------
+    # Pointwise evaluations
+    # ------------------------------------------------------------------------------------------
+
+    def forward(self, t: float, q: np.ndarray, qdot: np.ndarray) -> None:
+        """``mj_forward`` at a paper-coordinates state with the controller applied."""
+        self.set_state(t, q, qdot)
+        self.d.ctrl[:] = 0.0
+        self.d.xfrc_applied[:] = 0.0
+        with self.callbacks():
+            mujoco.mj_forward(self.m, self.d)
+
+    def acceleration(self, t: float, q: np.ndarray, qdot: np.ndarray) -> np.ndarray:
+        """MuJoCo's forward dynamics at a paper-coordinates state, as ``q̈`` (n+7) in paper
+        coordinates (controlled scenes: the analytic controller evaluated at that state)."""
+        self.forward(t, q, qdot)
+        return mujoco_to_paper_acc(self.d.qpos, self.d.qvel, self.d.qacc, self.ipos, self.iquat)
+
+    def mujoco_control(self, t: float, q: np.ndarray, qdot: np.ndarray) -> MjControl:
+        """Udwadia–Kalaba control from MuJoCo's ``mj_fullM`` and ``qfrc_passive − qfrc_bias`` in
+        MuJoCo's coordinates (no quaternion constraint there), at a paper-coordinates state."""
+        if not self.controlled:
+            raise ValueError(f"scene.effects: {self.scene.name!r} has no control effect")
+        if self.scene.control.weighting is not Weighting.M_INV:
+            raise ValueError(
+                "control.weighting: the MuJoCo-coordinate law is implemented for M^-1 only "
+                f"(got {self.scene.control.weighting.value!r})"
+            )
+        self.set_state(t, q, qdot)
+        d = self.d
+        d.ctrl[:] = 0.0
+        d.xfrc_applied[:] = 0.0
+        with installed(act_bias=spring_user_bias if self.needs_act_bias else None):
+            mujoco.mj_forward(self.m, d)
+            return self._uk_from_data(t, in_callback=False)
+
+    def _uk_from_data(self, t: float, in_callback: bool) -> MjControl:
+        m, d = self.m, self.d
+        nv = m.nv
+        mujoco.mj_fullM(m, d, self._M)
+        F = d.qfrc_passive - d.qfrc_bias
+        if len(self.spring_act_ids):
+            if in_callback:  # qfrc_actuator is computed after mjcb_control: springs only here
+                d.ctrl[:] = 0.0
+                mujoco.mj_fwdActuation(m, d)
+            F = F + d.qfrc_actuator
+        tau_g = self.model.given_torque(t)
+        F = F.copy()
+        F[3:6] += self.R_I @ tau_g
+        model = self.model
+        req = model.requirements(t)
+        rows, rhs = [], []
+        omega = self.R_I.T @ d.qvel[3:6]
+        if model.omega_track:
+            c = model._w_comps
+            gain = model.omega_track.gain
+            e = omega[c] - req["omega_bar"]
+            b_w = req["omega_bar_dot"] - gain @ e  # Eq. (84) / (B8)
+            for j, comp in enumerate(c):
+                row = np.zeros(nv)
+                row[3:6] = self.R_I.T[comp]  # ω̇_comp = (R_Iᵀ qacc[3:6])_comp
+                rows.append(row)
+                rhs.append(b_w[j])
+        if model.mass_track:
+            mt = model.mass_track
+            idx = model._p_idx
+            p, pd = d.qpos[7 + idx], d.qvel[6 + idx]
+            b_p = (
+                req["p_bar_ddot"]
+                - mt.alpha * (pd - req["p_bar_dot"])
+                - mt.beta * (p - req["p_bar"])
+            )  # Eq. (81)
+            for j, i in enumerate(idx):
+                row = np.zeros(nv)
+                row[6 + i] = 1.0
+                rows.append(row)
+                rhs.append(b_p[j])
+        A = np.array(rows).reshape(len(rows), nv)
+        b = np.array(rhs)
+        X = np.vstack([F[None, :], A])
+        Y = np.empty_like(X)
+        mujoco.mj_solveM(m, d, Y, X)  # M⁻¹ [F, Aᵀ] with MuJoCo's own factorisation
+        a0, MinvAt = Y[0], Y[1:].T
+        G = A @ MinvAt
+        mu = np.linalg.lstsq(0.5 * (G + G.T), b - A @ a0, rcond=None)[0]
+        Qc = A.T @ mu
+        qacc = a0 + MinvAt @ mu
+        return MjControl(
+            torque=self.R_I.T @ Qc[3:6],
+            rod_forces=Qc[6:].copy(),
+            qacc=qacc,
+            residual=A @ qacc - b,
+        )
+
+
+def _as_enum(kind, value, name: str):
+    if isinstance(value, kind):
+        return value
+    try:
+        return kind(value)
+    except ValueError:
+        allowed = ", ".join(repr(e.value) for e in kind)
+        raise ValueError(f"{name}: unknown value {value!r} (allowed: {allowed})") from None
+
+
+def acceleration(scene: Scene, t: float, q: np.ndarray, qdot: np.ndarray) -> np.ndarray:
+    """MuJoCo's forward dynamics of ``scene`` at a paper-coordinates state, as paper ``q̈``."""
+    return Twin(scene).acceleration(t, q, qdot)
+
+
+def mujoco_control(scene: Scene, t: float, q: np.ndarray, qdot: np.ndarray) -> MjControl:
+    """The Udwadia–Kalaba control of ``scene`` from MuJoCo's own matrices (see
+    :meth:`Twin.mujoco_control`)."""
+    return Twin(scene).mujoco_control(t, q, qdot)

@@ -1,0 +1,109 @@
+"""Small w-first quaternion helpers shared by ``model_xml`` and ``mj_bridge``.
+
+Conventions: quaternions are ``[w, x, y, z]``; ``quat_to_mat(q)`` is the active rotation taking
+vectors from the rotated (child/body) frame to the parent (world) frame, as in MuJoCo and as the
+paper's ``S(u)`` for unit ``u``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def quat_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Hamilton product ``a ⊗ b`` (w first), shape (4,): the rotation b followed by a."""
+    aw, ax, ay, az = a
+    bw, bx, by, bz = b
+    return np.array(
+        [
+            aw * bw - ax * bx - ay * by - az * bz,
+            aw * bx + ax * bw + ay * bz - az * by,
+            aw * by - ax * bz + ay * bw + az * bx,
+            aw * bz + ax * by - ay * bx + az * bw,
+        ]
+    )
+
+
+def quat_conj(q: np.ndarray) -> np.ndarray:
+    """Conjugate (the inverse rotation for unit q), shape (4,)."""
+    return np.array([q[0], -q[1], -q[2], -q[3]])
+
+
+def quat_to_mat(q: np.ndarray) -> np.ndarray:
+    """Rotation matrix of a quaternion (normalised first), shape (3, 3)."""
+    w, x, y, z = np.asarray(q, float) / np.linalg.norm(q)
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+
+
+def mat_to_quat(R: np.ndarray) -> np.ndarray:
+    """Unit quaternion (w first, w >= 0) of a proper rotation matrix, shape (4,).
+
+    Raises:
+        ValueError: if R is not a proper rotation to 1e-9.
+    """
+    R = np.asarray(R, float)
+    if R.shape != (3, 3) or not np.allclose(R @ R.T, np.eye(3), atol=1e-9):
+        raise ValueError(f"R: must be a 3x3 rotation matrix (got {R.tolist()!r})")
+    if np.linalg.det(R) < 0:
+        raise ValueError(f"R: must be a proper rotation, det = +1 (got det {np.linalg.det(R)!r})")
+    tr = np.trace(R)
+    if tr > 0:
+        s = 2.0 * np.sqrt(1.0 + tr)
+        q = [0.25 * s, (R[2, 1] - R[1, 2]) / s, (R[0, 2] - R[2, 0]) / s, (R[1, 0] - R[0, 1]) / s]
+    elif R[0, 0] > R[1, 1] and R[0, 0] > R[2, 2]:
+        s = 2.0 * np.sqrt(1.0 + R[0, 0] - R[1, 1] - R[2, 2])
+        q = [(R[2, 1] - R[1, 2]) / s, 0.25 * s, (R[0, 1] + R[1, 0]) / s, (R[0, 2] + R[2, 0]) / s]
+    elif R[1, 1] > R[2, 2]:
+        s = 2.0 * np.sqrt(1.0 + R[1, 1] - R[0, 0] - R[2, 2])
+        q = [(R[0, 2] - R[2, 0]) / s, (R[0, 1] + R[1, 0]) / s, 0.25 * s, (R[1, 2] + R[2, 1]) / s]
+    else:
+        s = 2.0 * np.sqrt(1.0 + R[2, 2] - R[0, 0] - R[1, 1])
+        q = [(R[1, 0] - R[0, 1]) / s, (R[0, 2] + R[2, 0]) / s, (R[1, 2] + R[2, 1]) / s, 0.25 * s]
+    q = np.array(q)
+    q /= np.linalg.norm(q)
+    return q if q[0] >= 0 else -q
+
+
+def quat_z_to(v: np.ndarray) -> np.ndarray:
+    """A unit quaternion rotating the z axis onto the direction of v (MuJoCo cylinders/joints)."""
+    v = np.asarray(v, float) / np.linalg.norm(v)
+    z = np.array([0.0, 0.0, 1.0])
+    c = float(z @ v)
+    if c < -1.0 + 1e-15:
+        return np.array([0.0, 1.0, 0.0, 0.0])
+    axis = np.cross(z, v)
+    q = np.array([1.0 + c, *axis])
+    return q / np.linalg.norm(q)
+
+
+def principal_frame(inertia: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Principal moments (ascending) and the quaternion of a right-handed principal frame.
+
+    Args:
+        inertia: symmetric inertia matrix, kg·m², shape (3, 3), in some frame F.
+
+    Returns:
+        ``(moments (3,), quat (4,))`` with ``inertia = Rot(quat) diag(moments) Rot(quat)ᵀ``.
+    """
+    w, V = np.linalg.eigh(0.5 * (inertia + inertia.T))
+    if np.linalg.det(V) < 0:
+        V[:, 2] = -V[:, 2]
+    return w, mat_to_quat(V)
+
+
+def attitude_angle(u1: np.ndarray, u2: np.ndarray) -> np.ndarray:
+    """Angle between attitudes (q and -q are the same attitude), rad; batched (..., 4) -> (...)."""
+    u1 = np.asarray(u1, float)
+    u2 = np.asarray(u2, float)
+    u1 = u1 / np.linalg.norm(u1, axis=-1, keepdims=True)
+    u2 = u2 / np.linalg.norm(u2, axis=-1, keepdims=True)
+    w = np.sum(u1 * u2, axis=-1)
+    # vector part of conj(u1) ⊗ u2
+    v = u1[..., :1] * u2[..., 1:] - u2[..., :1] * u1[..., 1:] - np.cross(u1[..., 1:], u2[..., 1:])
+    return 2.0 * np.arctan2(np.linalg.norm(v, axis=-1), np.abs(w))

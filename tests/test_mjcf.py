@@ -1,0 +1,277 @@
+"""model_xml: the MJCF twin built from a scene (issue 3, first half).
+
+References: closed forms (spring law of Eq. 38, the paper's mass properties of Example 1), the
+scene's own data, and the spec compiled directly (for the text round trip).
+"""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+import pytest
+from mj_scenes import PAPER, paper_scene, random_scene, random_state
+
+from analytic.effects import Effect, SpringModel
+from analytic.scene import MujocoSettings
+from mj_bridge import Twin
+from mj_bridge import thresholds as th
+from model_xml import (
+    TORQUE_ACTUATORS,
+    BodyFrame,
+    build_spec,
+    force_actuator_name,
+    joint_name,
+    mass_name,
+    tendon_name,
+    to_mjcf,
+)
+from model_xml.primitives import (
+    Primitive,
+    PrimitiveKind,
+    mass_properties,
+    match_axes,
+    paper_example1_primitives,
+    rod_in_principal,
+)
+from model_xml.regenerate import PAPER_SCENES, generate, xml_path
+
+
+def _qacc(m: mujoco.MjModel, qpos, qvel, ctrl) -> np.ndarray:
+    d = mujoco.MjData(m)
+    d.qpos[:] = qpos
+    d.qvel[:] = qvel
+    d.ctrl[: len(ctrl)] = ctrl
+    mujoco.mj_forward(m, d)
+    return d.qacc.copy()
+
+
+def _scenes():
+    rng = np.random.default_rng(3)
+    out = [(name, paper_scene(name)) for name in PAPER]
+    for k in range(4):
+        out.append((f"random{k}", random_scene(rng, controlled=bool(k % 2))))
+    return out
+
+
+@pytest.mark.parametrize(
+    ("label", "scene"), _scenes(), ids=lambda x: x if isinstance(x, str) else ""
+)
+def test_xml_text_and_spec_give_same_qacc(label, scene):
+    """Full-precision MJCF recompiles to the same dynamics as the spec (to_xml alone would not)."""
+    spec = build_spec(scene)
+    m_spec = spec.compile()
+    m_xml = mujoco.MjModel.from_xml_string(to_mjcf(scene))
+    rng = np.random.default_rng(7)
+    for _ in range(3):
+        qpos = np.concatenate([rng.normal(size=3), rng.normal(size=4), rng.normal(size=scene.n)])
+        qpos[3:7] /= np.linalg.norm(qpos[3:7])
+        qvel = rng.normal(size=m_spec.nv)
+        ctrl = rng.normal(size=m_spec.nu) * 1e3
+        a1 = _qacc(m_spec, qpos, qvel, ctrl)
+        a2 = _qacc(m_xml, qpos, qvel, ctrl)
+        assert np.max(np.abs(a1 - a2)) <= th.XML_VS_SPEC_QACC_REL * np.max(np.abs(a1))
+    for field in ("body_mass", "body_inertia", "body_ipos", "body_iquat", "body_pos", "jnt_axis"):
+        np.testing.assert_array_equal(getattr(m_spec, field), getattr(m_xml, field), err_msg=field)
+
+
+def test_mujoco_to_xml_alone_is_not_enough():
+    """Documents why to_mjcf exists: MuJoCo's own writer loses digits (or the inertial)."""
+    scene = paper_scene("paper_example1")
+    spec = build_spec(scene)
+    txt = spec.to_xml()
+    try:
+        m_xml = mujoco.MjModel.from_xml_string(txt)
+    except ValueError:
+        return  # the explicit inertial at C was dropped: the text does not even compile
+    assert not np.array_equal(m_xml.body_inertia, spec.compile().body_inertia)
+
+
+@pytest.mark.parametrize("name", PAPER_SCENES)
+def test_checked_in_mjcf_is_reproduced(name):
+    assert xml_path(name).read_text(encoding="utf-8") == generate(name)
+
+
+def test_names_and_layout_example2_controlled():
+    scene = paper_scene("paper_example2_controlled")
+    m = build_spec(scene).compile()
+    n = scene.n
+    assert m.nq == 7 + n and m.nv == 6 + n
+    assert m.jnt_type[m.joint("root").id] == mujoco.mjtJoint.mjJNT_FREE
+    for i in range(n):
+        j = m.joint(joint_name(i)).id
+        assert m.jnt_type[j] == mujoco.mjtJoint.mjJNT_SLIDE
+        assert m.jnt_bodyid[j] == m.body(mass_name(i)).id
+        np.testing.assert_allclose(m.jnt_axis[j], scene.rod.axis, rtol=0, atol=1e-15)
+        np.testing.assert_allclose(m.body_pos[m.body(mass_name(i)).id], scene.rod.offset, atol=0)
+        assert m.body_mass[m.body(mass_name(i)).id] == scene.masses.mass[i]
+    assert m.ntendon == n + 1
+    assert [m.tendon(tendon_name(j)).id for j in range(n + 1)] == list(range(n + 1))
+    names = [m.actuator(k).name for k in range(m.nu)]
+    assert names == [*TORQUE_ACTUATORS, *(force_actuator_name(i) for i in range(n))]
+    # BR: explicit inertial at C along the principal axes, total mass conserved
+    b = m.body("BR").id
+    assert m.body_mass[b] == scene.body.mass
+    np.testing.assert_array_equal(m.body_ipos[b], np.zeros(3))
+    assert m.body_subtreemass[b] == pytest.approx(
+        scene.body.mass + scene.masses.mass.sum(), rel=1e-15
+    )
+    # visual geoms are massless and never collide
+    assert np.all(m.geom_contype == 0) and np.all(m.geom_conaffinity == 0)
+
+
+def test_rotational_inertia_total_matches_paper_J():
+    """At qpos = 0 with every mass at O' = d, the system inertia about C (from MuJoCo's bodies)
+    equals J (incl. Remark 1's ring inertia) + Σ m_i (|d|² I - d dᵀ)."""
+    scene = paper_scene("paper_example1")
+    assert scene.has(Effect.MASS_INERTIA)
+    m = build_spec(scene).compile()
+    d = mujoco.MjData(m)
+    mujoco.mj_forward(m, d)
+    I_tot = np.zeros((3, 3))
+    for b in range(1, m.nbody):
+        R = d.ximat[b].reshape(3, 3)
+        r = d.xipos[b]
+        I_tot += R @ np.diag(m.body_inertia[b]) @ R.T
+        I_tot += m.body_mass[b] * (r @ r * np.eye(3) - np.outer(r, r))
+    dv = np.asarray(scene.rod.offset)
+    J = np.diag(scene.body.inertia) + scene.masses.inertia.sum(axis=0)
+    ref = J + scene.masses.mass.sum() * (dv @ dv * np.eye(3) - np.outer(dv, dv))
+    np.testing.assert_allclose(I_tot, ref, rtol=0, atol=1e-13 * np.max(ref))
+
+
+def test_effects_map_onto_the_model():
+    scene = paper_scene("paper_example1")
+    m = build_spec(scene).compile()
+    np.testing.assert_array_equal(m.opt.gravity, scene.gravity)
+    assert m.nu == 0  # uncontrolled: no actuators
+    np.testing.assert_array_equal(m.tendon_stiffness, scene.springs.k_linear)
+    np.testing.assert_array_equal(m.tendon_stiffnesspoly[:, 1], scene.springs.k_cubic)
+    assert m.opt.integrator == mujoco.mjtIntegrator.mjINT_RK4
+    assert m.opt.timestep == scene.mujoco.timestep
+
+    off = build_spec(scene.with_effects({Effect.SPRINGS_LINEAR})).compile()
+    np.testing.assert_array_equal(off.opt.gravity, np.zeros(3))
+    np.testing.assert_array_equal(off.tendon_stiffness, scene.springs.k_linear)
+    np.testing.assert_array_equal(off.tendon_stiffnesspoly, 0.0)
+    # no mass_inertia: the mass bodies carry only the tiny isotropic padding, taken off BR
+    pad = off.body_inertia[off.body("mass1").id]
+    assert np.all(pad < 1e-8 * scene.body.inertia.min())
+    np.testing.assert_allclose(
+        off.body_inertia[off.body("BR").id] + scene.n * pad[0], scene.body.inertia, rtol=1e-15
+    )
+
+    bare = build_spec(scene.with_effects(set())).compile()
+    assert bare.ntendon == 0 and bare.nu == 0
+
+    torque_only = random_scene(np.random.default_rng(1), 2, controlled=False, external_torque=True)
+    mt = build_spec(torque_only).compile()
+    assert [mt.actuator(k).name for k in range(mt.nu)] == list(TORQUE_ACTUATORS)
+
+
+def test_tendon_springs_follow_eq38():
+    """Tendon forces and MuJoCo's spring energy against the closed form of Eq. (38)."""
+    scene = paper_scene("paper_example2")
+    no_gravity = scene.with_effects(scene.effects - {Effect.GRAVITY})
+    m = build_spec(no_gravity).compile()
+    d = mujoco.MjData(m)
+    rng = np.random.default_rng(0)
+    p = np.asarray(scene.masses.p_e) + rng.normal(scale=0.5, size=scene.n)
+    d.qpos[3] = 1.0
+    d.qpos[7:] = p
+    mujoco.mj_forward(m, d)
+    x = np.concatenate([[0.0], p - scene.masses.p_e, [0.0]])
+    ext = np.diff(x)
+    kl, kn = scene.springs.k_linear, scene.springs.k_cubic
+    f = kl * ext + kn * ext**3
+    F_ref = f[1:] - f[:-1]  # -∂U/∂p
+    np.testing.assert_allclose(d.qfrc_passive[6:], F_ref, rtol=1e-13, atol=1e-9 * np.abs(f).max())
+    U_ref = np.sum(0.5 * kl * ext**2 + 0.25 * kn * ext**4)
+    assert d.energy[0] == pytest.approx(U_ref, rel=1e-13)
+
+
+def test_rest_length_minus_one_is_not_mujocos_sentinel():
+    """springlength = -1 means "length at qpos0" to MuJoCo; the builder flips such a tendon."""
+    rng = np.random.default_rng(5)
+    scene = random_scene(rng, 2, controlled=False)
+    masses = scene.masses.__class__(
+        mass=scene.masses.mass, p_e=np.array([-1.0, 0.5]), inertia=scene.masses.inertia
+    )
+    scene = scene.replace(masses=masses, initial=scene.initial)
+    m = build_spec(scene).compile()
+    assert np.all(m.tendon_lengthspring != -1.0)
+    d = mujoco.MjData(m)
+    d.qpos[3] = 1.0
+    d.qpos[7:] = [-1.0, 0.5]  # at equilibrium: no spring force
+    mujoco.mj_forward(m, d)
+    assert np.max(np.abs(d.qfrc_passive[6:])) == 0.0
+
+
+def test_spring_actuators_agree_with_tendon_springs():
+    """The "spring actuator" form (affine bias + user-bias cubic term) vs native tendon springs."""
+    rng = np.random.default_rng(11)
+    for k in range(3):
+        scene = random_scene(rng, controlled=bool(k % 2))
+        alt = scene.replace(mujoco=MujocoSettings(spring_model=SpringModel.ACTUATOR))
+        tw_t, tw_a = Twin(scene), Twin(alt)
+        assert tw_a.m.nu == tw_t.m.nu + scene.n + 1
+        for _ in range(3):
+            t, q, qd = random_state(rng, scene)
+            a1 = tw_t.acceleration(t, q, qd)
+            a2 = tw_a.acceleration(t, q, qd)
+            assert np.max(np.abs(a1 - a2)) <= th.SPRING_ACTUATOR_VS_TENDON_REL * np.max(np.abs(a1))
+
+
+def test_body_frame_option_moves_only_the_frame():
+    """A BR body frame away from C: same inertial frame, masses, joint axes (in world)."""
+    scene = paper_scene("paper_example1")
+    bf = BodyFrame(pos=np.array([1.0, -2.0, 0.5]), quat=np.array([0.5, 0.5, 0.5, 0.5]))
+    m = build_spec(scene, bf).compile()
+    b = m.body("BR").id
+    assert np.linalg.norm(m.body_ipos[b]) == pytest.approx(np.linalg.norm(bf.pos), rel=1e-15)
+    assert m.body_mass[b] == scene.body.mass
+
+
+def test_primitives_reproduce_example1_mass_properties():
+    """Block + rod in aluminium: MuJoCo's mass and principal moments equal the paper's (4 digits);
+    the rod line in principal axes gives the paper's a and d (to 1e-3)."""
+    prims, rod = paper_example1_primitives()
+    props = mass_properties(prims)
+    assert props.mass == pytest.approx(4.597e5, rel=th.PRIMITIVE_SIG_DIGITS_REL)
+    paper_J = np.array([1.3626e7, 1.5333e7, 0.3848e7])
+    A = match_axes(props, paper_J, reference_axis=np.array([-0.3985, -0.1481, 0.9051]))
+    moments = np.array([A[:, k] @ _inertia_in_design(props) @ A[:, k] for k in range(3)])
+    np.testing.assert_allclose(moments, paper_J, rtol=th.PRIMITIVE_SIG_DIGITS_REL)
+    a, d = rod_in_principal(props, rod["point"], rod["direction"], A)
+    np.testing.assert_allclose(a, [-0.3985, -0.1481, 0.9051], atol=th.PRIMITIVE_ROD_ABS)
+    np.testing.assert_allclose(d, [3.2616, 1.4196, -0.1623], atol=th.PRIMITIVE_ROD_ABS)
+    # independent closed form for the mass: ρ (box volume + rod volume)
+    assert props.mass == pytest.approx(2700 * (10 * 6 * 2 + np.pi * 16), rel=1e-12)
+
+
+def _inertia_in_design(props):
+    return props.axes @ np.diag(props.moments) @ props.axes.T
+
+
+def test_closed_shell_cylinder_is_thin_wall_limit():
+    """A closed thin shell (hollow cylinder with end caps): mass = ρ t (2πrh + 2πr²)."""
+    r, h, t, rho = 4.0, 12.0, 0.02, 7000.0
+    props = mass_properties(
+        [Primitive(PrimitiveKind.CLOSED_SHELL, (r, h / 2), density=rho, thickness=t)]
+    )
+    assert props.mass == pytest.approx(rho * t * (2 * np.pi * r * h + 2 * np.pi * r * r), rel=1e-12)
+    # axial moment of the lateral surface (m r²) and the two caps (m r²/2 each)
+    m_lat, m_cap = rho * t * 2 * np.pi * r * h, rho * t * np.pi * r * r
+    I = _inertia_in_design(props)
+    assert I[2, 2] == pytest.approx(m_lat * r * r + 2 * m_cap * r * r / 2, rel=1e-9)
+    # transverse: lateral surface m (r²/2 + h²/12), each cap m (r²/4 + (h/2)²)
+    I_t = m_lat * (r * r / 2 + h * h / 12) + 2 * m_cap * (r * r / 4 + h * h / 4)
+    assert I[0, 0] == pytest.approx(I_t, rel=1e-9)
+
+
+def test_bad_primitive_raises_naming_field():
+    with pytest.raises(ValueError, match=r"Primitive\.size"):
+        Primitive(PrimitiveKind.BOX, (1.0, 2.0))
+    with pytest.raises(ValueError, match=r"Primitive\.thickness"):
+        Primitive(PrimitiveKind.CYLINDER, (1.0, 2.0), thickness=0.1)
+    with pytest.raises(ValueError, match=r"BodyFrame\.quat"):
+        BodyFrame(quat=np.array([1.0, 1.0, 0.0, 0.0]))
