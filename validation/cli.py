@@ -87,6 +87,50 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     return 0 if tr.status is RunStatus.OK else EXIT_FAILED
 
 
+def cmd_validate(args: argparse.Namespace) -> int:
+    from validation.scenes import DEFAULT_VALIDATE_SCENE
+    from validation.validate import run_validation
+
+    scene = resolve_scene(args.scene, DEFAULT_VALIDATE_SCENE)
+    out = Path(args.out or Path("out") / f"validate_{scene.name}")
+    t_end = args.t_end or scene.output.t_end
+    prog = Progress(f"validate {scene.name}", t_end)
+    try:
+        res = run_validation(
+            scene, out, integrator=args.integrator, dt=args.dt, t_end=args.t_end, progress=prog
+        )
+    finally:
+        prog.close()
+    n_fail = sum(1 for c in res.checks if not c.passed)
+    verdict = "PASS" if res.passed else "FAIL"
+    print(f"{verdict}: {len(res.checks) - n_fail}/{len(res.checks)} checks passed for {scene.name}")
+    for c in res.checks:
+        if not c.passed:
+            print(f"  failed: {c.name}: {c.value:.3e} > {c.threshold:.3e}")
+    print(f"report: {Path(res.out_dir) / 'report.md'}  recording: {Path(res.out_dir) / 'run.rrd'}")
+    return 0 if res.passed else EXIT_FAILED
+
+
+def cmd_export_mjcf(args: argparse.Namespace) -> int:
+    from model_xml import to_mjcf
+    from validation.atomic import write_text
+
+    scene = resolve_scene(args.scene, DEFAULT_SIMULATE_SCENE)
+    out = Path(args.out or f"{scene.name}.xml")
+    write_text(out, to_mjcf(scene))
+    print(f"wrote {out}")
+    return 0
+
+
+def cmd_demo(args: argparse.Namespace) -> int:
+    from validation.validate import write_demo
+
+    out = Path(args.out or Path("out") / "demo")
+    path = write_demo(out)
+    print(f"wrote the demo to {path}; open the .rrd with: rerun {Path(path) / 'demo.rrd'}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="tumble",
@@ -110,6 +154,45 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--atol", type=_positive_float, help="absolute tolerance")
     p.add_argument("--t-end", type=_positive_float, help="horizon in seconds")
     p.set_defaults(func=cmd_simulate)
+
+    p = sub.add_parser(
+        "validate",
+        help="run a scene on the analytic plant and on MuJoCo under one controller; compare",
+        description="Run the scene on the analytic model and on its MuJoCo twin, both driven by "
+        "the same analytic controller, compare trajectories, invariants and control forces, and "
+        "write OUT/report.md, OUT/report.json, figures and OUT/run.rrd. Exits 1 when a check "
+        "fails.",
+    )
+    from validation.scenes import DEFAULT_VALIDATE_SCENE
+
+    _add_scene_arg(p, DEFAULT_VALIDATE_SCENE)
+    p.add_argument("--out", help="output directory (default: out/validate_<scene name>)")
+    p.add_argument(
+        "--integrator",
+        choices=["RK4", "Euler", "implicit", "implicitfast"],
+        help="MuJoCo integrator (default: the scene's)",
+    )
+    p.add_argument("--dt", type=_positive_float, help="MuJoCo timestep in seconds")
+    p.add_argument("--t-end", type=_positive_float, help="horizon in seconds")
+    p.set_defaults(func=cmd_validate)
+
+    p = sub.add_parser(
+        "export-mjcf",
+        help="write the MJCF of a scene's MuJoCo twin (full precision)",
+        description="Write the MuJoCo model generated from the scene (MjSpec) as MJCF text.",
+    )
+    _add_scene_arg(p, DEFAULT_SIMULATE_SCENE)
+    p.add_argument("--out", help="output file (default: <scene name>.xml)")
+    p.set_defaults(func=cmd_export_mjcf)
+
+    p = sub.add_parser(
+        "demo",
+        help="write a narrated teaching demo (.rrd + markdown)",
+        description="Write a teaching demo: Example 1 uncontrolled and controlled, Example 2 "
+        "with masses 1, 2, 4 controlled, and an effect switched off, narrated with equations.",
+    )
+    p.add_argument("--out", help="output directory (default: out/demo)")
+    p.set_defaults(func=cmd_demo)
     return parser
 
 
