@@ -111,3 +111,43 @@ def test_writes_are_atomic(tmp_path, monkeypatch):
     monkeypatch.undo()
     assert target.read_text() == "old"
     assert os.listdir(tmp_path) == ["report.json"]  # no temporary file left behind
+
+
+# ----------------------------------------------------------------------------------------------
+# run_validation end to end (short horizon)
+# ----------------------------------------------------------------------------------------------
+
+
+def test_run_validation_with_both_plants(tmp_path):
+    from validation.validate import run_validation
+
+    res = run_validation("paper_example1_controlled", tmp_path, t_end=0.1)
+    assert dataclasses.is_dataclass(res)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        res.passed = False  # type: ignore[misc]
+    doc = json.loads((tmp_path / "report.json").read_text())
+    assert doc["passed"] is res.passed
+    assert {p["engine"] for p in doc["plants"]} == {"analytic", "mujoco"}
+    assert len(doc["checks"]) == len(res.checks) > 10
+    assert doc["run"]["mujoco_settings"]["integrator"] == "RK4"
+    assert set(doc["run"]["wall_times_s"]) >= {"analytic", "mujoco", "compare", "recording"}
+    for name in ("report.md", "report.json", "run.rrd", "errors.png", "control.png"):
+        assert (tmp_path / name).exists(), name
+    # the same controller in both plants: they agree to the default thresholds over 0.1 s
+    assert res.passed, [c.label for c in res.failed_checks]
+
+
+def test_run_validation_without_the_mujoco_twin_is_failed_not_crashed(tmp_path, monkeypatch):
+    from validation import validate
+
+    def missing():
+        raise ImportError("the MuJoCo twin (mj_bridge) is not available: planted")
+
+    monkeypatch.setattr(validate, "_mj_simulate", missing)
+    res = validate.run_validation("paper_example1_controlled", tmp_path, t_end=0.1)
+    assert not res.passed and "mj_bridge" in res.failure
+    md = (tmp_path / "report.md").read_text()
+    assert "FAILED" in md.splitlines()[0] and "mj_bridge" in md
+    assert json.loads((tmp_path / "report.json").read_text())["verdict"] == "FAILED"
+    # the analytic plant's own checks are still there
+    assert any(c.label == "analytic.energy" for c in res.checks)
