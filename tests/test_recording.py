@@ -182,6 +182,7 @@ def test_hollow_cylinder_shape_for_example_2(tmp_path):
 
 def test_demo_has_four_narrated_steps(tmp_path):
     res = write_demo(tmp_path, t_end=0.2)
+    assert Path(res) / "demo.rrd" == res.rrd
     store = RrdReader(res.rrd).store()
     ents = set(store.schema().entity_paths())
     assert len(res.steps) == 4

@@ -151,3 +151,14 @@ def test_run_validation_without_the_mujoco_twin_is_failed_not_crashed(tmp_path, 
     assert json.loads((tmp_path / "report.json").read_text())["verdict"] == "FAILED"
     # the analytic plant's own checks are still there
     assert any(c.label == "analytic.energy" for c in res.checks)
+
+
+def test_progress_accepts_both_callback_forms():
+    from validation.validate import _stage_progress
+
+    seen = []
+    _stage_progress(lambda stage, t: seen.append((stage, t)), "mujoco")(1.5)
+    _stage_progress(lambda t: seen.append(t), "analytic")(0.5)
+    assert seen == [("mujoco", 1.5), 0.5]
+    assert _stage_progress(lambda t: None, "mujoco") is None
+    assert _stage_progress(None, "analytic") is None

@@ -10,6 +10,7 @@
 
 from __future__ import annotations
 
+import inspect
 import time
 import traceback
 from collections.abc import Callable
@@ -33,8 +34,25 @@ from validation.report import versions, write_atomic, write_report
 SCENES = Path(__file__).resolve().parent / "scenes"
 DEFAULT_SCENE = "paper_example1_controlled"
 
-Progress = Callable[[str, float], None]
-"""``progress(stage, t)``: stage is ``analytic`` or ``mujoco``, t the simulated time reached (s)."""
+Progress = Callable[[str, float], None] | Callable[[float], None]
+"""``progress(stage, t)`` (stage ``analytic`` or ``mujoco``) or ``progress(t)``: t is the simulated
+time reached, s. A one-argument callable is told the analytic plant's progress only."""
+
+
+def _stage_progress(progress: Any, stage: str) -> Callable[[float], None] | None:
+    """Adapt either form of ``progress`` to the engines' ``progress(t)``."""
+    if progress is None:
+        return None
+    try:
+        params = inspect.signature(progress).parameters.values()
+        two = sum(
+            p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD) for p in params
+        ) >= 2 or any(p.kind is p.VAR_POSITIONAL for p in params)
+    except (TypeError, ValueError):
+        two = False
+    if two:
+        return lambda t: progress(stage, t)
+    return progress if stage == "analytic" else None
 
 
 @dataclass(frozen=True)
@@ -137,7 +155,7 @@ def run_validation(
             lambda: analytic_simulate(
                 sc,
                 t_end=horizon,
-                progress=(lambda t: progress("analytic", t)) if progress else None,
+                progress=_stage_progress(progress, "analytic"),
             ),
         )
     except Exception as exc:
@@ -146,8 +164,9 @@ def run_validation(
     try:
         mj_sim = _mj_simulate()
         mj = timed("mujoco", lambda: mj_sim(sc, integrator=integrator, dt=dt, t_end=horizon))
-        if progress:
-            progress("mujoco", float(mj.t[-1]) if mj.t.size else 0.0)
+        mj_progress = _stage_progress(progress, "mujoco")
+        if mj_progress is not None:
+            mj_progress(float(mj.t[-1]) if mj.t.size else 0.0)
     except ValueError:
         raise  # bad integrator / dt: the caller's input, not a failed run
     except Exception as exc:
@@ -240,12 +259,19 @@ class DemoStep:
 
 @dataclass(frozen=True)
 class DemoResult:
-    """What :func:`write_demo` wrote: ``rrd`` and ``markdown`` paths, the steps, wall times (s)."""
+    """What :func:`write_demo` wrote: ``rrd`` and ``markdown`` paths, the steps, wall times (s).
 
+    ``os.fspath(result)`` is the output directory, so ``Path(result) / "demo.rrd"`` works.
+    """
+
+    out_dir: Path
     rrd: Path
     markdown: Path
     steps: tuple[DemoStep, ...]
     wall_times: dict[str, float]
+
+    def __fspath__(self) -> str:
+        return str(self.out_dir)
 
 
 DEMO_RTOL = 1e-10  # the demo favours speed; `tumble validate` uses the scenes' rtol 1e-12
@@ -406,7 +432,7 @@ def write_demo(
         first = step.narrative.split("\n\n")[1].replace("\n", " ")
         md += [f"## {step.title}", "", first, ""]
     mdp = write_atomic(out / "demo.md", "\n".join(md))
-    return DemoResult(path, mdp, tuple(s for s, _, _ in runs), walls)
+    return DemoResult(out, path, mdp, tuple(s for s, _, _ in runs), walls)
 
 
 def _with_masses_plot(tab, run):
