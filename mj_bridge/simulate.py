@@ -37,7 +37,7 @@ def steps_between(times: np.ndarray, dt: float) -> np.ndarray:
     if np.any(bad) or np.any(k < 1):
         i = int(np.argmax(bad | (k < 1)))
         raise ValueError(
-            f"dt: {dt!r} s does not divide the output interval {gaps[i]!r} s "
+            f"dt: {dt!r} s does not divide the output interval {float(gaps[i])!r} s "
             f"(output.rate and t_end must be whole multiples of dt)"
         )
     return k

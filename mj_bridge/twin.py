@@ -29,7 +29,7 @@ from model_xml import (
     spring_tendons,
 )
 from model_xml.builder import _INTEGRATORS
-from model_xml.rotations import quat_to_mat
+from model_xml.rotations import cross3, quat_to_mat
 from model_xml.state import mujoco_to_paper_acc, mujoco_to_paper_state, paper_to_mujoco_state
 
 
@@ -222,7 +222,16 @@ class Twin:
         if self.acc.active:
             omega = self.R_I.T @ d.qvel[3:6]
             power = float(tau_tot @ omega) + float(rod @ qd[7:]) + float(fC @ qd[:3])
-            self.acc.add(power, quat_to_mat(q[3:7]) @ tau_tot, fC)
+            Sm = quat_to_mat(q[3:7])
+            moment = Sm @ tau_tot
+            if np.any(fC):
+                # a force at C has a moment about the system CoM c: R - c = -(μ1 Sa + μ0 Sd)/m_T
+                mdl = self.model
+                R_minus_c = (
+                    -(float(mdl.m @ q[7:]) * (Sm @ mdl.a) + mdl.mu0 * (Sm @ mdl.d)) / mdl.m_T
+                )
+                moment = moment + cross3(R_minus_c, fC)
+            self.acc.add(power, moment, fC)
 
     # ------------------------------------------------------------------------------------------
     # Pointwise evaluations

@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from analytic.kinematics import H, omega_of
-from model_xml.rotations import quat_conj, quat_mul, quat_to_mat
+from model_xml.rotations import cross3, quat_conj, quat_mul, quat_to_mat
 
 
 def paper_to_mujoco_state(
@@ -38,7 +38,7 @@ def paper_to_mujoco_state(
     omega_b = quat_to_mat(iquat) @ omega
     omega_w = Rb @ omega_b
     qpos = np.concatenate([q[:3] - r, q_b, q[7:]])
-    qvel = np.concatenate([qdot[:3] - np.cross(omega_w, r), omega_b, qdot[7:]])
+    qvel = np.concatenate([qdot[:3] - cross3(omega_w, r), omega_b, qdot[7:]])
     return qpos, qvel
 
 
@@ -57,7 +57,7 @@ def mujoco_to_paper_state(
     omega_w = Rb @ omega_b
     udot = 0.25 * H(u).T @ omega / float(u @ u)
     q = np.concatenate([qpos[:3] + r, u, qpos[7:]])
-    qdot = np.concatenate([qvel[:3] + np.cross(omega_w, r), udot, qvel[6:]])
+    qdot = np.concatenate([qvel[:3] + cross3(omega_w, r), udot, qvel[6:]])
     return q, qdot
 
 
@@ -79,7 +79,7 @@ def mujoco_to_paper_acc(
     alpha_w = Rb @ qacc[3:6]
     omega = RI.T @ omega_b
     omega_dot = RI.T @ qacc[3:6]
-    Rdd = qacc[:3] + np.cross(alpha_w, r) + np.cross(omega_w, np.cross(omega_w, r))
+    Rdd = qacc[:3] + cross3(alpha_w, r) + cross3(omega_w, cross3(omega_w, r))
     udd = 0.25 * (H(udot).T @ omega + H(u).T @ omega_dot)
     return np.concatenate([Rdd, udd, qacc[6:]])
 
