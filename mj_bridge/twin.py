@@ -38,6 +38,9 @@ class ControllerSource(StrEnum):
 
     ANALYTIC = "analytic"
     """``analytic.TumblingModel.acceleration`` at MuJoCo's state (the paper's Eq. 89)."""
+    ANALYTIC_FAST = "analytic_fast"
+    """The same controller from the analytic side's compiled kernel (``analytic.fast.FastModel``,
+    tested against the numpy model to 1e-12 there); the numpy model answers when numba is absent."""
     MUJOCO = "mujoco"
     """Udwadia–Kalaba from MuJoCo's own ``M`` and forces (Gauss weighting only)."""
 
@@ -117,6 +120,11 @@ class Twin:
         if not (np.isfinite(self.dt) and self.dt > 0):
             raise ValueError(f"dt: must be a positive finite time step in s (got {dt!r})")
         self.model = TumblingModel(scene)
+        self._controller_fn = self.model.acceleration
+        if self.controller is ControllerSource.ANALYTIC_FAST:
+            from analytic.fast import FastModel
+
+            self._controller_fn = FastModel(scene, self.model).acceleration_output
         self.n = scene.n
         self.m = build_spec(scene, body_frame).compile()
         self.m.opt.integrator = int(_INTEGRATORS[self.integrator])
@@ -126,6 +134,7 @@ class Twin:
         self.ipos = self.m.body_ipos[self.body_id].copy()
         self.iquat = self.m.body_iquat[self.body_id].copy()
         self.R_I = quat_to_mat(self.iquat)  # paper body axes -> MuJoCo body frame
+        self._frame_at_C = bool(np.all(self.ipos == 0) and np.all(self.iquat == [1, 0, 0, 0]))
         self.controlled = scene.controlled
         self.has_torque = scene.has(Effect.EXTERNAL_TORQUE)
         if self.controller is ControllerSource.MUJOCO and self.controlled:
@@ -199,13 +208,32 @@ class Twin:
             d.ctrl[self.force_ids] = rod
             d.xfrc_applied[self.body_id, :3] = force_C  # world force at C (zero for Gauss)
 
+    def _paper_state(self, d: mujoco.MjData) -> tuple[np.ndarray, np.ndarray]:
+        """Paper state of ``d``; a short path when BR's body frame is at C (the default)."""
+        if not self._frame_at_C:
+            return mujoco_to_paper_state(d.qpos, d.qvel, self.ipos, self.iquat)
+        q = d.qpos.copy()
+        v = d.qvel
+        u = q[3:7]
+        w0, w1, w2 = v[3], v[4], v[5]
+        u0, u1, u2, u3 = u
+        s = 0.5 / float(u @ u)  # u̇ = ¼ Hᵀ ω / |u|², H of Eq. (13) carries the factor 2
+        qd = np.empty(self.n + 7)
+        qd[:3] = v[:3]
+        qd[3] = s * (-u1 * w0 - u2 * w1 - u3 * w2)
+        qd[4] = s * (u0 * w0 - u3 * w1 + u2 * w2)
+        qd[5] = s * (u3 * w0 + u0 * w1 - u1 * w2)
+        qd[6] = s * (-u2 * w0 + u1 * w1 + u0 * w2)
+        qd[7:] = v[6:]
+        return q, qd
+
     def _control_callback(self, m: mujoco.MjModel, d: mujoco.MjData) -> None:
         t = d.time
-        q, qd = mujoco_to_paper_state(d.qpos, d.qvel, self.ipos, self.iquat)
+        q, qd = self._paper_state(d)
         tau_g = self.model.given_torque(t)
         if self.controlled:
-            if self.controller is ControllerSource.ANALYTIC:
-                _, c = self.model.acceleration(t, q, qd)
+            if self.controller is not ControllerSource.MUJOCO:
+                _, c = self._controller_fn(t, q, qd)
                 self.last_control = c
                 tau, rod, fC = c.torque, c.rod_forces, c.force_at_C
             else:

@@ -165,7 +165,7 @@ def test_callbacks_removed_after_run_and_on_exception():
     def explode(*_):
         raise Boom("in callback")
 
-    tw.model.acceleration = explode  # type: ignore[method-assign]
+    tw._controller_fn = explode
     with pytest.raises(Boom):
         tw.forward(0.0, scene.initial.q0(), scene.initial.qdot0())
     assert not any_installed()
