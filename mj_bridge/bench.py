@@ -55,7 +55,7 @@ def run(steps: int = 400, repeats: int = 5) -> list[dict]:
             for src in ControllerSource:
                 tw = Twin(scene, integrator="RK4", controller=src)
                 label = "mujoco UK" if src is ControllerSource.MUJOCO else src.value
-                row[label] = _per_step_us(tw, tw._control_callback, steps, repeats)
+                row[label] = _per_step_us(tw, tw.control_callback, steps, repeats)
         rows.append(row)
     return rows
 

@@ -49,7 +49,7 @@ def simulate(
     dt: float | None = None,
     t_end: float | None = None,
     *,
-    controller: ControllerSource | str = ControllerSource.ANALYTIC,
+    controller: ControllerSource | str = ControllerSource.ANALYTIC_FAST,
     body_frame: BodyFrame | None = None,
 ) -> Trajectory:
     """Integrate ``scene`` in MuJoCo; samples at the scene's output rate.
@@ -59,7 +59,8 @@ def simulate(
         integrator: MuJoCo integrator (default ``scene.mujoco.integrator``, RK4).
         dt: time step, s (default ``scene.mujoco.timestep``); must divide the output interval.
         t_end: horizon, s (default ``scene.output.t_end``).
-        controller: the analytic controller (default) or the same law from MuJoCo's matrices.
+        controller: the analytic controller, compiled (default; the numpy model answers where the
+            kernel does not apply), or numpy (``analytic``), or the same law from MuJoCo's matrices.
         body_frame: BR's MuJoCo body frame relative to C (default at C).
 
     Returns:
@@ -84,7 +85,9 @@ def simulate(
 
     def sample(t: float) -> None:
         acc.active = False
+        tw._record = True
         mujoco.mj_forward(m, d)
+        tw._record = False
         q, qd = tw.state()
         rec["t"].append(t)
         rec["q"].append(q)

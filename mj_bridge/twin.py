@@ -18,6 +18,7 @@ import numpy as np
 from analytic.effects import Effect, MjIntegrator, SpringModel, Weighting
 from analytic.model import ControlOutput, TumblingModel
 from analytic.scene import Scene
+from mj_bridge import fast_stage
 from mj_bridge.callbacks import installed, spring_user_bias
 from model_xml import (
     BODY,
@@ -63,23 +64,42 @@ class MjControl:
 
 
 class _Accumulator:
-    """Work and impulse integrals accumulated per integrator stage with the scheme's weights."""
+    """Work and impulse integrals accumulated per integrator stage with the scheme's weights.
+
+    ``v = [W (J), angular impulse about the system CoM (3, N·m·s), linear impulse (3, N·s)]``.
+    """
 
     def __init__(self, weights: tuple[float, ...]):
         self.weights = weights
         self.h = 0.0
         self.active = False
         self.calls = 0
-        self.work = 0.0
-        self.angular_impulse = np.zeros(3)
-        self.linear_impulse = np.zeros(3)
+        self.v = np.zeros(7)
+
+    def weight(self) -> float:
+        """``h`` times the weight of the next stage (0 when not accumulating)."""
+        if not self.active:
+            return 0.0
+        return self.h * self.weights[self.calls % len(self.weights)]
 
     def add(self, power: float, torque_world: np.ndarray, force: np.ndarray) -> None:
         w = self.h * self.weights[self.calls % len(self.weights)]
         self.calls += 1
-        self.work += w * power
-        self.angular_impulse += w * torque_world
-        self.linear_impulse += w * force
+        self.v[0] += w * power
+        self.v[1:4] += w * torque_world
+        self.v[4:7] += w * force
+
+    @property
+    def work(self) -> float:
+        return float(self.v[0])
+
+    @property
+    def angular_impulse(self) -> np.ndarray:
+        return self.v[1:4].copy()
+
+    @property
+    def linear_impulse(self) -> np.ndarray:
+        return self.v[4:7].copy()
 
 
 _STAGE_WEIGHTS = {
@@ -107,7 +127,7 @@ class Twin:
         integrator: MjIntegrator | str | None = None,
         dt: float | None = None,
         body_frame: BodyFrame | None = None,
-        controller: ControllerSource | str = ControllerSource.ANALYTIC,
+        controller: ControllerSource | str = ControllerSource.ANALYTIC_FAST,
     ):
         self.scene = scene
         self.integrator = _as_enum(
@@ -121,10 +141,12 @@ class Twin:
             raise ValueError(f"dt: must be a positive finite time step in s (got {dt!r})")
         self.model = TumblingModel(scene)
         self._controller_fn = self.model.acceleration
+        self._fast = None
         if self.controller is ControllerSource.ANALYTIC_FAST:
             from analytic.fast import FastModel
 
-            self._controller_fn = FastModel(scene, self.model).acceleration_output
+            self._fast = FastModel(scene, self.model)
+            self._controller_fn = self._fast.acceleration_output
         self.n = scene.n
         self.m = build_spec(scene, body_frame).compile()
         self.m.opt.integrator = int(_INTEGRATORS[self.integrator])
@@ -166,7 +188,29 @@ class Twin:
         self.needs_control_cb = self.controlled or self.has_torque
         self.acc = _Accumulator(_STAGE_WEIGHTS[self.integrator])
         self.last_control: ControlOutput | None = None
+        self._record = False  # the compiled stage keeps a ControlOutput only when asked (samples)
         self._M = np.zeros((self.m.nv, self.m.nv))
+        self._use_stage = bool(
+            self._fast is not None
+            and self._fast.compiled
+            and self._frame_at_C
+            and self.controlled
+            and fast_stage.HAVE_NUMBA
+        )
+        if self._use_stage:
+            nq = self.n + 7
+            self._st_out = np.empty(2 * nq + 3 + self.model.k)
+            self._st_q = np.empty(nq)
+            self._st_qd = np.empty(nq)
+            self._st_tau_g = np.zeros(3)
+            self._st_geo = fast_stage.geometry(self.model)
+            self._st_tq = np.asarray(self.torque_ids, dtype=np.int64)
+            self._st_f = np.asarray(self.force_ids, dtype=np.int64)
+            self._st_gauss = scene.control.weighting is Weighting.M_INV
+            self._st_args = (
+                self._st_tq, self._st_f, self._fast.fp, self._fast.ip, self._st_out,
+                self._st_q, self._st_qd, self._st_tau_g, self._st_geo,
+            )  # fmt: skip
 
     # ------------------------------------------------------------------------------------------
     # State
@@ -192,7 +236,7 @@ class Twin:
     def callbacks(self) -> installed:
         """The context manager installing this twin's callbacks (control, user bias) as needed."""
         return installed(
-            control=self._control_callback if self.needs_control_cb else None,
+            control=self.control_callback if self.needs_control_cb else None,
             act_bias=spring_user_bias if self.needs_act_bias else None,
         )
 
@@ -227,25 +271,42 @@ class Twin:
         qd[7:] = v[6:]
         return q, qd
 
-    def _control_callback(self, m: mujoco.MjModel, d: mujoco.MjData) -> None:
+    @property
+    def control_callback(self):
+        """The ``mjcb_control`` function this twin installs (compiled stage or Python)."""
+        return self._stage_callback if self._use_stage else self._control_callback
+
+    def _stage_callback(self, m: mujoco.MjModel, d: mujoco.MjData) -> None:
+        """``mjcb_control`` through the compiled stage (:mod:`mj_bridge.fast_stage`)."""
+        t = d.time
+        acc = self.acc
+        if self.has_torque:
+            self._st_tau_g[:] = self.model.given_torque(t)
+        w = acc.h * acc.weights[acc.calls % len(acc.weights)] if acc.active else 0.0
+        status = fast_stage.stage(t, d.qpos, d.qvel, d.ctrl, *self._st_args, w, acc.v)
+        if status != 0:  # the kernel declined: the numpy model answers this stage
+            self._fast.fallbacks += 1
+            _, c = self.model.acceleration(t, *self._paper_state(d))
+            self._finish_stage(d, c.torque, c.rod_forces, c.force_at_C, c)
+            return
+        if acc.active:
+            acc.calls += 1
+        nq = self.n + 7
+        out = self._st_out
+        if not self._st_gauss:
+            d.xfrc_applied[self.body_id, :3] = out[nq : nq + 3]
+        if self._record:
+            QC = out[nq : 2 * nq].copy()
+            self.last_control = ControlOutput(
+                QC=QC, torque=out[2 * nq : 2 * nq + 3].copy(), rod_forces=QC[7:],
+                force_at_C=QC[:3], residual=out[2 * nq + 3 :].copy(), rank=self.model.k,
+            )  # fmt: skip
+
+    def _finish_stage(self, d, tau, rod, fC, c) -> None:
+        self.last_control = c
         t = d.time
         q, qd = self._paper_state(d)
-        tau_g = self.model.given_torque(t)
-        if self.controlled:
-            if self.controller is not ControllerSource.MUJOCO:
-                _, c = self._controller_fn(t, q, qd)
-                self.last_control = c
-                tau, rod, fC = c.torque, c.rod_forces, c.force_at_C
-            else:
-                mc = self._uk_from_data(t, in_callback=True)
-                tau, rod, fC = mc.torque, mc.rod_forces, np.zeros(3)
-                self.last_control = ControlOutput(
-                    QC=np.zeros(self.n + 7), torque=tau, rod_forces=rod, force_at_C=fC,
-                    residual=mc.residual, rank=len(mc.residual),
-                )  # fmt: skip
-        else:
-            tau, rod, fC = np.zeros(3), np.zeros(self.n), np.zeros(3)
-        tau_tot = tau + tau_g
+        tau_tot = tau + self.model.given_torque(t)
         self._write_controls(tau_tot, rod, fC)
         if self.acc.active:
             omega = self.R_I.T @ d.qvel[3:6]
@@ -261,6 +322,24 @@ class Twin:
                 moment = moment + cross3(R_minus_c, fC)
             self.acc.add(power, moment, fC)
 
+    def _control_callback(self, m: mujoco.MjModel, d: mujoco.MjData) -> None:
+        """``mjcb_control`` in Python: the controller at this stage's time and state."""
+        t = d.time
+        c = None
+        if not self.controlled:
+            tau, rod, fC = np.zeros(3), np.zeros(self.n), np.zeros(3)
+        elif self.controller is not ControllerSource.MUJOCO:
+            _, c = self._controller_fn(t, *self._paper_state(d))
+            tau, rod, fC = c.torque, c.rod_forces, c.force_at_C
+        else:
+            mc = self._uk_from_data(t, in_callback=True)
+            tau, rod, fC = mc.torque, mc.rod_forces, np.zeros(3)
+            c = ControlOutput(
+                QC=np.full(self.n + 7, np.nan), torque=tau, rod_forces=rod, force_at_C=fC,
+                residual=mc.residual, rank=len(mc.residual),
+            )  # fmt: skip
+        self._finish_stage(d, tau, rod, fC, c)
+
     # ------------------------------------------------------------------------------------------
     # Pointwise evaluations
     # ------------------------------------------------------------------------------------------
@@ -270,8 +349,12 @@ class Twin:
         self.set_state(t, q, qdot)
         self.d.ctrl[:] = 0.0
         self.d.xfrc_applied[:] = 0.0
-        with self.callbacks():
-            mujoco.mj_forward(self.m, self.d)
+        self._record = True
+        try:
+            with self.callbacks():
+                mujoco.mj_forward(self.m, self.d)
+        finally:
+            self._record = False
 
     def acceleration(self, t: float, q: np.ndarray, qdot: np.ndarray) -> np.ndarray:
         """MuJoCo's forward dynamics at a paper-coordinates state, as ``q̈`` (n+7) in paper

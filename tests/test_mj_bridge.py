@@ -157,7 +157,7 @@ def test_callbacks_removed_after_run_and_on_exception():
     assert not any_installed()
     build_spec(scene).compile()  # compiling works again
 
-    tw = Twin(scene)
+    tw = Twin(scene, controller=ControllerSource.ANALYTIC)
 
     class Boom(RuntimeError):
         pass
@@ -181,7 +181,7 @@ def test_controller_runs_at_every_rk4_stage():
     scene = paper_scene("paper_example1_controlled")
     tw = Twin(scene, dt=1e-3)
     seen = []
-    inner = tw._control_callback
+    inner = tw.control_callback
 
     def spy(m, d):
         seen.append(d.time)
@@ -299,6 +299,47 @@ def test_controlled_example2_follows_closed_form_error_dynamics(controller):
     rod = tr.rod_forces
     assert np.max(np.abs(rod[:, untracked])) <= th.UNCONTROLLED_ROD_FORCE_REL * np.abs(rod).max()
     assert np.max(np.abs(tr.force_at_C)) == 0.0
+
+
+def test_controller_sources_give_the_same_trajectory():
+    """Compiled analytic (default), numpy analytic and MuJoCo-matrix Udwadia–Kalaba controllers
+    drive MuJoCo along the same trajectory, with the same work and impulses."""
+    scene = paper_scene("paper_example1_controlled")
+    runs = {src: simulate(scene, dt=5e-3, t_end=0.5, controller=src) for src in ControllerSource}
+    ref = runs[ControllerSource.ANALYTIC]
+    for src, tr in runs.items():
+        assert tr.info["controller"] == src.value
+        assert _rel(tr.q, ref.q) <= 1e-12
+        assert _rel(tr.qdot, ref.qdot) <= 1e-11
+        assert _rel(tr.torque, ref.torque) <= 1e-10
+        assert _rel(tr.invariants.work, ref.invariants.work) <= 1e-11
+        assert _rel(tr.invariants.angular_impulse, ref.invariants.angular_impulse) <= 1e-11
+
+
+@pytest.mark.parametrize("weighting", ["M^-1", "M^-2", "identity"])
+def test_balances_with_given_torque_and_other_weightings(weighting):
+    """A random controlled scene with a given torque: energy, angular and linear momentum balances
+    hold with the stage-integrated work and impulses (compiled stage, or the numpy fallback for
+    the identity weighting, which also puts a force at C)."""
+    import dataclasses
+
+    from analytic.effects import Weighting
+
+    rng = np.random.default_rng(99)
+    scene = random_scene(rng, 3, controlled=True, external_torque=True)
+    scene = scene.replace(
+        control=dataclasses.replace(scene.control, weighting=Weighting(weighting))
+    )
+    tr = simulate(scene, dt=2e-3, t_end=1.0)
+    inv = tr.invariants
+    E_scale = np.max(np.abs(inv.energy)) + np.max(np.abs(inv.work))
+    L_scale = np.max(np.linalg.norm(inv.angular_momentum, axis=1))
+    P_scale = np.max(np.abs(inv.linear_momentum))
+    assert np.max(np.abs(inv.energy_balance())) <= th.BALANCE_REL_CONTROLLED * E_scale
+    assert np.max(np.abs(inv.angular_momentum_balance())) <= th.BALANCE_REL_CONTROLLED * L_scale
+    assert np.max(np.abs(inv.linear_momentum_balance())) <= th.BALANCE_REL_CONTROLLED * P_scale
+    if weighting == "identity":
+        assert np.max(np.abs(tr.force_at_C)) > 0  # the case the force-at-C moment is for
 
 
 def test_controlled_balances_with_stage_integrated_work():
