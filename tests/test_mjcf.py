@@ -13,8 +13,9 @@ from mj_scenes import PAPER, paper_scene, random_scene, random_state
 
 from analytic.effects import Effect, SpringModel
 from analytic.scene import MujocoSettings
-from mj_bridge import Twin
+from mj_bridge import Twin, installed
 from mj_bridge import thresholds as th
+from mj_bridge.callbacks import spring_user_bias
 from model_xml import (
     TORQUE_ACTUATORS,
     BodyFrame,
@@ -41,7 +42,8 @@ def _qacc(m: mujoco.MjModel, qpos, qvel, ctrl) -> np.ndarray:
     d.qpos[:] = qpos
     d.qvel[:] = qvel
     d.ctrl[: len(ctrl)] = ctrl
-    mujoco.mj_forward(m, d)
+    with installed(act_bias=spring_user_bias):
+        mujoco.mj_forward(m, d)
     return d.qacc.copy()
 
 
@@ -50,6 +52,7 @@ def _scenes():
     out = [(name, paper_scene(name)) for name in PAPER]
     for k in range(4):
         out.append((f"random{k}", random_scene(rng, controlled=bool(k % 2))))
+    out.append(("spring_actuators", random_scene(rng, 4, spring_model="actuator")))
     return out
 
 
@@ -58,9 +61,13 @@ def _scenes():
 )
 def test_xml_text_and_spec_give_same_qacc(label, scene):
     """Full-precision MJCF recompiles to the same dynamics as the spec (to_xml alone would not)."""
-    spec = build_spec(scene)
+    kw = {
+        "body_frame": BodyFrame(pos=np.array([0.3, -0.2, 1.1]), quat=np.array([0.6, 0.0, 0.8, 0.0]))
+    }
+    spec = build_spec(scene, **kw) if label == "spring_actuators" else build_spec(scene)
     m_spec = spec.compile()
-    m_xml = mujoco.MjModel.from_xml_string(to_mjcf(scene))
+    text = to_mjcf(scene, **kw) if label == "spring_actuators" else to_mjcf(scene)
+    m_xml = mujoco.MjModel.from_xml_string(text)
     rng = np.random.default_rng(7)
     for _ in range(3):
         qpos = np.concatenate([rng.normal(size=3), rng.normal(size=4), rng.normal(size=scene.n)])
