@@ -48,6 +48,11 @@ class installed:
         with _lock:
             if _active:
                 raise RuntimeError("mj_bridge callbacks are already installed (they are global)")
+            if any_installed():
+                raise RuntimeError(
+                    "a MuJoCo control or act-bias callback is already installed by other code; "
+                    "mj_bridge will not replace it"
+                )
             _active = True
         try:
             if self.control is not None:

@@ -19,6 +19,16 @@ from model_xml.builder import (
     tendon_name,
 )
 from model_xml.mjcf_text import spec_to_mjcf, to_mjcf
+from model_xml.primitives import (
+    MassProperties,
+    Primitive,
+    PrimitiveKind,
+    mass_properties,
+    match_axes,
+    paper_example1_primitives,
+    primitive_spec,
+    rod_in_principal,
+)
 
 __all__ = [
     "BODY",
@@ -26,12 +36,20 @@ __all__ = [
     "ROOT",
     "TORQUE_ACTUATORS",
     "BodyFrame",
+    "MassProperties",
+    "Primitive",
+    "PrimitiveKind",
     "SpringTendon",
     "build_spec",
     "compile_scene",
     "force_actuator_name",
     "joint_name",
     "mass_name",
+    "mass_properties",
+    "match_axes",
+    "paper_example1_primitives",
+    "primitive_spec",
+    "rod_in_principal",
     "spec_to_mjcf",
     "spring_actuator_name",
     "spring_tendons",

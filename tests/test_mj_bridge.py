@@ -174,6 +174,13 @@ def test_callbacks_removed_after_run_and_on_exception():
             with installed(control=lambda m, d: None):
                 pass
     assert not any_installed()
+    mujoco.set_mjcb_control(lambda m, d: None)  # somebody else's callback is never replaced
+    try:
+        with pytest.raises(RuntimeError, match="other code"):
+            with installed(control=lambda m, d: None):
+                pass
+    finally:
+        mujoco.set_mjcb_control(None)
 
 
 def test_controller_runs_at_every_rk4_stage():
