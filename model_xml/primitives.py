@@ -5,6 +5,10 @@ Primitives are given in a *design* frame (e.g. block coordinates of the paper's 
 
 * ``BOX``: ``size`` = half-sizes (m), solid, volumetric ``density`` (kg/m³);
 * ``CYLINDER``: ``size = [radius, half_length]`` (m), solid, axis along the primitive's z;
+* ``TUBE``: a hollow cylinder with open ends and a wall of any ``thickness``, ``size = [outer radius,
+  half_length]``: a closed triangle mesh with MuJoCo's exact (volumetric) mesh inertia. Its polygons
+  (``TUBE_SEGMENTS`` sides) have the circles' areas, so the mass is exact and the moments are off by
+  O((2π/N)⁴) (~4e-7 for N = 256). End caps are ``CYLINDER`` discs;
 * ``CLOSED_SHELL``: a hollow cylinder with end caps, thin-walled: MuJoCo's shell inertia with areal
   density ``density · thickness`` (exact as the wall thickness -> 0).
 
@@ -30,7 +34,11 @@ ALUMINIUM_DENSITY = 2700.0  # kg/m³, the paper's Example 1 material (Sec. V.A.1
 class PrimitiveKind(StrEnum):
     BOX = "box"
     CYLINDER = "cylinder"
+    TUBE = "tube"
     CLOSED_SHELL = "closed_shell"
+
+
+TUBE_SEGMENTS = 256
 
 
 @dataclass(frozen=True)
@@ -61,10 +69,16 @@ class Primitive:
             )
         if not self.density > 0:
             raise ValueError(f"Primitive.density: must be positive (got {self.density!r})")
-        if (self.kind is PrimitiveKind.CLOSED_SHELL) != (self.thickness > 0):
+        walled = self.kind in (PrimitiveKind.CLOSED_SHELL, PrimitiveKind.TUBE)
+        if walled != (self.thickness > 0):
             raise ValueError(
-                f"Primitive.thickness: positive for closed_shell only (got {self.thickness!r} "
-                f"for {self.kind.value})"
+                f"Primitive.thickness: positive for closed_shell and tube only (got "
+                f"{self.thickness!r} for {self.kind.value})"
+            )
+        if self.kind is PrimitiveKind.TUBE and self.thickness >= self.size[0]:
+            raise ValueError(
+                f"Primitive.thickness: must be below the tube's radius {self.size[0]!r} "
+                f"(got {self.thickness!r})"
             )
 
 
@@ -99,7 +113,16 @@ def primitive_spec(primitives: list[Primitive]) -> mujoco.MjSpec:
         g.quat = quat_z_to(pr.axis)
         g.contype = 0
         g.conaffinity = 0
-        if pr.kind is PrimitiveKind.BOX:
+        if pr.kind is PrimitiveKind.TUBE:
+            mesh = spec.add_mesh(name=f"tube{k}")
+            V, F = tube_mesh(pr.size[0], pr.size[0] - pr.thickness, pr.size[1])
+            mesh.uservert = V.ravel()
+            mesh.userface = F.ravel()
+            mesh.inertia = mujoco.mjtMeshInertia.mjMESH_INERTIA_EXACT
+            g.type = mujoco.mjtGeom.mjGEOM_MESH
+            g.meshname = mesh.name
+            g.density = pr.density
+        elif pr.kind is PrimitiveKind.BOX:
             g.type = mujoco.mjtGeom.mjGEOM_BOX
             g.size = list(pr.size)
             g.density = pr.density
@@ -112,6 +135,35 @@ def primitive_spec(primitives: list[Primitive]) -> mujoco.MjSpec:
             else:
                 g.density = pr.density
     return spec
+
+
+def tube_mesh(
+    r_out: float, r_in: float, half_length: float, segments: int = TUBE_SEGMENTS
+) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices (4N, 3) and outward-oriented triangles (8N, 3) of an open-ended thick tube along z.
+
+    Radii are scaled by ``sqrt(θ / sin θ)`` (θ = 2π/N) so each polygon has its circle's area.
+    """
+    th = 2.0 * np.pi / segments
+    k = np.sqrt(th / np.sin(th))
+    ang = np.arange(segments) * th
+    ring = np.stack([np.cos(ang), np.sin(ang)], axis=1)
+    V = np.concatenate(
+        [
+            np.column_stack([rad * k * ring, np.full(segments, z)])
+            for rad in (r_out, r_in)
+            for z in (-half_length, half_length)
+        ]
+    )
+    ob, ot, ib, it = 0, segments, 2 * segments, 3 * segments
+    F = []
+    for i in range(segments):
+        j = (i + 1) % segments
+        F += [[ob + i, ob + j, ot + j], [ob + i, ot + j, ot + i]]  # outer wall
+        F += [[ib + i, it + j, ib + j], [ib + i, it + i, it + j]]  # inner wall (faces the axis)
+        F += [[ot + i, ot + j, it + j], [ot + i, it + j, it + i]]  # top annulus
+        F += [[ob + i, ib + j, ob + j], [ob + i, ib + i, ib + j]]  # bottom annulus
+    return V, np.array(F, dtype=int)
 
 
 def mass_properties(primitives: list[Primitive]) -> MassProperties:

@@ -275,6 +275,31 @@ def test_closed_shell_cylinder_is_thin_wall_limit():
     assert I[0, 0] == pytest.approx(I_t, rel=1e-9)
 
 
+def test_thick_tube_matches_closed_form():
+    """Open thick-walled tube (exact mesh inertia) + two solid end caps vs closed forms."""
+    R, t, h, rho = 4.0, 0.3, 12.0, 7000.0
+    r = R - t
+    tube = Primitive(PrimitiveKind.TUBE, (R, h / 2), density=rho, thickness=t)
+    props = mass_properties([tube])
+    m = rho * np.pi * (R * R - r * r) * h
+    assert props.mass == pytest.approx(m, rel=1e-6)
+    I = _inertia_in_design(props)
+    assert I[2, 2] == pytest.approx(m * (R * R + r * r) / 2, rel=1e-6)
+    assert I[0, 0] == pytest.approx(m * (3 * (R * R + r * r) + h * h) / 12, rel=1e-6)
+    np.testing.assert_allclose(props.com, 0.0, atol=1e-12)
+    # with end caps (discs of radius r inside the ends): parallel-axis closed form
+    caps = [
+        Primitive(PrimitiveKind.CYLINDER, (r, t / 2), np.array([0, 0, z]), density=rho)
+        for z in (-(h / 2 - t / 2), h / 2 - t / 2)
+    ]
+    props2 = mass_properties([tube, *caps])
+    mc = rho * np.pi * r * r * t
+    assert props2.mass == pytest.approx(m + 2 * mc, rel=1e-6)
+    I2 = _inertia_in_design(props2)
+    Ic_t = mc * (3 * r * r + t * t) / 12 + mc * (h / 2 - t / 2) ** 2
+    assert I2[0, 0] == pytest.approx(I[0, 0] + 2 * Ic_t, rel=1e-6)
+
+
 def test_bad_primitive_raises_naming_field():
     with pytest.raises(ValueError, match=r"Primitive\.size"):
         Primitive(PrimitiveKind.BOX, (1.0, 2.0))
