@@ -53,6 +53,17 @@ class SolverMethod(StrEnum):
     LSODA = "LSODA"
 
 
+class Backend(StrEnum):
+    """How the analytic engine evaluates its right-hand side."""
+
+    AUTO = "auto"
+    """The compiled kernel when numba is installed and the case is structured, else numpy."""
+    NUMPY = "numpy"
+    """The reference implementation (:class:`analytic.model.TumblingModel`)."""
+    NUMBA = "numba"
+    """The compiled O(n) kernel (:mod:`analytic.fast`); an error when numba is missing."""
+
+
 class MjIntegrator(StrEnum):
     """MuJoCo integrators (``mjtIntegrator``) by their MJCF names."""
 

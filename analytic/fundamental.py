@@ -64,12 +64,27 @@ class FundamentalSolution:
 
 
 def pinv_psd(G: np.ndarray, rcond: float = PINV_RCOND) -> tuple[np.ndarray, int]:
-    """Moore-Penrose inverse of a symmetric positive semidefinite matrix, and its numerical rank."""
-    w, V = np.linalg.eigh(G)
+    """Moore-Penrose inverse of a symmetric positive semidefinite Gram matrix, and its rank.
+
+    The rows of ``A_c`` carry different units (rad/s² for ω rows, m/s² for mass rows) and masses
+    may span many decades, so the rank is decided on the Jacobi-scaled matrix ``D G D``
+    (``D = diag(G)^-1/2``, unit diagonal), which is invariant to the rows' units. At full rank the
+    inverse is computed from the scaled matrix too (``G⁻¹ = D (D G D)⁻¹ D``, better conditioned);
+    at rank r < k it is the Moore-Penrose inverse of G from its r largest eigenpairs.
+    """
+    dg = np.diag(G).copy()
+    dg[dg <= 0] = 1.0
+    D = 1.0 / np.sqrt(dg)
+    DD = np.outer(D, D)
+    w, V = np.linalg.eigh(G * DD)
     wmax = float(np.max(np.abs(w))) if w.size else 0.0
     keep = w > rcond * wmax
-    inv = (V[:, keep] / w[keep]) @ V[:, keep].T
-    return inv, int(np.count_nonzero(keep))
+    rank = int(np.count_nonzero(keep))
+    if rank == G.shape[0]:
+        return ((V / w) @ V.T) * DD, rank
+    w, V = np.linalg.eigh(G)
+    top = np.argsort(w)[::-1][:rank]
+    return (V[:, top] / w[top]) @ V[:, top].T, rank
 
 
 def solve(

@@ -18,7 +18,7 @@ from collections.abc import Callable
 import numpy as np
 from scipy import integrate
 
-from analytic.effects import SolverMethod
+from analytic.effects import Backend, SolverMethod
 from analytic.invariants import compute_invariants
 from analytic.kinematics import S, omega_of
 from analytic.model import TumblingModel
@@ -40,14 +40,28 @@ class _NonFinite(ArithmeticError):
     pass
 
 
-def _rhs(model: TumblingModel) -> Callable[[float, np.ndarray], np.ndarray]:
+def evaluator(model: TumblingModel, backend: Backend) -> Callable:
+    """``accel(t, q, qdot) -> (q̈, ControlOutput)`` for the chosen backend."""
+    backend = Backend(backend)
+    if backend is Backend.NUMPY:
+        return model.acceleration
+    from analytic import fast
+
+    if not fast.available():
+        if backend is Backend.NUMBA:
+            raise ValueError("backend: 'numba' needs the numba package (got backend='numba')")
+        return model.acceleration
+    return fast.FastModel(model.scene, model).acceleration_output
+
+
+def _rhs(model: TumblingModel, accel: Callable) -> Callable[[float, np.ndarray], np.ndarray]:
     nq = model.nq
     counter = {"nfev": 0}
 
     def f(t: float, y: np.ndarray) -> np.ndarray:
         counter["nfev"] += 1
         q, qd = y[:nq], y[nq : 2 * nq]
-        qdd, c = model.acceleration(t, q, qd)
+        qdd, c = accel(t, q, qd)
         u = q[3:7]
         omega = omega_of(u, qd[3:7])
         tau_g = model.given_torque(t)
@@ -62,7 +76,9 @@ def _rhs(model: TumblingModel) -> Callable[[float, np.ndarray], np.ndarray]:
         Sm = S(u)
         # External moments about the system centre of mass c: the body torques, and a force at C
         # acting at R, with R - c = -(Σ m_i (r_i - R))/m_T = -(μ1 Sa + μ0 Sd)/m_T.
-        R_minus_c = -(float(model.m @ q[7:]) * (Sm @ model.a) + model.mu0 * (Sm @ model.d)) / model.m_T
+        R_minus_c = (
+            -(float(model.m @ q[7:]) * (Sm @ model.a) + model.mu0 * (Sm @ model.d)) / model.m_T
+        )
         out[2 * nq + 1 : 2 * nq + 4] = Sm @ (c.torque + tau_g) + np.cross(R_minus_c, c.force_at_C)
         out[2 * nq + 4 : 2 * nq + 7] = c.force_at_C
         if not np.all(np.isfinite(out)):
@@ -81,14 +97,19 @@ def simulate(
     atol: float | None = None,
     t_end: float | None = None,
     progress: Callable[[float], None] | None = None,
+    backend: Backend | str = Backend.AUTO,
 ) -> Trajectory:
     """Integrate ``scene`` with the analytic model; returns the samples at the scene's output rate.
 
     Solver, tolerances and horizon default to the scene's (``[solver]``, ``[output]``).
     A failure (solver failure, non-finite state, KeyboardInterrupt) ends the run early with
     ``status = failed`` and the samples reached so far.
+
+    ``backend``: ``auto`` (the compiled kernel of :mod:`analytic.fast` when numba is installed,
+    else numpy), ``numpy`` (the reference :class:`TumblingModel`) or ``numba``.
     """
     model = TumblingModel(scene)
+    accel = evaluator(model, backend)
     method = SolverMethod(method or scene.solver.method)
     rtol = scene.solver.rtol if rtol is None else rtol
     atol = scene.solver.atol if atol is None else atol
@@ -96,7 +117,7 @@ def simulate(
     t_eval = out.times()
     nq = model.nq
     y0 = np.concatenate([scene.initial.q0(), scene.initial.qdot0(), np.zeros(N_AUX)])
-    f = _rhs(model)
+    f = _rhs(model, accel)
     status, message = RunStatus.OK, ""
     ys = [y0]
     ts = [t_eval[0]]
@@ -148,12 +169,16 @@ def simulate(
     t = np.array(ts)
     return _assemble(
         model,
+        accel,
         t,
         Y,
         status,
         message,
         {
             "method": method.value,
+            "backend": "numba"
+            if getattr(getattr(accel, "__self__", None), "compiled", False)
+            else "numpy",
             "rtol": rtol,
             "atol": atol,
             "nfev": f.counter["nfev"],
@@ -164,7 +189,7 @@ def simulate(
     )
 
 
-def _assemble(model, t, Y, status, message, info) -> Trajectory:
+def _assemble(model, accel, t, Y, status, message, info) -> Trajectory:
     nq = model.nq
     q, qd = Y[:, :nq], Y[:, nq : 2 * nq]
     N = len(t)
@@ -177,7 +202,7 @@ def _assemble(model, t, Y, status, message, info) -> Trajectory:
     e_w, e_p = [], []
     for i in range(N):
         try:
-            a, c = model.acceleration(t[i], q[i], qd[i])
+            a, c = accel(t[i], q[i], qd[i])
         except (np.linalg.LinAlgError, ValueError):
             a = np.full(nq, np.nan)
             c = None
