@@ -18,7 +18,7 @@ import sys  # noqa: E402
 import warnings  # noqa: E402
 from pathlib import Path  # noqa: E402
 
-from analytic.effects import SolverMethod  # noqa: E402
+from analytic.effects import Backend, SolverMethod  # noqa: E402
 from analytic.trajectory import RunStatus  # noqa: E402
 from validation.progress import Progress  # noqa: E402
 from validation.scenes import DEFAULT_SIMULATE_SCENE, builtin_names, resolve_scene  # noqa: E402
@@ -63,6 +63,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
             atol=args.atol,
             t_end=args.t_end,
             progress=prog,
+            backend=args.backend,
         )
     finally:
         prog.close()
@@ -106,7 +107,7 @@ def cmd_validate(args: argparse.Namespace) -> int:
     print(f"{verdict}: {len(res.checks) - n_fail}/{len(res.checks)} checks passed for {scene.name}")
     for c in res.checks:
         if not c.passed:
-            print(f"  failed: {c.name}: {c.value:.3e} > {c.threshold:.3e}")
+            print(f"  failed: {c.label}: {c.value:.3e} > {c.threshold:.3e} {c.unit}")
     print(f"report: {Path(res.out_dir) / 'report.md'}  recording: {Path(res.out_dir) / 'run.rrd'}")
     return 0 if res.passed else EXIT_FAILED
 
@@ -126,8 +127,8 @@ def cmd_demo(args: argparse.Namespace) -> int:
     from validation.validate import write_demo
 
     out = Path(args.out or Path("out") / "demo")
-    path = write_demo(out)
-    print(f"wrote the demo to {path}; open the .rrd with: rerun {Path(path) / 'demo.rrd'}")
+    res = write_demo(out)
+    print(f"wrote {res.markdown}; open the recording with: rerun {res.rrd}")
     return 0
 
 
@@ -153,6 +154,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--rtol", type=_positive_float, help="relative tolerance")
     p.add_argument("--atol", type=_positive_float, help="absolute tolerance")
     p.add_argument("--t-end", type=_positive_float, help="horizon in seconds")
+    p.add_argument(
+        "--backend",
+        choices=[b.value for b in Backend],
+        default=Backend.AUTO.value,
+        help="right-hand side: the compiled kernel (auto/numba) or the numpy reference",
+    )
     p.set_defaults(func=cmd_simulate)
 
     p = sub.add_parser(
