@@ -17,7 +17,7 @@ import time
 import mujoco
 import numpy as np
 
-from analytic.effects import MjIntegrator
+from analytic.effects import MjIntegrator, SpringModel
 from analytic.invariants import compute_invariants
 from analytic.scene import OutputSettings, Scene
 from analytic.trajectory import Engine, RunStatus, Tracking, Trajectory
@@ -180,7 +180,7 @@ def simulate(
             "dt": tw.dt,
             "nsteps": nsteps,
             "controller": tw.controller.value,
-            "spring_model": scene.mujoco.spring_model.value,
+            "spring_model": SpringModel(scene.mujoco.spring_model).value,
             "wall_time_s": wall,
             "mujoco_version": mujoco.__version__,
             "mujoco_energy": [float(e) for e in rec["energy_mj"]],

@@ -181,7 +181,7 @@ class Twin:
                 [self.m.actuator(spring_actuator_name(j)).id for j in range(len(tendons))],
                 dtype=int,
             )
-            if scene.mujoco.spring_model is SpringModel.ACTUATOR
+            if SpringModel(scene.mujoco.spring_model) is SpringModel.ACTUATOR
             else np.zeros(0, dtype=int)
         )
         self.needs_act_bias = any(sp.k_cubic != 0.0 for sp in tendons) and len(self.spring_act_ids)

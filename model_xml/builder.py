@@ -281,7 +281,7 @@ def build_spec(scene: Scene, body_frame: BodyFrame | None = None) -> mujoco.MjSp
         _visual(g, red)
 
     tendons = spring_tendons(scene)
-    as_actuators = scene.mujoco.spring_model is SpringModel.ACTUATOR
+    as_actuators = SpringModel(scene.mujoco.spring_model) is SpringModel.ACTUATOR
     for j, sp in enumerate(tendons):
         t = spec.add_tendon(name=tendon_name(j))
         for jj, c in zip(sp.joints, sp.coefs, strict=True):
