@@ -108,7 +108,7 @@ def test_names_and_layout_example2_controlled():
         j = m.joint(joint_name(i)).id
         assert m.jnt_type[j] == mujoco.mjtJoint.mjJNT_SLIDE
         assert m.jnt_bodyid[j] == m.body(mass_name(i)).id
-        np.testing.assert_allclose(m.jnt_axis[j], scene.rod.axis, rtol=0, atol=1e-15)
+        np.testing.assert_allclose(m.jnt_axis[j], scene.rod.axis, rtol=0, atol=th.ULP_REL)
         np.testing.assert_allclose(m.body_pos[m.body(mass_name(i)).id], scene.rod.offset, atol=0)
         assert m.body_mass[m.body(mass_name(i)).id] == scene.masses.mass[i]
     assert m.ntendon == n + 1
@@ -120,7 +120,7 @@ def test_names_and_layout_example2_controlled():
     assert m.body_mass[b] == scene.body.mass
     np.testing.assert_array_equal(m.body_ipos[b], np.zeros(3))
     assert m.body_subtreemass[b] == pytest.approx(
-        scene.body.mass + scene.masses.mass.sum(), rel=1e-15
+        scene.body.mass + scene.masses.mass.sum(), rel=th.ULP_REL
     )
     # visual geoms are massless and never collide
     assert np.all(m.geom_contype == 0) and np.all(m.geom_conaffinity == 0)
@@ -143,7 +143,7 @@ def test_rotational_inertia_total_matches_paper_J():
     dv = np.asarray(scene.rod.offset)
     J = np.diag(scene.body.inertia) + scene.masses.inertia.sum(axis=0)
     ref = J + scene.masses.mass.sum() * (dv @ dv * np.eye(3) - np.outer(dv, dv))
-    np.testing.assert_allclose(I_tot, ref, rtol=0, atol=1e-13 * np.max(ref))
+    np.testing.assert_allclose(I_tot, ref, rtol=0, atol=th.INERTIA_SUM_REL * np.max(ref))
 
 
 def test_effects_map_onto_the_model():
@@ -164,7 +164,7 @@ def test_effects_map_onto_the_model():
     pad = off.body_inertia[off.body("mass1").id]
     assert np.all(pad < 1e-8 * scene.body.inertia.min())
     np.testing.assert_allclose(
-        off.body_inertia[off.body("BR").id] + scene.n * pad[0], scene.body.inertia, rtol=1e-15
+        off.body_inertia[off.body("BR").id] + scene.n * pad[0], scene.body.inertia, rtol=th.ULP_REL
     )
 
     bare = build_spec(scene.with_effects(set())).compile()
@@ -191,9 +191,10 @@ def test_tendon_springs_follow_eq38():
     kl, kn = scene.springs.k_linear, scene.springs.k_cubic
     f = kl * ext + kn * ext**3
     F_ref = f[1:] - f[:-1]  # -∂U/∂p
-    np.testing.assert_allclose(d.qfrc_passive[6:], F_ref, rtol=1e-13, atol=1e-9 * np.abs(f).max())
+    tol = th.SPRING_CLOSED_FORM_REL
+    np.testing.assert_allclose(d.qfrc_passive[6:], F_ref, rtol=0, atol=tol * np.abs(f).max())
     U_ref = np.sum(0.5 * kl * ext**2 + 0.25 * kn * ext**4)
-    assert d.energy[0] == pytest.approx(U_ref, rel=1e-13)
+    assert d.energy[0] == pytest.approx(U_ref, rel=tol)
 
 
 def test_rest_length_minus_one_is_not_mujocos_sentinel():
@@ -234,7 +235,7 @@ def test_body_frame_option_moves_only_the_frame():
     bf = BodyFrame(pos=np.array([1.0, -2.0, 0.5]), quat=np.array([0.5, 0.5, 0.5, 0.5]))
     m = build_spec(scene, bf).compile()
     b = m.body("BR").id
-    assert np.linalg.norm(m.body_ipos[b]) == pytest.approx(np.linalg.norm(bf.pos), rel=1e-15)
+    assert np.linalg.norm(m.body_ipos[b]) == pytest.approx(np.linalg.norm(bf.pos), rel=th.ULP_REL)
     assert m.body_mass[b] == scene.body.mass
 
 
@@ -252,7 +253,7 @@ def test_primitives_reproduce_example1_mass_properties():
     np.testing.assert_allclose(a, [-0.3985, -0.1481, 0.9051], atol=th.PRIMITIVE_ROD_ABS)
     np.testing.assert_allclose(d, [3.2616, 1.4196, -0.1623], atol=th.PRIMITIVE_ROD_ABS)
     # independent closed form for the mass: ρ (box volume + rod volume)
-    assert props.mass == pytest.approx(2700 * (10 * 6 * 2 + np.pi * 16), rel=1e-12)
+    assert props.mass == pytest.approx(2700 * (10 * 6 * 2 + np.pi * 16), rel=th.MASS_FORMULA_REL)
 
 
 def _inertia_in_design(props):
@@ -265,14 +266,18 @@ def test_closed_shell_cylinder_is_thin_wall_limit():
     props = mass_properties(
         [Primitive(PrimitiveKind.CLOSED_SHELL, (r, h / 2), density=rho, thickness=t)]
     )
-    assert props.mass == pytest.approx(rho * t * (2 * np.pi * r * h + 2 * np.pi * r * r), rel=1e-12)
+    assert props.mass == pytest.approx(
+        rho * t * (2 * np.pi * r * h + 2 * np.pi * r * r), rel=th.MASS_FORMULA_REL
+    )
     # axial moment of the lateral surface (m r²) and the two caps (m r²/2 each)
     m_lat, m_cap = rho * t * 2 * np.pi * r * h, rho * t * np.pi * r * r
     I = _inertia_in_design(props)
-    assert I[2, 2] == pytest.approx(m_lat * r * r + 2 * m_cap * r * r / 2, rel=1e-9)
+    assert I[2, 2] == pytest.approx(
+        m_lat * r * r + 2 * m_cap * r * r / 2, rel=th.SHELL_CLOSED_FORM_REL
+    )
     # transverse: lateral surface m (r²/2 + h²/12), each cap m (r²/4 + (h/2)²)
     I_t = m_lat * (r * r / 2 + h * h / 12) + 2 * m_cap * (r * r / 4 + h * h / 4)
-    assert I[0, 0] == pytest.approx(I_t, rel=1e-9)
+    assert I[0, 0] == pytest.approx(I_t, rel=th.SHELL_CLOSED_FORM_REL)
 
 
 def test_thick_tube_matches_closed_form():
@@ -282,11 +287,11 @@ def test_thick_tube_matches_closed_form():
     tube = Primitive(PrimitiveKind.TUBE, (R, h / 2), density=rho, thickness=t)
     props = mass_properties([tube])
     m = rho * np.pi * (R * R - r * r) * h
-    assert props.mass == pytest.approx(m, rel=1e-6)
+    assert props.mass == pytest.approx(m, rel=th.TUBE_MESH_REL)
     I = _inertia_in_design(props)
-    assert I[2, 2] == pytest.approx(m * (R * R + r * r) / 2, rel=1e-6)
-    assert I[0, 0] == pytest.approx(m * (3 * (R * R + r * r) + h * h) / 12, rel=1e-6)
-    np.testing.assert_allclose(props.com, 0.0, atol=1e-12)
+    assert I[2, 2] == pytest.approx(m * (R * R + r * r) / 2, rel=th.TUBE_MESH_REL)
+    assert I[0, 0] == pytest.approx(m * (3 * (R * R + r * r) + h * h) / 12, rel=th.TUBE_MESH_REL)
+    np.testing.assert_allclose(props.com, 0.0, atol=th.KINEMATICS_REL * R)
     # with end caps (discs of radius r inside the ends): parallel-axis closed form
     caps = [
         Primitive(PrimitiveKind.CYLINDER, (r, t / 2), np.array([0, 0, z]), density=rho)
@@ -294,10 +299,10 @@ def test_thick_tube_matches_closed_form():
     ]
     props2 = mass_properties([tube, *caps])
     mc = rho * np.pi * r * r * t
-    assert props2.mass == pytest.approx(m + 2 * mc, rel=1e-6)
+    assert props2.mass == pytest.approx(m + 2 * mc, rel=th.TUBE_MESH_REL)
     I2 = _inertia_in_design(props2)
     Ic_t = mc * (3 * r * r + t * t) / 12 + mc * (h / 2 - t / 2) ** 2
-    assert I2[0, 0] == pytest.approx(I[0, 0] + 2 * Ic_t, rel=1e-6)
+    assert I2[0, 0] == pytest.approx(I[0, 0] + 2 * Ic_t, rel=th.TUBE_MESH_REL)
 
 
 def test_bad_primitive_raises_naming_field():
