@@ -1,0 +1,159 @@
+"""Effects cost time too: one dynamics evaluation with each of the scene's effects switched off.
+
+For the scene as given and for each effect it lists, the scene without that effect
+(``scene.with_effects(...)``; a combination the scene validation refuses is reported as such), the
+median cost in µs of one evaluation of:
+
+* ``analytic_numpy``: ``TumblingModel.acceleration`` (the reference numpy path);
+* ``analytic_fast``: the analytic engine's default evaluator (compiled kernel when numba is
+  installed: what ``analytic.simulate`` calls per right-hand side);
+* ``mj_forward``: MuJoCo's ``mj_forward`` on ``model_xml.build_spec(scene).compile()`` at the
+  scene's initial state (no Python callback: controls stay zero);
+* ``mj_forward_ctrl``: ``mj_forward`` with the twin's callbacks installed (installing and removing
+  them included) (the analytic controller
+  in ``mjcb_control`` for controlled scenes; the spring user bias when the scene needs it), i.e. one
+  stage of the controlled MuJoCo plant.
+
+Run alone: ``python -m validation.effects_cost [SCENE]``.
+"""
+
+from __future__ import annotations
+
+import os
+
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import statistics  # noqa: E402
+import time  # noqa: E402
+from collections.abc import Callable  # noqa: E402
+from typing import Any  # noqa: E402
+
+from analytic.scene import Scene  # noqa: E402
+
+COST_COLUMNS = ("analytic_numpy", "analytic_fast", "mj_forward", "mj_forward_ctrl")
+
+
+def _batch(fn) -> int:
+    """Calls per timed batch (~10 ms)."""
+    t0 = time.perf_counter()
+    fn()
+    one = max(time.perf_counter() - t0, 1e-7)
+    return max(1, int(0.01 / one))
+
+
+def evaluation_callables(scene: Scene) -> dict[str, Callable[[], Any]]:
+    """One zero-argument callable per column of :data:`COST_COLUMNS`, warmed up."""
+    import mujoco
+
+    from analytic.model import TumblingModel
+    from analytic.simulate import evaluator
+    from mj_bridge.twin import Twin
+    from model_xml import build_spec
+
+    q, qd = scene.initial.q0(), scene.initial.qdot0()
+    model = TumblingModel(scene)
+    fast = evaluator(model, "auto")
+    m = build_spec(scene).compile()
+    d = mujoco.MjData(m)
+    tw = Twin(scene, integrator="RK4")
+    tw.set_state(0.3, q, qd)
+
+    def mj_ctrl() -> None:
+        with tw.callbacks():
+            mujoco.mj_forward(tw.m, tw.d)
+
+    fns = {
+        "analytic_numpy": lambda: model.acceleration(0.3, q, qd),
+        "analytic_fast": lambda: fast(0.3, q, qd),
+        "mj_forward": lambda: mujoco.mj_forward(m, d),
+        "mj_forward_ctrl": mj_ctrl,
+    }
+    for fn in fns.values():
+        fn()  # JIT compile or cache load, first-call allocations
+    return fns
+
+
+def effects_cost(scene: Scene, repeats: int = 15) -> list[dict[str, Any]]:
+    """One row for the full scene and one per effect switched off (``off`` = effect name).
+
+    Costs in µs per evaluation: the median over ``repeats`` rounds, each round timing one batch of
+    every (variant, column) in turn, so that a slow spell of a shared machine spreads over all
+    variants instead of biasing one.
+    """
+    rows: list[dict[str, Any]] = []
+    variants: list[tuple[str, Any]] = [("", scene.effects)]
+    variants += [(str(e.value), scene.effects - {e}) for e in sorted(scene.effects)]
+    fns: dict[tuple[int, str], Callable[[], Any]] = {}
+    for off, effects in variants:
+        row: dict[str, Any] = {"off": off or "(none: full scene)", "note": ""}
+        row.update(dict.fromkeys(COST_COLUMNS))
+        rows.append(row)
+        try:
+            sc = scene.with_effects(effects)
+        except ValueError as exc:
+            row["note"] = f"refused by the scene validation: {exc}"
+            continue
+        try:
+            for c, fn in evaluation_callables(sc).items():
+                fns[(len(rows) - 1, c)] = fn
+        except Exception as exc:  # an engine that cannot build this variant is a result
+            row["note"] = f"{type(exc).__name__}: {exc}"
+    numbers = {k: _batch(fn) for k, fn in fns.items()}
+    samples: dict[tuple[int, str], list[float]] = {k: [] for k in fns}
+    for _ in range(repeats):
+        for k, fn in fns.items():
+            n = numbers[k]
+            t0 = time.perf_counter()
+            for _ in range(n):
+                fn()
+            samples[k].append((time.perf_counter() - t0) / n * 1e6)
+    for (i, c), v in samples.items():
+        rows[i][c] = statistics.median(v)
+    full = rows[0]
+    for row in rows:
+        for c in COST_COLUMNS:
+            v, f = row[c], full[c]
+            row[f"{c}_rel"] = (v / f) if (v is not None and f) else None
+    return rows
+
+
+def effects_markdown(rows: list[dict[str, Any]]) -> list[str]:
+    """Markdown table lines (µs, and the fraction of the full scene's cost)."""
+
+    def cell(r, c):
+        v, rel = r[c], r.get(f"{c}_rel")
+        return "–" if v is None else f"{v:.3g} ({rel:.2f})"
+
+    lines = [
+        "Median µs per evaluation (fraction of the full scene's cost). analytic_fast is what the "
+        "analytic engine calls per right-hand side; mj_forward_ctrl includes the analytic "
+        "controller in MuJoCo's control callback.",
+        "",
+        "| effect off | " + " | ".join(COST_COLUMNS) + " | note |",
+        "|---|" + "---|" * (len(COST_COLUMNS) + 1),
+    ]
+    for r in rows:
+        note = r["note"].replace("|", "/").replace("\n", " ")
+        lines.append(
+            f"| {r['off']} | " + " | ".join(cell(r, c) for c in COST_COLUMNS) + f" | {note} |"
+        )
+    return lines
+
+
+def main(argv: list[str] | None = None) -> int:
+    import argparse
+
+    from validation.scenes import resolve_scene
+
+    ap = argparse.ArgumentParser(prog="python -m validation.effects_cost")
+    ap.add_argument("scene", nargs="?", default="paper_example1_controlled")
+    ap.add_argument("--repeats", type=int, default=15)
+    args = ap.parse_args(argv)
+    rows = effects_cost(resolve_scene(args.scene), repeats=args.repeats)
+    print("\n".join(effects_markdown(rows)))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,270 @@
+"""The fast engine's goals (issue 5), each measured as a ratio in this one process, with whether it
+holds. Numbers are printed, never asserted (tests cover correctness, not speed).
+
+``python -m validation.goals [--skip-long]``:
+
+1. **evaluation**: one evaluation of the analytic controlled dynamics (``M``, ``Q``, Udwadia–Kalaba
+   with control; ``FastModel.qddot``, the integrator's right-hand side) / MuJoCo's ``mj_forward``
+   on the same body (``model_xml.build_spec(scene).compile()``), for ``validation.bench.chain_scene``
+   n = 2 and n = 5. Holds when ≤ 1.
+2. **controller in RK4**: the extra cost per RK4 step of the analytic controller running in
+   ``mjcb_control`` (four stages, the twin's default compiled stage) / the bare ``mj_step`` (RK4, no
+   callback, ctrl = 0), on the controlled paper scenes. Holds when ≤ 1 ("costs no more than the
+   MuJoCo step it sits in").
+3. **60 s Example 1**: the controlled Example 1 over 60 s, analytic DOP853 at rtol 1e-12 (atol 1e-13):
+   its error against a reference (DOP853 at rtol 2.5e-14) in the sweep's error measure
+   (:func:`validation.sweep.errors_against`); then MuJoCo RK4 with dt halving from 1e-3 s until its
+   error is at most the analytic one. Ratio = analytic wall / wall of the first RK4 run that is as
+   accurate. If none is reached within the time cap, the RK4 cost at the needed dt is extrapolated
+   from its observed order and the ratio is marked as extrapolated. Holds when ≤ 1.
+4. **n scaling**: cost of one fast evaluation at n = 1000 / at n = 10. Holds when ≤ 150.
+
+Timings are medians over interleaved rounds (both sides of a ratio measured alternately), with one
+BLAS thread.
+"""
+
+from __future__ import annotations
+
+import os
+
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import argparse  # noqa: E402
+import math  # noqa: E402
+import statistics  # noqa: E402
+import time  # noqa: E402
+from collections.abc import Callable  # noqa: E402
+from dataclasses import dataclass, field  # noqa: E402
+from typing import Any  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+
+@dataclass(frozen=True)
+class Goal:
+    """One goal: ``value`` compared with ``limit`` (holds when value ≤ limit)."""
+
+    name: str
+    value: float
+    limit: float
+    detail: str = ""
+    extrapolated: bool = False
+    data: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def holds(self) -> bool:
+        return bool(math.isfinite(self.value) and self.value <= self.limit)
+
+    def line(self) -> str:
+        verdict = "holds" if self.holds else "fails"
+        if self.extrapolated:
+            verdict += " (extrapolated)"
+        return (
+            f"{self.name}: ratio {self.value:.3g} (goal ≤ {self.limit:g}): {verdict}. {self.detail}"
+        )
+
+
+def interleaved(fns: dict[str, Callable[[], Any]], rounds: int = 11) -> dict[str, float]:
+    """Median seconds per call of each function, timed in alternating ~10 ms batches."""
+    numbers = {}
+    for k, fn in fns.items():
+        fn()
+        t0 = time.perf_counter()
+        fn()
+        numbers[k] = max(1, int(0.01 / max(time.perf_counter() - t0, 1e-7)))
+    samples: dict[str, list[float]] = {k: [] for k in fns}
+    for _ in range(rounds):
+        for k, fn in fns.items():
+            n = numbers[k]
+            t0 = time.perf_counter()
+            for _ in range(n):
+                fn()
+            samples[k].append((time.perf_counter() - t0) / n)
+    return {k: statistics.median(v) for k, v in samples.items()}
+
+
+def _chain(n: int):
+    import mujoco
+
+    from analytic import fast
+    from model_xml import build_spec
+    from validation.bench import chain_scene
+
+    sc = chain_scene(n)
+    fm = fast.FastModel(sc)
+    q = np.ascontiguousarray(sc.initial.q0())
+    qd = np.ascontiguousarray(sc.initial.qdot0())
+    m = build_spec(sc).compile()
+    d = mujoco.MjData(m)
+    return sc, (lambda: fm.qddot(0.3, q, qd)), (lambda: mujoco.mj_forward(m, d))
+
+
+def goal_evaluation(n: int, rounds: int = 11) -> Goal:
+    _, fa, fm = _chain(n)
+    c = interleaved({"analytic": fa, "mj_forward": fm}, rounds)
+    return Goal(
+        f"evaluation n={n}: analytic controlled dynamics / mj_forward",
+        c["analytic"] / c["mj_forward"],
+        1.0,
+        f"analytic {c['analytic'] * 1e6:.2f} µs, mj_forward {c['mj_forward'] * 1e6:.2f} µs",
+        data={k: v * 1e6 for k, v in c.items()},
+    )
+
+
+def goal_controller_in_rk4(scene_name: str, steps: int = 200, rounds: int = 9) -> Goal:
+    import mujoco
+
+    from mj_bridge.callbacks import installed
+    from mj_bridge.twin import Twin
+    from validation.scenes import resolve_scene
+
+    sc = resolve_scene(scene_name)
+    tw = Twin(sc, integrator="RK4")
+    q0, qd0 = sc.initial.q0(), sc.initial.qdot0()
+
+    def bare() -> None:
+        tw.set_state(0.0, q0, qd0)
+        tw.d.ctrl[:] = 0.0
+        mujoco.mj_step(tw.m, tw.d, nstep=steps)
+
+    def with_controller() -> None:
+        tw.set_state(0.0, q0, qd0)
+        tw.d.ctrl[:] = 0.0
+        with tw.callbacks():
+            mujoco.mj_step(tw.m, tw.d, nstep=steps)
+
+    def bare_nocb() -> None:
+        with installed(control=None, act_bias=None):
+            bare()
+
+    def empty_cb() -> None:
+        with installed(control=lambda m, d: None, act_bias=None):
+            bare()
+
+    c = interleaved({"bare": bare_nocb, "empty": empty_cb, "controlled": with_controller}, rounds)
+    step = c["bare"] / steps
+    ctl = c["controlled"] / steps
+    empty = c["empty"] / steps
+    return Goal(
+        f"controller in RK4 ({scene_name}): added cost per step / bare mj_step",
+        (ctl - step) / step,
+        1.0,
+        f"bare RK4 step {step * 1e6:.1f} µs, with the analytic controller {ctl * 1e6:.1f} µs "
+        f"({ctl / step:.2f}x); of the added cost, calling an empty Python callback 4x a step "
+        f"costs {(empty - step) * 1e6:.1f} µs",
+        data={"bare_us": step * 1e6, "controlled_us": ctl * 1e6, "empty_cb_us": empty * 1e6},
+    )
+
+
+def goal_example1_60s(
+    t_end: float = 60.0, cap_s: float = 120.0, progress: Callable[[str], None] = print
+) -> Goal:
+    import analytic
+    import mj_bridge
+    from validation.scenes import resolve_scene
+    from validation.sweep import errors_against, ref_samples, reference_run
+
+    sc = resolve_scene("paper_example1_controlled")
+    progress(f"  reference (DOP853 rtol 2.5e-14, {t_end:g} s) ...")
+    ref = ref_samples(reference_run(sc, t_end))
+    tr_a = analytic.simulate(sc, method="DOP853", rtol=1e-12, atol=1e-13, t_end=t_end)
+    e_a = errors_against(tr_a, ref)["error"]
+    w_a = float(tr_a.info["wall_time_s"])
+    progress(f"  analytic rtol 1e-12: error {e_a:.3g}, wall {w_a:.2f} s")
+    interval = 1.0 / sc.output.rate
+    pts: list[tuple[float, float, float]] = []  # (dt, error, wall)
+    k = round(interval / 1e-3)
+    while True:
+        dt = interval / k
+        tr = mj_bridge.simulate(sc, integrator="RK4", dt=dt, t_end=t_end)
+        e = errors_against(tr, ref)["error"] if tr.status.value == "ok" else math.inf
+        w = float(tr.info["wall_time_s"])
+        pts.append((dt, e, w))
+        progress(f"  RK4 dt {dt:.4g}: error {e:.3g}, wall {w:.2f} s")
+        if e <= e_a:
+            return Goal(
+                "60 s controlled Example 1: analytic rtol 1e-12 wall / MuJoCo RK4 wall at the same"
+                " accuracy",
+                w_a / w,
+                1.0,
+                f"analytic {w_a:.2f} s (error {e_a:.2e}); RK4 dt {dt:.4g} s {w:.2f} s "
+                f"(error {e:.2e})",
+                data={"analytic": (e_a, w_a), "rk4": pts},
+            )
+        if 2 * w > cap_s or not math.isfinite(e):
+            break
+        k *= 2
+    # Extrapolate from the last two finite points: error ∝ dt^p, wall ∝ 1/dt.
+    fin = [p for p in pts if math.isfinite(p[1]) and p[1] > 0]
+    if len(fin) < 2:
+        return Goal("60 s controlled Example 1", math.inf, 1.0, "RK4 runs failed", data={})
+    (dt1, e1, _), (dt2, e2, w2) = fin[-2], fin[-1]
+    order = math.log(e1 / e2) / math.log(dt1 / dt2)
+    dt_need = dt2 * (e_a / e2) ** (1.0 / order) if order > 0 else 0.0
+    w_need = w2 * dt2 / dt_need if dt_need > 0 else math.inf
+    return Goal(
+        "60 s controlled Example 1: analytic rtol 1e-12 wall / MuJoCo RK4 wall at the same accuracy",
+        w_a / w_need,
+        1.0,
+        f"analytic {w_a:.2f} s (error {e_a:.2e}); RK4 did not reach it within the {cap_s:g} s cap: "
+        f"observed order {order:.2f} predicts dt {dt_need:.3g} s at {w_need:.3g} s",
+        extrapolated=True,
+        data={"analytic": (e_a, w_a), "rk4": pts},
+    )
+
+
+def goal_scaling(rounds: int = 9) -> Goal:
+    from analytic import fast
+    from validation.bench import chain_scene
+
+    fns = {}
+    for n in (10, 1000):
+        sc = chain_scene(n)
+        fm = fast.FastModel(sc)
+        q = np.ascontiguousarray(sc.initial.q0())
+        qd = np.ascontiguousarray(sc.initial.qdot0())
+        fns[n] = lambda fm=fm, q=q, qd=qd: fm.qddot(0.3, q, qd)
+    c = interleaved(fns, rounds)
+    return Goal(
+        "scaling: fast evaluation cost n=1000 / n=10",
+        c[1000] / c[10],
+        150.0,
+        f"n=10 {c[10] * 1e6:.2f} µs, n=1000 {c[1000] * 1e6:.2f} µs",
+    )
+
+
+def measure(skip_long: bool = False, progress: Callable[[str], None] = print) -> list[Goal]:
+    from analytic import fast
+
+    if not fast.available():
+        progress("numba is not installed: the analytic side runs on numpy")
+    goals = [goal_evaluation(2), goal_evaluation(5)]
+    for g in goals:
+        progress(g.line())
+    for name in ("paper_example1_controlled", "paper_example2_controlled"):
+        goals.append(goal_controller_in_rk4(name))
+        progress(goals[-1].line())
+    goals.append(goal_scaling())
+    progress(goals[-1].line())
+    if not skip_long:
+        goals.append(goal_example1_60s(progress=progress))
+        progress(goals[-1].line())
+    return goals
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(
+        prog="python -m validation.goals", description=__doc__.split("\n")[0]
+    )
+    ap.add_argument("--skip-long", action="store_true", help="skip the 60 s Example 1 goal")
+    args = ap.parse_args(argv)
+    goals = measure(args.skip_long, progress=lambda s: print(s, flush=True))
+    print("\nsummary")
+    for g in goals:
+        print(f"  {'HOLDS' if g.holds else 'FAILS'}  {g.name}: {g.value:.3g} (≤ {g.limit:g})")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
