@@ -14,6 +14,7 @@ from enum import StrEnum
 
 import mujoco
 import numpy as np
+from scipy.linalg import cho_factor, cho_solve
 
 from analytic.effects import Effect, MjIntegrator, SpringModel, Weighting
 from analytic.model import ControlOutput, TumblingModel
@@ -381,6 +382,10 @@ class Twin:
             return self._uk_from_data(t, in_callback=False)
 
     def _uk_from_data(self, t: float, in_callback: bool) -> MjControl:
+        """Gauss's principle in MuJoCo's coordinates: ``M qacc = F + Aᵀμ`` with ``A qacc = b``,
+        ``F = qfrc_passive − qfrc_bias`` (+ spring actuators, + the given torque), A the tracked
+        rows (ω̇ components on the free joint's rotational dofs, q̈ of tracked slide joints) and b
+        the paper's stabilised requirements (Eqs. 81, 84) at MuJoCo's state."""
         m, d = self.m, self.d
         nv = m.nv
         mujoco.mj_fullM(m, d, self._M)
@@ -423,10 +428,9 @@ class Twin:
                 rhs.append(b_p[j])
         A = np.array(rows).reshape(len(rows), nv)
         b = np.array(rhs)
-        X = np.vstack([F[None, :], A])
-        Y = np.empty_like(X)
-        mujoco.mj_solveM(m, d, Y, X)  # M⁻¹ [F, Aᵀ] with MuJoCo's own factorisation
-        a0, MinvAt = Y[0], Y[1:].T
+        # M⁻¹ [F, Aᵀ] from MuJoCo's dense mass matrix (mj_fullM), symmetric positive definite
+        Y = cho_solve(cho_factor(self._M), np.column_stack([F, A.T]))
+        a0, MinvAt = Y[:, 0], Y[:, 1:]
         G = A @ MinvAt
         mu = np.linalg.lstsq(0.5 * (G + G.T), b - A @ a0, rcond=None)[0]
         Qc = A.T @ mu

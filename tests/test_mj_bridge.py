@@ -106,6 +106,21 @@ def test_state_map_round_trip_and_mujoco_kinematics(frame):
         np.testing.assert_allclose(vel[:3], omega_world, rtol=0, atol=tol * np.abs(qd).max())
 
 
+def test_model_level_state_maps_read_the_inertial_frame():
+    """to_mujoco / to_paper on a model whose BR frame is offset from C agree with the Twin's."""
+    from mj_bridge import to_mujoco, to_paper, to_paper_acc
+
+    scene = paper_scene("paper_example1")
+    tw = Twin(scene, body_frame=_offset_frame())
+    _, q, qd = random_state(np.random.default_rng(8), scene)
+    qpos, qvel = to_mujoco(tw.m, q, qd)
+    q2, qd2 = to_paper(tw.m, qpos, qvel)
+    assert _rel(q2, q) <= th.STATE_MAP_ROUNDTRIP and _rel(qd2, qd) <= th.STATE_MAP_ROUNDTRIP
+    ref, _ = TumblingModel(scene).acceleration(0.0, q, qd)
+    tw.forward(0.0, q, qd)
+    assert _rel(to_paper_acc(tw.m, tw.d.qpos, tw.d.qvel, tw.d.qacc), ref) <= th.POINTWISE_QDDOT_REL
+
+
 def test_state_map_functions_exported():
     scene = paper_scene("paper_example2")
     q, qd = scene.initial.q0(), scene.initial.qdot0()
@@ -169,6 +184,8 @@ def test_spring_actuator_trajectory_matches_tendon_springs():
     assert b.info["spring_model"] == "actuator"
     assert _rel(b.q, a.q) <= th.SPRING_ACTUATOR_VS_TENDON_REL
     assert _rel(b.qdot, a.qdot) <= th.SPRING_ACTUATOR_VS_TENDON_REL
+    c = simulate(alt, dt=5e-3, t_end=0.5, controller=ControllerSource.MUJOCO)
+    assert _rel(c.q, a.q) <= th.CONTROLLER_SOURCES_TRAJ_REL
 
 
 def test_module_level_functions():
