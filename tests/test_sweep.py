@@ -1,0 +1,287 @@
+"""The work-precision sweep (validation.sweep): physics of the numbers it reports, the cheapest-setting
+selection, file round trips, series stopping and user executors.
+
+One quick sweep (``quick=True``, 0.5 s of the controlled Example 1) is shared by the module; every
+expected value is computed here independently (integrator orders, the closed-form tracking and
+norm-error dynamics, errors recomputed with rotation matrices), never copied from the sweep's output.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+import json
+import math
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+from scipy.linalg import expm
+from scipy.spatial.transform import Rotation
+
+import analytic
+from validation import sweep
+from validation.scenes import resolve_scene
+from validation.summary import drift_figures
+
+SCENE = "paper_example1_controlled"
+
+
+@pytest.fixture(scope="module")
+def result(tmp_path_factory):
+    out = tmp_path_factory.mktemp("sweep")
+    return sweep.run_sweep(SCENE, out, quick=True)
+
+
+@pytest.fixture(scope="module")
+def scene():
+    return resolve_scene(SCENE)
+
+
+def _ok(result, engine, method):
+    rows = [
+        r
+        for r in result.runs
+        if r["engine"] == engine and r["method"] == method and r["status"] == "ok"
+    ]
+    return sorted(rows, key=lambda r: -r["setting"])  # loose/large first
+
+
+def test_every_setting_of_the_grid_is_reported(result):
+    cfg = sweep.SweepConfig.quick()
+    expected = len(cfg.solvers) * len(cfg.rtols) + len(cfg.integrators) * len(cfg.dts)
+    assert len(result.runs) == expected
+    assert [r["run_id"] for r in result.runs] == list(range(expected))
+    for r in result.runs:
+        assert r["status"] in {"ok", "diverged", "failed", "too_slow", "skipped"}
+        if r["status"] != "ok":
+            assert r["note"], f"run {r['run_id']} {r['status']} without a reason"
+
+
+def test_reference_self_convergence_below_every_sweep_error(result):
+    est = result.reference["error_estimate"]
+    assert 0 < est < 1e-11  # DOP853 at rtol 2.5e-14 over 0.5 s: round-off level
+    errors = [r["error"] for r in result.runs if r["status"] == "ok"]
+    assert est < min(errors)
+    assert result.reference["rtol"] < min(sweep.SweepConfig.quick().rtols)
+
+
+def test_rk4_error_falls_16x_per_halving(result):
+    rows = _ok(result, "mujoco", "RK4")
+    floor = 100 * result.reference["error_estimate"]
+    ratios = [
+        a["error"] / b["error"]
+        for a, b in itertools.pairwise(rows)
+        if math.isclose(a["dt"], 2 * b["dt"]) and b["error"] > floor
+    ]
+    assert len(ratios) >= 3
+    for r in ratios:
+        assert 16 / 1.5 < r < 16 * 1.5, ratios
+
+
+def test_euler_error_falls_2x_per_halving(result):
+    rows = _ok(result, "mujoco", "Euler")
+    ratios = [a["error"] / b["error"] for a, b in itertools.pairwise(rows)]
+    assert len(ratios) >= 3
+    for r in ratios:
+        assert 2 / 1.3 < r < 2 * 1.3, ratios
+
+
+def test_dop853_error_decreases_with_rtol(result):
+    rows = _ok(result, "analytic", "DOP853")
+    assert len(rows) == len(sweep.SweepConfig.quick().rtols)
+    errs = [r["error"] for r in rows]
+    for a, b in itertools.pairwise(errs):
+        assert b <= 2 * a, errs  # monotone within a factor 2
+    # rtol spans 1e-3 … 1e-11: the error must fall by orders of magnitude too
+    assert errs[-1] < 1e-5 * errs[0]
+
+
+def test_errors_match_an_independent_computation(result, scene):
+    """Recompute one row: own reference run, attitude angle from rotation matrices, own scales."""
+    cfg = sweep.SweepConfig.quick()
+    row = next(
+        r
+        for r in result.runs
+        if r["engine"] == "analytic" and r["method"] == "DOP853" and r["rtol"] == 1e-5
+    )
+    ref = sweep.reference_run(scene, cfg.t_end, result.reference["max_step"])
+    tr = analytic.simulate(scene, method="DOP853", rtol=1e-5, atol=1e-6, t_end=cfg.t_end)
+    Ra = Rotation.from_quat(tr.u, scalar_first=True).as_matrix()
+    Rb = Rotation.from_quat(ref.u, scalar_first=True).as_matrix()
+    cosang = (np.einsum("nij,nij->n", Ra, Rb) - 1) / 2
+    att = np.arccos(np.clip(cosang, -1, 1))
+    pos = np.linalg.norm(tr.R - ref.R, axis=1) / np.max(np.linalg.norm(ref.R - ref.R[0], axis=1))
+    rod = np.max(np.abs(tr.p - ref.p), axis=1) / np.max(np.abs(ref.p))
+    assert row["err_att_max"] == pytest.approx(att.max(), rel=1e-4)
+    assert row["err_pos_max"] == pytest.approx(pos.max(), rel=1e-6)
+    assert row["err_rod_max"] == pytest.approx(rod.max(), rel=1e-6)
+    assert row["err_pos_final"] == pytest.approx(pos[-1], rel=1e-6)
+    assert row["error"] == pytest.approx(max(att.max(), pos.max(), rod.max()), rel=1e-4)
+    for k, v in drift_figures(tr).items():
+        assert row[k] == pytest.approx(v, rel=1e-9, abs=1e-300)
+
+
+def test_tracking_error_follows_the_closed_form(result, scene):
+    """ERRATA 3: e_ω(t) = exp(-P t) e_ω(0) exactly; accurate runs must report |e_ω(T)|."""
+    ot = scene.control.omega
+    comps = list(ot.components)
+    e0 = scene.initial.omega[comps] - ot.b[comps]  # ω̄(0) = b cos 0
+    T = sweep.SweepConfig.quick().t_end
+    expected = float(np.max(np.abs(expm(-ot.gain * T) @ e0)))
+    for r in result.runs:
+        if r["status"] == "ok" and r["error"] < 1e-8:
+            assert r["tracking_omega_final"] == pytest.approx(expected, rel=1e-6), r["run_id"]
+
+
+def test_stabilization_norm_error_obeys_its_ode(result):
+    """φ = uᵀu − 1 solves φ̈ + δ1 φ̇ + δ2 φ = 0 with φ̇(0) = 0 (u̇(0) = Hᵀω/… ⟂ u)."""
+    rows = [s for s in result.stabilization if s["initial_norm_error"] > 0]
+    assert {(s["delta1"], s["delta2"]) for s in rows} == set(sweep.SweepConfig.quick().deltas)
+    for s in rows:
+        d1, d2, phi0 = s["delta1"], s["delta2"], s["initial_norm_error"]
+        sol = solve_ivp(
+            lambda t, x, d1=d1, d2=d2: [x[1], -d1 * x[1] - d2 * x[0]],
+            (0, s["t_end"]),
+            [phi0, 0.0],
+            rtol=1e-12,
+            atol=1e-16,
+        )
+        assert s["quat_norm_error_final"] == pytest.approx(sol.y[0, -1], rel=1e-4, abs=1e-9)
+    exact_start = [s for s in result.stabilization if s["initial_norm_error"] == 0]
+    for s in exact_start:
+        assert s["quat_norm_error_max"] < 1e-8  # stays on the sphere up to the tolerance
+
+
+def test_cheapest_setting_table(result):
+    """For each level: the pick is below the level and no cheaper qualifying run exists."""
+    levels = sweep.SweepConfig.quick().levels
+    assert levels == tuple(10.0**-k for k in range(3, 11))
+    for engine in ("analytic", "mujoco"):
+        cands_all = [r for r in result.runs if r["engine"] == engine and r["status"] == "ok"]
+        for lv in levels:
+            pick = result.cheapest[engine][lv]
+            qualifying = [r for r in cands_all if r["error"] <= lv]
+            if not qualifying:
+                assert pick is None
+                continue
+            r = result.runs[pick]
+            assert r["engine"] == engine and r["status"] == "ok" and r["error"] <= lv
+            assert all(q["wall_time_s"] >= r["wall_time_s"] for q in qualifying)
+    md = (result.out_dir / "sweep.md").read_text()
+    for engine in ("analytic", "mujoco"):
+        for lv, rid in result.cheapest[engine].items():
+            if rid is not None:
+                assert (f"#{rid} " in md and f"★ {lv:.0e}" in md) or f", {lv:.0e}" in md
+
+
+def test_csv_and_json_round_trip(result):
+    rows_csv = sweep.read_csv(result.files["csv"])
+    doc = json.loads(result.files["json"].read_text())
+    rows_json = doc["runs"]
+    assert len(rows_csv) == len(rows_json) == len(result.runs)
+    for a, b, c in zip(rows_csv, rows_json, result.runs, strict=True):
+        assert set(a) == set(sweep.COLUMNS)
+        for k in sweep.COLUMNS:
+            assert a[k] == b[k] == c[k], (k, a[k], b[k], c[k])
+    assert doc["reference"]["error_estimate"] == result.reference["error_estimate"]
+
+
+def test_files_complete_and_written_atomically(result):
+    names = {p.name for p in result.out_dir.iterdir()}
+    assert {"sweep.csv", "sweep.json", "sweep.md", "work_precision.png", "sweep.rrd"} <= names
+    assert not [n for n in names if n.endswith(".tmp")]
+    assert result.files["png"].read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    from rerun.chunk import RrdReader
+
+    store = RrdReader(str(result.files["rrd"])).store()  # raises without the footer
+    ents = {str(e) for e in store.schema().entity_paths()}
+    assert "/work_precision/mujoco/RK4" in ents and "/work_precision/analytic/DOP853" in ents
+
+
+def test_effects_rows(result, scene):
+    offs = [r["off"] for r in result.effects]
+    assert len(offs) == 1 + len(scene.effects)
+    assert set(offs[1:]) == {e.value for e in scene.effects}
+    for r in result.effects:
+        if not r["note"]:
+            for c in ("analytic_fast", "mj_forward", "mj_forward_ctrl"):
+                assert r[c] is not None and r[c] > 0
+
+
+def _tiny(**kw):
+    return dataclasses.replace(
+        sweep.SweepConfig.quick(),
+        solvers=("DOP853",),
+        rtols=(1e-5, 1e-9),
+        integrators=("RK4",),
+        dts=(1e-2, 5e-3),
+        deltas=((0.5, 8.0),),
+        effects_repeats=1,
+        **kw,
+    )
+
+
+def test_series_stops_when_too_slow_and_reports_it(scene, result):
+    ref = sweep.ref_samples(sweep.reference_run(scene, 0.5, result.reference["max_step"]))
+    cfg = dataclasses.replace(
+        sweep.SweepConfig.quick(), dts=tuple(1e-2 / 2**k for k in range(8)), max_run_wall_s=0.05
+    )
+    rows = sweep.run_series(scene, "mujoco", "RK4", cfg, ref)
+    assert [r["dt"] for r in rows] == list(cfg.dts)
+    statuses = [r["status"] for r in rows]
+    assert "too_slow" in statuses
+    i = statuses.index("too_slow")
+    assert all(s == "skipped" for s in statuses[i + 1 :])
+    assert all("too slow" in r["note"] for r in rows[i:])
+    cfg_a = dataclasses.replace(sweep.SweepConfig.quick(), max_run_wall_s=0.02)
+    rows_a = sweep.run_series(scene, "analytic", "Radau", cfg_a, ref)
+    assert [r["rtol"] for r in rows_a] == list(cfg_a.rtols)
+    assert "too_slow" in [r["status"] for r in rows_a]
+
+
+def test_divergence_stops_a_series(scene, result, monkeypatch):
+    """A run that blows up after a coarser one worked is 'diverged' and ends the series."""
+    ref = sweep.ref_samples(sweep.reference_run(scene, 0.5, result.reference["max_step"]))
+    real = sweep._mujoco_run
+
+    def fake(sc, integrator, dt, t_end):
+        tr = real(sc, integrator, dt, t_end)
+        if dt < 6e-3:  # pretend the run blew up: C thrown 1 km off
+            q = tr.q.copy()
+            q[:, :3] += 1e3
+            return dataclasses.replace(tr, q=q)
+        return tr
+
+    monkeypatch.setattr(sweep, "_mujoco_run", fake)
+    cfg = dataclasses.replace(sweep.SweepConfig.quick(), dts=(1e-2, 5e-3, 2.5e-3))
+    rows = sweep.run_series(scene, "mujoco", "RK4", cfg, ref)
+    assert [r["status"] for r in rows] == ["ok", "diverged", "skipped"]
+
+
+def _compare_with_quick(res, result):
+    quick = {(r["engine"], r["method"], r["setting"]): r for r in result.runs}
+    for r in res.runs:
+        q = quick[(r["engine"], r["method"], r["setting"])]
+        assert r["status"] == q["status"] == "ok"
+        assert r["error"] == pytest.approx(q["error"], rel=1e-9)
+        assert r["nfev"] == q["nfev"]
+
+
+def test_user_thread_executor(tmp_path, result):
+    with ThreadPoolExecutor(max_workers=2) as ex:
+        res = sweep.run_sweep(SCENE, tmp_path, executor=ex, config=_tiny())
+    _compare_with_quick(res, result)
+
+
+def test_dask_local_cluster(tmp_path, result):
+    distributed = pytest.importorskip("dask.distributed")
+    with (
+        distributed.LocalCluster(
+            n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+        ) as cluster,
+        distributed.Client(cluster) as client,
+    ):
+        res = sweep.run_sweep(SCENE, tmp_path, executor=client.get_executor(), config=_tiny())
+    _compare_with_quick(res, result)
