@@ -163,17 +163,25 @@ def test_cheapest_setting_table(result):
         for lv in levels:
             pick = result.cheapest[engine][lv]
             qualifying = [r for r in cands_all if r["error"] <= lv]
-            if not qualifying:
+            if not qualifying or lv <= sweep.FLOOR_FACTOR * result.reference["error_estimate"]:
                 assert pick is None
                 continue
             r = result.runs[pick]
             assert r["engine"] == engine and r["status"] == "ok" and r["error"] <= lv
             assert all(q["wall_time_s"] >= r["wall_time_s"] for q in qualifying)
-    md = (result.out_dir / "sweep.md").read_text()
+    md_rows = {
+        int(line.split("|")[1]): line
+        for line in (result.out_dir / "sweep.md")
+        .read_text()
+        .split("## Every run")[1]
+        .split("## Stabilisation")[0]
+        .splitlines()
+        if line.startswith("| ") and line.split("|")[1].strip().isdigit()
+    }
     for engine in ("analytic", "mujoco"):
         for lv, rid in result.cheapest[engine].items():
             if rid is not None:
-                assert (f"#{rid} " in md and f"★ {lv:.0e}" in md) or f", {lv:.0e}" in md
+                assert "★" in md_rows[rid] and f"{lv:.0e}" in md_rows[rid]
 
 
 def test_csv_and_json_round_trip(result):
@@ -285,3 +293,20 @@ def test_dask_local_cluster(tmp_path, result):
     ):
         res = sweep.run_sweep(SCENE, tmp_path, executor=client.get_executor(), config=_tiny())
     _compare_with_quick(res, result)
+
+
+def test_goal_same_accuracy_search():
+    """The 60 s goal's search (here over 1 s): the RK4 run it stops at is the first as accurate."""
+    from validation.goals import Goal, goal_example1_60s
+
+    g = goal_example1_60s(t_end=1.0, cap_s=5.0, progress=lambda _s: None)
+    e_a, w_a = g.data["analytic"]
+    pts = g.data["rk4"]
+    dts = [p[0] for p in pts]
+    assert all(math.isclose(a, 2 * b) for a, b in itertools.pairwise(dts))
+    if not g.extrapolated:
+        assert pts[-1][1] <= e_a
+        assert all(p[1] > e_a for p in pts[:-1])
+        assert g.value == pytest.approx(w_a / pts[-1][2])
+    assert Goal("x", 1.0, 1.0).holds and not Goal("x", 1.01, 1.0).holds
+    assert not Goal("x", math.nan, 1.0).holds

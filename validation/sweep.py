@@ -51,6 +51,7 @@ import json  # noqa: E402
 import math  # noqa: E402
 import statistics  # noqa: E402
 import time  # noqa: E402
+import warnings  # noqa: E402
 from collections.abc import Callable, Mapping, Sequence  # noqa: E402
 from concurrent.futures import Executor, ProcessPoolExecutor  # noqa: E402
 from dataclasses import dataclass, field  # noqa: E402
@@ -312,9 +313,13 @@ def _analytic_run(scene: Scene, method: str, rtol: float, atol: float, t_end: fl
             if time.perf_counter() - start > budget:
                 raise _TooSlow
 
-    return analytic.simulate(
-        scene, method=method, rtol=rtol, atol=atol, t_end=t_end, progress=progress
-    )
+    with warnings.catch_warnings():
+        # the engine's quadrature states carry atol 1e300 (outside error control); scipy's
+        # first-step heuristic then overflows harmlessly
+        warnings.filterwarnings("ignore", "overflow encountered", RuntimeWarning)
+        return analytic.simulate(
+            scene, method=method, rtol=rtol, atol=atol, t_end=t_end, progress=progress
+        )
 
 
 def _mujoco_run(scene: Scene, integrator: str, dt: float, t_end: float):
@@ -490,9 +495,12 @@ def _timed(scene: Scene, row: Mapping[str, Any], cfg: SweepConfig) -> tuple[floa
 
 
 def cheapest_settings(
-    runs: Sequence[Mapping[str, Any]], levels: Sequence[float] = LEVELS
+    runs: Sequence[Mapping[str, Any]], levels: Sequence[float] = LEVELS, floor: float = 0.0
 ) -> dict[str, dict[float, int | None]]:
-    """For each engine and level, the ``ok`` run of least median wall time with error ≤ level."""
+    """For each engine and level, the ``ok`` run of least median wall time with error ≤ level.
+
+    Levels at or below ``floor`` (what the reference can resolve) get None.
+    """
     out: dict[str, dict[float, int | None]] = {}
     for engine in (ANALYTIC, MUJOCO):
         ok = [
@@ -505,7 +513,7 @@ def cheapest_settings(
         ]
         out[engine] = {}
         for lv in levels:
-            cand = [r for r in ok if r["error"] <= lv]
+            cand = [r for r in ok if r["error"] <= lv] if lv > floor else []
             best = min(cand, key=lambda r: (r["wall_time_s"], r["run_id"]), default=None)
             out[engine][lv] = None if best is None else int(best["run_id"])
     return out
@@ -614,7 +622,9 @@ def _markdown(res_parts: dict[str, Any]) -> str:
         cells = []
         for engine in cheapest:
             rid = cheapest[engine].get(lv)
-            if rid is None:
+            if lv <= FLOOR_FACTOR * ref["error_estimate"]:
+                cells.append("below the reference's resolution")
+            elif rid is None:
                 cells.append("not reached")
             else:
                 r = runs[rid]
@@ -851,7 +861,7 @@ def run_sweep(
                 r["wall_time_s"], r["wall_time_repeats"] = _timed(sc, r, cfg)
             else:
                 r["wall_time_s"], r["wall_time_repeats"] = r["wall_time_pool_s"], 0
-    cheapest = cheapest_settings(runs, cfg.levels)
+    cheapest = cheapest_settings(runs, cfg.levels, FLOOR_FACTOR * reference["error_estimate"])
     # 4. Effects.
     say("effects: cost of one evaluation with each effect off")
     from validation.effects_cost import effects_cost
