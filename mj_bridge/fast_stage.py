@@ -4,7 +4,7 @@ One call does what :meth:`mj_bridge.twin.Twin._control_callback` does in Python,
 frame at C (the default model): map MuJoCo's ``(qpos, qvel)`` to the paper's ``(q, q̇)``
 (``u = q_b``, ``u̇ = ¼ Hᵀ ω / |u|²``), evaluate the analytic side's compiled kernel
 (:func:`analytic.fast_kernel.evaluate`, the paper's Eq. 89), write the actuators' ``ctrl``
-(torque + given torque on ``torque_x..z``, rod forces on ``force1..N``) and, with weight ``w > 0``,
+(torque + given torque on ``torque_x..z``, rod forces on ``force1..N``, divided by the gear) and, with weight ``w > 0``,
 add ``w·[P, S(u)(τ+τ_g) + (R-c)×F_C, F_C]`` to the work/impulse accumulator.
 
 Its status is the kernel's: anything but ``STATUS_OK`` makes the caller fall back to the numpy model
@@ -21,7 +21,7 @@ HAVE_NUMBA = fk.HAVE_NUMBA
 
 
 def _stage(
-    t, qpos, qvel, ctrl, tq_ids, f_ids, fp, ip, out, q, qd, tau_g, geo, w, acc
+    t, qpos, qvel, ctrl, tq_ids, f_ids, fp, ip, out, q, qd, tau_g, geo, inv_gear, w, acc
 ):  # pragma: no cover - compiled
     n = q.shape[0] - 7
     nq = n + 7
@@ -44,13 +44,13 @@ def _stage(
     tau1 = out[2 * nq + 1] + tau_g[1]
     tau2 = out[2 * nq + 2] + tau_g[2]
     if tq_ids.shape[0] == 3:
-        ctrl[tq_ids[0]] = tau0
-        ctrl[tq_ids[1]] = tau1
-        ctrl[tq_ids[2]] = tau2
+        ctrl[tq_ids[0]] = tau0 * inv_gear
+        ctrl[tq_ids[1]] = tau1 * inv_gear
+        ctrl[tq_ids[2]] = tau2 * inv_gear
     power = tau0 * w0 + tau1 * w1 + tau2 * w2
     for i in range(f_ids.shape[0]):
         F = out[nq + 7 + i]
-        ctrl[f_ids[i]] = F
+        ctrl[f_ids[i]] = F * inv_gear
         power += F * qvel[6 + i]
     if w > 0.0:
         f0, f1, f2 = out[nq], out[nq + 1], out[nq + 2]

@@ -21,7 +21,7 @@ from analytic.effects import MjIntegrator, SpringModel
 from analytic.invariants import compute_invariants
 from analytic.scene import OutputSettings, Scene
 from analytic.trajectory import Engine, RunStatus, Tracking, Trajectory
-from mj_bridge.twin import ControllerSource, Twin
+from mj_bridge.twin import ControllerSource, Twin, bad_warnings
 from model_xml import BodyFrame
 from model_xml.state import mujoco_to_paper_acc
 
@@ -121,6 +121,11 @@ def simulate(
                         f"step for {tw.integrator.value}"
                     )
                 nsteps += int(k)
+                bad = bad_warnings(d)
+                if bad:
+                    status = RunStatus.FAILED
+                    message = f"MuJoCo warning before t = {times[i]:.6g} s: {'; '.join(bad)}"
+                    break
                 d.time = float(times[i])
                 if not (np.all(np.isfinite(d.qpos)) and np.all(np.isfinite(d.qvel))):
                     status, message = RunStatus.FAILED, f"non-finite state at t = {times[i]:.6g} s"

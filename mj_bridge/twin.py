@@ -30,9 +30,28 @@ from model_xml import (
     spring_actuator_name,
     spring_tendons,
 )
-from model_xml.builder import _INTEGRATORS
+from model_xml.builder import _INTEGRATORS, CONTROL_GEAR
 from model_xml.rotations import cross3, quat_to_mat
 from model_xml.state import mujoco_to_paper_acc, mujoco_to_paper_state, paper_to_mujoco_state
+
+INV_GEAR = 1.0 / CONTROL_GEAR  # exact: a power of two
+
+# MuJoCo warnings after which the step is not the model's dynamics (MuJoCo resets or zeroes silently).
+BAD_WARNINGS = {
+    mujoco.mjtWarning.mjWARN_BADQPOS: "bad qpos (MuJoCo reset the state)",
+    mujoco.mjtWarning.mjWARN_BADQVEL: "bad qvel (MuJoCo reset the state)",
+    mujoco.mjtWarning.mjWARN_BADQACC: "bad qacc (MuJoCo reset the state)",
+    mujoco.mjtWarning.mjWARN_BADCTRL: "bad ctrl (MuJoCo zeroed every control)",
+}
+
+
+def bad_warnings(d: mujoco.MjData) -> list[str]:
+    """Descriptions of the MuJoCo warnings raised so far that invalidate the dynamics."""
+    return [
+        f"{w.name} x{d.warning[int(w)].number}: {text}"
+        for w, text in BAD_WARNINGS.items()
+        if d.warning[int(w)].number > 0
+    ]
 
 
 class ControllerSource(StrEnum):
@@ -246,11 +265,13 @@ class Twin:
     # ------------------------------------------------------------------------------------------
 
     def _write_controls(self, torque: np.ndarray, rod: np.ndarray, force_C: np.ndarray) -> None:
+        """Physical torque (body axes, N·m), rod forces (N) and force at C (inertial, N) -> ctrl
+        (divided by the actuators' gear, :data:`model_xml.builder.CONTROL_GEAR`) and xfrc_applied."""
         d = self.d
         if self.torque_ids is not None:
-            d.ctrl[self.torque_ids] = torque
+            d.ctrl[self.torque_ids] = torque * INV_GEAR
         if self.force_ids is not None:
-            d.ctrl[self.force_ids] = rod
+            d.ctrl[self.force_ids] = rod * INV_GEAR
             d.xfrc_applied[self.body_id, :3] = force_C  # world force at C (zero for Gauss)
 
     def _paper_state(self, d: mujoco.MjData) -> tuple[np.ndarray, np.ndarray]:
@@ -284,7 +305,7 @@ class Twin:
         if self.has_torque:
             self._st_tau_g[:] = self.model.given_torque(t)
         w = acc.h * acc.weights[acc.calls % len(acc.weights)] if acc.active else 0.0
-        status = fast_stage.stage(t, d.qpos, d.qvel, d.ctrl, *self._st_args, w, acc.v)
+        status = fast_stage.stage(t, d.qpos, d.qvel, d.ctrl, *self._st_args, INV_GEAR, w, acc.v)
         if status != 0:  # the kernel declined: the numpy model answers this stage
             self._fast.fallbacks += 1
             _, c = self.model.acceleration(t, *self._paper_state(d))
@@ -351,11 +372,16 @@ class Twin:
         self.d.ctrl[:] = 0.0
         self.d.xfrc_applied[:] = 0.0
         self._record = True
+        for w in BAD_WARNINGS:
+            self.d.warning[int(w)].number = 0
         try:
             with self.callbacks():
                 mujoco.mj_forward(self.m, self.d)
         finally:
             self._record = False
+        bad = bad_warnings(self.d)
+        if bad:
+            raise RuntimeError(f"MuJoCo warning at t = {t!r} s: {'; '.join(bad)}")
 
     def acceleration(self, t: float, q: np.ndarray, qdot: np.ndarray) -> np.ndarray:
         """MuJoCo's forward dynamics at a paper-coordinates state, as ``q̈`` (n+7) in paper

@@ -16,8 +16,9 @@ Layout (names are a contract other modules rely on; mass indices 1-based as in t
   general actuator ``springJ_act`` per tendon applies ``-(k_l x + k_n x³)``: the linear part as an
   affine bias, the cubic part through MuJoCo's user-bias callback (see :mod:`mj_bridge.callbacks`).
 * control channels (only when the scene is controlled or has a given torque): motors ``torque_x``,
-  ``torque_y``, ``torque_z`` on the free joint's rotational dofs (torque about the paper's body axes,
-  N·m) and, when controlled, motors ``force1..forceN`` on the slide joints (rod force on mass i, N).
+  ``torque_y``, ``torque_z`` on the free joint's rotational dofs (torque about the paper's body axes)
+  and, when controlled, motors ``force1..forceN`` on the slide joints (rod force on mass i). Their
+  gear is :data:`CONTROL_GEAR` (2^24): ``ctrl`` = torque (N·m) or force (N) / 2^24.
 * visual geoms only (massless, never colliding): the block or hollow cylinder, the rod, spheres.
 
 Effects map onto the model: no gravity effect -> zero gravity; a spring term that is off has zero
@@ -54,6 +55,13 @@ _INTEGRATORS = {
     MjIntegrator.IMPLICIT: mujoco.mjtIntegrator.mjINT_IMPLICIT,
     MjIntegrator.IMPLICITFAST: mujoco.mjtIntegrator.mjINT_IMPLICITFAST,
 }
+
+# MuJoCo zeroes every ctrl (warning "huge value", mjWARN_BADCTRL) once one exceeds mjMAXVAL = 1e10, and
+# the paper-scale rod forces and torques reach that (1.3e10 N with masses 1e3 x m_BR). The control
+# actuators therefore carry a gear of CONTROL_GEAR: ctrl is the force (N) or torque (N·m) divided by
+# 2^24 ≈ 1.7e7. A power of two scales exactly (no rounding), so accuracy is unchanged, and the
+# channels reach 1.7e17 N / N·m.
+CONTROL_GEAR = 2.0**24
 
 # MuJoCo refuses moving bodies whose inertia is below mjMINVAL (1e-15). A point mass gets an isotropic
 # inertia POINT_INERTIA_REL x min(J_BR) (floored at POINT_INERTIA_MIN), and exactly that much is taken
@@ -315,14 +323,14 @@ def build_spec(scene: Scene, body_frame: BodyFrame | None = None) -> mujoco.MjSp
             act = spec.add_actuator(name=name, target=ROOT)
             act.trntype = mujoco.mjtTrn.mjTRN_JOINT
             gear = np.zeros(6)
-            gear[3:] = Rt[:, c]  # paper body axis c, in frame coordinates
+            gear[3:] = CONTROL_GEAR * Rt[:, c]  # paper body axis c, in frame coordinates
             act.gear = gear
             act.ctrllimited = 0
     if scene.controlled:
         for i in range(n):
             act = spec.add_actuator(name=force_actuator_name(i), target=joint_name(i))
             act.trntype = mujoco.mjtTrn.mjTRN_JOINT
-            act.gear = [1.0, 0, 0, 0, 0, 0]
+            act.gear = [CONTROL_GEAR, 0, 0, 0, 0, 0]
             act.ctrllimited = 0
 
     # keyframe "initial": the scene's initial state in MuJoCo coordinates

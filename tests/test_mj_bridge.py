@@ -188,6 +188,67 @@ def test_spring_actuator_trajectory_matches_tendon_springs():
     assert _rel(c.q, a.q) <= th.CONTROLLER_SOURCES_TRAJ_REL
 
 
+def test_control_above_mjmaxval_is_applied():
+    """Rod forces above mjMAXVAL (1e10 N, where MuJoCo zeroes every ctrl) still reach the plant:
+    the control actuators' power-of-two gear keeps ctrl small (hard case: masses 1e3 x m_BR)."""
+    from mj_scenes import SCENE_DIR
+
+    from analytic.scene import load_scene
+
+    scene = load_scene(SCENE_DIR / "hard" / "heavy_masses.toml")
+    q, qd = scene.initial.q0(), scene.initial.qdot0()
+    ref, c = TumblingModel(scene).acceleration(0.0, q, qd)
+    assert np.max(np.abs(c.rod_forces)) > mujoco.mjMAXVAL
+    assert _rel(Twin(scene).acceleration(0.0, q, qd), ref) <= th.POINTWISE_QDDOT_REL
+
+
+def test_mujoco_bad_warning_is_an_error_not_silence():
+    """A ctrl MuJoCo refuses (it would zero every control) raises instead of passing silently."""
+    scene = paper_scene("paper_example1_controlled")
+    tw = Twin(scene, controller=ControllerSource.ANALYTIC)
+    model = tw.model
+
+    def huge(t, q, qd):
+        qdd, c = model.acceleration(t, q, qd)
+        return qdd, c.__class__(
+            QC=c.QC, torque=c.torque * 1e30, rod_forces=c.rod_forces, force_at_C=c.force_at_C,
+            residual=c.residual, rank=c.rank,
+        )  # fmt: skip
+
+    tw._controller_fn = huge
+    with pytest.raises(RuntimeError, match="mjWARN_BADCTRL"):
+        tw.forward(0.0, scene.initial.q0(), scene.initial.qdot0())
+
+
+def test_simulate_reports_mujoco_bad_warning_as_failed(monkeypatch):
+    """The same refusal during a run ends it with status failed, naming the warning."""
+    import sys
+
+    sim = sys.modules["mj_bridge.simulate"]
+
+    class HugeTwin(Twin):
+        def __init__(self, *a, **kw):
+            kw["controller"] = ControllerSource.ANALYTIC
+            super().__init__(*a, **kw)
+            model = self.model
+
+            def huge(t, q, qd):
+                qdd, c = model.acceleration(t, q, qd)
+                scale = 1.0 if t < 0.05 else 1e30
+                return qdd, c.__class__(
+                    QC=c.QC, torque=c.torque * scale, rod_forces=c.rod_forces,
+                    force_at_C=c.force_at_C, residual=c.residual, rank=c.rank,
+                )  # fmt: skip
+
+            self._controller_fn = huge
+
+    monkeypatch.setattr(sim, "Twin", HugeTwin)
+    tr = sim.simulate(paper_scene("paper_example1_controlled"), dt=5e-3, t_end=0.2)
+    assert tr.status.value == "failed"
+    assert "mjWARN_BADCTRL" in tr.message
+    assert 0.04 <= tr.t[-1] < 0.2
+
+
 def test_module_level_functions():
     scene = paper_scene("paper_example2_controlled")
     q, qd = scene.initial.q0(), scene.initial.qdot0()
