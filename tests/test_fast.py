@@ -15,6 +15,7 @@ the same equations, and the fast path must be the one within 1e-12 of it.
 from __future__ import annotations
 
 import itertools
+import zlib
 
 import numpy as np
 import pytest
@@ -126,7 +127,7 @@ def compare(scene, rng, n_states=3, stats=None):
     """Fast vs numpy at random states; returns the max relative differences per output."""
     model = TumblingModel(scene)
     fm = fast.FastModel(scene, model)
-    assert fm.compiled == (scene.control.weighting != Weighting.IDENTITY or model.k == 0)
+    assert fm.compiled == (scene.control.weighting == Weighting.M_INV or model.k == 0)
     worst = dict.fromkeys(NAMES, 0.0)
     for _ in range(n_states):
         q, qd = random_state(rng, scene.n)
@@ -144,9 +145,16 @@ def compare(scene, rng, n_states=3, stats=None):
             # path must be about as accurate as the reference or better (each sees its own rounding
             # of M and Q, so neither can beat cond x eps: 1e-11 floor, 4x the reference's error)
             x = extended_reference(model, t, q, qd)
+            # A backward-stable solve is accurate to ~cond(M_α)·ε, whichever path: that bound (x10)
+            # is the floor, rather than a fixed 1e-11 that holds only for moderate conditioning.
+            a_m = np.zeros(model.nq)
+            a_m[3:7] = q[3:7]
+            M = model.mass_matrix(q)
+            kappa = np.linalg.cond(M + np.trace(M) / model.nq * np.outer(a_m, a_m))
+            floor = max(10 * TOL, 10 * kappa * np.finfo(float).eps)
             for nm, g, r, xr in zip(NAMES, got, ref, x, strict=True):
                 ef, en = rel(g, xr), rel(r, xr)
-                assert ef <= max(10 * TOL, 4.0 * en), (nm, errs, ef, en)
+                assert ef <= max(floor, 4.0 * en), (nm, errs, ef, en, kappa)
                 if stats is not None:
                     stats["fast_vs_x"] = max(stats.get("fast_vs_x", 0.0), ef)
                     stats["numpy_vs_x"] = max(stats.get("numpy_vs_x", 0.0), en)
@@ -174,7 +182,7 @@ EFFECT_SUBSETS = [
 
 @pytest.mark.parametrize("weighting", ["M^-1", "M^-2", "identity"])
 def test_random_small_scenes_every_effect_combination(weighting):
-    rng = np.random.default_rng(hash(weighting) % 2**32)
+    rng = np.random.default_rng(zlib.crc32(str(weighting).encode()))  # stable across processes
     stats = {"direct": 0, "extended": 0}
     worst = dict.fromkeys(NAMES, 0.0)
     for effects in EFFECT_SUBSETS:
