@@ -20,7 +20,8 @@
    the largest |p| in the reference); ``error`` is the largest of the three maxima (the accuracy
    that the levels refer to). Invariant drifts (:func:`validation.summary.drift_figures`), final
    tracking errors, and cost: median wall time of ``repeats`` runs timed serially in this process
-   (one run at a time; the integration only, as measured by the engines), right-hand-side
+   (one run at a time, repeats round-robin over the grid; the integration only, as measured by
+   the engines), right-hand-side
    evaluations (analytic ``nfev``; MuJoCo steps x stages, 4 for RK4) and steps.
    A MuJoCo run is ``diverged`` when it is non-finite or its error exceeds ``diverge_error`` (MuJoCo
    resets an unstable simulation to its initial state, so a diverged run can look finite).
@@ -481,17 +482,36 @@ def stabilization_row(
 # ----------------------------------------------------------------------------------------------
 
 
-def _timed(scene: Scene, row: Mapping[str, Any], cfg: SweepConfig) -> tuple[float, int]:
-    """Median wall time (s) of ``repeats`` serial runs of one setting (one repeat if slow)."""
-    repeats = cfg.repeats if (row["wall_time_pool_s"] or 0) * cfg.repeats < 60 else 1
-    walls = []
-    for _ in range(repeats):
-        if row["engine"] == ANALYTIC:
-            tr = _analytic_run(scene, row["method"], row["rtol"], row["atol"], cfg.t_end)
-        else:
-            tr = _mujoco_run(scene, row["method"], row["dt"], cfg.t_end)
-        walls.append(float(tr.info["wall_time_s"]))
-    return statistics.median(walls), repeats
+def _time_once(scene: Scene, row: Mapping[str, Any], cfg: SweepConfig) -> float:
+    """Wall time (s) of one run of a setting, as the engine measures it (integration only)."""
+    if row["engine"] == ANALYTIC:
+        tr = _analytic_run(scene, row["method"], row["rtol"], row["atol"], cfg.t_end)
+    else:
+        tr = _mujoco_run(scene, row["method"], row["dt"], cfg.t_end)
+    return float(tr.info["wall_time_s"])
+
+
+def time_runs(scene: Scene, runs: Sequence[dict[str, Any]], cfg: SweepConfig) -> None:
+    """Fill ``wall_time_s`` (median) and ``wall_time_repeats`` of the ``ok`` runs, serially.
+
+    Repeats go round-robin over the runs (every run once, then again …), so that a slow spell of a
+    shared machine is spread over many settings instead of biasing one. A run whose first timing
+    exceeds ``max_run_wall_s / repeats`` is not repeated. Runs that are not ``ok`` keep the wall
+    time of their accuracy run with ``wall_time_repeats = 0``.
+    """
+    todo = [r for r in runs if r["status"] == "ok"]
+    walls: dict[int, list[float]] = {id(r): [] for r in todo}
+    for k in range(max(1, cfg.repeats)):
+        for r in todo:
+            if k > 0 and walls[id(r)][0] * cfg.repeats > cfg.max_run_wall_s:
+                continue
+            walls[id(r)].append(_time_once(scene, r, cfg))
+    for r in runs:
+        if r["status"] == "ok":
+            r["wall_time_s"] = statistics.median(walls[id(r)])
+            r["wall_time_repeats"] = len(walls[id(r)])
+        elif r["wall_time_pool_s"] is not None:
+            r["wall_time_s"], r["wall_time_repeats"] = r["wall_time_pool_s"], 0
 
 
 def cheapest_settings(
@@ -853,14 +873,10 @@ def run_sweep(
         )
     # 3. Timings, one run at a time in this process (after a warm-up of both engines).
     say("timing: serial runs")
-    _analytic_run(sc, "DOP853", 1e-6, 1e-7, min(cfg.t_end, 0.1))
-    _mujoco_run(sc, "RK4", 1e-2, min(cfg.t_end, 0.1) if cfg.t_end >= 0.1 else cfg.t_end)
-    for r in runs:
-        if r["status"] in ("ok", "diverged", "failed") and r["wall_time_pool_s"] is not None:
-            if r["status"] == "ok":
-                r["wall_time_s"], r["wall_time_repeats"] = _timed(sc, r, cfg)
-            else:
-                r["wall_time_s"], r["wall_time_repeats"] = r["wall_time_pool_s"], 0
+    interval = 1.0 / sc.output.rate
+    _analytic_run(sc, "DOP853", 1e-6, 1e-7, interval)  # JIT / cache load outside the timings
+    _mujoco_run(sc, "RK4", interval, interval)
+    time_runs(sc, runs, cfg)
     cheapest = cheapest_settings(runs, cfg.levels, FLOOR_FACTOR * reference["error_estimate"])
     # 4. Effects.
     say("effects: cost of one evaluation with each effect off")
