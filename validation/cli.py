@@ -132,6 +132,24 @@ def cmd_demo(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_hard_cases(args: argparse.Namespace) -> int:
+    from validation.hard_cases import run_hard_cases
+
+    out = Path(args.out or Path("out") / "hard_cases")
+
+    def progress(case: str, i: int, total: int) -> None:
+        if sys.stderr.isatty():
+            print(f"hard case {i + 1}/{total}: {case}", file=sys.stderr)
+
+    table = run_hard_cases(out, names=args.case or None, fast_only=args.fast, progress=progress)
+    for r in table.rows:
+        print(f"  {'PASS' if r.passed else 'FAIL'}  {r.case}")
+    n_pass = sum(1 for r in table.rows if r.passed)
+    verdict = "PASS" if table.passed else "FAIL"
+    print(f"{verdict}: {n_pass}/{len(table.rows)} hard cases; table in {out / 'hard_cases.md'}")
+    return 0 if table.passed else EXIT_FAILED
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="tumble",
@@ -200,6 +218,19 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--out", help="output directory (default: out/demo)")
     p.set_defaults(func=cmd_demo)
+
+    p = sub.add_parser(
+        "hard-cases",
+        help="run the hard-case stability suite and write its table",
+        description="Run the hard cases (validation/scenes/hard/*.toml: a rigid body alone, stiff "
+        "springs, extreme mass ratios, fast spin, long horizons, many masses, off-manifold and "
+        "conflicting requirements ...) on both engines against their stated criteria; write "
+        "OUT/hard_cases.md and OUT/hard_cases.json. Exits 1 when a case fails.",
+    )
+    p.add_argument("--out", help="output directory (default: out/hard_cases)")
+    p.add_argument("--fast", action="store_true", help="only the fast subset")
+    p.add_argument("--case", action="append", help="run only this case (repeatable)")
+    p.set_defaults(func=cmd_hard_cases)
     return parser
 
 
