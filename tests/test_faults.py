@@ -86,3 +86,47 @@ def test_cli_bad_scene_one_line_no_traceback(arg):
     assert r.returncode != 0
     assert "Traceback" not in r.stderr
     assert len(r.stderr.strip().splitlines()) == 1, r.stderr
+
+
+# ------------------------------------------------------------------------------------------------
+# Injected faults in the right-hand side: the run stops there, says when and why, keeps the rest.
+# ------------------------------------------------------------------------------------------------
+
+
+def _faulty_after(monkeypatch, t_fault, fault):
+    """Make the numpy model's acceleration misbehave from ``t_fault`` on (fault: 'nan' or 'linalg')."""
+    from analytic.model import TumblingModel
+
+    original = TumblingModel.acceleration
+
+    def accel(self, t, q, qdot):
+        qdd, c = original(self, t, q, qdot)
+        if t > t_fault:
+            if fault == "nan":
+                qdd = qdd.copy()
+                qdd[0] = np.nan
+            else:
+                raise np.linalg.LinAlgError("Matrix is not positive definite")
+        return qdd, c
+
+    monkeypatch.setattr(TumblingModel, "acceleration", accel)
+
+
+@pytest.mark.parametrize(
+    ("fault", "needle"),
+    [("nan", "non-finite acceleration at t ="), ("linalg", "mass matrix not positive definite")],
+)
+def test_fault_part_way_keeps_samples_before_it(monkeypatch, tmp_path, fault, needle):
+    scene = load_scene(hc.HARD_DIR / "zero_gravity.toml")
+    clean = simulate(scene, t_end=1.0, backend="numpy")
+    _faulty_after(monkeypatch, 0.4, fault)
+    tr = simulate(scene, t_end=1.0, backend="numpy")
+    assert tr.status is RunStatus.FAILED and needle in tr.message
+    # the samples before the fault are kept, finite, and identical to the clean run's
+    assert 0.2 <= tr.t[-1] <= 0.4
+    k = len(tr.t)
+    assert np.all(np.isfinite(tr.q))
+    assert np.array_equal(tr.q, clean.q[:k])
+    path = tr.save_npz(tmp_path / "failed.npz")
+    with np.load(path) as z:
+        assert json.loads(str(z["meta_json"]))["status"] == "failed"

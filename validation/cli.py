@@ -150,6 +150,25 @@ def cmd_hard_cases(args: argparse.Namespace) -> int:
     return 0 if table.passed else EXIT_FAILED
 
 
+def cmd_sweep(args: argparse.Namespace) -> int:
+    from validation.sweep import run_sweep
+
+    scene = resolve_scene(args.scene, DEFAULT_SIMULATE_SCENE)
+    out = Path(args.out or Path("out") / f"sweep_{scene.name}")
+
+    def progress(line: str) -> None:
+        if sys.stderr.isatty():
+            print(line, file=sys.stderr)
+
+    res = run_sweep(scene, out, quick=args.quick, progress=progress)
+    print(f"sweep of {scene.name}: {len(res.runs)} runs in {res.wall_time_s:.1f} s")
+    for engine, levels in res.cheapest.items():
+        picks = ", ".join(f"{lvl}: {rid or '-'}" for lvl, rid in levels.items())
+        print(f"  cheapest {engine}: {picks}")
+    print(f"table: {out / 'sweep.md'}  figure: {out / 'work_precision.png'}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="tumble",
@@ -231,6 +250,20 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--fast", action="store_true", help="only the fast subset")
     p.add_argument("--case", action="append", help="run only this case (repeatable)")
     p.set_defaults(func=cmd_hard_cases)
+
+    p = sub.add_parser(
+        "sweep",
+        help="what accuracy costs in time: work-precision study over both engines",
+        description="Compute a reference solution, run the analytic engine over scipy solvers and "
+        "tolerances and MuJoCo over integrators and timesteps, and write OUT/sweep.csv, "
+        "sweep.json, sweep.md (the cheapest setting per accuracy level marked), "
+        "work_precision.png and sweep.rrd; also the cost of each effect and the effect of the "
+        "quaternion stabilisation (delta1, delta2).",
+    )
+    _add_scene_arg(p, DEFAULT_SIMULATE_SCENE)
+    p.add_argument("--out", help="output directory (default: out/sweep_<scene name>)")
+    p.add_argument("--quick", action="store_true", help="a small grid (minutes, not tens)")
+    p.set_defaults(func=cmd_sweep)
     return parser
 
 
