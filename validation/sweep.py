@@ -50,6 +50,7 @@ import dataclasses  # noqa: E402
 import io  # noqa: E402
 import json  # noqa: E402
 import math  # noqa: E402
+import multiprocessing  # noqa: E402
 import statistics  # noqa: E402
 import time  # noqa: E402
 import warnings  # noqa: E402
@@ -810,7 +811,12 @@ def run_sweep(
     out = Path(out_dir)
     say = progress or (lambda _msg: None)
     own = executor is None
-    ex = executor or ProcessPoolExecutor(max_workers=max(1, min(4, os.cpu_count() or 1)))
+    # spawn, not fork: the parent may hold threads (BLAS, numba, a Dask client) that fork would copy
+    # mid-state; workers import the engines afresh
+    ex = executor or ProcessPoolExecutor(
+        max_workers=max(1, min(4, os.cpu_count() or 1)),
+        mp_context=multiprocessing.get_context("spawn"),
+    )
     try:
         # 1. Reference: uncapped, then steps capped at half its mean step.
         say(f"reference: DOP853 rtol {REFERENCE_RTOL:g}, {cfg.t_end:g} s")
