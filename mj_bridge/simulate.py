@@ -13,6 +13,7 @@ controller's outputs then describe that state).
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 
 import mujoco
 import numpy as np
@@ -51,6 +52,7 @@ def simulate(
     *,
     controller: ControllerSource | str = ControllerSource.ANALYTIC_FAST,
     body_frame: BodyFrame | None = None,
+    progress: Callable[[float], None] | None = None,
 ) -> Trajectory:
     """Integrate ``scene`` in MuJoCo; samples at the scene's output rate.
 
@@ -62,6 +64,7 @@ def simulate(
         controller: the analytic controller, compiled (default; the numpy model answers where the
             kernel does not apply), or numpy (``analytic``), or the same law from MuJoCo's matrices.
         body_frame: BR's MuJoCo body frame relative to C (default at C).
+        progress: called with the simulated time reached after each output sample, s.
 
     Returns:
         a :class:`Trajectory` with ``engine = mujoco``; a run that goes non-finite or is interrupted
@@ -131,6 +134,8 @@ def simulate(
                     status, message = RunStatus.FAILED, f"non-finite state at t = {times[i]:.6g} s"
                     break
                 sample(float(times[i]))
+                if progress is not None:
+                    progress(float(times[i]))
         except KeyboardInterrupt:
             status, message = RunStatus.FAILED, f"interrupted at t = {rec['t'][-1]:.6g} s"
         except np.linalg.LinAlgError as exc:

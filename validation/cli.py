@@ -96,9 +96,14 @@ def cmd_validate(args: argparse.Namespace) -> int:
     out = Path(args.out or Path("out") / f"validate_{scene.name}")
     t_end = args.t_end or scene.output.t_end
     prog = Progress(f"validate {scene.name}", t_end)
+
+    def progress(stage: str, t: float) -> None:
+        prog.label = f"validate {scene.name} [{stage}]"
+        prog(t)
+
     try:
         res = run_validation(
-            scene, out, integrator=args.integrator, dt=args.dt, t_end=args.t_end, progress=prog
+            scene, out, integrator=args.integrator, dt=args.dt, t_end=args.t_end, progress=progress
         )
     finally:
         prog.close()

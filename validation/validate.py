@@ -163,10 +163,11 @@ def run_validation(
     mj: Trajectory | None = None
     try:
         mj_sim = _mj_simulate()
-        mj = timed("mujoco", lambda: mj_sim(sc, integrator=integrator, dt=dt, t_end=horizon))
         mj_progress = _stage_progress(progress, "mujoco")
-        if mj_progress is not None:
-            mj_progress(float(mj.t[-1]) if mj.t.size else 0.0)
+        mj = timed(
+            "mujoco",
+            lambda: mj_sim(sc, integrator=integrator, dt=dt, t_end=horizon, progress=mj_progress),
+        )
     except ValueError:
         raise  # bad integrator / dt: the caller's input, not a failed run
     except Exception as exc:
