@@ -167,9 +167,13 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 
     res = run_sweep(scene, out, quick=args.quick, progress=progress)
     print(f"sweep of {scene.name}: {len(res.runs)} runs in {res.wall_time_s:.1f} s")
+    by_id = {r["run_id"]: r for r in res.runs}
+    print("  cheapest setting reaching each accuracy level:")
     for engine, levels in res.cheapest.items():
-        picks = ", ".join(f"{lvl}: {rid or '-'}" for lvl, rid in levels.items())
-        print(f"  cheapest {engine}: {picks}")
+        for lvl, rid in levels.items():
+            r = by_id.get(rid)
+            pick = f"{r['method']} {r['setting_name']} {r['setting']:g}" if r else "none reaches it"
+            print(f"    {engine:<9} error <= {float(lvl):.0e}: {pick}")
     print(f"table: {out / 'sweep.md'}  figure: {out / 'work_precision.png'}")
     return 0
 
