@@ -430,8 +430,8 @@ def write_demo(
         "",
     ]
     for step, _, _ in runs:
-        first = step.narrative.split("\n\n")[1].replace("\n", " ")
-        md += [f"## {step.title}", "", first, ""]
+        body = step.narrative.split("\n\n", 1)[1]  # the narrative without its own heading
+        md += [f"## {step.title}", "", body, ""]
     mdp = write_atomic(out / "demo.md", "\n".join(md))
     return DemoResult(out, path, mdp, tuple(s for s, _, _ in runs), walls)
 
