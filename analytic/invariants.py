@@ -19,7 +19,7 @@ import numpy as np
 from analytic.effects import Effect
 from analytic.kinematics import T_H, S_batch
 from analytic.model import TumblingModel, spring_energy
-from analytic.trajectory import Invariants
+from analytic.trajectory import Invariants, Tracking
 
 
 def mass_kinematics(model: TumblingModel, q: np.ndarray, qdot: np.ndarray):
@@ -78,3 +78,30 @@ def compute_invariants(
         energy=T + U,
         work=work,
     )
+
+
+def tracking_errors(
+    model: TumblingModel, t: np.ndarray, q: np.ndarray, omega: np.ndarray
+) -> Tracking:
+    """Tracking errors of the scene's requirements for N samples, any engine.
+
+    Args:
+        t: times, s, shape (N,); q: coordinates (Eq. 44), shape (N, n+7); omega: body-axis angular
+            velocity, rad/s, shape (N, 3).
+
+    Returns:
+        ``e_ω = ω - ω̄`` on the tracked axes (Eq. 82) and ``e_p = p - p̄`` for the tracked masses
+        (Eq. 77); empty arrays for what is not tracked.
+    """
+    N = len(t)
+    comps = tuple(model.omega_track.components) if model.omega_track else ()
+    idx = tuple(model.mass_track.indices) if model.mass_track else ()
+    e_w = np.zeros((N, len(comps)))
+    e_p = np.zeros((N, len(idx)))
+    for i in range(N):
+        req = model.requirements(float(t[i]))
+        if comps:
+            e_w[i] = omega[i, list(comps)] - req["omega_bar"]
+        if idx:
+            e_p[i] = q[i, 7 + np.array(idx)] - req["p_bar"]
+    return Tracking(omega_components=comps, e_omega=e_w, mass_indices=idx, e_p=e_p)

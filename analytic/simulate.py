@@ -19,11 +19,11 @@ import numpy as np
 from scipy import integrate
 
 from analytic.effects import Backend, SolverMethod
-from analytic.invariants import compute_invariants
+from analytic.invariants import compute_invariants, tracking_errors
 from analytic.kinematics import S, omega_of
 from analytic.model import TumblingModel
 from analytic.scene import OutputSettings, Scene
-from analytic.trajectory import Engine, RunStatus, Tracking, Trajectory
+from analytic.trajectory import Engine, RunStatus, Trajectory
 
 _SOLVERS = {
     SolverMethod.DOP853: integrate.DOP853,
@@ -199,7 +199,6 @@ def _assemble(model, accel, t, Y, status, message, info) -> Trajectory:
     rod = np.zeros((N, model.n))
     fC = np.zeros((N, 3))
     res = np.zeros(N)
-    e_w, e_p = [], []
     for i in range(N):
         try:
             a, c = accel(t[i], q[i], qd[i])
@@ -210,20 +209,7 @@ def _assemble(model, accel, t, Y, status, message, info) -> Trajectory:
         if c is not None:
             QC[i], torque[i], rod[i], fC[i] = c.QC, c.torque, c.rod_forces, c.force_at_C
             res[i] = float(np.linalg.norm(c.residual))
-        req = model.requirements(t[i])
-        if model.omega_track:
-            w = model._kin(q[i], qd[i]).omega
-            e_w.append(w[model._w_comps] - req["omega_bar"])
-        if model.mass_track:
-            e_p.append(q[i, 7 + model._p_idx] - req["p_bar"])
-    comps = tuple(model.omega_track.components) if model.omega_track else ()
-    idx = tuple(model.mass_track.indices) if model.mass_track else ()
-    tracking = Tracking(
-        omega_components=comps,
-        e_omega=np.array(e_w).reshape(N, len(comps)),
-        mass_indices=idx,
-        e_p=np.array(e_p).reshape(N, len(idx)),
-    )
+    tracking = tracking_errors(model, t, q, omega_of(q[:, 3:7], qd[:, 3:7]))
     inv = compute_invariants(
         model, t, q, qd, Y[:, 2 * nq], Y[:, 2 * nq + 1 : 2 * nq + 4], Y[:, 2 * nq + 4 : 2 * nq + 7]
     )

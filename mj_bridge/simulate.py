@@ -19,9 +19,9 @@ import mujoco
 import numpy as np
 
 from analytic.effects import MjIntegrator, SpringModel
-from analytic.invariants import compute_invariants
+from analytic.invariants import compute_invariants, tracking_errors
 from analytic.scene import OutputSettings, Scene
-from analytic.trajectory import Engine, RunStatus, Tracking, Trajectory
+from analytic.trajectory import Engine, RunStatus, Trajectory
 from mj_bridge.twin import ControllerSource, Twin, bad_warnings
 from model_xml import BodyFrame
 from model_xml.state import mujoco_to_paper_acc
@@ -150,22 +150,9 @@ def simulate(
     qd = np.array(rec["qdot"])
     N = len(t)
     model = tw.model
-    e_w, e_p = [], []
-    for i in range(N):
-        req = model.requirements(t[i])
-        if model.omega_track:
-            w = tw.R_I.T @ tw.to_mujoco(q[i], qd[i])[1][3:6]
-            e_w.append(w[model._w_comps] - req["omega_bar"])
-        if model.mass_track:
-            e_p.append(q[i, 7 + model._p_idx] - req["p_bar"])
-    comps = tuple(model.omega_track.components) if model.omega_track else ()
-    idx = tuple(model.mass_track.indices) if model.mass_track else ()
-    tracking = Tracking(
-        omega_components=comps,
-        e_omega=np.array(e_w).reshape(N, len(comps)),
-        mass_indices=idx,
-        e_p=np.array(e_p).reshape(N, len(idx)),
-    )
+    omega = np.array([tw.R_I.T @ tw.to_mujoco(q[i], qd[i])[1][3:6] for i in range(N)])
+    omega = omega.reshape(N, 3)
+    tracking = tracking_errors(model, t, q, omega)
     inv = compute_invariants(
         model, t, q, qd, np.array(rec["W"]), np.array(rec["IL"]), np.array(rec["IP"])
     )

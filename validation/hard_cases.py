@@ -24,6 +24,7 @@ from typing import Any
 import mujoco
 import numpy as np
 from scipy.integrate import solve_ivp
+from scipy.spatial.transform import Rotation
 
 import mj_bridge
 from analytic import simulate
@@ -277,15 +278,9 @@ def tracking_law_error(tr: Trajectory, scene: Scene) -> float:
 
 
 def rotation(u: np.ndarray) -> np.ndarray:
-    """Rotation matrix of a unit quaternion (w first), body -> inertial; the textbook formula."""
-    w, x, y, z = np.asarray(u, float) / np.linalg.norm(u)
-    return np.array(
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-        ]
-    )
+    """Rotation matrix of a quaternion (w first, normalised), body -> inertial, from scipy: a
+    reference independent of the paper's S(u) and of MuJoCo's."""
+    return Rotation.from_quat(np.asarray(u, float), scalar_first=True).as_matrix()
 
 
 def system_com(scene: Scene, q: np.ndarray) -> np.ndarray:

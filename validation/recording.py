@@ -27,6 +27,7 @@ Quaternions are w first inside the project and converted to x, y, z, w here only
 
 from __future__ import annotations
 
+import contextlib
 import time
 import uuid
 from collections.abc import Sequence
@@ -434,6 +435,30 @@ def close_atomic(rec, tmp: Path, path: Path) -> None:
     os.replace(tmp, path)
 
 
+@contextlib.contextmanager
+def atomic_stream(path: str | Path, app_id: str = "tumble", blueprint: Any = None):
+    """``with atomic_stream(path) as rec:`` — a stream saving to a temporary file beside ``path``,
+    moved into place (footer written) only when the block finishes; on any exception the stream
+    is closed and the temporary file removed, so ``path`` is never a half-written recording."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.{uuid.uuid4().hex[:8]}.tmp")
+    rec = new_stream(app_id)
+    try:
+        if blueprint is None:
+            rec.save(str(tmp))
+        else:
+            rec.save(str(tmp), default_blueprint=blueprint)
+        yield rec
+        close_atomic(rec, tmp, path)
+    except BaseException:
+        try:
+            rec.disconnect()
+        finally:
+            tmp.unlink(missing_ok=True)
+        raise
+
+
 def write_recording(
     path: str | Path,
     scene: Any,
@@ -445,25 +470,14 @@ def write_recording(
     import rerun.blueprint as rrb
 
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.{uuid.uuid4().hex[:8]}.tmp")
     t0 = time.perf_counter()
-    rec = new_stream()
-    try:
-        bp = rrb.Blueprint(
-            blueprint_for("", scene, comparison, len(plants) > 1),
-            rrb.TimePanel(state="expanded"),
-            collapse_panels=False,
-        )
-        rec.save(str(tmp), default_blueprint=bp)
+    bp = rrb.Blueprint(
+        blueprint_for("", scene, comparison, len(plants) > 1),
+        rrb.TimePanel(state="expanded"),
+        collapse_panels=False,
+    )
+    with atomic_stream(path, blueprint=bp) as rec:
         entities, _ = log_run(rec, scene, plants, comparison, narrative)
-        close_atomic(rec, tmp, path)
-    except BaseException:
-        try:
-            rec.disconnect()
-        finally:
-            tmp.unlink(missing_ok=True)
-        raise
     samples = max((p.t.shape[0] for p in plants), default=0)
     return RecordingInfo(path, tuple(dict.fromkeys(entities)), samples, time.perf_counter() - t0)
 

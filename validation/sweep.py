@@ -740,16 +740,12 @@ def _figure_png(runs, ref_error: float, title: str) -> bytes:
 
 def _write_rrd(path: Path, runs, png: bytes, md: str) -> None:
     """Work-precision lines in log10 coordinates (x: wall time, y: error), the PNG and the text."""
-    import uuid
 
     import rerun as rr
 
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.{uuid.uuid4().hex[:8]}.tmp")
-    rec = rr.RecordingStream("tumble_sweep", recording_id=str(uuid.uuid4()))
-    rec.set_log_time_enabled(False)
-    try:
-        rec.save(str(tmp))
+    from validation.recording import atomic_stream
+
+    with atomic_stream(path, "tumble_sweep") as rec:
         for (engine, method), pts in _series_points(runs).items():
             xy = np.log10(pts)
             ent = f"work_precision/{engine}/{method}"
@@ -762,15 +758,6 @@ def _write_rrd(path: Path, runs, png: bytes, md: str) -> None:
             )
         rec.log("figure", rr.EncodedImage(contents=png, media_type="image/png"), static=True)
         rec.log("report", rr.TextDocument(md, media_type=rr.MediaType.MARKDOWN), static=True)
-        rec.flush()
-        rec.disconnect()
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            rec.disconnect()
-        finally:
-            tmp.unlink(missing_ok=True)
-        raise
 
 
 # ----------------------------------------------------------------------------------------------

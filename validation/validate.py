@@ -23,10 +23,9 @@ from analytic.scene import Scene, load_scene
 from analytic.trajectory import RunStatus, Trajectory
 from validation.compare import Check, Comparison, compare
 from validation.recording import (
+    atomic_stream,
     blueprint_for,
-    close_atomic,
     log_run,
-    new_stream,
     write_recording,
 )
 from validation.report import versions, write_atomic, write_report
@@ -376,17 +375,14 @@ def write_demo(
         runs.append((step, sc, tr))
 
     path = out / "demo.rrd"
-    tmp = path.with_name(f".{path.name}.tmp")
     t0 = time.perf_counter()
-    rec = new_stream("tumble_demo")
-    try:
-        tabs = [
-            blueprint_for(s.prefix, sc, compare(tr, None, sc), False, name=s.title)
-            for s, sc, tr in runs
-        ]
-        tabs[3] = _with_masses_plot(tabs[3], runs[3])
-        bp = rrb.Blueprint(rrb.Tabs(*tabs), rrb.TimePanel(state="expanded"))
-        rec.save(str(tmp), default_blueprint=bp)
+    tabs = [
+        blueprint_for(s.prefix, sc, compare(tr, None, sc), False, name=s.title)
+        for s, sc, tr in runs
+    ]
+    tabs[3] = _with_masses_plot(tabs[3], runs[3])
+    bp = rrb.Blueprint(rrb.Tabs(*tabs), rrb.TimePanel(state="expanded"))
+    with atomic_stream(path, "tumble_demo", blueprint=bp) as rec:
         for step, sc, tr in runs:
             log_run(
                 rec, sc, [tr], compare(tr, None, sc), narrative=step.narrative, prefix=step.prefix
@@ -414,13 +410,6 @@ def write_demo(
                     [tr.n] * tr.t.shape[0]
                 ),
             )
-        close_atomic(rec, tmp, path)
-    except BaseException:
-        try:
-            rec.disconnect()
-        finally:
-            tmp.unlink(missing_ok=True)
-        raise
     walls["recording"] = time.perf_counter() - t0
     md = [
         "# tumble demo",
