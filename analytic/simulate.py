@@ -18,9 +18,10 @@ from collections.abc import Callable
 import numpy as np
 from scipy import integrate
 
-from analytic.effects import Backend, SolverMethod
+from analytic.aux_rates import aux_rates
+from analytic.effects import Backend, Effect, SolverMethod
 from analytic.invariants import compute_invariants, tracking_errors
-from analytic.kinematics import S, omega_of
+from analytic.kinematics import omega_of
 from analytic.model import TumblingModel
 from analytic.scene import OutputSettings, Scene
 from analytic.trajectory import Engine, RunStatus, Trajectory
@@ -57,31 +58,21 @@ def evaluator(model: TumblingModel, backend: Backend) -> Callable:
 def _rhs(model: TumblingModel, accel: Callable) -> Callable[[float, np.ndarray], np.ndarray]:
     nq = model.nq
     counter = {"nfev": 0}
+    has_tau_g = model.scene.has(Effect.EXTERNAL_TORQUE)
+    a, d, m = model.a, model.d, model.m
+    mu0, m_T = float(model.mu0), float(model.m_T)
 
     def f(t: float, y: np.ndarray) -> np.ndarray:
         counter["nfev"] += 1
         q, qd = y[:nq], y[nq : 2 * nq]
         qdd, c = accel(t, q, qd)
-        u = q[3:7]
-        omega = omega_of(u, qd[3:7])
-        tau_g = model.given_torque(t)
+        tau = c.torque + model.given_torque(t) if has_tau_g else c.torque
         out = np.empty_like(y)
         out[:nq] = qd
         out[nq : 2 * nq] = qdd
-        out[2 * nq] = (
-            float((c.torque + tau_g) @ omega)
-            + float(c.rod_forces @ qd[7:])
-            + float(c.force_at_C @ qd[:3])
-        )
-        Sm = S(u)
-        # External moments about the system centre of mass c: the body torques, and a force at C
-        # acting at R, with R - c = -(Σ m_i (r_i - R))/m_T = -(μ1 Sa + μ0 Sd)/m_T.
-        R_minus_c = (
-            -(float(model.m @ q[7:]) * (Sm @ model.a) + model.mu0 * (Sm @ model.d)) / model.m_T
-        )
-        out[2 * nq + 1 : 2 * nq + 4] = Sm @ (c.torque + tau_g) + np.cross(R_minus_c, c.force_at_C)
-        out[2 * nq + 4 : 2 * nq + 7] = c.force_at_C
-        if not np.all(np.isfinite(out)):
+        # Work, and the external moments about the system centre of mass (analytic/aux_rates.py)
+        aux_rates(q, qd, tau, c.rod_forces, c.force_at_C, a, d, m, mu0, m_T, out[2 * nq :])
+        if not np.isfinite(out).all():
             raise _NonFinite(f"non-finite acceleration at t = {t:.6g} s")
         return out
 
