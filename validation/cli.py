@@ -18,7 +18,7 @@ import sys  # noqa: E402
 import warnings  # noqa: E402
 from pathlib import Path  # noqa: E402
 
-from analytic.effects import Backend, SolverMethod  # noqa: E402
+from analytic.effects import Backend, MjIntegrator, SolverMethod  # noqa: E402
 from analytic.trajectory import RunStatus  # noqa: E402
 from validation.progress import Progress  # noqa: E402
 from validation.scenes import DEFAULT_SIMULATE_SCENE, builtin_names, resolve_scene  # noqa: E402
@@ -222,7 +222,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", help="output directory (default: out/validate_<scene name>)")
     p.add_argument(
         "--integrator",
-        choices=["RK4", "Euler", "implicit", "implicitfast"],
+        choices=[i.value for i in MjIntegrator],
         help="MuJoCo integrator (default: the scene's)",
     )
     p.add_argument("--dt", type=_positive_float, help="MuJoCo timestep in seconds")
