@@ -53,6 +53,7 @@ def simulate(
     controller: ControllerSource | str = ControllerSource.ANALYTIC_FAST,
     body_frame: BodyFrame | None = None,
     progress: Callable[[float], None] | None = None,
+    native_callback: bool = True,
 ) -> Trajectory:
     """Integrate ``scene`` in MuJoCo; samples at the scene's output rate.
 
@@ -65,18 +66,28 @@ def simulate(
             kernel does not apply), or numpy (``analytic``), or the same law from MuJoCo's matrices.
         body_frame: BR's MuJoCo body frame relative to C (default at C).
         progress: called with the simulated time reached after each output sample, s.
+        native_callback: run the compiled controller as a native ``mjcb_control`` where it applies
+            (:mod:`mj_bridge.native`; same kernel, same numbers, no Python per stage); False keeps
+            the Python callback.
 
     Returns:
         a :class:`Trajectory` with ``engine = mujoco``; a run that goes non-finite or is interrupted
         returns the samples reached with ``status = failed``.
     """
-    tw = Twin(scene, integrator=integrator, dt=dt, body_frame=body_frame, controller=controller)
+    tw = Twin(
+        scene,
+        integrator=integrator,
+        dt=dt,
+        body_frame=body_frame,
+        controller=controller,
+        native_callback=native_callback,
+    )
     out = scene.output if t_end is None else OutputSettings(t_end=t_end, rate=scene.output.rate)
     if t_end is not None and not (np.isfinite(t_end) and t_end > 0):
         raise ValueError(f"t_end: must be a positive time in s (got {t_end!r})")
     times = out.times()
     ksteps = steps_between(times, tw.dt)
-    m, d = tw.m, tw.d
+    d = tw.d
     tw.set_state(0.0, scene.initial.q0(), scene.initial.qdot0())
     tw.d.time = float(times[0])
     nq = tw.n + 7
@@ -88,9 +99,7 @@ def simulate(
 
     def sample(t: float) -> None:
         acc.active = False
-        tw._record = True
-        mujoco.mj_forward(m, d)
-        tw._record = False
+        tw.forward_here()
         q, qd = tw.state()
         rec["t"].append(t)
         rec["q"].append(q)
@@ -113,11 +122,7 @@ def simulate(
         sample(float(times[0]))
         try:
             for i, k in enumerate(ksteps, start=1):
-                acc.h = tw.dt
-                acc.calls = 0
-                acc.active = True
-                mujoco.mj_step(m, d, nstep=int(k))
-                acc.active = False
+                tw.step(int(k))
                 if tw.needs_control_cb and acc.calls != stages * k:
                     raise RuntimeError(
                         f"controller called {acc.calls} times in {k} steps; expected {stages} per "
@@ -177,6 +182,8 @@ def simulate(
             "dt": tw.dt,
             "nsteps": nsteps,
             "controller": tw.controller.value,
+            "native_callback": tw.native,
+            "native_redos": tw.native_redos,
             "spring_model": SpringModel(scene.mujoco.spring_model).value,
             "wall_time_s": wall,
             "mujoco_version": mujoco.__version__,

@@ -9,6 +9,8 @@ Frames: ``τ`` (torque) and ``ω`` in the paper's body axes (BR's principal axes
 
 from __future__ import annotations
 
+import contextlib
+from collections.abc import Iterator
 from dataclasses import dataclass
 from enum import StrEnum
 
@@ -19,7 +21,7 @@ from scipy.linalg import cho_factor, cho_solve
 from analytic.effects import Effect, MjIntegrator, SpringModel, Weighting
 from analytic.model import ControlOutput, TumblingModel
 from analytic.scene import Scene
-from mj_bridge import fast_stage
+from mj_bridge import fast_stage, native
 from mj_bridge.callbacks import installed, spring_user_bias
 from model_xml import (
     BODY,
@@ -148,6 +150,7 @@ class Twin:
         dt: float | None = None,
         body_frame: BodyFrame | None = None,
         controller: ControllerSource | str = ControllerSource.ANALYTIC_FAST,
+        native_callback: bool = True,
     ):
         self.scene = scene
         self.integrator = _as_enum(
@@ -231,6 +234,23 @@ class Twin:
                 self._st_tq, self._st_f, self._fast.fp, self._fast.ip, self._st_out,
                 self._st_q, self._st_qd, self._st_tau_g, self._st_geo,
             )  # fmt: skip
+        # The compiled stage as a native mjcb_control (mj_bridge.native): no Python per stage.
+        self._ctx: native.Context | None = None
+        self._native_bound = False
+        self.native_redos = 0  # batches rerun with the Python callback after a declined stage
+        if self._use_stage and self._st_gauss and native_callback and native.available():
+            arrays = dict(
+                fp=self._fast.fp, ip=self._fast.ip, out=self._st_out, q=self._st_q,
+                qd=self._st_qd, tq_ids=self._st_tq, f_ids=self._st_f, tau_g=self._st_tau_g,
+                geo=self._st_geo, acc=self.acc.v,
+            )  # fmt: skip
+            self._ctx = native.Context(
+                self.m,
+                arrays,
+                self.acc.weights,
+                INV_GEAR,
+                self.has_torque,
+            )
 
     # ------------------------------------------------------------------------------------------
     # State
@@ -253,12 +273,118 @@ class Twin:
     def state(self) -> tuple[np.ndarray, np.ndarray]:
         return self.to_paper(self.d.qpos, self.d.qvel)
 
-    def callbacks(self) -> installed:
-        """The context manager installing this twin's callbacks (control, user bias) as needed."""
-        return installed(
-            control=self.control_callback if self.needs_control_cb else None,
-            act_bias=spring_user_bias if self.needs_act_bias else None,
-        )
+    @property
+    def native(self) -> bool:
+        """Whether :meth:`callbacks` installs the native (machine-code) controller callback."""
+        return self._ctx is not None
+
+    @contextlib.contextmanager
+    def callbacks(self) -> Iterator[None]:
+        """Install this twin's callbacks (control, user bias) as needed for a ``with`` block: the
+        native controller when available (:mod:`mj_bridge.native`), else :attr:`control_callback`."""
+        act_bias = spring_user_bias if self.needs_act_bias else None
+        if self._ctx is None or not self.needs_control_cb:
+            control = self.control_callback if self.needs_control_cb else None
+            with installed(control=control, act_bias=act_bias):
+                yield
+            return
+        with self._ctx, installed(control=native.callback(), act_bias=act_bias):
+            self._native_bound = True
+            try:
+                yield
+            finally:
+                self._native_bound = False
+
+    def step(self, nstep: int) -> None:
+        """``nstep`` MuJoCo steps with the installed callbacks, accumulating the controller's work
+        and impulses (``acc``; ``acc.calls`` = controller stages run). Call inside :meth:`callbacks`.
+
+        With the native callback, a batch in which the kernel declined a stage is rerun from its
+        saved start with the Python callback (which answers that stage with the numpy model).
+        """
+        acc = self.acc
+        acc.h = self.dt
+        acc.calls = 0
+        m, d = self.m, self.d
+        if not self._native_bound:
+            acc.active = True
+            try:
+                mujoco.mj_step(m, d, nstep=nstep)
+            finally:
+                acc.active = False
+            return
+        ctx = self._ctx
+        saved = self._save()
+        ctx.clear_failures()
+        ctx.start(self.dt)
+        try:
+            mujoco.mj_step(m, d, nstep=nstep)
+        finally:
+            acc.calls = ctx.stop()
+        if ctx.failures:
+            self._restore(saved)
+            self.native_redos += 1
+            with self._python_control():
+                acc.calls = 0
+                acc.active = True
+                try:
+                    mujoco.mj_step(m, d, nstep=nstep)
+                finally:
+                    acc.active = False
+
+    def forward_here(self) -> None:
+        """``mj_forward`` at the current state with the installed callbacks, keeping the
+        controller's output in :attr:`last_control`. Call inside :meth:`callbacks`."""
+        if not self._native_bound:
+            self._record = True
+            try:
+                mujoco.mj_forward(self.m, self.d)
+            finally:
+                self._record = False
+            return
+        self._ctx.clear_failures()
+        warn = [self.d.warning[int(w)].number for w in BAD_WARNINGS]
+        mujoco.mj_forward(self.m, self.d)
+        if self._ctx.failures:  # the kernel declined: undo any warnings, ask Python
+            for w, k in zip(BAD_WARNINGS, warn, strict=True):
+                self.d.warning[int(w)].number = k
+            with self._python_control():
+                self._record = True
+                try:
+                    mujoco.mj_forward(self.m, self.d)
+                finally:
+                    self._record = False
+            return
+        nq = self.n + 7
+        out = self._st_out
+        QC = out[nq : 2 * nq].copy()
+        self.last_control = ControlOutput(
+            QC=QC, torque=out[2 * nq : 2 * nq + 3].copy(), rod_forces=QC[7:],
+            force_at_C=QC[:3], residual=out[2 * nq + 3 :].copy(), rank=self.model.k,
+        )  # fmt: skip
+
+    @contextlib.contextmanager
+    def _python_control(self) -> Iterator[None]:
+        """Swap the native control callback for the Python one inside an active :meth:`callbacks`."""
+        mujoco.set_mjcb_control(self.control_callback)
+        try:
+            yield
+        finally:
+            mujoco.set_mjcb_control(native.callback())
+
+    _SAVE = mujoco.mjtState.mjSTATE_INTEGRATION
+
+    def _save(self) -> tuple[np.ndarray, np.ndarray, list[int]]:
+        st = np.empty(mujoco.mj_stateSize(self.m, self._SAVE))
+        mujoco.mj_getState(self.m, self.d, st, self._SAVE)
+        return st, self.acc.v.copy(), [self.d.warning[int(w)].number for w in BAD_WARNINGS]
+
+    def _restore(self, saved: tuple[np.ndarray, np.ndarray, list[int]]) -> None:
+        st, v, warn = saved
+        mujoco.mj_setState(self.m, self.d, st, self._SAVE)
+        self.acc.v[:] = v
+        for w, k in zip(BAD_WARNINGS, warn, strict=True):
+            self.d.warning[int(w)].number = k
 
     # ------------------------------------------------------------------------------------------
     # The controller inside MuJoCo's integrator
@@ -371,14 +497,10 @@ class Twin:
         self.set_state(t, q, qdot)
         self.d.ctrl[:] = 0.0
         self.d.xfrc_applied[:] = 0.0
-        self._record = True
         for w in BAD_WARNINGS:
             self.d.warning[int(w)].number = 0
-        try:
-            with self.callbacks():
-                mujoco.mj_forward(self.m, self.d)
-        finally:
-            self._record = False
+        with self.callbacks():
+            self.forward_here()
         bad = bad_warnings(self.d)
         if bad:
             raise RuntimeError(f"MuJoCo warning at t = {t!r} s: {'; '.join(bad)}")

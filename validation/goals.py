@@ -8,9 +8,10 @@ holds. Numbers are printed, never asserted (tests cover correctness, not speed).
    on the same body (``model_xml.build_spec(scene).compile()``), for ``validation.bench.chain_scene``
    n = 2 and n = 5. Holds when ≤ 1.
 2. **controller in RK4**: the extra cost per RK4 step of the analytic controller running in
-   ``mjcb_control`` (four stages, the twin's default compiled stage) / the bare ``mj_step`` (RK4, no
-   callback, ctrl = 0), on the controlled paper scenes. Holds when ≤ 1 ("costs no more than the
-   MuJoCo step it sits in").
+   ``mjcb_control`` (four stages; the twin's default: the compiled stage as a native callback,
+   :mod:`mj_bridge.native`, with work and impulses accumulated as in a run) / the bare ``mj_step``
+   (RK4, no callback, ctrl = 0), on the controlled paper scenes. Holds when ≤ 1 ("costs no more than
+   the MuJoCo step it sits in"). The same controller through the Python callback is printed too.
 3. **60 s Example 1**: the controlled Example 1 over 60 s, analytic DOP853 at rtol 1e-12 (atol 1e-13):
    its error against a reference (DOP853 at rtol 2.5e-14) in the sweep's error measure
    (:func:`validation.sweep.errors_against`); then MuJoCo RK4 with dt halving from 1e-3 s until its
@@ -121,6 +122,7 @@ def goal_controller_in_rk4(scene_name: str, steps: int = 200, rounds: int = 9) -
 
     sc = resolve_scene(scene_name)
     tw = Twin(sc, integrator="RK4")
+    tw_py = Twin(sc, integrator="RK4", native_callback=False)
     q0, qd0 = sc.initial.q0(), sc.initial.qdot0()
 
     def bare() -> None:
@@ -128,11 +130,14 @@ def goal_controller_in_rk4(scene_name: str, steps: int = 200, rounds: int = 9) -
         tw.d.ctrl[:] = 0.0
         mujoco.mj_step(tw.m, tw.d, nstep=steps)
 
-    def with_controller() -> None:
-        tw.set_state(0.0, q0, qd0)
-        tw.d.ctrl[:] = 0.0
-        with tw.callbacks():
-            mujoco.mj_step(tw.m, tw.d, nstep=steps)
+    def controlled(twin: Twin) -> Callable[[], None]:
+        def run() -> None:  # as mj_bridge.simulate runs it: work and impulses accumulated
+            twin.set_state(0.0, q0, qd0)
+            twin.d.ctrl[:] = 0.0
+            with twin.callbacks():
+                twin.step(steps)
+
+        return run
 
     def bare_nocb() -> None:
         with installed(control=None, act_bias=None):
@@ -142,18 +147,29 @@ def goal_controller_in_rk4(scene_name: str, steps: int = 200, rounds: int = 9) -
         with installed(control=lambda m, d: None, act_bias=None):
             bare()
 
-    c = interleaved({"bare": bare_nocb, "empty": empty_cb, "controlled": with_controller}, rounds)
+    fns = {"bare": bare_nocb, "empty": empty_cb, "controlled": controlled(tw)}
+    fns["python_cb"] = controlled(tw_py)
+    c = interleaved(fns, rounds)
     step = c["bare"] / steps
     ctl = c["controlled"] / steps
     empty = c["empty"] / steps
+    py = c["python_cb"] / steps
+    how = "native mjcb_control" if tw.native else "Python mjcb_control (native unavailable)"
     return Goal(
         f"controller in RK4 ({scene_name}): added cost per step / bare mj_step",
         (ctl - step) / step,
         1.0,
-        f"bare RK4 step {step * 1e6:.1f} µs, with the analytic controller {ctl * 1e6:.1f} µs "
-        f"({ctl / step:.2f}x); of the added cost, calling an empty Python callback 4x a step "
-        f"costs {(empty - step) * 1e6:.1f} µs",
-        data={"bare_us": step * 1e6, "controlled_us": ctl * 1e6, "empty_cb_us": empty * 1e6},
+        f"bare RK4 step {step * 1e6:.1f} µs, with the analytic controller ({how}) "
+        f"{ctl * 1e6:.1f} µs ({ctl / step:.2f}x); through a Python callback {py * 1e6:.1f} µs "
+        f"({py / step:.2f}x), of which calling an empty Python callback 4x a step costs "
+        f"{(empty - step) * 1e6:.1f} µs",
+        data={
+            "bare_us": step * 1e6,
+            "controlled_us": ctl * 1e6,
+            "python_cb_us": py * 1e6,
+            "empty_cb_us": empty * 1e6,
+            "native": tw.native,
+        },
     )
 
 

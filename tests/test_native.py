@@ -1,0 +1,118 @@
+"""The native (machine-code) ``mjcb_control``: it must be the Python stage callback's exact twin.
+
+Both run the same compiled kernel on the same numbers, so a run with the native callback must be
+bit-identical to the run with the Python callback: trajectories, control outputs, work and impulses.
+The fault path (the kernel declines a stage) must rerun the batch with the Python callback and end
+bit-identical too.
+"""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+import pytest
+
+from mj_bridge import native
+from mj_bridge.simulate import simulate
+from mj_bridge.twin import Twin, bad_warnings
+from tests.mj_scenes import paper_scene, random_scene
+
+pytestmark = pytest.mark.skipif(not native.available(), reason="native callback unavailable")
+
+FIELDS = ("t", "q", "qdot", "qddot", "QC", "torque", "rod_forces", "force_at_C", "residual_norm")
+
+
+def _same(a, b) -> None:
+    for f in FIELDS:
+        np.testing.assert_array_equal(getattr(a, f), getattr(b, f), err_msg=f)
+    for f in ("work", "angular_impulse", "linear_momentum_expected"):
+        np.testing.assert_array_equal(getattr(a.invariants, f), getattr(b.invariants, f), f)
+
+
+def test_layout_reads_the_fields_of_any_mjdata():
+    """The offsets found on the probes read time, qpos, qvel and ctrl of a twin's own MjData."""
+    tw = Twin(paper_scene("paper_example2_controlled"))
+    tw.d.time = 0.123456789
+    lay = native.layout()
+    t, qpos, qvel, ctrl = native.read_fields(tw.d, lay)
+    assert t == tw.d.time
+    assert (qpos, qvel, ctrl) == (
+        tw.d.qpos.ctypes.data,
+        tw.d.qvel.ctypes.data,
+        tw.d.ctrl.ctypes.data,
+    )
+
+
+@pytest.mark.parametrize("name", ["paper_example1_controlled", "paper_example2_controlled"])
+def test_native_run_is_bit_identical_to_python_callback(name):
+    sc = paper_scene(name)
+    a = simulate(sc, t_end=0.3, native_callback=False)
+    b = simulate(sc, t_end=0.3)
+    assert not a.info["native_callback"] and b.info["native_callback"]
+    assert b.info["native_redos"] == 0
+    _same(a, b)
+
+
+@pytest.mark.parametrize("spring_model", ["tendon", "actuator"])
+def test_native_with_given_torque_and_python_act_bias(spring_model):
+    """A given torque (computed inside the native stage) and the cubic springs' Python act-bias
+    callback alongside the native control callback."""
+    sc = random_scene(np.random.default_rng(7), 4, external_torque=True, spring_model=spring_model)
+    a = simulate(sc, dt=1e-3, t_end=0.2, native_callback=False)
+    b = simulate(sc, dt=1e-3, t_end=0.2)
+    assert b.info["native_callback"]
+    _same(a, b)
+    assert np.any(a.torque != 0.0)
+
+
+def test_declined_stage_reruns_the_batch_with_python():
+    """Fault injection: the 7th native stage call reports a declined kernel; the batch is rerun from
+    its start with the Python callback and the run ends exactly as a clean one."""
+    sc = paper_scene("paper_example1_controlled")
+    ref = simulate(sc, t_end=0.1, native_callback=False)
+    tw = Twin(sc)
+    assert tw.native
+    tw.set_state(0.0, sc.initial.q0(), sc.initial.qdot0())
+    k = round(0.01 / tw.dt)
+    with tw.callbacks():
+        tw._ctx.decline_at(7)
+        tw.forward_here()
+        qs = []
+        for _ in range(10):
+            tw.step(k)
+            assert tw.acc.calls == 4 * k
+            tw.d.time = round(tw.d.time, 12)
+            tw.forward_here()
+            qs.append(tw.state()[0])
+    assert tw.native_redos == 1
+    np.testing.assert_array_equal(np.array(qs), ref.q[1:])
+    assert not bad_warnings(tw.d)
+
+
+def test_context_is_exclusive_and_cleared():
+    sc = paper_scene("paper_example1_controlled")
+    tw1, tw2 = Twin(sc), Twin(sc)
+    with tw1.callbacks():
+        assert native.CTX[native.C_ARMED] == 1
+        with pytest.raises(RuntimeError, match="already"):
+            with tw2.callbacks():
+                pass
+    assert not native.CTX.any()
+    assert mujoco.get_mjcb_control() is None
+
+
+def test_unarmed_callback_touches_nothing():
+    """Installed without a bound context, the callback only counts the call as a failure."""
+    sc = paper_scene("paper_example1_controlled")
+    tw = Twin(sc)
+    tw.set_state(0.0, sc.initial.q0(), sc.initial.qdot0())
+    tw.d.ctrl[:] = 0.0
+    native.CTX[native.C_FAILS] = 0
+    mujoco.set_mjcb_control(native.callback())
+    try:
+        mujoco.mj_forward(tw.m, tw.d)
+    finally:
+        mujoco.set_mjcb_control(None)
+    assert native.CTX[native.C_FAILS] == 1
+    native.CTX[native.C_FAILS] = 0
+    assert not tw.d.ctrl.any()
