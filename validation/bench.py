@@ -1,11 +1,14 @@
-"""Benchmarks: what the analytic engine costs (numbers printed, never asserted).
+"""Benchmarks: what the analytic engine costs, and the fast engine's goals (issue 5) as ratios
+measured in this one process (numbers printed, never asserted; tests cover correctness).
 
-``python -m validation.bench`` prints
+``python -m validation.bench [--skip-long] [--json FILE]`` (also ``tumble bench``) prints
 
 * the cost of one evaluation of the controlled dynamics (``M``, ``Q``, Udwadia-Kalaba with control)
-  for n = 2, 5, 50 (median of repeats, µs), and next to it MuJoCo's ``mj_forward`` on the same body
-  when the MuJoCo twin is available, as a ratio measured in this process;
-* the wall time of the 60 s controlled Example 1 at rtol 1e-12 (DOP853).
+  for n = 2, 5, 50 on the numpy reference path and on the compiled path, next to MuJoCo's
+  ``mj_forward`` on the same body (median of repeats, µs);
+* every goal of :mod:`validation.goals` with its ratio and whether it holds (the 60 s Example 1
+  goal takes about a minute; ``--skip-long`` leaves it out);
+* with ``--json``, the same numbers written atomically to FILE.
 """
 
 from __future__ import annotations
@@ -22,9 +25,7 @@ import time  # noqa: E402
 import numpy as np  # noqa: E402
 
 from analytic.model import TumblingModel  # noqa: E402
-from analytic.scene import Scene, load_scene, scene_from_dict  # noqa: E402
-from analytic.simulate import simulate  # noqa: E402
-from validation.scenes import scene_path  # noqa: E402
+from analytic.scene import Scene, scene_from_dict  # noqa: E402
 
 
 def chain_scene(n: int, seed: int = 0) -> Scene:
@@ -83,9 +84,17 @@ def time_call(fn, repeats: int = 7, number: int | None = None) -> float:
     return statistics.median(runs)
 
 
-def analytic_eval_cost(scene: Scene) -> float:
-    model = TumblingModel(scene)
+def analytic_eval_cost(scene: Scene, compiled: bool = False) -> float:
+    """Seconds per evaluation of the controlled dynamics on the numpy path or the compiled one."""
     q, qd = scene.initial.q0(), scene.initial.qdot0()
+    if compiled:
+        from analytic.fast import FastModel
+
+        fm = FastModel(scene)
+        q, qd = np.ascontiguousarray(q), np.ascontiguousarray(qd)
+        fm.qddot(0.3, q, qd)
+        return time_call(lambda: fm.qddot(0.3, q, qd))
+    model = TumblingModel(scene)
     return time_call(lambda: model.acceleration(0.3, q, qd))
 
 
@@ -103,33 +112,72 @@ def mujoco_forward_cost(scene: Scene) -> float | None:
     return time_call(lambda: mujoco.mj_forward(m, d))
 
 
-def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m validation.bench", description=__doc__)
-    ap.add_argument("--skip-long", action="store_true", help="skip the 60 s Example 1 run")
-    args = ap.parse_args(argv)
-    print("one evaluation of the controlled dynamics (median)")
-    print(f"  {'n':>4} {'analytic µs':>12} {'mj_forward µs':>14} {'ratio':>8}")
-    for n in (2, 5, 50):
+def evaluation_table(ns: tuple[int, ...] = (2, 5, 50)) -> list[dict[str, float]]:
+    """µs per evaluation for chain scenes of n masses: numpy path, compiled path, mj_forward."""
+    rows = []
+    for n in ns:
         sc = chain_scene(n)
-        a = analytic_eval_cost(sc)
         mj = mujoco_forward_cost(sc)
-        mj_s = f"{mj * 1e6:14.1f}" if mj else f"{'n/a':>14}"
-        ratio = f"{a / mj:8.1f}" if mj else f"{'n/a':>8}"
-        print(f"  {n:>4} {a * 1e6:12.1f} {mj_s} {ratio}")
-    ex1 = load_scene(scene_path("paper_example1_controlled"))
-    a = analytic_eval_cost(ex1)
-    mj = mujoco_forward_cost(ex1)
-    print(
-        f"  paper_example1_controlled: analytic {a * 1e6:.1f} µs"
-        + (f", mj_forward {mj * 1e6:.1f} µs, ratio {a / mj:.1f}" if mj else "")
-    )
-    if not args.skip_long:
-        tr = simulate(ex1, t_end=60.0)
-        print(
-            "60 s controlled Example 1, DOP853 rtol 1e-12 atol 1e-13: "
-            f"{tr.info['wall_time_s']:.2f} s wall, {tr.info['nfev']} evaluations, "
-            f"{tr.info['nsteps']} steps, status {tr.status.value}"
+        rows.append(
+            {
+                "n": n,
+                "numpy_us": analytic_eval_cost(sc) * 1e6,
+                "compiled_us": analytic_eval_cost(sc, compiled=True) * 1e6,
+                "mj_forward_us": mj * 1e6 if mj else float("nan"),
+            }
         )
+    return rows
+
+
+def run(skip_long: bool = False, json_path: str | None = None, out=print) -> bool:
+    """Print the table and the goals; returns whether every goal measured holds."""
+    from validation import goals
+
+    out("one evaluation of the controlled dynamics (median, µs)")
+    out(f"  {'n':>4} {'numpy':>10} {'compiled':>10} {'mj_forward':>11}")
+    rows = evaluation_table()
+    for r in rows:
+        out(
+            f"  {r['n']:>4} {r['numpy_us']:10.1f} {r['compiled_us']:10.2f} "
+            f"{r['mj_forward_us']:11.2f}"
+        )
+    out("\ngoals (issue 5), each a ratio measured in this process")
+    measured = goals.measure(skip_long, progress=out)
+    out("\nsummary")
+    for g in measured:
+        out(f"  {'HOLDS' if g.holds else 'FAILS'}  {g.name}: {g.value:.3g} (≤ {g.limit:g})")
+    if json_path:
+        import json
+
+        from validation.atomic import write_text
+
+        doc = {
+            "evaluation_us": rows,
+            "goals": [
+                {
+                    "name": g.name,
+                    "ratio": g.value,
+                    "limit": g.limit,
+                    "holds": g.holds,
+                    "extrapolated": g.extrapolated,
+                    "detail": g.detail,
+                }
+                for g in measured
+            ],
+        }
+        write_text(json_path, json.dumps(doc, indent=2, allow_nan=True) + "\n")
+        out(f"written: {json_path}")
+    return all(g.holds for g in measured)
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(
+        prog="python -m validation.bench", description=__doc__.split("\n")[0]
+    )
+    ap.add_argument("--skip-long", action="store_true", help="skip the 60 s Example 1 goal")
+    ap.add_argument("--json", help="also write the numbers to this JSON file")
+    args = ap.parse_args(argv)
+    run(args.skip_long, args.json, out=lambda s: print(s, flush=True))
     return 0
 
 

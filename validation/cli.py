@@ -178,6 +178,14 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_bench(args: argparse.Namespace) -> int:
+    from validation.bench import run
+
+    out = Path(args.out) if args.out else None
+    run(args.skip_long, str(out / "bench.json") if out else None, out=lambda s: print(s, flush=True))
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="tumble",
@@ -273,6 +281,19 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", help="output directory (default: out/sweep_<scene name>)")
     p.add_argument("--quick", action="store_true", help="a small grid (minutes, not tens)")
     p.set_defaults(func=cmd_sweep)
+
+    p = sub.add_parser(
+        "bench",
+        help="the fast engine's speed goals as ratios measured in this process",
+        description="Time one controlled-dynamics evaluation (numpy path, compiled path, "
+        "mj_forward) and print each speed goal of the fast engine as a ratio with whether it "
+        "holds: evaluation vs mj_forward (n = 2, 5), the controller inside MuJoCo's RK4 vs the "
+        "bare step, n = 1000 vs n = 10, and the 60 s controlled Example 1 vs MuJoCo RK4 at the "
+        "same accuracy. Numbers only: exits 0 whether or not a goal holds.",
+    )
+    p.add_argument("--out", help="also write OUT/bench.json")
+    p.add_argument("--skip-long", action="store_true", help="skip the 60 s Example 1 goal")
+    p.set_defaults(func=cmd_bench)
     return parser
 
 

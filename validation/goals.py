@@ -1,7 +1,7 @@
 """The fast engine's goals (issue 5), each measured as a ratio in this one process, with whether it
 holds. Numbers are printed, never asserted (tests cover correctness, not speed).
 
-``python -m validation.goals [--skip-long]``:
+``python -m validation.bench [--skip-long]`` (or ``tumble bench``) prints these:
 
 1. **evaluation**: one evaluation of the analytic controlled dynamics (``M``, ``Q``, Udwadia–Kalaba
    with control; ``FastModel.qddot``, the integrator's right-hand side) / MuJoCo's ``mj_forward``
@@ -31,7 +31,6 @@ import os
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
-import argparse  # noqa: E402
 import math  # noqa: E402
 import statistics  # noqa: E402
 import time  # noqa: E402
@@ -270,16 +269,10 @@ def measure(skip_long: bool = False, progress: Callable[[str], None] = print) ->
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(
-        prog="python -m validation.goals", description=__doc__.split("\n")[0]
-    )
-    ap.add_argument("--skip-long", action="store_true", help="skip the 60 s Example 1 goal")
-    args = ap.parse_args(argv)
-    goals = measure(args.skip_long, progress=lambda s: print(s, flush=True))
-    print("\nsummary")
-    for g in goals:
-        print(f"  {'HOLDS' if g.holds else 'FAILS'}  {g.name}: {g.value:.3g} (≤ {g.limit:g})")
-    return 0
+    """Same as ``python -m validation.bench`` (the table, then these goals)."""
+    from validation.bench import main as bench_main
+
+    return bench_main(argv)
 
 
 if __name__ == "__main__":
