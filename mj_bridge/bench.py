@@ -6,7 +6,10 @@ steps (µs per step) and the ratio to MuJoCo's own step for:
 * ``mujoco``: ``mj_step`` alone (no Python callback; controlled scenes with ctrl = 0);
 * ``empty cb``: a Python ``mjcb_control`` that does nothing (the price of calling Python 4x a step);
 * ``analytic``: the analytic controller (numpy ``TumblingModel``) at every RK4 stage;
-* ``analytic_fast``: the same controller from the analytic side's compiled kernel;
+* ``analytic_fast``: the same controller from the analytic side's compiled kernel, through a
+  Python callback;
+* ``native``: the compiled kernel as a native ``mjcb_control`` (:mod:`mj_bridge.native`, the twin's
+  default), with the work and impulse accumulation of a real run;
 * ``mujoco UK``: Udwadia–Kalaba from MuJoCo's own matrices at every stage.
 """
 
@@ -42,6 +45,20 @@ def _per_step_us(tw: Twin, callback, steps: int, repeats: int) -> float:
     return statistics.median(samples)
 
 
+def _native_per_step_us(tw: Twin, steps: int, repeats: int) -> float:
+    scene = tw.scene
+    samples = []
+    for _ in range(repeats):
+        tw.set_state(0.0, scene.initial.q0(), scene.initial.qdot0())
+        tw.d.ctrl[:] = 0.0
+        with tw.callbacks():
+            tw.step(1)  # warm-up
+            t0 = time.perf_counter()
+            tw.step(steps)
+            samples.append((time.perf_counter() - t0) / steps * 1e6)
+    return statistics.median(samples)
+
+
 def run(steps: int = 400, repeats: int = 5) -> list[dict]:
     """Measure every scene; returns one row per scene with µs per step for each variant."""
     rows = []
@@ -56,6 +73,8 @@ def run(steps: int = 400, repeats: int = 5) -> list[dict]:
                 tw = Twin(scene, integrator="RK4", controller=src)
                 label = "mujoco UK" if src is ControllerSource.MUJOCO else src.value
                 row[label] = _per_step_us(tw, tw.control_callback, steps, repeats)
+                if src is ControllerSource.ANALYTIC_FAST and tw.native:
+                    row["native"] = _native_per_step_us(tw, steps, repeats)
         rows.append(row)
     return rows
 
@@ -70,7 +89,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.steps < 1 or args.repeats < 1:
         raise ValueError(f"--steps/--repeats: must be positive (got {args.steps}, {args.repeats})")
     rows = run(args.steps, args.repeats)
-    cols = ["mujoco", "empty cb", "analytic", "analytic_fast", "mujoco UK"]
+    cols = ["mujoco", "empty cb", "analytic", "analytic_fast", "native", "mujoco UK"]
     print(
         f"MuJoCo {mujoco.__version__}, RK4, µs per step (median of {args.repeats} x {args.steps})"
     )
