@@ -265,16 +265,21 @@ if HAVE_NUMBA:
 
 
 @functools.cache
-def callback():
-    """The native ``mjcb_control`` (a ctypes function object); compiled on first use, then loaded
-    from numba's disk cache."""
+def compiled():
+    """The numba ``CFunc`` of the callback; compiled on first use, then loaded from numba's disk
+    cache (its ``cache_hits`` say which)."""
     if not available():
         raise RuntimeError("the native controller callback is not available here")
+    sig = types.void(types.voidptr, types.voidptr)
     try:
-        fn = cfunc(types.void(types.voidptr, types.voidptr), nopython=True, cache=True)(_cb)
+        return cfunc(sig, nopython=True, cache=True)(_cb)
     except RuntimeError:  # no usable cache directory (see analytic.fast_kernel._jit)
-        fn = cfunc(types.void(types.voidptr, types.voidptr), nopython=True)(_cb)
-    return fn.ctypes
+        return cfunc(sig, nopython=True)(_cb)
+
+
+def callback():
+    """The native ``mjcb_control``: a ctypes function object for ``mujoco.set_mjcb_control``."""
+    return compiled().ctypes
 
 
 class Context:
@@ -357,4 +362,4 @@ class Context:
         CTX[C_DECLINE_AT] = int(call)
 
 
-__all__ = ["Context", "DataLayout", "available", "callback", "layout", "read_fields"]
+__all__ = ["Context", "DataLayout", "available", "callback", "compiled", "layout", "read_fields"]

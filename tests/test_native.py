@@ -116,3 +116,42 @@ def test_unarmed_callback_touches_nothing():
     assert native.CTX[native.C_FAILS] == 1
     native.CTX[native.C_FAILS] = 0
     assert not tw.d.ctrl.any()
+
+
+_CHILD = """
+import hashlib, sys
+from mj_bridge.simulate import simulate
+from tests.mj_scenes import paper_scene
+from mj_bridge import native
+tr = simulate(paper_scene("paper_example2_controlled"), t_end=0.05)
+assert tr.info["native_callback"], "native callback not used"
+hits = native.compiled().cache_hits
+print(hits, hashlib.sha256(tr.q.tobytes() + tr.QC.tobytes()).hexdigest())
+"""
+
+
+def test_disk_cached_callback_finds_the_context():
+    """The cfunc refers to CTX by an LLVM symbol resolved at load time: a second process, loading
+    the compiled callback from numba's disk cache (CTX at another address), gives the same run as
+    the process that compiled it, and as the Python callback."""
+    import hashlib
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    env = {**os.environ, "PYTHONPATH": str(root)}  # numba's usual cache (warm after the first)
+    hits, digests = [], []
+    for _ in range(2):
+        r = subprocess.run(
+            [sys.executable, "-c", _CHILD], env=env, cwd=root, capture_output=True, text=True
+        )
+        assert r.returncode == 0, r.stderr[-2000:]
+        h, dg = r.stdout.split()
+        hits.append(int(h))
+        digests.append(dg)
+    assert hits[1] == 1, "the second process did not load the callback from the disk cache"
+    ref = simulate(paper_scene("paper_example2_controlled"), t_end=0.05, native_callback=False)
+    want = hashlib.sha256(ref.q.tobytes() + ref.QC.tobytes()).hexdigest()
+    assert digests == [want, want]
