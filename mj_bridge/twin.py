@@ -302,45 +302,29 @@ class Twin:
         With the native callback, a batch in which the kernel declined a stage is rerun from its
         saved start with the Python callback (which answers that stage with the numpy model).
         """
-        acc = self.acc
-        acc.h = self.dt
-        acc.calls = 0
-        m, d = self.m, self.d
+        self.acc.h = self.dt
         if not self._native_bound:
-            acc.active = True
-            try:
-                mujoco.mj_step(m, d, nstep=nstep)
-            finally:
-                acc.active = False
+            self._python_steps(nstep)
             return
         ctx = self._ctx
         saved = self._save()
         ctx.clear_failures()
         ctx.start(self.dt)
         try:
-            mujoco.mj_step(m, d, nstep=nstep)
+            mujoco.mj_step(self.m, self.d, nstep=nstep)
         finally:
-            acc.calls = ctx.stop()
+            self.acc.calls = ctx.stop()
         if ctx.failures:
             self._restore(saved)
             self.native_redos += 1
             with self._python_control():
-                acc.calls = 0
-                acc.active = True
-                try:
-                    mujoco.mj_step(m, d, nstep=nstep)
-                finally:
-                    acc.active = False
+                self._python_steps(nstep)
 
     def forward_here(self) -> None:
         """``mj_forward`` at the current state with the installed callbacks, keeping the
         controller's output in :attr:`last_control`. Call inside :meth:`callbacks`."""
         if not self._native_bound:
-            self._record = True
-            try:
-                mujoco.mj_forward(self.m, self.d)
-            finally:
-                self._record = False
+            self._python_forward()
             return
         self._ctx.clear_failures()
         warn = [self.d.warning[int(w)].number for w in BAD_WARNINGS]
@@ -349,16 +333,32 @@ class Twin:
             for w, k in zip(BAD_WARNINGS, warn, strict=True):
                 self.d.warning[int(w)].number = k
             with self._python_control():
-                self._record = True
-                try:
-                    mujoco.mj_forward(self.m, self.d)
-                finally:
-                    self._record = False
+                self._python_forward()
             return
+        self.last_control = self._stage_output()
+
+    def _python_steps(self, nstep: int) -> None:
+        acc = self.acc
+        acc.calls = 0
+        acc.active = True
+        try:
+            mujoco.mj_step(self.m, self.d, nstep=nstep)
+        finally:
+            acc.active = False
+
+    def _python_forward(self) -> None:
+        self._record = True
+        try:
+            mujoco.mj_forward(self.m, self.d)
+        finally:
+            self._record = False
+
+    def _stage_output(self) -> ControlOutput:
+        """The compiled stage's last result as a :class:`ControlOutput` (copies)."""
         nq = self.n + 7
         out = self._st_out
         QC = out[nq : 2 * nq].copy()
-        self.last_control = ControlOutput(
+        return ControlOutput(
             QC=QC, torque=out[2 * nq : 2 * nq + 3].copy(), rod_forces=QC[7:],
             force_at_C=QC[:3], residual=out[2 * nq + 3 :].copy(), rank=self.model.k,
         )  # fmt: skip
@@ -444,11 +444,7 @@ class Twin:
         if not self._st_gauss:
             d.xfrc_applied[self.body_id, :3] = out[nq : nq + 3]
         if self._record:
-            QC = out[nq : 2 * nq].copy()
-            self.last_control = ControlOutput(
-                QC=QC, torque=out[2 * nq : 2 * nq + 3].copy(), rod_forces=QC[7:],
-                force_at_C=QC[:3], residual=out[2 * nq + 3 :].copy(), rank=self.model.k,
-            )  # fmt: skip
+            self.last_control = self._stage_output()
 
     def _finish_stage(self, d, tau, rod, fC, c) -> None:
         self.last_control = c
