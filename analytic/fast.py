@@ -17,8 +17,8 @@ What runs where:
 * **Gauss weighting (N = M⁻¹, the paper's Eq. 89) and uncontrolled scenes**: the kernel, O(n): the
   tracked-mass rows of ``A_c`` are unit rows, so Gauss's principle fixes those accelerations, the
   free rod rows (``M_pp = s diag(m)``) are eliminated onto the 7x7 body block ``[R, u]`` by a Schur
-  complement built from three mass moments, and a 7x7 Cholesky bordered by ``1 + k_ω`` constraint
-  rows finishes the solve.
+  complement built from three mass moments, its R block is inverted in closed form, and a 4x4 LDLᵀ
+  on u bordered by ``1 + k_ω`` constraint rows finishes the solve.
 * **N = M⁻² (Eq. B13)**: the kernel has an O(n) path with the closed form
   ``Zᵀ M² Z = diag(4|u|² I, I) + |u|² w wᵀ`` (see :mod:`analytic.fast_kernel`), but it is switched
   off: at some ill-conditioned states it was ~100x less accurate than the dense reference; these
@@ -52,6 +52,11 @@ from analytic import fast_kernel as fk
 from analytic.effects import Effect, Weighting
 from analytic.model import ControlOutput, TumblingModel
 from analytic.scene import Scene
+
+# bound once: FastModel.qddot runs once per right-hand side; a global + attribute lookup per name
+# costs ~20 ns of its ~1.5 µs
+_empty = np.empty
+_qddot_into = fk.qddot_into
 
 
 def available() -> bool:
@@ -160,12 +165,14 @@ class FastModel:
         """Constrained, controlled acceleration ``q̈`` (Eq. 89), shape (nq,).
 
         q and qdot must be contiguous float64 arrays of shape (nq,) (no conversion is made here, to
-        keep the call cheap; :meth:`acceleration` converts).
+        keep the call cheap; :meth:`acceleration` converts). The result is a new array on every
+        call (integrators keep it), written by :func:`analytic.fast_kernel.qddot_into`.
         """
-        out = self._raw(t, q, qdot)
-        if out is None:
-            return self._numpy(t, np.asarray(q, float), np.asarray(qdot, float))[0]
-        return out[: self.nq]
+        if self.compiled:
+            qdd = _empty(self.nq)  # a fresh array each call: callers (solve_ivp) keep it
+            if _qddot_into(float(t), q, qdot, self.fp, self.ip, qdd) == 0:  # fk.STATUS_OK
+                return qdd
+        return self._numpy(t, np.asarray(q, float), np.asarray(qdot, float))[0]
 
     def acceleration(
         self, t: float, q: np.ndarray, qdot: np.ndarray

@@ -20,79 +20,88 @@ from analytic import fast_kernel as fk
 HAVE_NUMBA = fk.HAVE_NUMBA
 
 
-def _stage(
-    t, qpos, qvel, ctrl, tq_ids, f_ids, fp, ip, out, q, qd, tau_g, geo, inv_gear, w, acc
-):  # pragma: no cover - compiled
-    n = q.shape[0] - 7
-    nq = n + 7
-    for i in range(nq):
-        q[i] = qpos[i]
-    u0, u1, u2, u3 = q[3], q[4], q[5], q[6]
-    w0, w1, w2 = qvel[3], qvel[4], qvel[5]
-    s = 0.5 / (u0 * u0 + u1 * u1 + u2 * u2 + u3 * u3)
-    qd[0], qd[1], qd[2] = qvel[0], qvel[1], qvel[2]
-    qd[3] = s * (-u1 * w0 - u2 * w1 - u3 * w2)
-    qd[4] = s * (u0 * w0 - u3 * w1 + u2 * w2)
-    qd[5] = s * (u3 * w0 + u0 * w1 - u1 * w2)
-    qd[6] = s * (-u2 * w0 + u1 * w1 + u0 * w2)
-    for i in range(n):
-        qd[7 + i] = qvel[6 + i]
-    status = fk.evaluate(t, q, qd, fp, ip, out)
-    if status != fk.STATUS_OK:
+def make_stage(deps: int):
+    """The stage function closing over ``deps`` (:func:`analytic.fast_kernel.source_fingerprint` of
+    the kernel's module), so numba's disk cache recompiles it when the kernel changes."""
+
+    def _stage(
+        t, qpos, qvel, ctrl, tq_ids, f_ids, fp, ip, out, q, qd, tau_g, geo, inv_gear, w, acc
+    ):  # pragma: no cover - compiled
+        if deps < 0:  # never true: ties numba's cache key to the kernel's source (see above)
+            return fk.STATUS_UNSUPPORTED
+        n = q.shape[0] - 7
+        nq = n + 7
+        for i in range(nq):
+            q[i] = qpos[i]
+        u0, u1, u2, u3 = q[3], q[4], q[5], q[6]
+        w0, w1, w2 = qvel[3], qvel[4], qvel[5]
+        s = 0.5 / (u0 * u0 + u1 * u1 + u2 * u2 + u3 * u3)
+        qd[0], qd[1], qd[2] = qvel[0], qvel[1], qvel[2]
+        qd[3] = s * (-u1 * w0 - u2 * w1 - u3 * w2)
+        qd[4] = s * (u0 * w0 - u3 * w1 + u2 * w2)
+        qd[5] = s * (u3 * w0 + u0 * w1 - u1 * w2)
+        qd[6] = s * (-u2 * w0 + u1 * w1 + u0 * w2)
+        for i in range(n):
+            qd[7 + i] = qvel[6 + i]
+        status = fk.evaluate(t, q, qd, fp, ip, out)
+        if status != fk.STATUS_OK:
+            return status
+        tau0 = out[2 * nq] + tau_g[0]
+        tau1 = out[2 * nq + 1] + tau_g[1]
+        tau2 = out[2 * nq + 2] + tau_g[2]
+        if tq_ids.shape[0] == 3:
+            ctrl[tq_ids[0]] = tau0 * inv_gear
+            ctrl[tq_ids[1]] = tau1 * inv_gear
+            ctrl[tq_ids[2]] = tau2 * inv_gear
+        power = tau0 * w0 + tau1 * w1 + tau2 * w2
+        for i in range(f_ids.shape[0]):
+            F = out[nq + 7 + i]
+            ctrl[f_ids[i]] = F * inv_gear
+            power += F * qvel[6 + i]
+        if w > 0.0:
+            f0, f1, f2 = out[nq], out[nq + 1], out[nq + 2]
+            power += f0 * qvel[0] + f1 * qvel[1] + f2 * qvel[2]
+            # S(u) for unit u (MuJoCo keeps qpos quaternions unit)
+            S00 = 1 - 2 * (u2 * u2 + u3 * u3)
+            S01 = 2 * (u1 * u2 - u0 * u3)
+            S02 = 2 * (u1 * u3 + u0 * u2)
+            S10 = 2 * (u1 * u2 + u0 * u3)
+            S11 = 1 - 2 * (u1 * u1 + u3 * u3)
+            S12 = 2 * (u2 * u3 - u0 * u1)
+            S20 = 2 * (u1 * u3 - u0 * u2)
+            S21 = 2 * (u2 * u3 + u0 * u1)
+            S22 = 1 - 2 * (u1 * u1 + u2 * u2)
+            L0 = S00 * tau0 + S01 * tau1 + S02 * tau2
+            L1 = S10 * tau0 + S11 * tau1 + S12 * tau2
+            L2 = S20 * tau0 + S21 * tau1 + S22 * tau2
+            if f0 != 0.0 or f1 != 0.0 or f2 != 0.0:
+                # R - c = -(μ1 Sa + μ0 Sd)/m_T; geo = [m_T, μ0, a (3), d (3), m (n)]
+                mu1 = 0.0
+                for i in range(n):
+                    mu1 += geo[8 + i] * q[7 + i]
+                b0 = mu1 * geo[2] + geo[1] * geo[5]
+                b1 = mu1 * geo[3] + geo[1] * geo[6]
+                b2 = mu1 * geo[4] + geo[1] * geo[7]
+                r0 = -(S00 * b0 + S01 * b1 + S02 * b2) / geo[0]
+                r1 = -(S10 * b0 + S11 * b1 + S12 * b2) / geo[0]
+                r2 = -(S20 * b0 + S21 * b1 + S22 * b2) / geo[0]
+                L0 += r1 * f2 - r2 * f1
+                L1 += r2 * f0 - r0 * f2
+                L2 += r0 * f1 - r1 * f0
+            acc[0] += w * power
+            acc[1] += w * L0
+            acc[2] += w * L1
+            acc[3] += w * L2
+            acc[4] += w * f0
+            acc[5] += w * f1
+            acc[6] += w * f2
         return status
-    tau0 = out[2 * nq] + tau_g[0]
-    tau1 = out[2 * nq + 1] + tau_g[1]
-    tau2 = out[2 * nq + 2] + tau_g[2]
-    if tq_ids.shape[0] == 3:
-        ctrl[tq_ids[0]] = tau0 * inv_gear
-        ctrl[tq_ids[1]] = tau1 * inv_gear
-        ctrl[tq_ids[2]] = tau2 * inv_gear
-    power = tau0 * w0 + tau1 * w1 + tau2 * w2
-    for i in range(f_ids.shape[0]):
-        F = out[nq + 7 + i]
-        ctrl[f_ids[i]] = F * inv_gear
-        power += F * qvel[6 + i]
-    if w > 0.0:
-        f0, f1, f2 = out[nq], out[nq + 1], out[nq + 2]
-        power += f0 * qvel[0] + f1 * qvel[1] + f2 * qvel[2]
-        # S(u) for unit u (MuJoCo keeps qpos quaternions unit)
-        S00 = 1 - 2 * (u2 * u2 + u3 * u3)
-        S01 = 2 * (u1 * u2 - u0 * u3)
-        S02 = 2 * (u1 * u3 + u0 * u2)
-        S10 = 2 * (u1 * u2 + u0 * u3)
-        S11 = 1 - 2 * (u1 * u1 + u3 * u3)
-        S12 = 2 * (u2 * u3 - u0 * u1)
-        S20 = 2 * (u1 * u3 - u0 * u2)
-        S21 = 2 * (u2 * u3 + u0 * u1)
-        S22 = 1 - 2 * (u1 * u1 + u2 * u2)
-        L0 = S00 * tau0 + S01 * tau1 + S02 * tau2
-        L1 = S10 * tau0 + S11 * tau1 + S12 * tau2
-        L2 = S20 * tau0 + S21 * tau1 + S22 * tau2
-        if f0 != 0.0 or f1 != 0.0 or f2 != 0.0:
-            # R - c = -(μ1 Sa + μ0 Sd)/m_T; geo = [m_T, μ0, a (3), d (3), m (n)]
-            mu1 = 0.0
-            for i in range(n):
-                mu1 += geo[8 + i] * q[7 + i]
-            b0 = mu1 * geo[2] + geo[1] * geo[5]
-            b1 = mu1 * geo[3] + geo[1] * geo[6]
-            b2 = mu1 * geo[4] + geo[1] * geo[7]
-            r0 = -(S00 * b0 + S01 * b1 + S02 * b2) / geo[0]
-            r1 = -(S10 * b0 + S11 * b1 + S12 * b2) / geo[0]
-            r2 = -(S20 * b0 + S21 * b1 + S22 * b2) / geo[0]
-            L0 += r1 * f2 - r2 * f1
-            L1 += r2 * f0 - r0 * f2
-            L2 += r0 * f1 - r1 * f0
-        acc[0] += w * power
-        acc[1] += w * L0
-        acc[2] += w * L1
-        acc[3] += w * L2
-        acc[4] += w * f0
-        acc[5] += w * f1
-        acc[6] += w * f2
-    return status
+
+    return _stage
 
 
-stage = fk._jit(_stage) if HAVE_NUMBA else None
+DEPS = fk.source_fingerprint(fk)
+stage = fk._jit(make_stage(DEPS)) if HAVE_NUMBA else None
 
 
 def geometry(model) -> np.ndarray:

@@ -100,49 +100,76 @@ C_DECLINE_AT = 37  # fault injection for tests: treat call number C_DECLINE_AT (
 CTX_LEN = 38
 
 
-def _native_stage(d_addr, ctx_addr):  # pragma: no cover - compiled
-    """One ``mjcb_control`` call: what ``Twin._stage_callback`` does, from raw addresses."""
-    ctx = carray(_as_iptr(ctx_addr), (CTX_LEN,))
-    ctxf = carray(_as_ptr(ctx_addr), (CTX_LEN,))
-    if ctx[C_ARMED] == 0:
-        ctx[C_FAILS] += 1
-        return
-    t = carray(_as_ptr(d_addr + ctx[C_OFF_TIME]), (1,))[0]
-    qpos = carray(_as_ptr(carray(_as_iptr(d_addr + ctx[C_OFF_QPOS]), (1,))[0]), (ctx[C_NQ],))
-    qvel = carray(_as_ptr(carray(_as_iptr(d_addr + ctx[C_OFF_QVEL]), (1,))[0]), (ctx[C_NV],))
-    ctrl = carray(_as_ptr(carray(_as_iptr(d_addr + ctx[C_OFF_CTRL]), (1,))[0]), (ctx[C_NU],))
-    fp = carray(_as_ptr(ctx[C_FP]), (ctx[C_FP_LEN],))
-    ip = carray(_as_iptr(ctx[C_IP]), (ctx[C_IP_LEN],))
-    out = carray(_as_ptr(ctx[C_OUT]), (ctx[C_OUT_LEN],))
-    q = carray(_as_ptr(ctx[C_Q]), (ctx[C_NQP],))
-    qd = carray(_as_ptr(ctx[C_QD]), (ctx[C_NQP],))
-    tq = carray(_as_iptr(ctx[C_TQ]), (ctx[C_NTQ],))
-    fi = carray(_as_iptr(ctx[C_F]), (ctx[C_NF],))
-    tau_g = carray(_as_ptr(ctx[C_TAUG]), (3,))
-    geo = carray(_as_ptr(ctx[C_GEO]), (ctx[C_GEO_LEN],))
-    acc = carray(_as_ptr(ctx[C_ACC]), (7,))
-    if ctx[C_HAS_TORQUE]:  # the given torque of Remark 2: constant + amplitude cos(freq t), body
-        ct = np.cos(fp[fk.F_TFREQ] * t)
-        for r in range(3):
-            tau_g[r] = fp[fk.F_TC + r] + fp[fk.F_TA + r] * ct
-    w = 0.0
-    if ctx[C_ACTIVE]:
-        w = ctxf[F_H] * ctxf[F_WEIGHTS + ctx[C_CALLS] % ctx[C_NSTAGE]]
-    ctx[C_TOTAL] += 1
-    if ctx[C_TOTAL] == ctx[C_DECLINE_AT]:
-        status = fk.STATUS_NOT_PD
-    else:
-        status = fast_stage.stage(
-            t, qpos, qvel, ctrl, tq, fi, fp, ip, out, q, qd, tau_g, geo, ctxf[F_INV_GEAR], w, acc
-        )
-    if status != fk.STATUS_OK:
-        ctx[C_FAILS] += 1
-        return
-    if ctx[C_ACTIVE]:
-        ctx[C_CALLS] += 1
+def _make_native_stage(deps: int):
+    """:func:`_native_stage` closing over ``deps`` (see :data:`DEPS`)."""
+
+    def _native_stage(d_addr, ctx_addr):  # pragma: no cover - compiled
+        """One ``mjcb_control`` call: what ``Twin._stage_callback`` does, from raw addresses."""
+        if deps < 0:  # never true: ties numba's cache key to the kernel's sources
+            return
+        ctx = carray(_as_iptr(ctx_addr), (CTX_LEN,))
+        ctxf = carray(_as_ptr(ctx_addr), (CTX_LEN,))
+        if ctx[C_ARMED] == 0:
+            ctx[C_FAILS] += 1
+            return
+        t = carray(_as_ptr(d_addr + ctx[C_OFF_TIME]), (1,))[0]
+        qpos = carray(_as_ptr(carray(_as_iptr(d_addr + ctx[C_OFF_QPOS]), (1,))[0]), (ctx[C_NQ],))
+        qvel = carray(_as_ptr(carray(_as_iptr(d_addr + ctx[C_OFF_QVEL]), (1,))[0]), (ctx[C_NV],))
+        ctrl = carray(_as_ptr(carray(_as_iptr(d_addr + ctx[C_OFF_CTRL]), (1,))[0]), (ctx[C_NU],))
+        fp = carray(_as_ptr(ctx[C_FP]), (ctx[C_FP_LEN],))
+        ip = carray(_as_iptr(ctx[C_IP]), (ctx[C_IP_LEN],))
+        out = carray(_as_ptr(ctx[C_OUT]), (ctx[C_OUT_LEN],))
+        q = carray(_as_ptr(ctx[C_Q]), (ctx[C_NQP],))
+        qd = carray(_as_ptr(ctx[C_QD]), (ctx[C_NQP],))
+        tq = carray(_as_iptr(ctx[C_TQ]), (ctx[C_NTQ],))
+        fi = carray(_as_iptr(ctx[C_F]), (ctx[C_NF],))
+        tau_g = carray(_as_ptr(ctx[C_TAUG]), (3,))
+        geo = carray(_as_ptr(ctx[C_GEO]), (ctx[C_GEO_LEN],))
+        acc = carray(_as_ptr(ctx[C_ACC]), (7,))
+        if ctx[
+            C_HAS_TORQUE
+        ]:  # the given torque of Remark 2: constant + amplitude cos(freq t), body
+            ct = np.cos(fp[fk.F_TFREQ] * t)
+            for r in range(3):
+                tau_g[r] = fp[fk.F_TC + r] + fp[fk.F_TA + r] * ct
+        w = 0.0
+        if ctx[C_ACTIVE]:
+            w = ctxf[F_H] * ctxf[F_WEIGHTS + ctx[C_CALLS] % ctx[C_NSTAGE]]
+        ctx[C_TOTAL] += 1
+        if ctx[C_TOTAL] == ctx[C_DECLINE_AT]:
+            status = fk.STATUS_NOT_PD
+        else:
+            status = fast_stage.stage(
+                t,
+                qpos,
+                qvel,
+                ctrl,
+                tq,
+                fi,
+                fp,
+                ip,
+                out,
+                q,
+                qd,
+                tau_g,
+                geo,
+                ctxf[F_INV_GEAR],
+                w,
+                acc,
+            )
+        if status != fk.STATUS_OK:
+            ctx[C_FAILS] += 1
+            return
+        if ctx[C_ACTIVE]:
+            ctx[C_CALLS] += 1
+
+    return _native_stage
 
 
-native_stage = fk._jit(_native_stage) if HAVE_NUMBA else None
+# numba's disk cache checks only this file; the compiled callback also embeds the kernel and the stage
+# (other files): their fingerprint is a closure variable, which numba hashes into the cache key.
+DEPS = fk.source_fingerprint(fk, fast_stage)
+native_stage = fk._jit(_make_native_stage(DEPS)) if HAVE_NUMBA else None
 
 
 # ----------------------------------------------------------------------------------------------
@@ -260,8 +287,12 @@ if HAVE_NUMBA:
 
         return sig, codegen
 
-    def _cb(m, d):  # pragma: no cover - compiled
-        native_stage(_addr(d), _ctx_addr())
+    def _make_cb(deps: int):
+        def _cb(m, d):  # pragma: no cover - compiled
+            if deps >= 0:  # always: ties the cache key to the kernel's sources (see DEPS)
+                native_stage(_addr(d), _ctx_addr())
+
+        return _cb
 
 
 @functools.cache
@@ -272,9 +303,9 @@ def compiled():
         raise RuntimeError("the native controller callback is not available here")
     sig = types.void(types.voidptr, types.voidptr)
     try:
-        return cfunc(sig, nopython=True, cache=True)(_cb)
+        return cfunc(sig, nopython=True, cache=True)(_make_cb(DEPS))
     except RuntimeError:  # no usable cache directory (see analytic.fast_kernel._jit)
-        return cfunc(sig, nopython=True)(_cb)
+        return cfunc(sig, nopython=True)(_make_cb(DEPS))
 
 
 def callback():

@@ -155,3 +155,17 @@ def test_disk_cached_callback_finds_the_context():
     ref = simulate(paper_scene("paper_example2_controlled"), t_end=0.05, native_callback=False)
     want = hashlib.sha256(ref.q.tobytes() + ref.QC.tobytes()).hexdigest()
     assert digests == [want, want]
+
+
+def test_compiled_callers_are_keyed_to_the_kernel_source():
+    """numba's disk cache checks only a function's own file; the stage and the native callback
+    embed the kernel from another file, so they close over the kernel's source fingerprint (numba
+    hashes closure variables into its cache key). Editing the kernel then recompiles them."""
+    from analytic import fast_kernel as fk
+    from mj_bridge import fast_stage
+
+    want = fk.source_fingerprint(fk)
+    assert fast_stage.DEPS == want
+    assert [c.cell_contents for c in fast_stage.stage.py_func.__closure__] == [want]
+    assert native.DEPS == fk.source_fingerprint(fk, fast_stage)
+    assert native.DEPS in [c.cell_contents for c in native.native_stage.py_func.__closure__]
