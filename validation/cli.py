@@ -182,7 +182,9 @@ def cmd_bench(args: argparse.Namespace) -> int:
     from validation.bench import run
 
     out = Path(args.out) if args.out else None
-    run(args.skip_long, str(out / "bench.json") if out else None, out=lambda s: print(s, flush=True))
+    run(
+        args.skip_long, str(out / "bench.json") if out else None, out=lambda s: print(s, flush=True)
+    )
     return 0
 
 
