@@ -76,8 +76,32 @@ def _rhs(model: TumblingModel, accel: Callable) -> Callable[[float, np.ndarray],
             raise _NonFinite(f"non-finite acceleration at t = {t:.6g} s")
         return out
 
-    f.counter = counter  # type: ignore[attr-defined]
-    return f
+    fm = getattr(accel, "__self__", None)
+    if fm is None or not getattr(fm, "compiled", False):
+        f.counter = counter  # type: ignore[attr-defined]
+        return f
+
+    # The compiled path: the same lines in one numba call (analytic.fast_rhs); f answers where the
+    # kernel declines (the numpy model then, as in FastModel).
+    from analytic.fast_rhs import STATUS_NONFINITE, rhs_into
+
+    fp, ip = fm.fp, fm.ip
+    work = np.empty(2 * nq + 3 + model.k)
+    ny = 2 * nq + N_AUX
+
+    def g(t: float, y: np.ndarray) -> np.ndarray:
+        out = np.empty(ny)
+        status = rhs_into(float(t), y, fp, ip, work, out)
+        if status == 0:
+            counter["nfev"] += 1
+            return out
+        if status == STATUS_NONFINITE:
+            counter["nfev"] += 1
+            raise _NonFinite(f"non-finite acceleration at t = {t:.6g} s")
+        return f(t, y)
+
+    g.counter = counter  # type: ignore[attr-defined]
+    return g
 
 
 def simulate(
