@@ -24,7 +24,7 @@ from analytic.scene import OutputSettings, Scene
 from analytic.trajectory import Engine, RunStatus, Trajectory
 from mj_bridge.twin import ControllerSource, Twin, bad_warnings
 from model_xml import BodyFrame
-from model_xml.state import mujoco_to_paper_acc
+from model_xml.state import mujoco_to_paper_batch
 
 # A sample interval must be a whole number of steps to this relative tolerance.
 STEP_FIT_RTOL = 1e-9
@@ -91,7 +91,7 @@ def simulate(
     tw.set_state(0.0, scene.initial.q0(), scene.initial.qdot0())
     tw.d.time = float(times[0])
     nq = tw.n + 7
-    rec = {k: [] for k in ("t", "q", "qdot", "qddot", "QC", "tau", "rod", "fC", "res")}
+    rec = {k: [] for k in ("t", "qpos", "qvel", "qacc", "QC", "tau", "rod", "fC", "res")}
     rec.update(W=[], IL=[], IP=[], energy_mj=[])
     status, message = RunStatus.OK, ""
     acc = tw.acc
@@ -100,11 +100,10 @@ def simulate(
     def sample(t: float) -> None:
         acc.active = False
         tw.forward_here()
-        q, qd = tw.state()
-        rec["t"].append(t)
-        rec["q"].append(q)
-        rec["qdot"].append(qd)
-        rec["qddot"].append(mujoco_to_paper_acc(d.qpos, d.qvel, d.qacc, tw.ipos, tw.iquat))
+        rec["t"].append(t)  # MuJoCo's state, mapped to the paper's coordinates after the run
+        rec["qpos"].append(d.qpos.copy())
+        rec["qvel"].append(d.qvel.copy())
+        rec["qacc"].append(d.qacc.copy())
         c = tw.last_control if tw.controlled else None
         rec["QC"].append(c.QC if c is not None else np.zeros(nq))
         rec["tau"].append(c.torque if c is not None else np.zeros(3))
@@ -151,12 +150,11 @@ def simulate(
     wall = time.perf_counter() - wall0
 
     t = np.array(rec["t"])
-    q = np.array(rec["q"])
-    qd = np.array(rec["qdot"])
+    q, qd, qdd, omega = mujoco_to_paper_batch(
+        np.array(rec["qpos"]), np.array(rec["qvel"]), np.array(rec["qacc"]), tw.ipos, tw.iquat
+    )
     N = len(t)
     model = tw.model
-    omega = np.array([tw.R_I.T @ tw.to_mujoco(q[i], qd[i])[1][3:6] for i in range(N)])
-    omega = omega.reshape(N, 3)
     tracking = tracking_errors(model, t, q, omega)
     inv = compute_invariants(
         model, t, q, qd, np.array(rec["W"]), np.array(rec["IL"]), np.array(rec["IP"])
@@ -167,7 +165,7 @@ def simulate(
         t=t,
         q=q,
         qdot=qd,
-        qddot=np.array(rec["qddot"]),
+        qddot=qdd,
         QC=np.array(rec["QC"]),
         torque=np.array(rec["tau"]),
         rod_forces=np.array(rec["rod"]).reshape(N, tw.n),

@@ -84,6 +84,81 @@ def mujoco_to_paper_acc(
     return np.concatenate([Rdd, udd, qacc[6:]])
 
 
+def _quat_mul_rows(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise Hamilton product of (N, 4) quaternions with one (4,) or (N, 4), w first."""
+    aw, ax, ay, az = np.moveaxis(a, -1, 0)
+    bw, bx, by, bz = np.moveaxis(np.broadcast_to(b, a.shape), -1, 0)
+    return np.stack(
+        [
+            aw * bw - ax * bx - ay * by - az * bz,
+            aw * bx + ax * bw + ay * bz - az * by,
+            aw * by - ax * bz + ay * bw + az * bx,
+            aw * bz + ax * by - ay * bx + az * bw,
+        ],
+        axis=-1,
+    )
+
+
+def _mat_rows(q: np.ndarray) -> np.ndarray:
+    """Rotation matrices of (N, 4) quaternions (normalised first), shape (N, 3, 3)."""
+    w, x, y, z = np.moveaxis(q / np.linalg.norm(q, axis=-1, keepdims=True), -1, 0)
+    return np.stack(
+        [
+            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
+            np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
+            np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
+        ],
+        axis=-2,
+    )
+
+
+def _Ht_rows(u: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """``H(u)ᵀ w`` row-wise (Eq. 13), (N, 4) and (N, 3) -> (N, 4)."""
+    u0, u1, u2, u3 = np.moveaxis(u, -1, 0)
+    w0, w1, w2 = np.moveaxis(w, -1, 0)
+    return 2.0 * np.stack(
+        [
+            -u1 * w0 - u2 * w1 - u3 * w2,
+            u0 * w0 - u3 * w1 + u2 * w2,
+            u3 * w0 + u0 * w1 - u1 * w2,
+            -u2 * w0 + u1 * w1 + u0 * w2,
+        ],
+        axis=-1,
+    )
+
+
+def mujoco_to_paper_batch(
+    qpos: np.ndarray, qvel: np.ndarray, qacc: np.ndarray, ipos: np.ndarray, iquat: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`mujoco_to_paper_state` and :func:`mujoco_to_paper_acc` for N samples at once.
+
+    Args:
+        qpos (N, n+7), qvel (N, n+6), qacc (N, n+6): MuJoCo's state and acceleration per sample.
+        ipos (3,), iquat (4,): BR's inertial frame in its MuJoCo body frame.
+
+    Returns:
+        ``(q, q̇, q̈)`` (N, n+7 each) in the paper's coordinates and ω (N, 3), body axes, rad/s.
+    """
+    qpos, qvel, qacc = (np.atleast_2d(np.asarray(x, float)) for x in (qpos, qvel, qacc))
+    iquat = np.asarray(iquat, float)
+    q_b = qpos[:, 3:7]
+    u = _quat_mul_rows(q_b, iquat)
+    Rb = _mat_rows(q_b)
+    RI = quat_to_mat(iquat)
+    r = Rb @ np.asarray(ipos, float)
+    omega_b = qvel[:, 3:6]
+    omega = omega_b @ RI  # R_Iᵀ ω_b, row-wise
+    omega_w = np.einsum("nij,nj->ni", Rb, omega_b)
+    udot = 0.25 * _Ht_rows(u, omega) / np.sum(u * u, axis=1)[:, None]
+    q = np.concatenate([qpos[:, :3] + r, u, qpos[:, 7:]], axis=1)
+    qdot = np.concatenate([qvel[:, :3] + np.cross(omega_w, r), udot, qvel[:, 6:]], axis=1)
+    alpha_w = np.einsum("nij,nj->ni", Rb, qacc[:, 3:6])
+    omega_dot = qacc[:, 3:6] @ RI
+    Rdd = qacc[:, :3] + np.cross(alpha_w, r) + np.cross(omega_w, np.cross(omega_w, r))
+    udd = 0.25 * (_Ht_rows(udot, omega) + _Ht_rows(u, omega_dot))
+    return q, qdot, np.concatenate([Rdd, udd, qacc[:, 6:]], axis=1), omega
+
+
 def paper_to_frame_state(
     q: np.ndarray, qdot: np.ndarray, frame_pos: np.ndarray, frame_quat: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
