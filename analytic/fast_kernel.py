@@ -24,7 +24,8 @@ Structure used (coordinates ``q = [R (3), u (4), p (n)]``, body block ``b = [R, 
 * N = M⁻² (Eq. B13): with ``Z = K A_cᵀ`` (``K`` the norm-constrained compliance) one has
   ``M Z = A_cᵀ - a_m wᵀ``, ``w = A_c y / s_m``, and since ``H(u) u = 0``,
   ``Zᵀ M² Z = A_c A_cᵀ + |u|² w wᵀ = diag(4|u|² I_kω, I_kp) + |u|² w wᵀ`` (Sherman-Morrison); the rest
-  are structured solves with ``M_α`` and products with ``M``. Cost O(n).
+  are structured solves with ``M_α``, one product with ``M`` (for ``Q^C``) and
+  ``M_α⁻¹ M v = v - α y (a_mᵀ v)`` (``y = M_α⁻¹ a_m``). Cost O(n).
 
 The identity weighting is not in this kernel (:mod:`analytic.fast` uses the numpy path for it).
 
@@ -963,8 +964,14 @@ def _minv2(q, fp, ip, out, w, n, kw, kp, s, mu0, mu1, mu2, alpha, b_m, uu):
         v[7 + ip[iidx + j]] = mu[kw + j]
     Qc = np.zeros(nq)
     _m_mul(Mbb, c1, c2, s, fp, om, p, n, v, Qc)
-    v2 = Qc.copy()
-    _ma_solve(SB, c1, c2, s, fp, om, p, n, v2)
+    # v2 = M_α⁻¹ Q_c = M_α⁻¹ M v = v - α y (a_mᵀ v) exactly (M = M_α - α a_m a_mᵀ, y = M_α⁻¹ a_m):
+    # no product with M followed by a solve, which would cost about cond(M) in accuracy
+    am_v = 0.0
+    for c in range(4):
+        am_v += u[c] * v[3 + c]
+    v2 = np.empty(nq)
+    for i in range(nq):
+        v2[i] = v[i] - alpha * am_v * y[i]
     am_v2 = 0.0
     yQc = 0.0
     for c in range(4):

@@ -296,7 +296,9 @@ def test_dask_local_cluster(tmp_path, result):
 
 
 def test_goal_same_accuracy_search():
-    """The 60 s goal's search (here over 1 s): the RK4 run it stops at is the first as accurate."""
+    """The 60 s goal's search (here over 1 s): the RK4 run it stops at is the first as accurate,
+    the two last runs show RK4's order, and the ratio uses MuJoCo's wall interpolated to exactly
+    the analytic accuracy (between the walls of those two runs)."""
     from validation.goals import Goal, goal_example1_60s
 
     g = goal_example1_60s(t_end=1.0, cap_s=5.0, progress=lambda _s: None)
@@ -307,6 +309,18 @@ def test_goal_same_accuracy_search():
     if not g.extrapolated:
         assert pts[-1][1] <= e_a
         assert all(p[1] > e_a for p in pts[:-1])
-        assert g.value == pytest.approx(w_a / pts[-1][2])
+        if len(pts) == 1:
+            assert g.value == pytest.approx(w_a / pts[-1][2])
+        else:  # MuJoCo's wall at exactly e_a, interpolated between the last two runs
+            (dt1, e1, w1), (dt2, e2, w2) = pts[-2], pts[-1]
+            order = math.log(e1 / e2) / math.log(dt1 / dt2)
+            assert 3.5 < order < 4.5  # RK4, with the controller inside every stage
+            w_need = w_a / g.value
+            assert min(w1, w2) <= w_need <= max(w1, w2)
+            dt_need = dt2 * (e_a / e2) ** (1 / order)
+            assert dt2 <= dt_need <= dt1
+            assert w_need == pytest.approx(
+                w1 + (w2 - w1) * (1 / dt_need - 1 / dt1) / (1 / dt2 - 1 / dt1)
+            )
     assert Goal("x", 1.0, 1.0).holds and not Goal("x", 1.01, 1.0).holds
     assert not Goal("x", math.nan, 1.0).holds
