@@ -97,7 +97,10 @@ F_H, F_INV_GEAR = 30, 31
 F_WEIGHTS = 32  # 4 slots
 C_TOTAL = 36  # stage calls since binding
 C_DECLINE_AT = 37  # fault injection for tests: treat call number C_DECLINE_AT (1-based) as declined
-CTX_LEN = 38
+C_OFF_XFRC = 38  # mjData.xfrc_applied
+C_FORCE_BODY = 39  # -1: no force at C (Gauss); else the body whose xfrc_applied[:3] receives it
+C_NBODY = 40
+CTX_LEN = 41
 
 
 def _make_native_stage(deps: int):
@@ -160,6 +163,13 @@ def _make_native_stage(deps: int):
         if status != fk.STATUS_OK:
             ctx[C_FAILS] += 1
             return
+        b = ctx[C_FORCE_BODY]
+        if b >= 0:  # the force at C of a non-Gauss weighting: a world force at BR's CoM (= C)
+            xfrc_addr = carray(_as_iptr(d_addr + ctx[C_OFF_XFRC]), (1,))[0]
+            xfrc = carray(_as_ptr(xfrc_addr), (6 * ctx[C_NBODY],))
+            nqp = ctx[C_NQP]
+            for r in range(3):
+                xfrc[6 * b + r] = out[nqp + r]
         if ctx[C_ACTIVE]:
             ctx[C_CALLS] += 1
 
@@ -185,6 +195,7 @@ class DataLayout:
     qpos: int
     qvel: int
     ctrl: int
+    xfrc_applied: int
 
 
 _PROBE_XML = """<mujoco><worldbody><body><freejoint/><geom size="0.1"/>
@@ -216,13 +227,19 @@ def _scan(d: mujoco.MjData, targets: dict[str, int], times: tuple[float, float])
     if len(time_hits) != 1 or any(not found[k] for k in targets):
         raise LookupError("mjData layout: time or a pointer field not found uniquely")
     # last match: a zero-sized array allocated just before a field shares its address
-    return DataLayout(time_hits[0], found["qpos"][-1], found["qvel"][-1], found["ctrl"][-1])
+    return DataLayout(
+        time_hits[0],
+        found["qpos"][-1],
+        found["qvel"][-1],
+        found["ctrl"][-1],
+        found["xfrc_applied"][-1],
+    )
 
 
 def _probe(i: int) -> DataLayout:
     m = mujoco.MjModel.from_xml_string(_PROBE_XML.format(i=i))
     d = mujoco.MjData(m)
-    targets = {"qpos": d.qpos.ctypes.data, "qvel": d.qvel.ctypes.data, "ctrl": d.ctrl.ctypes.data}
+    targets = {k: getattr(d, k).ctypes.data for k in ("qpos", "qvel", "ctrl", "xfrc_applied")}
     return _scan(d, targets, (1.2345678901234567e-3 + i, -7.654321098765432e-5 - i))
 
 
@@ -236,14 +253,15 @@ def layout() -> DataLayout | None:
     return a if a == b else None
 
 
-def read_fields(d: mujoco.MjData, lay: DataLayout) -> tuple[float, int, int, int]:
-    """``(time, qpos address, qvel address, ctrl address)`` read through the offsets (for tests)."""
+def read_fields(d: mujoco.MjData, lay: DataLayout) -> tuple[float, int, int, int, int]:
+    """``(time, qpos, qvel, ctrl, xfrc_applied addresses)`` read through the offsets (for tests)."""
     base = d._address
     return (
         ctypes.c_double.from_address(base + lay.time).value,
         ctypes.c_int64.from_address(base + lay.qpos).value,
         ctypes.c_int64.from_address(base + lay.qvel).value,
         ctypes.c_int64.from_address(base + lay.ctrl).value,
+        ctypes.c_int64.from_address(base + lay.xfrc_applied).value,
     )
 
 
@@ -321,10 +339,21 @@ class Context:
         arrays: ``fp, ip, out, q, qd, tq_ids, f_ids, tau_g, geo, acc`` (contiguous; kept alive by
             this object while bound).
         weights: the integrator's stage weights; ``inv_gear``: 1 / the control actuators' gear;
-        has_torque: whether the given torque of Remark 2 is on.
+        has_torque: whether the given torque of Remark 2 is on;
+        force_body: the body (BR) whose ``xfrc_applied[:3]`` receives the control's force at C,
+            or None when the weighting puts none there (Gauss).
     """
 
-    def __init__(self, m, arrays: dict[str, np.ndarray], weights, inv_gear: float, has_torque):
+    def __init__(
+        self,
+        m,
+        arrays: dict[str, np.ndarray],
+        weights,
+        inv_gear: float,
+        has_torque,
+        force_body: int | None = None,
+    ):
+        self.force_body = -1 if force_body is None else int(force_body)
         self.arrays = arrays
         self.m = m
         self.weights = tuple(float(w) for w in weights)
@@ -346,6 +375,11 @@ class Context:
         CTX[:] = 0
         CTX[C_OFF_TIME], CTX[C_OFF_QPOS] = lay.time, lay.qpos
         CTX[C_OFF_QVEL], CTX[C_OFF_CTRL] = lay.qvel, lay.ctrl
+        CTX[C_OFF_XFRC], CTX[C_FORCE_BODY], CTX[C_NBODY] = (
+            lay.xfrc_applied,
+            self.force_body,
+            self.m.nbody,
+        )
         CTX[C_NQ], CTX[C_NV], CTX[C_NU] = self.m.nq, self.m.nv, self.m.nu
         CTX[C_NQP] = a["q"].shape[0]
         for slot, key, len_slot in (

@@ -238,7 +238,7 @@ class Twin:
         self._ctx: native.Context | None = None
         self._native_bound = False
         self.native_redos = 0  # batches rerun with the Python callback after a declined stage
-        if self._use_stage and self._st_gauss and native_callback and native.available():
+        if self._use_stage and native_callback and native.available():
             arrays = dict(
                 fp=self._fast.fp, ip=self._fast.ip, out=self._st_out, q=self._st_q,
                 qd=self._st_qd, tq_ids=self._st_tq, f_ids=self._st_f, tau_g=self._st_tau_g,
@@ -250,6 +250,7 @@ class Twin:
                 self.acc.weights,
                 INV_GEAR,
                 self.has_torque,
+                force_body=None if self._st_gauss else self.body_id,
             )
 
     # ------------------------------------------------------------------------------------------

@@ -34,13 +34,11 @@ def test_layout_reads_the_fields_of_any_mjdata():
     tw = Twin(paper_scene("paper_example2_controlled"))
     tw.d.time = 0.123456789
     lay = native.layout()
-    t, qpos, qvel, ctrl = native.read_fields(tw.d, lay)
+    t, *addresses = native.read_fields(tw.d, lay)
     assert t == tw.d.time
-    assert (qpos, qvel, ctrl) == (
-        tw.d.qpos.ctypes.data,
-        tw.d.qvel.ctypes.data,
-        tw.d.ctrl.ctypes.data,
-    )
+    assert addresses == [
+        getattr(tw.d, k).ctypes.data for k in ("qpos", "qvel", "ctrl", "xfrc_applied")
+    ]
 
 
 @pytest.mark.parametrize("name", ["paper_example1_controlled", "paper_example2_controlled"])
@@ -51,6 +49,22 @@ def test_native_run_is_bit_identical_to_python_callback(name):
     assert not a.info["native_callback"] and b.info["native_callback"]
     assert b.info["native_redos"] == 0
     _same(a, b)
+
+
+def test_native_with_a_force_at_C():
+    """The M⁻² weighting's control has a force at C: the native stage writes it to BR's
+    xfrc_applied as the Python stage does."""
+    import dataclasses
+
+    from analytic.effects import Weighting
+
+    sc = random_scene(np.random.default_rng(3), 3, external_torque=True)
+    sc = sc.replace(control=dataclasses.replace(sc.control, weighting=Weighting.M_INV2))
+    a = simulate(sc, dt=1e-3, t_end=0.2, native_callback=False)
+    b = simulate(sc, dt=1e-3, t_end=0.2)
+    assert b.info["native_callback"]
+    _same(a, b)
+    assert np.abs(a.force_at_C).max() > 0.0
 
 
 @pytest.mark.parametrize("spring_model", ["tendon", "actuator"])
