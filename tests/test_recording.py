@@ -198,3 +198,11 @@ def test_demo_has_four_narrated_steps(tmp_path):
     assert np.all(tau == 0.0)
     md = res.markdown.read_text()
     assert md.startswith("# ") and md.count("## ") == 4
+    # the MuJoCo twin rides along as a ghost in every step, and agrees with the analytic plant
+    # under the report's thresholds (validation/thresholds.py)
+    assert len(res.comparisons) == 4
+    for step, cmp in zip(res.steps, res.comparisons, strict=True):
+        assert f"/{step.prefix}/world/mujoco/body" in ents
+        assert cmp.passed, [c.label for c in cmp.failed_checks]
+    assert rows(store, "/step1_uncontrolled/world/mujoco/body") == 21
+    assert "ghost" in md

@@ -252,7 +252,8 @@ def build_parser() -> argparse.ArgumentParser:
         "demo",
         help="write a narrated teaching demo (.rrd + markdown)",
         description="Write a teaching demo: Example 1 uncontrolled and controlled, Example 2 "
-        "with masses 1, 2, 4 controlled, and an effect switched off, narrated with equations.",
+        "with masses 1, 2, 4 controlled, and an effect switched off, narrated with equations; "
+        "each step on the analytic plant with the MuJoCo twin as a ghost.",
     )
     p.add_argument("--out", help="output directory (default: out/demo)")
     p.set_defaults(func=cmd_demo)

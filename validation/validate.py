@@ -269,12 +269,14 @@ class DemoResult:
     markdown: Path
     steps: tuple[DemoStep, ...]
     wall_times: dict[str, float]
+    comparisons: tuple[Comparison, ...] = ()
+    """Per step, the analytic plant against the MuJoCo ghost (empty without MuJoCo)."""
 
     def __fspath__(self) -> str:
         return str(self.out_dir)
 
 
-DEMO_RTOL = 1e-10  # the demo favours speed; `tumble validate` uses the scenes' rtol 1e-12
+DEMO_RTOL = 1e-12  # as `tumble validate` (the scenes' rtol): the ghost is checked against it
 DEMO_T_END = 10.0  # s
 
 _STEPS = (
@@ -346,12 +348,18 @@ removed from the model and from the energy alike.""",
 
 
 def write_demo(
-    out_dir: str | Path, *, t_end: float = DEMO_T_END, rtol: float = DEMO_RTOL
+    out_dir: str | Path,
+    *,
+    t_end: float = DEMO_T_END,
+    rtol: float = DEMO_RTOL,
+    mujoco: bool = True,
 ) -> DemoResult:
     """Write the teaching demo into ``out_dir``: ``demo.rrd`` (one tab per step) and ``demo.md``.
 
-    The steps run on the analytic plant only (the MuJoCo twin is what ``tumble validate`` checks),
-    for ``t_end`` seconds each at ``rtol`` (DOP853).
+    Each step runs on the analytic plant for ``t_end`` seconds at ``rtol`` (DOP853) and, with
+    ``mujoco`` (and the MuJoCo twin importable), on the MuJoCo twin under the same controller (the
+    scene's integrator and timestep), drawn as a translucent ghost over the analytic body with its
+    curves in the same plots.
     """
     import numpy as np
     import rerun as rr
@@ -361,8 +369,15 @@ def write_demo(
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
+    mj_simulate = None
+    if mujoco:
+        try:
+            from mj_bridge import simulate as mj_simulate
+        except ImportError:  # pragma: no cover - the twin is part of the package
+            mj_simulate = None
     walls: dict[str, float] = {}
     runs = []
+    ghosts = []
     for step in _STEPS:
         sc = _scene(step.scene)
         if step.prefix == "step4_no_cubic_springs":
@@ -373,20 +388,30 @@ def write_demo(
         if tr.status is not RunStatus.OK:
             raise RuntimeError(f"demo step {step.title!r} failed: {tr.message}")
         runs.append((step, sc, tr))
+        if mj_simulate is not None:
+            t0 = time.perf_counter()
+            tm = mj_simulate(sc, t_end=t_end)
+            walls[f"{step.prefix}_mujoco"] = time.perf_counter() - t0
+            if tm.status is not RunStatus.OK:
+                raise RuntimeError(f"demo step {step.title!r} failed on MuJoCo: {tm.message}")
+            ghosts.append(tm)
+    two = len(ghosts) == len(runs)
+    cmps = [
+        compare(tr, ghosts[i] if two else None, sc, t_end=t_end)
+        for i, (_, sc, tr) in enumerate(runs)
+    ]
 
     path = out / "demo.rrd"
     t0 = time.perf_counter()
     tabs = [
-        blueprint_for(s.prefix, sc, compare(tr, None, sc), False, name=s.title)
-        for s, sc, tr in runs
+        blueprint_for(s.prefix, sc, cmps[i], two, name=s.title) for i, (s, sc, _) in enumerate(runs)
     ]
     tabs[3] = _with_masses_plot(tabs[3], runs[3])
     bp = rrb.Blueprint(rrb.Tabs(*tabs), rrb.TimePanel(state="expanded"))
     with atomic_stream(path, "tumble_demo", blueprint=bp) as rec:
-        for step, sc, tr in runs:
-            log_run(
-                rec, sc, [tr], compare(tr, None, sc), narrative=step.narrative, prefix=step.prefix
-            )
+        for i, (step, sc, tr) in enumerate(runs):
+            plants = [tr, ghosts[i]] if two else [tr]
+            log_run(rec, sc, plants, cmps[i], narrative=step.narrative, prefix=step.prefix)
         # step 4: the masses' positions with and without the cubic term, in one plot
         full = runs[0][2]
         off = runs[3][2]
@@ -415,14 +440,22 @@ def write_demo(
         "# tumble demo",
         "",
         f"Open with `rerun {path.name}`; one tab per step, {t_end:g} s each "
-        f"(analytic plant, DOP853 at rtol {rtol:g}).",
+        f"(analytic plant, DOP853 at rtol {rtol:g}"
+        + (
+            "; the MuJoCo twin under the same controller as a translucent ghost, RK4 at the "
+            "scene's timestep, its curves in the same plots)."
+            if two
+            else ")."
+        ),
         "",
     ]
     for step, _, _ in runs:
         body = step.narrative.split("\n\n", 1)[1]  # the narrative without its own heading
         md += [f"## {step.title}", "", body, ""]
     mdp = write_atomic(out / "demo.md", "\n".join(md))
-    return DemoResult(out, path, mdp, tuple(s for s, _, _ in runs), walls)
+    return DemoResult(
+        out, path, mdp, tuple(s for s, _, _ in runs), walls, tuple(cmps) if two else ()
+    )
 
 
 def _with_masses_plot(tab, run):
