@@ -92,13 +92,12 @@ def _rhs(model: TumblingModel, accel: Callable) -> Callable[[float, np.ndarray],
     def g(t: float, y: np.ndarray) -> np.ndarray:
         out = np.empty(ny)
         status = rhs_into(float(t), y, fp, ip, work, out)
-        if status == 0:
-            counter["nfev"] += 1
-            return out
+        if status != 0 and status != STATUS_NONFINITE:
+            return f(t, y)  # the kernel declined: the numpy model answers (f counts it)
+        counter["nfev"] += 1
         if status == STATUS_NONFINITE:
-            counter["nfev"] += 1
             raise _NonFinite(f"non-finite acceleration at t = {t:.6g} s")
-        return f(t, y)
+        return out
 
     g.counter = counter  # type: ignore[attr-defined]
     return g

@@ -103,6 +103,14 @@ C_NBODY = 40
 CTX_LEN = 41
 
 
+def _data_array(d_addr, ctx, slot, n):  # pragma: no cover - compiled
+    """The ``mjtNum*`` field of ``mjData`` whose byte offset is in ``ctx[slot]``, as n float64."""
+    return carray(_as_ptr(carray(_as_iptr(d_addr + ctx[slot]), (1,))[0]), (n,))
+
+
+data_array = fk._jit(_data_array) if HAVE_NUMBA else None
+
+
 def _make_native_stage(deps: int):
     """:func:`_native_stage` closing over ``deps`` (see :data:`DEPS`)."""
 
@@ -116,9 +124,9 @@ def _make_native_stage(deps: int):
             ctx[C_FAILS] += 1
             return
         t = carray(_as_ptr(d_addr + ctx[C_OFF_TIME]), (1,))[0]
-        qpos = carray(_as_ptr(carray(_as_iptr(d_addr + ctx[C_OFF_QPOS]), (1,))[0]), (ctx[C_NQ],))
-        qvel = carray(_as_ptr(carray(_as_iptr(d_addr + ctx[C_OFF_QVEL]), (1,))[0]), (ctx[C_NV],))
-        ctrl = carray(_as_ptr(carray(_as_iptr(d_addr + ctx[C_OFF_CTRL]), (1,))[0]), (ctx[C_NU],))
+        qpos = data_array(d_addr, ctx, C_OFF_QPOS, ctx[C_NQ])
+        qvel = data_array(d_addr, ctx, C_OFF_QVEL, ctx[C_NV])
+        ctrl = data_array(d_addr, ctx, C_OFF_CTRL, ctx[C_NU])
         fp = carray(_as_ptr(ctx[C_FP]), (ctx[C_FP_LEN],))
         ip = carray(_as_iptr(ctx[C_IP]), (ctx[C_IP_LEN],))
         out = carray(_as_ptr(ctx[C_OUT]), (ctx[C_OUT_LEN],))
@@ -165,8 +173,7 @@ def _make_native_stage(deps: int):
             return
         b = ctx[C_FORCE_BODY]
         if b >= 0:  # the force at C of a non-Gauss weighting: a world force at BR's CoM (= C)
-            xfrc_addr = carray(_as_iptr(d_addr + ctx[C_OFF_XFRC]), (1,))[0]
-            xfrc = carray(_as_ptr(xfrc_addr), (6 * ctx[C_NBODY],))
+            xfrc = data_array(d_addr, ctx, C_OFF_XFRC, 6 * ctx[C_NBODY])
             nqp = ctx[C_NQP]
             for r in range(3):
                 xfrc[6 * b + r] = out[nqp + r]
