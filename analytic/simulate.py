@@ -172,7 +172,7 @@ def simulate(
     except _NonFinite as exc:
         status, message = RunStatus.FAILED, str(exc)
     except KeyboardInterrupt:
-        status, message = RunStatus.FAILED, f"interrupted at t = {ts[-1]:.6g} s"
+        status, message = RunStatus.INTERRUPTED, f"interrupted at t = {ts[-1]:.6g} s"
     except np.linalg.LinAlgError as exc:
         status, message = (
             RunStatus.FAILED,

@@ -6,9 +6,10 @@ All arrays are per output sample (N samples) in the paper's coordinates (Eq. 44)
 
 from __future__ import annotations
 
+import io
 import json
 import os
-import tempfile
+import uuid
 from dataclasses import asdict, dataclass, field
 from enum import StrEnum
 from pathlib import Path
@@ -20,11 +21,13 @@ import numpy as np
 class Engine(StrEnum):
     ANALYTIC = "analytic"
     MUJOCO = "mujoco"
+    PINOCCHIO = "pinocchio"
 
 
 class RunStatus(StrEnum):
     OK = "ok"
     FAILED = "failed"
+    INTERRUPTED = "interrupted"  # stopped by Ctrl-C / SIGTERM: the samples so far, kept
 
 
 @dataclass(frozen=True)
@@ -141,6 +144,17 @@ class Trajectory:
 
         return omega_of(self.u, self.qdot[:, 3:7])
 
+    def raise_if_interrupted(self) -> Trajectory:
+        """``self``, or KeyboardInterrupt when the run was interrupted (Ctrl-C, SIGTERM).
+
+        A plant keeps the samples it reached when interrupted and returns them
+        (:attr:`RunStatus.INTERRUPTED`); a caller that runs several plants or cases calls this so
+        that the user's interrupt stops the whole job instead of only the current run.
+        """
+        if self.status is RunStatus.INTERRUPTED:
+            raise KeyboardInterrupt(self.message)
+        return self
+
     def to_arrays(self) -> dict[str, np.ndarray]:
         """Flat name -> array mapping (for ``.npz``)."""
         out = {
@@ -161,9 +175,8 @@ class Trajectory:
             out[f"invariants.{k}"] = v
         return out
 
-    def save_npz(self, path: str | Path) -> Path:
-        """Write the arrays and metadata atomically (temporary file, then rename)."""
-        path = Path(path)
+    def npz_bytes(self) -> bytes:
+        """The arrays of :meth:`to_arrays` and the metadata (``meta_json``) as ``.npz`` bytes."""
         meta = {
             "engine": self.engine.value,
             "scene": self.scene,
@@ -175,13 +188,27 @@ class Trajectory:
         }
         arrays = self.to_arrays()
         arrays["meta_json"] = np.array(json.dumps(meta, default=str))
+        buf = io.BytesIO()
+        np.savez(buf, **arrays)
+        return buf.getvalue()
+
+    def save_npz(self, path: str | Path) -> Path:
+        """Write :meth:`npz_bytes` to ``path`` atomically (a new file beside it, then a rename).
+
+        The command line writes through ``validation.atomic`` instead, which also checks the
+        written size; this is the dependency-free form for library users.
+        """
+        path = Path(path)
+        data = self.npz_bytes()
         path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+        tmp = path.with_name(f".{path.name}.{os.getpid()}.{uuid.uuid4().hex[:8]}.tmp")
         try:
-            with os.fdopen(fd, "wb") as f:
-                np.savez(f, **arrays)
+            with open(tmp, "xb") as f:  # mode 0o666 & ~umask, like any new file
+                f.write(data)
+                f.flush()
+                os.fsync(f.fileno())
             os.replace(tmp, path)
         except BaseException:
-            Path(tmp).unlink(missing_ok=True)
+            tmp.unlink(missing_ok=True)
             raise
         return path

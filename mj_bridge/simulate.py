@@ -141,7 +141,7 @@ def simulate(
                 if progress is not None:
                     progress(float(times[i]))
         except KeyboardInterrupt:
-            status, message = RunStatus.FAILED, f"interrupted at t = {rec['t'][-1]:.6g} s"
+            status, message = RunStatus.INTERRUPTED, f"interrupted at t = {rec['t'][-1]:.6g} s"
         except np.linalg.LinAlgError as exc:
             status, message = (
                 RunStatus.FAILED,

@@ -26,7 +26,11 @@ def test_simulate_writes_trajectory_and_summary(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "paper_example2" in out and "invariants" in out
     # no temporary files left behind by the atomic writes
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["summary.json", "trajectory.npz"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "manifest.json",
+        "summary.json",
+        "trajectory.npz",
+    ]
 
 
 @pytest.mark.parametrize(

@@ -22,10 +22,10 @@ def _interrupt_after(t_stop):
     return progress
 
 
-def test_interrupted_run_returns_partial_failed_trajectory(tmp_path):
+def test_interrupted_run_returns_partial_interrupted_trajectory(tmp_path):
     scene = load_scene(hc.HARD_DIR / "rod_through_C.toml")
     tr = simulate(scene, t_end=2.0, progress=_interrupt_after(0.5))
-    assert tr.status is RunStatus.FAILED
+    assert tr.status is RunStatus.INTERRUPTED
     assert "interrupted at t =" in tr.message
     assert 0.5 <= tr.t[-1] < 2.0 and np.all(np.isfinite(tr.q))
     # what it reached is still physics: masses at C, invariants closed
@@ -33,7 +33,7 @@ def test_interrupted_run_returns_partial_failed_trajectory(tmp_path):
     path = tr.save_npz(tmp_path / "partial.npz")
     with np.load(path) as z:
         meta = json.loads(str(z["meta_json"]))
-        assert meta["status"] == "failed" and "interrupted" in meta["message"]
+        assert meta["status"] == "interrupted" and "interrupted" in meta["message"]
         assert z["t"][-1] == tr.t[-1]
 
 

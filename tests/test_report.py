@@ -13,7 +13,7 @@ import pytest
 from analytic.scene import load_scene
 from analytic.simulate import simulate
 from analytic.trajectory import Engine
-from validation import report as report_mod
+from validation import atomic as atomic_mod
 from validation.compare import compare
 from validation.report import versions, write_atomic, write_report
 
@@ -105,7 +105,7 @@ def test_writes_are_atomic(tmp_path, monkeypatch):
     def broken_replace(src, dst):
         raise OSError("disk full")
 
-    monkeypatch.setattr(report_mod.os, "replace", broken_replace)
+    monkeypatch.setattr(atomic_mod.os, "replace", broken_replace)
     with pytest.raises(OSError, match="disk full"):
         write_atomic(target, "new")
     monkeypatch.undo()

@@ -1,7 +1,13 @@
 """The ``tumble`` command line.
 
 Errors are one line on stderr (``tumble: error: ...``) and a non-zero exit status, never a
-traceback. Outputs are written atomically.
+traceback: 2 for bad input (found before any work), 1 for a failed run or check or a result that
+could not be written, 130 after Ctrl-C and 143 after SIGTERM (the partial results are kept, marked
+interrupted). Every output directory is one run, whole (:mod:`validation.outputs`); default output
+paths are built from a sanitised slug of the scene's name, always under ``out/``.
+
+Only the standard library is imported before ``main`` has installed its signal handlers, so a
+Ctrl-C during start-up (numpy, MuJoCo, numba loading) is one line too.
 """
 
 from __future__ import annotations
@@ -14,17 +20,15 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import argparse  # noqa: E402
 import json  # noqa: E402
+import signal  # noqa: E402
 import sys  # noqa: E402
 import warnings  # noqa: E402
 from pathlib import Path  # noqa: E402
 
-from analytic.effects import Backend, MjIntegrator, SolverMethod  # noqa: E402
-from analytic.trajectory import RunStatus  # noqa: E402
-from validation.progress import Progress  # noqa: E402
-from validation.scenes import DEFAULT_SIMULATE_SCENE, builtin_names, resolve_scene  # noqa: E402
-
-EXIT_FAILED = 1  # a run or a check failed
-EXIT_USAGE = 2  # bad input (scene, arguments)
+EXIT_FAILED = 1  # a run or a check failed, or its results could not be written
+EXIT_USAGE = 2  # bad input (scene, arguments), found before any work
+EXIT_SIGINT = 130  # 128 + SIGINT, the shell's convention
+EXIT_SIGTERM = 143  # 128 + SIGTERM
 
 
 def _positive_float(s: str) -> float:
@@ -37,63 +41,74 @@ def _positive_float(s: str) -> float:
     return v
 
 
-def _add_scene_arg(p: argparse.ArgumentParser, default: str) -> None:
+def _add_scene_arg(p: argparse.ArgumentParser, default: str, builtin: list[str]) -> None:
     p.add_argument(
         "scene",
         nargs="?",
         default=None,
         help=f"scene file (TOML) or built-in scene name (default: {default}); "
-        f"built-in: {', '.join(builtin_names())}",
+        f"built-in: {', '.join(builtin)}",
     )
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
     from analytic.simulate import simulate
+    from analytic.trajectory import RunStatus
+    from validation.atomic import write_bytes, write_text
+    from validation.outputs import default_out_dir, output_run
+    from validation.progress import Progress
+    from validation.scenes import DEFAULT_SIMULATE_SCENE, resolve_scene
     from validation.summary import drift_figures, summary_table
 
     scene = resolve_scene(args.scene, DEFAULT_SIMULATE_SCENE)
     t_end = args.t_end or scene.output.t_end
-    out = Path(args.out or Path("out") / scene.name)
-    prog = Progress(f"simulate {scene.name}", t_end)
-    try:
-        tr = simulate(
-            scene,
-            method=args.method,
-            rtol=args.rtol,
-            atol=args.atol,
-            t_end=args.t_end,
-            progress=prog,
-            backend=args.backend,
-        )
-    finally:
-        prog.close()
-    path = tr.save_npz(out / "trajectory.npz")
-    summary = {
-        "scene": scene.name,
-        "engine": tr.engine.value,
-        "status": tr.status.value,
-        "message": tr.message,
-        "info": tr.info,
-        "drift": drift_figures(tr),
-        "final_tracking_error": {
-            "e_omega": tr.tracking.e_omega[-1].tolist() if tr.tracking.e_omega.size else [],
-            "e_p": tr.tracking.e_p[-1].tolist() if tr.tracking.e_p.size else [],
-        },
-    }
-    from validation.atomic import write_text
-
-    write_text(out / "summary.json", json.dumps(summary, indent=2, default=str))
+    out = Path(args.out) if args.out else default_out_dir("simulate_", scene.name)
+    with output_run(out, "simulate") as run:
+        prog = Progress(f"simulate {scene.name}", t_end)
+        try:
+            tr = simulate(
+                scene,
+                method=args.method,
+                rtol=args.rtol,
+                atol=args.atol,
+                t_end=args.t_end,
+                progress=prog,
+                backend=args.backend,
+            )
+        finally:
+            prog.close()
+        write_bytes(run.path / "trajectory.npz", tr.npz_bytes())
+        summary = {
+            "run_id": run.run_id,
+            "scene": scene.name,
+            "engine": tr.engine.value,
+            "status": tr.status.value,
+            "message": tr.message,
+            "info": tr.info,
+            "drift": drift_figures(tr),
+            "final_tracking_error": {
+                "e_omega": tr.tracking.e_omega[-1].tolist() if tr.tracking.e_omega.size else [],
+                "e_p": tr.tracking.e_p[-1].tolist() if tr.tracking.e_p.size else [],
+            },
+        }
+        write_text(run.path / "summary.json", json.dumps(summary, indent=2, default=str))
+        if tr.status is RunStatus.INTERRUPTED:
+            raise KeyboardInterrupt  # the partial trajectory is kept, marked interrupted
+        if tr.status is not RunStatus.OK:
+            run.mark_failed(tr.message)
     print(summary_table(tr))
-    print(f"wrote {path} and {out / 'summary.json'}")
+    print(f"wrote {run.final('trajectory.npz')} and {run.final('summary.json')}")
     return 0 if tr.status is RunStatus.OK else EXIT_FAILED
 
 
 def cmd_validate(args: argparse.Namespace) -> int:
-    from validation.scenes import DEFAULT_VALIDATE_SCENE
+    from validation.outputs import default_out_dir
+    from validation.progress import Progress
+    from validation.scenes import DEFAULT_VALIDATE_SCENE, resolve_scene
     from validation.validate import run_validation
 
     scene = resolve_scene(args.scene, DEFAULT_VALIDATE_SCENE)
-    out = Path(args.out or Path("out") / f"validate_{scene.name}")
+    out = Path(args.out) if args.out else default_out_dir("validate_", scene.name)
     t_end = args.t_end or scene.output.t_end
     prog = Progress(f"validate {scene.name}", t_end)
 
@@ -110,19 +125,25 @@ def cmd_validate(args: argparse.Namespace) -> int:
     n_fail = sum(1 for c in res.checks if not c.passed)
     verdict = "PASS" if res.passed else "FAIL"
     print(f"{verdict}: {len(res.checks) - n_fail}/{len(res.checks)} checks passed for {scene.name}")
+    if res.failure:
+        print(f"  run failed: {res.failure}")
     for c in res.checks:
         if not c.passed:
             print(f"  failed: {c.label}: {c.value:.3e} > {c.threshold:.3e} {c.unit}")
-    print(f"report: {Path(res.out_dir) / 'report.md'}  recording: {Path(res.out_dir) / 'run.rrd'}")
+    print(f"report: {res.out_dir / 'report.md'}  recording: {res.out_dir / 'run.rrd'}")
     return 0 if res.passed else EXIT_FAILED
 
 
 def cmd_export_mjcf(args: argparse.Namespace) -> int:
     from model_xml import to_mjcf
     from validation.atomic import write_text
+    from validation.outputs import default_out_file
+    from validation.scenes import DEFAULT_SIMULATE_SCENE, resolve_scene
 
     scene = resolve_scene(args.scene, DEFAULT_SIMULATE_SCENE)
-    out = Path(args.out or f"{scene.name}.xml")
+    out = Path(args.out) if args.out else default_out_file(scene.name, ".xml")
+    if out.is_dir():
+        raise ValueError(f"--out {out}: is a directory; give a file name")
     write_text(out, to_mjcf(scene))
     print(f"wrote {out}")
     return 0
@@ -131,7 +152,7 @@ def cmd_export_mjcf(args: argparse.Namespace) -> int:
 def cmd_demo(args: argparse.Namespace) -> int:
     from validation.validate import write_demo
 
-    out = Path(args.out or Path("out") / "demo")
+    out = Path(args.out) if args.out else Path("out") / "demo"
     res = write_demo(out)
     print(f"wrote {res.markdown}; open the recording with: rerun {res.rrd}")
     return 0
@@ -156,10 +177,12 @@ def cmd_hard_cases(args: argparse.Namespace) -> int:
 
 
 def cmd_sweep(args: argparse.Namespace) -> int:
-    from validation.sweep import run_sweep
+    from validation.outputs import default_out_dir
+    from validation.scenes import resolve_scene
+    from validation.sweep import DEFAULT_SCENE, run_sweep
 
-    scene = resolve_scene(args.scene, DEFAULT_SIMULATE_SCENE)
-    out = Path(args.out or Path("out") / f"sweep_{scene.name}")
+    scene = resolve_scene(args.scene, DEFAULT_SCENE)
+    out = Path(args.out) if args.out else default_out_dir("sweep_", scene.name)
 
     def progress(line: str) -> None:
         if sys.stderr.isatty():
@@ -174,21 +197,32 @@ def cmd_sweep(args: argparse.Namespace) -> int:
             r = by_id.get(rid)
             pick = f"{r['method']} {r['setting_name']} {r['setting']:g}" if r else "none reaches it"
             print(f"    {engine:<9} error <= {float(lvl):.0e}: {pick}")
-    print(f"table: {out / 'sweep.md'}  figure: {out / 'work_precision.png'}")
+    print(f"table: {res.out_dir / 'sweep.md'}  figure: {res.out_dir / 'work_precision.png'}")
     return 0
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
     from validation.bench import run
 
-    out = Path(args.out) if args.out else None
-    run(
-        args.skip_long, str(out / "bench.json") if out else None, out=lambda s: print(s, flush=True)
-    )
+    def say(s: str) -> None:
+        print(s, flush=True)
+
+    if not args.out:
+        run(args.skip_long, None, out=say)
+        return 0
+    from validation.outputs import output_run
+
+    with output_run(Path(args.out), "bench") as orun:
+        run(args.skip_long, str(orun.path / "bench.json"), out=lambda s: None)
+    say(f"written: {orun.final('bench.json')}")
     return 0
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from analytic.effects import Backend, MjIntegrator, SolverMethod
+    from validation.scenes import DEFAULT_SIMULATE_SCENE, builtin_names
+    from validation.sweep import DEFAULT_SCENE as DEFAULT_SWEEP_SCENE
+
     parser = argparse.ArgumentParser(
         prog="tumble",
         description="Cross-validation testbed for tumbling multibody dynamics: the Koganti-Udwadia "
@@ -204,7 +238,7 @@ def build_parser() -> argparse.ArgumentParser:
         "scene, overridable), write OUT/trajectory.npz and OUT/summary.json, and print the "
         "tracking errors at the end and the invariant drifts.",
     )
-    _add_scene_arg(p, DEFAULT_SIMULATE_SCENE)
+    _add_scene_arg(p, DEFAULT_SIMULATE_SCENE, builtin_names())
     p.add_argument("--out", help="output directory (default: out/<scene name>)")
     p.add_argument("--method", choices=[m.value for m in SolverMethod], help="scipy solver")
     p.add_argument("--rtol", type=_positive_float, help="relative tolerance")
@@ -228,7 +262,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     from validation.scenes import DEFAULT_VALIDATE_SCENE
 
-    _add_scene_arg(p, DEFAULT_VALIDATE_SCENE)
+    _add_scene_arg(p, DEFAULT_VALIDATE_SCENE, builtin_names())
     p.add_argument("--out", help="output directory (default: out/validate_<scene name>)")
     p.add_argument(
         "--integrator",
@@ -244,7 +278,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="write the MJCF of a scene's MuJoCo twin (full precision)",
         description="Write the MuJoCo model generated from the scene (MjSpec) as MJCF text.",
     )
-    _add_scene_arg(p, DEFAULT_SIMULATE_SCENE)
+    _add_scene_arg(p, DEFAULT_SIMULATE_SCENE, builtin_names())
     p.add_argument("--out", help="output file (default: <scene name>.xml)")
     p.set_defaults(func=cmd_export_mjcf)
 
@@ -280,7 +314,7 @@ def build_parser() -> argparse.ArgumentParser:
         "work_precision.png and sweep.rrd; also the cost of each effect and the effect of the "
         "quaternion stabilisation (delta1, delta2).",
     )
-    _add_scene_arg(p, DEFAULT_SIMULATE_SCENE)
+    _add_scene_arg(p, DEFAULT_SWEEP_SCENE, builtin_names())
     p.add_argument("--out", help="output directory (default: out/sweep_<scene name>)")
     p.add_argument("--quick", action="store_true", help="a small grid (minutes, not tens)")
     p.set_defaults(func=cmd_sweep)
@@ -300,25 +334,52 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+class _Terminated(KeyboardInterrupt):
+    """SIGTERM, handled like Ctrl-C: the run stops, its partial results are kept."""
+
+
+def _on_sigterm(signum, frame):
+    raise _Terminated
+
+
+def _one_line_warning(message, category, filename, lineno, file=None, line=None):
+    """Warnings as one line each (``tumble: warning: ...``), without the source line."""
+    text = str(message).splitlines()[0] if str(message) else category.__name__
+    print(f"tumble: warning: {text}", file=file or sys.stderr)
+
+
 def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    """Run one ``tumble`` command; returns the exit status (see the module docstring)."""
+    previous = signal.signal(signal.SIGTERM, _on_sigterm)
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("default")
+            warnings.showwarning = _one_line_warning
+            parser = build_parser()
+            args = parser.parse_args(argv)
             return args.func(args)
-    except ValueError as exc:
+    except ValueError as exc:  # bad input (also OutputBusy: another run holds the directory)
         print(f"tumble: error: {exc}", file=sys.stderr)
         return EXIT_USAGE
     except OSError as exc:
+        from validation.atomic import OutputError
+
+        if isinstance(exc, OutputError):  # the run happened; its results could not be written
+            print(f"tumble: error: {exc}", file=sys.stderr)
+            return EXIT_FAILED
+        where = f": {exc.filename}" if exc.filename else ""
+        print(f"tumble: error: {exc.strerror or exc}{where}", file=sys.stderr)
+        return EXIT_USAGE
+    except KeyboardInterrupt as exc:
+        sigterm = isinstance(exc, _Terminated)
         print(
-            f"tumble: error: {exc.strerror or exc}: {exc.filename or ''}".rstrip(": "),
+            f"tumble: {'terminated' if sigterm else 'interrupted'}; "
+            "partial results (if any) are kept, marked interrupted",
             file=sys.stderr,
         )
-        return EXIT_USAGE
-    except KeyboardInterrupt:
-        print("tumble: interrupted", file=sys.stderr)
-        return 130
+        return EXIT_SIGTERM if sigterm else EXIT_SIGINT
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 if __name__ == "__main__":

@@ -185,7 +185,9 @@ def goal_example1_60s(
     sc = resolve_scene("paper_example1_controlled")
     progress(f"  reference (DOP853 rtol 2.5e-14, {t_end:g} s) ...")
     ref = ref_samples(reference_run(sc, t_end))
-    tr_a = analytic.simulate(sc, method="DOP853", rtol=1e-12, atol=1e-13, t_end=t_end)
+    tr_a = analytic.simulate(
+        sc, method="DOP853", rtol=1e-12, atol=1e-13, t_end=t_end
+    ).raise_if_interrupted()
     e_a = errors_against(tr_a, ref)["error"]
     w_a = float(tr_a.info["wall_time_s"])
     progress(f"  analytic rtol 1e-12: error {e_a:.3g}, wall {w_a:.2f} s")
@@ -194,7 +196,7 @@ def goal_example1_60s(
     k = round(interval / 1e-3)
     while True:
         dt = interval / k
-        tr = mj_bridge.simulate(sc, integrator="RK4", dt=dt, t_end=t_end)
+        tr = mj_bridge.simulate(sc, integrator="RK4", dt=dt, t_end=t_end).raise_if_interrupted()
         e = errors_against(tr, ref)["error"] if tr.status.value == "ok" else math.inf
         w = float(tr.info["wall_time_s"])
         pts.append((dt, e, w))

@@ -27,7 +27,7 @@ from scipy.integrate import solve_ivp
 from scipy.spatial.transform import Rotation
 
 import mj_bridge
-from analytic import simulate
+from analytic import simulate as _analytic_simulate
 from analytic.invariants import mass_kinematics
 from analytic.kinematics import omega_of
 from analytic.model import TumblingModel, spring_energy
@@ -36,10 +36,22 @@ from analytic.trajectory import RunStatus, Trajectory
 from model_xml.state import mujoco_to_paper_acc
 from validation.atomic import write_text
 from validation.compare import attitude_angle, mass_error_reference, omega_error_reference
+from validation.outputs import output_run
 from validation.scenes import SCENES_DIR
 from validation.summary import drift_figures
 
 HARD_DIR = SCENES_DIR / "hard"
+
+
+def simulate(*args: Any, **kwargs: Any) -> Trajectory:
+    """The analytic plant; the user's Ctrl-C stops the suite, not only the current case."""
+    return _analytic_simulate(*args, **kwargs).raise_if_interrupted()
+
+
+def _mj_simulate(*args: Any, **kwargs: Any) -> Trajectory:
+    """The MuJoCo plant; the user's Ctrl-C stops the suite, not only the current case."""
+    return mj_bridge.simulate(*args, **kwargs).raise_if_interrupted()
+
 
 # Verdicts.
 PASS, FAIL, ERROR = "PASS", "FAIL", "ERROR"
@@ -338,7 +350,7 @@ def _ok_checks(tr: Trajectory, who: str) -> list[Check]:
 
 def _rigid_reference_case(scene: Scene, th: dict, J: np.ndarray, p_bound: float | None):
     a = simulate(scene)
-    m = mj_bridge.simulate(scene)
+    m = _mj_simulate(scene)
     w_ref, u_ref = euler_reference(J, scene.initial.omega, scene.initial.u, a.t)
     wscale = float(np.max(np.linalg.norm(w_ref, axis=1)))
     checks = _ok_checks(a, "analytic") + _ok_checks(m, "mujoco")
@@ -388,7 +400,7 @@ def case_rod_through_C(scene: Scene, th: dict) -> CaseResult:
 
 def _pair_case(scene: Scene, th: dict, *, tracking: bool = False, **mj_kw) -> tuple:
     a = simulate(scene)
-    m = mj_bridge.simulate(scene, **mj_kw)
+    m = _mj_simulate(scene, **mj_kw)
     checks = _ok_checks(a, "analytic") + _ok_checks(m, "mujoco")
     fa, fm = {}, {}
     for tr, f, who in ((a, fa, "analytic"), (m, fm, "mujoco")):
@@ -510,7 +522,7 @@ def case_negative_w(scene: Scene, th: dict) -> CaseResult:
         raise ValueError("initial.attitude.quaternion: must be -u(0) of paper_example1")
     ref = simulate(ref_scene, t_end=scene.output.t_end)
     a = simulate(scene)
-    m = mj_bridge.simulate(scene)
+    m = _mj_simulate(scene)
     checks = _ok_checks(a, "analytic") + _ok_checks(m, "mujoco") + _ok_checks(ref, "+u reference")
     k = min(len(a.t), len(ref.t))
     sign = float(np.max(np.abs(a.u[:k] + ref.u[:k])))
@@ -728,7 +740,7 @@ def case_conflicting(scene: Scene, th: dict) -> CaseResult:
 
 def case_fast_spin_intermediate(scene: Scene, th: dict) -> CaseResult:
     a = simulate(scene)
-    m = mj_bridge.simulate(scene)
+    m = _mj_simulate(scene)
     checks = _ok_checks(a, "analytic") + _ok_checks(m, "mujoco")
     w_ref, _ = euler_reference(
         np.diag(scene.body.inertia), scene.initial.omega, scene.initial.u, a.t
@@ -804,7 +816,7 @@ def split_energy(scene: Scene, tr: Trajectory) -> tuple[np.ndarray, np.ndarray, 
 
 def case_long_horizon(scene: Scene, th: dict) -> CaseResult:
     a = simulate(scene)
-    m = mj_bridge.simulate(scene)
+    m = _mj_simulate(scene)
     checks = _ok_checks(a, "analytic") + _ok_checks(m, "mujoco")
     fa, fm = {}, {}
     g = np.array(scene.gravity)
@@ -920,6 +932,33 @@ def _json_default(o: Any) -> Any:
     return str(o)
 
 
+def _run_into(
+    out: Path, selected: list[str], progress: Callable[[str, int, int], None] | None
+) -> HardCaseTable:
+    """Run the ``selected`` cases, rewriting the table in ``out`` after each one."""
+    rows: list[HardCaseRow] = []
+    table = HardCaseTable((), complete=True, message="no case selected")
+    for i, name in enumerate(selected):
+        if progress is not None:
+            progress(name, i, len(selected))
+        try:
+            rows.append(run_case(name))
+        except KeyboardInterrupt:
+            table = HardCaseTable(tuple(rows), complete=False, message=f"interrupted during {name}")
+            write_table(table, out)
+            raise
+        done = i + 1 == len(selected)
+        table = HardCaseTable(
+            tuple(rows),
+            complete=done,
+            message="" if done else f"{len(selected) - i - 1} cases still to run",
+        )
+        write_table(table, out)
+    if not selected:
+        write_table(table, out)
+    return table
+
+
 def run_hard_cases(
     out_dir: str | Path,
     names: Iterable[str] | None = None,
@@ -944,26 +983,8 @@ def run_hard_cases(
             raise ValueError(f"names: unknown hard case {n!r} (known: {', '.join(CASES)})")
     if fast_only:
         selected = [n for n in selected if CASES[n][1]]
-    rows: list[HardCaseRow] = []
-    for i, name in enumerate(selected):
-        if progress is not None:
-            progress(name, i, len(selected))
-        try:
-            rows.append(run_case(name))
-        except KeyboardInterrupt:
-            table = HardCaseTable(tuple(rows), complete=False, message=f"interrupted during {name}")
-            write_table(table, out_dir)
-            raise
-        done = i + 1 == len(selected)
-        table = HardCaseTable(
-            tuple(rows),
-            complete=done,
-            message="" if done else f"{len(selected) - i - 1} cases still to run",
-        )
-        write_table(table, out_dir)
-    if not selected:
-        table = HardCaseTable((), complete=True, message="no case selected")
-        write_table(table, out_dir)
+    with output_run(out_dir, "hard-cases") as run:
+        table = _run_into(run.path, selected, progress)
     return table
 
 

@@ -417,46 +417,63 @@ def blueprint_for(
     )
 
 
-def new_stream(app_id: str = "tumble"):
+RRD_FLUSH_TIMEOUT_S = 120.0
+"""Longest wait for Rerun's batcher to hand over a recording's bytes (memory only, no disk): a
+recording of a 60 s run takes well under a second, so two minutes means it is stuck, not slow."""
+
+
+def new_stream(app_id: str = "tumble", recording_id: str | None = None):
     """An explicit stream (not the global one) without the wall-clock timeline."""
     import rerun as rr
 
-    rec = rr.RecordingStream(app_id, recording_id=str(uuid.uuid4()))
+    rec = rr.RecordingStream(app_id, recording_id=recording_id or str(uuid.uuid4()))
     rec.set_log_time_enabled(False)
     return rec
 
 
-def close_atomic(rec, tmp: Path, path: Path) -> None:
-    """Flush, write the footer and move the finished file into place."""
-    import os
+def check_rrd(path: str | Path) -> None:
+    """Raise ``ValueError`` unless ``path`` is a whole ``.rrd`` (it reads back, footer included)."""
+    import warnings
 
-    rec.flush()
-    rec.disconnect()
-    os.replace(tmp, path)
+    from rerun.chunk import RrdReader
+
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")  # "no footer" is only a warning in rerun
+            RrdReader(str(path)).store()
+    except Exception as exc:
+        raise ValueError(f"{path}: not a complete recording ({exc})".splitlines()[0]) from exc
 
 
 @contextlib.contextmanager
-def atomic_stream(path: str | Path, app_id: str = "tumble", blueprint: Any = None):
-    """``with atomic_stream(path) as rec:`` — a stream saving to a temporary file beside ``path``,
-    moved into place (footer written) only when the block finishes; on any exception the stream
-    is closed and the temporary file removed, so ``path`` is never a half-written recording."""
+def atomic_stream(
+    path: str | Path,
+    app_id: str = "tumble",
+    blueprint: Any = None,
+    recording_id: str | None = None,
+):
+    """``with atomic_stream(path) as rec:`` log into ``rec``; ``path`` appears when the block ends.
+
+    Rerun encodes into memory (``binary_stream``), never onto the disk, so a full disk cannot
+    stall its writer; the bytes are then written by :func:`validation.atomic.write_bytes`, read
+    back (:func:`check_rrd`) and only then moved over ``path``. On any exception, or when the
+    recording is incomplete, ``path`` keeps its previous contents.
+    """
+    from validation.atomic import write_bytes
+
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.{uuid.uuid4().hex[:8]}.tmp")
-    rec = new_stream(app_id)
+    rec = new_stream(app_id, recording_id)
+    stream = rec.binary_stream()
+    if blueprint is not None:
+        rec.send_blueprint(blueprint, make_active=False, make_default=True)
     try:
-        if blueprint is None:
-            rec.save(str(tmp))
-        else:
-            rec.save(str(tmp), default_blueprint=blueprint)
         yield rec
-        close_atomic(rec, tmp, path)
-    except BaseException:
-        try:
-            rec.disconnect()
-        finally:
-            tmp.unlink(missing_ok=True)
-        raise
+        rec.flush(timeout_sec=RRD_FLUSH_TIMEOUT_S)
+        data = stream.read(flush=True, flush_timeout_sec=RRD_FLUSH_TIMEOUT_S) or b""
+    finally:
+        rec.disconnect()
+    data += stream.read(flush=False) or b""  # anything the disconnect wrote (the footer)
+    write_bytes(path, data, check=check_rrd)
 
 
 def write_recording(
@@ -465,8 +482,12 @@ def write_recording(
     plants: Sequence[Trajectory],
     comparison: Comparison | None = None,
     narrative: str = "",
+    recording_id: str | None = None,
 ) -> RecordingInfo:
-    """Write ``run.rrd`` for one run (blueprint included); atomically (temporary file, rename)."""
+    """Write ``run.rrd`` for one run (blueprint included); atomically, checked (:func:`atomic_stream`).
+
+    ``recording_id``: Rerun's recording id (the run id of the output directory, when there is one).
+    """
     import rerun.blueprint as rrb
 
     path = Path(path)
@@ -476,7 +497,7 @@ def write_recording(
         rrb.TimePanel(state="expanded"),
         collapse_panels=False,
     )
-    with atomic_stream(path, blueprint=bp) as rec:
+    with atomic_stream(path, blueprint=bp, recording_id=recording_id) as rec:
         entities, _ = log_run(rec, scene, plants, comparison, narrative)
     samples = max((p.t.shape[0] for p in plants), default=0)
     return RecordingInfo(path, tuple(dict.fromkeys(entities)), samples, time.perf_counter() - t0)
@@ -488,7 +509,9 @@ __all__ = [
     "ArrowScales",
     "RecordingInfo",
     "arrow_scales",
+    "atomic_stream",
     "blueprint_for",
+    "check_rrd",
     "default_narrative",
     "log_run",
     "new_stream",

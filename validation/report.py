@@ -19,10 +19,8 @@ from __future__ import annotations
 import io
 import json
 import math
-import os
 import platform
 import sys
-import tempfile
 import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -33,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from analytic.trajectory import Trajectory
+from validation.atomic import write_bytes
 from validation.compare import Comparison, Group, Series, Subject
 
 PLANT_STYLE = {
@@ -49,21 +48,8 @@ FIGURES = ("errors", "tracking", "invariants", "control")
 
 
 def write_atomic(path: str | Path, data: bytes | str) -> Path:
-    """Write ``data`` to ``path`` through a temporary file in the same directory and a rename."""
-    path = Path(path)
-    if isinstance(data, str):
-        data = data.encode("utf-8")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-        os.chmod(tmp, 0o644)  # mkstemp makes 0600; reports are for reading
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return path
+    """Write ``data`` (text as UTF-8) atomically and checked: :func:`validation.atomic.write_bytes`."""
+    return write_bytes(path, data.encode("utf-8") if isinstance(data, str) else data)
 
 
 # ----------------------------------------------------------------------------------------------

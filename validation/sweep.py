@@ -64,6 +64,7 @@ import numpy as np  # noqa: E402
 
 from analytic.scene import Scene, SolverSettings, Stabilization  # noqa: E402
 from validation.atomic import write_bytes, write_text  # noqa: E402
+from validation.outputs import output_run  # noqa: E402
 
 DEFAULT_SCENE = "paper_example1_controlled"
 LEVELS = tuple(10.0**-k for k in range(3, 11))
@@ -293,33 +294,52 @@ def _tracking(tr) -> dict[str, float | None]:
 
 
 class _TooSlow(KeyboardInterrupt):
-    """Raised from the analytic engine's progress callback; the engine ends the run as failed."""
+    """Raised from the analytic engine's progress callback; the engine ends the run interrupted."""
+
+
+TOO_SLOW_INFO = "stopped_over_budget"
+"""``Trajectory.info`` key set (True) on a run that :func:`_analytic_run` stopped for its budget."""
 
 
 def _analytic_run(scene: Scene, method: str, rtol: float, atol: float, t_end: float, budget=None):
+    """One analytic run; with ``budget`` (s of wall time), stopped when it exceeds it.
+
+    A run stopped for its budget comes back INTERRUPTED with ``info[TOO_SLOW_INFO]``; a run
+    interrupted by the user (Ctrl-C, SIGTERM) raises KeyboardInterrupt, so the sweep stops.
+    """
     import analytic
+    from analytic.trajectory import RunStatus
 
     progress = None
+    over = []
     if budget is not None:
         start = time.perf_counter()
 
         def progress(_t: float) -> None:
             if time.perf_counter() - start > budget:
+                over.append(True)
                 raise _TooSlow
 
     with warnings.catch_warnings():
         # the engine's quadrature states carry atol 1e300 (outside error control); scipy's
         # first-step heuristic then overflows harmlessly
         warnings.filterwarnings("ignore", "overflow encountered", RuntimeWarning)
-        return analytic.simulate(
+        tr = analytic.simulate(
             scene, method=method, rtol=rtol, atol=atol, t_end=t_end, progress=progress
         )
+    if tr.status is RunStatus.INTERRUPTED:
+        if not over:
+            tr.raise_if_interrupted()
+        tr = dataclasses.replace(tr, info={**tr.info, TOO_SLOW_INFO: True})
+    return tr
 
 
 def _mujoco_run(scene: Scene, integrator: str, dt: float, t_end: float):
     import mj_bridge
 
-    return mj_bridge.simulate(scene, integrator=integrator, dt=dt, t_end=t_end)
+    return mj_bridge.simulate(
+        scene, integrator=integrator, dt=dt, t_end=t_end
+    ).raise_if_interrupted()
 
 
 def _blank_row(engine: str, method: str, setting: float, cfg: SweepConfig) -> dict[str, Any]:
@@ -395,15 +415,14 @@ def run_series(
                 stop_reason = f"series stopped: failed at {s:.3g}"
             continue
         _fill_row(row, tr, ref)
-        interrupted = tr.status.value == "failed" and "interrupted" in tr.message
-        if engine == ANALYTIC and interrupted:
+        if engine == ANALYTIC and tr.info.get(TOO_SLOW_INFO):
             row.update(
                 status="too_slow",
                 note=f"interrupted after {cfg.max_run_wall_s:g} s ({tr.message})",
             )
             stop_reason = f"series stopped: rtol {s:.3g} took longer than {cfg.max_run_wall_s:g} s"
             continue
-        if tr.status.value == "failed":
+        if tr.status.value != "ok":
             row.update(status="failed", note=tr.message)
         elif not (math.isfinite(row["error"]) and row["error"] <= cfg.diverge_error):
             row.update(
@@ -775,7 +794,8 @@ def run_sweep(
     config: SweepConfig | None = None,
 ) -> SweepResult:
     """Run the study on ``scene`` (a Scene, a built-in name or a path; None: the default) and write
-    ``sweep.csv``, ``sweep.json``, ``sweep.md``, ``work_precision.png``, ``sweep.rrd`` to ``out_dir``.
+    ``sweep.csv``, ``sweep.json``, ``sweep.md``, ``work_precision.png``, ``sweep.rrd`` to ``out_dir``
+    as one set (:func:`validation.outputs.output_run`, with ``manifest.json``).
 
     Args:
         quick: the small grid of :meth:`SweepConfig.quick` (ignored when ``config`` is given).
@@ -784,10 +804,27 @@ def run_sweep(
         progress: called with one line of text per stage.
         config: the grid and limits (default :class:`SweepConfig`).
     """
-    t_start = time.perf_counter()
     sc = _resolve(scene)
     cfg = config or (SweepConfig.quick() if quick else SweepConfig())
-    out = Path(out_dir)
+    with output_run(out_dir, "sweep") as run:
+        res = _sweep_into(sc, cfg, run.path, executor=executor, progress=progress)
+    if progress is not None:
+        progress(f"wrote {', '.join(sorted(res.files))} to {run.target}")
+    return dataclasses.replace(
+        res, out_dir=run.target, files={k: run.final(p.name) for k, p in res.files.items()}
+    )
+
+
+def _sweep_into(
+    sc: Scene,
+    cfg: SweepConfig,
+    out: Path,
+    *,
+    executor: Executor | None,
+    progress: Callable[[str], None] | None,
+) -> SweepResult:
+    """:func:`run_sweep`'s work, writing into the staging directory ``out``."""
+    t_start = time.perf_counter()
     say = progress or (lambda _msg: None)
     own = executor is None
     # spawn, not fork: the parent may hold threads (BLAS, numba, a Dask client) that fork would copy
@@ -902,7 +939,6 @@ def run_sweep(
     write_text(files["md"], md)
     write_bytes(files["png"], png)
     _write_rrd(files["rrd"], runs, png, md)
-    say(f"wrote {', '.join(p.name for p in files.values())} to {out}")
     return SweepResult(
         scene=sc.name,
         out_dir=out,
@@ -925,7 +961,7 @@ def main(argv: list[str] | None = None) -> int:
         prog="python -m validation.sweep", description=__doc__.split("\n")[0]
     )
     ap.add_argument("scene", nargs="?", default=None, help=f"scene name or path ({DEFAULT_SCENE})")
-    ap.add_argument("--out", default="sweep_out", help="output directory")
+    ap.add_argument("--out", default=None, help="output directory (default: out/sweep_<scene>)")
     ap.add_argument("--quick", action="store_true", help="the small grid of tests and CI")
     ap.add_argument("--t-end", type=float, default=None, help="horizon, s")
     ap.add_argument("--max-run-wall", type=float, default=None, help="per-run wall cap, s")
@@ -940,7 +976,10 @@ def main(argv: list[str] | None = None) -> int:
     if args.repeats is not None:
         changes["repeats"] = args.repeats
     cfg = dataclasses.replace(cfg, **changes)
-    res = run_sweep(args.scene, args.out, config=cfg, progress=print)
+    from validation.outputs import default_out_dir
+
+    sc = _resolve(args.scene)
+    res = run_sweep(sc, args.out or default_out_dir("sweep_", sc.name), config=cfg, progress=print)
     print(f"reference estimated error {res.reference['error_estimate']:.2e}")
     for engine, by_level in res.cheapest.items():
         for lv, rid in by_level.items():

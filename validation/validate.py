@@ -10,6 +10,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import inspect
 import time
 import traceback
@@ -21,7 +22,9 @@ from typing import Any
 from analytic.effects import Effect
 from analytic.scene import Scene, load_scene
 from analytic.trajectory import RunStatus, Trajectory
+from validation.atomic import OutputError
 from validation.compare import Check, Comparison, compare
+from validation.outputs import OutputRun, output_run
 from validation.recording import (
     atomic_stream,
     blueprint_for,
@@ -117,7 +120,10 @@ def run_validation(
 
     Args:
         scene: a :class:`Scene`, a scene file, or a built-in scene name.
-        out_dir: output directory (created); files are replaced atomically.
+        out_dir: output directory. It receives this run's files as one set
+            (:func:`validation.outputs.output_run`): ``manifest.json`` lists them with their
+            hashes and the run id; a failed run's partial set is marked failed, an interrupted one
+            interrupted (and the KeyboardInterrupt re-raised after the files are in place).
         integrator: MuJoCo integrator (default the scene's ``[mujoco] integrator``).
         dt: MuJoCo time step, s (default the scene's ``[mujoco] timestep``).
         t_end: horizon, s (default the scene's ``[output] t_end``).
@@ -127,13 +133,33 @@ def run_validation(
     Returns:
         a frozen :class:`ValidationResult`; ``passed`` is False when any check fails or a plant
         could not run.
+
+    Raises:
+        ValueError: bad input (scene, integrator, dt, t_end, out_dir), before any plant runs.
+        OutputBusy: another run is writing into ``out_dir``.
+        OutputError: the files could not be written; ``out_dir`` keeps its previous contents.
     """
     sc = _scene(scene)
     if t_end is not None and not (t_end > 0):
         raise ValueError(f"t_end: must be a positive time in s (got {t_end!r})")
     horizon = float(t_end) if t_end is not None else sc.output.t_end
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    with output_run(out_dir, "validate") as run:
+        res = _validate_into(run, sc, integrator, dt, horizon, progress)
+    files = {name: run.final(name) for name in res.files}
+    files["manifest.json"] = run.final("manifest.json")
+    return dataclasses.replace(res, out_dir=run.target, files=files)
+
+
+def _validate_into(
+    run: OutputRun,
+    sc: Scene,
+    integrator: Any,
+    dt: float | None,
+    horizon: float,
+    progress: Progress | None,
+) -> ValidationResult:
+    """:func:`run_validation`'s work, writing into the staging directory ``run.path``."""
+    out = run.path
     walls: dict[str, float] = {}
     failures: list[str] = []
     t_all = time.perf_counter()
@@ -159,18 +185,25 @@ def run_validation(
         )
     except Exception as exc:
         failures.append(f"analytic plant: {_one_line(exc)}")
+    interrupted = ana is not None and ana.status is RunStatus.INTERRUPTED
     mj: Trajectory | None = None
-    try:
-        mj_sim = _mj_simulate()
-        mj_progress = _stage_progress(progress, "mujoco")
-        mj = timed(
-            "mujoco",
-            lambda: mj_sim(sc, integrator=integrator, dt=dt, t_end=horizon, progress=mj_progress),
-        )
-    except ValueError:
-        raise  # bad integrator / dt: the caller's input, not a failed run
-    except Exception as exc:
-        failures.append(f"MuJoCo plant: {_one_line(exc)}")
+    if not interrupted:  # Ctrl-C stops the run, it does not skip to the next plant
+        try:
+            mj_sim = _mj_simulate()
+            mj_progress = _stage_progress(progress, "mujoco")
+            mj = timed(
+                "mujoco",
+                lambda: mj_sim(
+                    sc, integrator=integrator, dt=dt, t_end=horizon, progress=mj_progress
+                ),
+            )
+        except ValueError:
+            raise  # bad integrator / dt: the caller's input, not a failed run
+        except Exception as exc:
+            failures.append(f"MuJoCo plant: {_one_line(exc)}")
+        interrupted = mj is not None and mj.status is RunStatus.INTERRUPTED
+    else:
+        failures.append("MuJoCo plant: not run (interrupted)")
     plants = [p for p in (ana, mj) if p is not None]
     for p in plants:
         if p.status is not RunStatus.OK:
@@ -189,17 +222,22 @@ def run_validation(
     files: dict[str, Path] = {}
     try:
         rinfo = (
-            timed("recording", lambda: write_recording(out / "run.rrd", sc, plants, cmp))
+            timed(
+                "recording",
+                lambda: write_recording(out / "run.rrd", sc, plants, cmp, recording_id=run.run_id),
+            )
             if plants
             else None
         )
         if rinfo is not None:
             files["run.rrd"] = rinfo.path
     except Exception as exc:
-        failure = "; ".join([*failures, f"recording: {_one_line(exc)}"])
+        why = exc.reason if isinstance(exc, OutputError) else _one_line(exc)
+        failure = "; ".join([*failures, f"recording: {why}"])
         passed = False
     walls["total"] = time.perf_counter() - t_all
     meta = {
+        "run_id": run.run_id,
         "scene": {
             "name": sc.name,
             "source": sc.source,
@@ -230,6 +268,10 @@ def run_validation(
     walls["report"] = time.perf_counter() - t0
     files.update({"report.md": rep.markdown, "report.json": rep.json})
     files.update({f.name: f for f in rep.figures})
+    if failure:
+        run.mark_failed(failure)
+    if interrupted:
+        raise KeyboardInterrupt  # the partial set is committed, marked interrupted
     return ValidationResult(
         scene=sc.name,
         out_dir=out,
@@ -361,14 +403,22 @@ def write_demo(
     scene's integrator and timestep), drawn as a translucent ghost over the analytic body with its
     curves in the same plots.
     """
+    with output_run(out_dir, "demo") as run:
+        res = _demo_into(run, t_end, rtol, mujoco)
+    return dataclasses.replace(
+        res, out_dir=run.target, rrd=run.final(res.rrd.name), markdown=run.final(res.markdown.name)
+    )
+
+
+def _demo_into(run: OutputRun, t_end: float, rtol: float, mujoco: bool) -> DemoResult:
+    """:func:`write_demo`'s work, writing into the staging directory ``run.path``."""
     import numpy as np
     import rerun as rr
     import rerun.blueprint as rrb
 
     from analytic.simulate import simulate
 
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    out = run.path
     mj_simulate = None
     if mujoco:
         try:
@@ -383,14 +433,14 @@ def write_demo(
         if step.prefix == "step4_no_cubic_springs":
             sc = sc.with_effects(set(sc.effects) - {Effect.SPRINGS_CUBIC})
         t0 = time.perf_counter()
-        tr = simulate(sc, t_end=t_end, rtol=rtol)
+        tr = simulate(sc, t_end=t_end, rtol=rtol).raise_if_interrupted()
         walls[step.prefix] = time.perf_counter() - t0
         if tr.status is not RunStatus.OK:
             raise RuntimeError(f"demo step {step.title!r} failed: {tr.message}")
         runs.append((step, sc, tr))
         if mj_simulate is not None:
             t0 = time.perf_counter()
-            tm = mj_simulate(sc, t_end=t_end)
+            tm = mj_simulate(sc, t_end=t_end).raise_if_interrupted()
             walls[f"{step.prefix}_mujoco"] = time.perf_counter() - t0
             if tm.status is not RunStatus.OK:
                 raise RuntimeError(f"demo step {step.title!r} failed on MuJoCo: {tm.message}")
@@ -408,7 +458,7 @@ def write_demo(
     ]
     tabs[3] = _with_masses_plot(tabs[3], runs[3])
     bp = rrb.Blueprint(rrb.Tabs(*tabs), rrb.TimePanel(state="expanded"))
-    with atomic_stream(path, "tumble_demo", blueprint=bp) as rec:
+    with atomic_stream(path, "tumble_demo", blueprint=bp, recording_id=run.run_id) as rec:
         for i, (step, sc, tr) in enumerate(runs):
             plants = [tr, ghosts[i]] if two else [tr]
             log_run(rec, sc, plants, cmps[i], narrative=step.narrative, prefix=step.prefix)
