@@ -102,7 +102,7 @@ def test_balances_close(n, weighting, comps, masses):
     # Tracked ω components follow e(t) = e(0) exp(-γ t) (first-order constraint, Eq. 84).
     e = tr.tracking.e_omega
     np.testing.assert_allclose(e, e[0] * np.exp(-0.8 * tr.t)[:, None], atol=1e-7)
-    if weighting == "M^-1":
+    if weighting == "M^-1":  # exact zeros: Q^C = A_cᵀμ has no R or free-rod columns (structural)
         assert np.max(np.abs(tr.force_at_C)) == 0.0
     if masses:
         free = [i for i in range(n) if i + 1 not in masses]

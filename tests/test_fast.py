@@ -165,7 +165,8 @@ def compare(scene, rng, n_states=3, stats=None):
             worst[nm] = max(worst[nm], errs[nm])
         if stats is not None:
             stats["direct"] += 1
-        # the drop-in API gives the same numbers
+        # the drop-in API gives the same numbers (bit-identity is legitimate: both wrap the same
+        # kernel call, fk.evaluate, on the same inputs in this process)
         qdd2, c2 = fm.acceleration_output(t, q, qd)
         np.testing.assert_array_equal(qdd2, got[0])
         assert c2.rank == model.k
@@ -311,6 +312,7 @@ def test_qddot_matches_acceleration():
     sc = make_scene(rng, 5, FORCE_EFFECTS, omega=True, masses=True, weighting="M^-1")
     fm = fast.FastModel(sc)
     q, qd = random_state(rng, 5)
+    # bit-identical: qddot_into and evaluate run the same compiled body (_core) on the same inputs
     np.testing.assert_array_equal(fm.qddot(0.4, q, qd), fm.acceleration(0.4, q, qd)[0])
 
 
@@ -341,6 +343,10 @@ def test_compiled_rhs_is_the_python_rhs_to_the_last_bit():
                 q, qd = random_state(rng, n)
                 y = np.concatenate([q, qd, rng.normal(size=7)])
                 t = float(rng.uniform(0, 10))
+                # Bit-identity is legitimate (same process, same operations): both call the same
+                # compiled kernel and aux_rates; f's only numpy arithmetic is element-wise (τ + τ_g:
+                # each element rounded once, libm's cos in both), and numba compiles without
+                # fastmath, so LLVM may neither reassociate nor fuse into FMAs.
                 np.testing.assert_array_equal(g(t, y), f(t, y))
 
 
@@ -360,5 +366,5 @@ def test_compiled_rhs_falls_back_and_flags_non_finite(monkeypatch):
         g(0.5, bad)
     monkeypatch.setattr(fr, "rhs_into", lambda *a: fast.fk.STATUS_NOT_PD)
     _, _, g2, _ = _rhs_pair(sc)
-    np.testing.assert_array_equal(g2(0.5, y), f(0.5, y))
+    np.testing.assert_array_equal(g2(0.5, y), f(0.5, y))  # g2 hands the call to f itself
     assert g2.counter["nfev"] == 1

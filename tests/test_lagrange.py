@@ -136,6 +136,7 @@ def test_switching_an_effect_off_removes_exactly_its_term(ref, effect):
         assert rel_err(dM, M_term) < RTOL
     else:
         Q_term = ref.force(q, qd, par, (effect,))
+        # exact: M's code does not read the force effects (same operations on both models)
         assert np.all(dM == 0), "a force effect must not change M"
         if n == 0 and effect.startswith("springs"):
             assert np.all(dQ == 0) and effect not in model_on.force_terms

@@ -149,7 +149,7 @@ def test_state_map_functions_exported():
     scene = paper_scene("paper_example2")
     q, qd = scene.initial.q0(), scene.initial.qdot0()
     qpos, qvel = paper_to_mujoco_state(q, qd, np.zeros(3), np.array([1.0, 0, 0, 0]))
-    np.testing.assert_array_equal(qpos[:3], q[:3])
+    np.testing.assert_array_equal(qpos[:3], q[:3])  # exact: a zero offset, R - Rb @ 0 = R
     np.testing.assert_allclose(qvel[3:6], scene.initial.omega, rtol=th.ULP_REL)
     q2, _ = mujoco_to_paper_state(qpos, qvel, np.zeros(3), np.array([1.0, 0, 0, 0]))
     np.testing.assert_allclose(q2, q, rtol=0, atol=th.ULP_REL)
@@ -450,7 +450,7 @@ def test_controlled_example2_follows_closed_form_error_dynamics(controller):
     untracked = [i for i in range(scene.n) if i not in idx]
     rod = tr.rod_forces
     assert np.max(np.abs(rod[:, untracked])) <= th.UNCONTROLLED_ROD_FORCE_REL * np.abs(rod).max()
-    assert np.max(np.abs(tr.force_at_C)) == 0.0
+    assert np.max(np.abs(tr.force_at_C)) == 0.0  # structural: written as 0 by every source
 
 
 def test_controller_sources_give_the_same_trajectory():

@@ -157,10 +157,33 @@ def test_only_the_simulation_timeline_and_a_stored_blueprint(ex1):
     assert any(p.startswith("/view/") for p in bp_ents)
 
 
-def test_writing_is_a_small_fraction_of_the_simulation(ex1):
-    _, tr, _, info = ex1
-    # 41 samples of two plants; the analytic run alone took tr.info["wall_time_s"]
-    assert info.wall_time_s < max(1.0, tr.info["wall_time_s"])
+def test_writing_is_columnar_whatever_the_number_of_samples(ex1, tmp_path, monkeypatch):
+    """Writing stays a small fraction of the simulation because every time series goes out in
+    columns (send_columns): the number of logging calls does not grow with the samples.
+
+    This replaces a wall-clock assert (writing < max(1 s, the run's wall time)), whose outcome
+    depended on the machine's speed and load; speed goals are not asserted by timed tests."""
+    scene, tr, cmp, _ = ex1
+    calls = dict.fromkeys(("log", "send_columns"), 0)
+    for name in calls:
+        real = getattr(rr.RecordingStream, name)
+
+        def spy(self, *a, _real=real, _name=name, **k):
+            calls[_name] += 1
+            return _real(self, *a, **k)
+
+        monkeypatch.setattr(rr.RecordingStream, name, spy)
+    short = simulate(scene, t_end=0.1, rtol=1e-10)
+    counts = []
+    for run, c, t_end in ((short, None, 0.1), (tr, cmp, T_END)):
+        other = dataclasses.replace(run, engine=Engine.MUJOCO)
+        c = c or compare(run, other, scene, t_end=t_end)
+        for k in calls:
+            calls[k] = 0
+        write_recording(tmp_path / f"run_{t_end}.rrd", scene, [run, other], c)
+        counts.append(dict(calls))
+    assert len(short.t) < len(tr.t)
+    assert counts[0] == counts[1] and counts[0]["send_columns"] > 0, counts
 
 
 def test_hollow_cylinder_shape_for_example_2(tmp_path):

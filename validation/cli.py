@@ -338,7 +338,14 @@ class _Terminated(KeyboardInterrupt):
     """SIGTERM, handled like Ctrl-C: the run stops, its partial results are kept."""
 
 
+_received_sigterm = False
+"""Set by the SIGTERM handler: the plants turn the interrupt into a partial run and whoever
+re-raises it raises a plain KeyboardInterrupt, so the exit status is decided from this flag."""
+
+
 def _on_sigterm(signum, frame):
+    global _received_sigterm
+    _received_sigterm = True
     raise _Terminated
 
 
@@ -350,6 +357,8 @@ def _one_line_warning(message, category, filename, lineno, file=None, line=None)
 
 def main(argv: list[str] | None = None) -> int:
     """Run one ``tumble`` command; returns the exit status (see the module docstring)."""
+    global _received_sigterm
+    _received_sigterm = False
     previous = signal.signal(signal.SIGTERM, _on_sigterm)
     try:
         with warnings.catch_warnings():
@@ -371,7 +380,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"tumble: error: {exc.strerror or exc}{where}", file=sys.stderr)
         return EXIT_USAGE
     except KeyboardInterrupt as exc:
-        sigterm = isinstance(exc, _Terminated)
+        sigterm = isinstance(exc, _Terminated) or _received_sigterm
         print(
             f"tumble: {'terminated' if sigterm else 'interrupted'}; "
             "partial results (if any) are kept, marked interrupted",
