@@ -378,3 +378,20 @@ def test_validate_controlled_then_uncontrolled_leaves_only_the_second_run(tmp_pa
     assert report["run"]["run_id"] == man["run_id"]
     assert set(second.files) == {p.name for p in out.iterdir()}
     assert _leftovers(tmp_path) == []
+
+
+def test_interrupt_while_figures_are_drawn_is_not_lost(tmp_path, monkeypatch):
+    """Ctrl-C in the last stage still stops the run: no PASS, the set marked interrupted."""
+    from validation import report
+    from validation.validate import run_validation
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(report, "figure_invariants", interrupted)
+    out = tmp_path / "v"
+    with pytest.raises(KeyboardInterrupt):
+        run_validation("paper_example1_controlled", out, t_end=0.05)
+    man = json.loads((out / MANIFEST).read_text())
+    assert man["state"] == "interrupted" and "report.json" not in man["files"]
+    assert set(man["files"]) | {MANIFEST} == {p.name for p in out.iterdir()}

@@ -239,7 +239,7 @@ def build_parser() -> argparse.ArgumentParser:
         "tracking errors at the end and the invariant drifts.",
     )
     _add_scene_arg(p, DEFAULT_SIMULATE_SCENE, builtin_names())
-    p.add_argument("--out", help="output directory (default: out/<scene name>)")
+    p.add_argument("--out", help="output directory (default: out/simulate_<scene slug>)")
     p.add_argument("--method", choices=[m.value for m in SolverMethod], help="scipy solver")
     p.add_argument("--rtol", type=_positive_float, help="relative tolerance")
     p.add_argument("--atol", type=_positive_float, help="absolute tolerance")
@@ -263,7 +263,7 @@ def build_parser() -> argparse.ArgumentParser:
     from validation.scenes import DEFAULT_VALIDATE_SCENE
 
     _add_scene_arg(p, DEFAULT_VALIDATE_SCENE, builtin_names())
-    p.add_argument("--out", help="output directory (default: out/validate_<scene name>)")
+    p.add_argument("--out", help="output directory (default: out/validate_<scene slug>)")
     p.add_argument(
         "--integrator",
         choices=[i.value for i in MjIntegrator],
@@ -279,7 +279,7 @@ def build_parser() -> argparse.ArgumentParser:
         description="Write the MuJoCo model generated from the scene (MjSpec) as MJCF text.",
     )
     _add_scene_arg(p, DEFAULT_SIMULATE_SCENE, builtin_names())
-    p.add_argument("--out", help="output file (default: <scene name>.xml)")
+    p.add_argument("--out", help="output file (default: out/<scene slug>.xml)")
     p.set_defaults(func=cmd_export_mjcf)
 
     p = sub.add_parser(
@@ -315,7 +315,7 @@ def build_parser() -> argparse.ArgumentParser:
         "quaternion stabilisation (delta1, delta2).",
     )
     _add_scene_arg(p, DEFAULT_SWEEP_SCENE, builtin_names())
-    p.add_argument("--out", help="output directory (default: out/sweep_<scene name>)")
+    p.add_argument("--out", help="output directory (default: out/sweep_<scene slug>)")
     p.add_argument("--quick", action="store_true", help="a small grid (minutes, not tens)")
     p.set_defaults(func=cmd_sweep)
 
