@@ -17,6 +17,8 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
+import stat
 import tomllib
 import warnings
 from collections.abc import Mapping
@@ -45,6 +47,48 @@ QUAT_REFUSE_TOL = 1e-3
 # it is replaced by the nearest rotation, and refused when further than this from orthogonal.
 ROTATION_REFUSE_TOL = 1e-2
 AXIS_REFUSE_TOL = 1e-3
+
+# --- Sizes that can be held -------------------------------------------------------------------
+# A scene file is a page of numbers: the largest built-in one (hard/many_masses, 200 masses) is
+# about 10 KB. 1 MiB leaves a hundredfold margin and is still read at once; anything larger (a
+# device such as /dev/zero, a log given by mistake) is refused before it is read.
+MAX_SCENE_BYTES = 1 << 20
+# The reference numpy model and MuJoCo's dense mass matrix hold (n+7)² doubles: 0.8 GB each at
+# n = 10⁴ (ten times the largest benchmarked n = 1000); a longer list is a mistake, not a scene.
+MAX_MASSES = 10_000
+# Every output sample holds the state, accelerations, control and invariants of each plant (about
+# 1 KB for the paper scenes, n + 7 ≤ 12): 10⁶ samples are ~1 GB per plant before the comparison,
+# figures and recording, and a hundred times the largest built-in grid (1000 s at 10 Hz).
+MAX_OUTPUT_SAMPLES = 1_000_000
+# MuJoCo steps of one run: 10⁹ steps at the measured 10-17 µs per RK4 step with the controller
+# are three to five hours; the longest built-in run is 2·10⁶ steps (hard/long_horizon).
+MAX_MUJOCO_STEPS = 1_000_000_000
+# t_end·rate within this relative distance of an integer puts t_end on the output grid: decimal
+# horizons and rates are not exact in binary (0.3 s x 10 Hz = 3.0000000000000004), and a sample
+# interval must fit a whole number of MuJoCo steps to the same relative tolerance
+# (mj_bridge.simulate.STEP_FIT_RTOL).
+GRID_RTOL = 1e-9
+
+# --- What the MuJoCo twin can represent (checked here so that a scene is refused at load, naming
+# its field, rather than by MuJoCo's compiler after the analytic plant has run) -----------------
+# MuJoCo's mjMINVAL: its compiler refuses a moving body whose mass or any principal moment of
+# inertia is below this (and one whose moments violate A + B >= C, checked exactly).
+MJ_MINVAL = 1e-15
+# model_xml gives each mass body without an inertia of its own an isotropic inertia
+# eps = max(POINT_INERTIA_REL · min(J_BR), POINT_INERTIA_MIN) (MuJoCo refuses it without) and takes
+# exactly that much off BR's principal moments, so the system's inertia is unchanged
+# (model_xml.builder imports these two).
+POINT_INERTIA_REL = 1e-9
+POINT_INERTIA_MIN = 1e-12
+# A mass's principal moments may violate A + B >= C by this much relative round-off (a ring's
+# A + B = C after an eigen-decomposition); model_xml sets C = A + B then. Beyond it, MuJoCo refuses.
+TRIANGLE_RTOL = 1e-12
+# Upper bounds on masses (kg) and moments of inertia (kg·m²): the model forms squares and fourth
+# powers of them (the M⁻² weighting and its Schur complement, energies, momenta times lever arms);
+# at 1e30 kg (the mass of the Sun) and 1e40 kg·m² their fourth powers (1e120, 1e160) stay far
+# inside the double range (1e308), where 1e300 overflows at once.
+MAX_MASS = 1e30
+MAX_INERTIA = 1e40
 
 
 def _frozen(a: np.ndarray) -> np.ndarray:
@@ -140,6 +184,8 @@ class Springs:
 
     k_linear: np.ndarray
     k_cubic: np.ndarray
+    given: frozenset[str] = frozenset({"k_linear", "k_cubic"})
+    """Which of ``k_linear``, ``k_cubic`` the scene gave (an effect needs its constants given)."""
 
 
 @dataclass(frozen=True)
@@ -259,17 +305,62 @@ class SolverSettings:
 
 @dataclass(frozen=True)
 class OutputSettings:
-    """Horizon and sampling shared by every engine."""
+    """Horizon and sampling shared by every engine.
+
+    The output grid is ``0, 1/rate, 2/rate, ...`` up to ``t_end``, with ``t_end`` appended when it
+    is not on that grid (:meth:`times`): a trajectory always starts with its t = 0 sample and ends
+    at ``t_end`` exactly. At most :data:`MAX_OUTPUT_SAMPLES` samples.
+    """
 
     t_end: float = 20.0
     rate: float = 100.0
 
+    def __post_init__(self) -> None:
+        _check_output(self.t_end, self.rate, "output.t_end", "output.rate", blame=None)
+
+    def with_t_end(self, t_end: float | None, name: str = "t_end") -> OutputSettings:
+        """These settings with another horizon (``self`` for None); a bad one is refused as ``name``."""
+        if t_end is None:
+            return self
+        _check_output(t_end, self.rate, name, "output.rate", blame=name)
+        return OutputSettings(t_end=float(t_end), rate=self.rate)
+
     def times(self) -> np.ndarray:
-        """Output times ``0, 1/rate, ..., t_end`` (t_end included), s."""
-        n = round(self.t_end * self.rate)
-        t = np.arange(n + 1) / self.rate
-        t[-1] = self.t_end
+        """Output times ``0, 1/rate, ..., t_end`` (t_end included, and appended when it is not a
+        multiple of ``1/rate``), s."""
+        return output_times(self.t_end, self.rate)
+
+
+def output_times(t_end: float, rate: float) -> np.ndarray:
+    """The output grid ``0, 1/rate, 2/rate, ...``, ending at ``t_end`` exactly, s.
+
+    ``t_end`` replaces the last grid point when ``t_end·rate`` is an integer to :data:`GRID_RTOL`,
+    else it is appended after the last grid point below it.
+    """
+    x = t_end * rate
+    k = round(x)
+    if k >= 1 and abs(x - k) <= GRID_RTOL * x:
+        t = np.arange(k + 1) / rate
+        t[-1] = t_end
         return t
+    k = math.floor(x)
+    return np.concatenate([np.arange(k + 1) / rate, [t_end]])
+
+
+def _check_output(t_end: Any, rate: Any, t_name: str, rate_name: str, blame: str | None) -> None:
+    """Horizon and rate positive and finite, at most MAX_OUTPUT_SAMPLES samples. ``blame`` names the
+    field refused for too many samples (None: whichever is further from its default)."""
+    t_end = _as_number(t_end, t_name, positive=True)
+    rate = _as_number(rate, rate_name, positive=True)
+    samples = t_end * rate + 2  # inf when the product overflows
+    if samples > MAX_OUTPUT_SAMPLES:
+        if blame is None:
+            blame = t_name if t_end / 20.0 >= rate / 100.0 else rate_name
+        value = t_end if blame == t_name else rate
+        raise ValueError(
+            f"{blame}: too large: {t_end:g} s at {rate:g} Hz makes {samples:.3g} output samples, "
+            f"at most {MAX_OUTPUT_SAMPLES:,} (got {value!r})"
+        )
 
 
 @dataclass(frozen=True)
@@ -336,7 +427,7 @@ class _Table:
 
     def __init__(self, data: Any, path: str):
         if not isinstance(data, Mapping):
-            raise ValueError(f"{path or 'scene'}: must be a table (got {data!r})")
+            raise ValueError(f"{path or 'scene'}: must be a table (got {_show(data)})")
         self.data = data
         self.path = path
         self.used: set[str] = set()
@@ -374,13 +465,13 @@ class _Table:
     def string(self, key: str, default: Any = ...) -> str:
         v = self.raw(key, default)
         if not isinstance(v, str):
-            raise ValueError(f"{self.name(key)}: must be a string (got {v!r})")
+            raise ValueError(f"{self.name(key)}: must be a string (got {_show(v)})")
         return v
 
     def boolean(self, key: str, default: Any = ...) -> bool:
         v = self.raw(key, default)
         if not isinstance(v, bool):
-            raise ValueError(f"{self.name(key)}: must be true or false (got {v!r})")
+            raise ValueError(f"{self.name(key)}: must be true or false (got {_show(v)})")
         return v
 
     def enum(self, key: str, kind: type, default: Any = ...):
@@ -392,25 +483,48 @@ class _Table:
         except ValueError:
             allowed = ", ".join(repr(e.value) for e in kind)
             raise ValueError(
-                f"{self.name(key)}: unknown value {v!r} (allowed: {allowed})"
+                f"{self.name(key)}: unknown value {_show(v)} (allowed: {allowed})"
             ) from None
 
     def finish(self) -> None:
         extra = sorted(set(self.data) - self.used)
         if extra:
-            raise ValueError(f"{self.name(extra[0])}: unknown key (got {self.data[extra[0]]!r})")
+            raise ValueError(
+                f"{self.name(extra[0])}: unknown key (got {_show(self.data[extra[0]])})"
+            )
+
+
+def _show(v: Any) -> str:
+    """``repr(v)``, but an integer too long to read is shown by its number of digits."""
+    if isinstance(v, int) and not isinstance(v, bool) and abs(v) >= 10**20:
+        # (from its bit length: str() of an integer of more than 4300 digits raises)
+        return f"an integer of about {int(abs(v).bit_length() * math.log10(2)) + 1} digits"
+    try:
+        r = repr(v)
+    except ValueError:  # it holds an integer of more than 4300 digits
+        return "a value holding an integer too long to show"
+    if len(r) > _SHOW_MAX:  # a long list: its head and its length, so the message stays a line
+        size = f"{len(v)} entries" if isinstance(v, list | tuple) else f"{len(r)} characters"
+        return f"{r[: _SHOW_MAX // 2]}... ({size})"
+    return r
+
+
+_SHOW_MAX = 200  # characters of a bad value quoted in a message
 
 
 def _as_number(v: Any, name: str, *, positive=False, nonneg=False) -> float:
     if isinstance(v, bool) or not isinstance(v, int | float):
-        raise ValueError(f"{name}: must be a number (got {v!r})")
-    x = float(v)
+        raise ValueError(f"{name}: must be a number (got {_show(v)})")
+    try:
+        x = float(v)
+    except OverflowError:  # an integer literal beyond the double range
+        raise ValueError(f"{name}: must be finite (got {_show(v)})") from None
     if not math.isfinite(x):
-        raise ValueError(f"{name}: must be finite (got {v!r})")
+        raise ValueError(f"{name}: must be finite (got {_show(v)})")
     if positive and not x > 0:
-        raise ValueError(f"{name}: must be positive (got {v!r})")
+        raise ValueError(f"{name}: must be positive (got {_show(v)})")
     if nonneg and not x >= 0:
-        raise ValueError(f"{name}: must be non-negative (got {v!r})")
+        raise ValueError(f"{name}: must be non-negative (got {_show(v)})")
     return x
 
 
@@ -418,16 +532,16 @@ def _as_vector(v: Any, name: str, length: int | None = None, *, positive=False, 
     if isinstance(v, np.ndarray):
         v = v.tolist()
     if not isinstance(v, list | tuple):
-        raise ValueError(f"{name}: must be a list of numbers (got {v!r})")
+        raise ValueError(f"{name}: must be a list of numbers (got {_show(v)})")
     if length is not None and len(v) != length:
-        raise ValueError(f"{name}: must have {length} entries (got {len(v)}: {v!r})")
+        raise ValueError(f"{name}: must have {length} entries (got {len(v)}: {_show(v)})")
     out = [_as_number(x, f"{name}[{i}]", positive=positive, nonneg=nonneg) for i, x in enumerate(v)]
     return _frozen(np.array(out, dtype=float).reshape(len(out)))
 
 
 def _as_matrix(v: Any, name: str, rows: int, cols: int) -> np.ndarray:
     if not isinstance(v, list | tuple) or len(v) != rows:
-        raise ValueError(f"{name}: must be a {rows}x{cols} list of rows (got {v!r})")
+        raise ValueError(f"{name}: must be a {rows}x{cols} list of rows (got {_show(v)})")
     return _frozen(np.array([_as_vector(r, f"{name}[{i}]", cols) for i, r in enumerate(v)]))
 
 
@@ -460,14 +574,14 @@ def _nearest_rotation(m: np.ndarray, name: str) -> np.ndarray:
 def _indices(v: Any, name: str, upper: int) -> tuple[int, ...]:
     """1-based indices in the file, 0-based in the record; distinct and in range."""
     if not isinstance(v, list | tuple) or not v:
-        raise ValueError(f"{name}: must be a non-empty list of 1-based indices (got {v!r})")
+        raise ValueError(f"{name}: must be a non-empty list of 1-based indices (got {_show(v)})")
     out = []
     for i, x in enumerate(v):
         if isinstance(x, bool) or not isinstance(x, int) or not 1 <= x <= upper:
-            raise ValueError(f"{name}[{i}]: must be an integer in 1..{upper} (got {x!r})")
+            raise ValueError(f"{name}[{i}]: must be an integer in 1..{upper} (got {_show(x)})")
         out.append(x - 1)
     if len(set(out)) != len(out):
-        raise ValueError(f"{name}: indices must be distinct (got {v!r})")
+        raise ValueError(f"{name}: indices must be distinct (got {_show(v)})")
     return tuple(out)
 
 
@@ -477,19 +591,49 @@ def _indices(v: Any, name: str, upper: int) -> tuple[int, ...]:
 
 
 def load_scene(path: str | Path) -> Scene:
-    """Read and validate a scene file (TOML). Raises ``ValueError`` naming the field on bad input."""
+    """Read and validate a scene file (TOML). Raises ``ValueError`` naming the field on bad input.
+
+    Only a regular file of at most :data:`MAX_SCENE_BYTES` is read (a FIFO, a device such as
+    ``/dev/zero`` or a directory is refused without reading it); messages name ``path`` as given.
+    """
     p = Path(path)
+    given = str(path)
     try:
-        text = p.read_text(encoding="utf-8")
+        st = os.stat(p)
     except FileNotFoundError:
-        raise ValueError(f"scene: file not found (got {str(path)!r})") from None
-    except (IsADirectoryError, PermissionError, UnicodeDecodeError) as exc:
-        raise ValueError(f"scene: cannot read {str(path)!r} ({exc.__class__.__name__})") from None
+        raise ValueError(f"scene: file not found (got {given!r})") from None
+    except OSError as exc:
+        raise ValueError(f"scene: cannot read {given!r} ({exc.strerror or exc})") from None
+    if stat.S_ISDIR(st.st_mode):
+        raise ValueError(f"scene: is a directory, not a scene file (got {given!r})")
+    if not stat.S_ISREG(st.st_mode):
+        raise ValueError(f"scene: not a regular file (got {given!r})")
+    too_big = f"scene: file larger than {MAX_SCENE_BYTES:,} bytes (got {given!r})"
+    if st.st_size > MAX_SCENE_BYTES:
+        raise ValueError(too_big)
+    try:
+        # O_NONBLOCK: should the path have become a FIFO since stat, opening it does not wait.
+        fd = os.open(p, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+        with os.fdopen(fd, "rb") as f:
+            if not stat.S_ISREG(os.fstat(f.fileno()).st_mode):
+                raise ValueError(f"scene: not a regular file (got {given!r})")
+            raw = f.read(MAX_SCENE_BYTES + 1)  # at most this much, should the file be growing
+    except OSError as exc:
+        raise ValueError(f"scene: cannot read {given!r} ({exc.strerror or exc})") from None
+    if len(raw) > MAX_SCENE_BYTES:
+        raise ValueError(too_big)
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError:
+        raise ValueError(f"scene: not UTF-8 text (got {given!r})") from None
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise ValueError(f"scene: not valid TOML in {str(path)!r} ({exc})") from None
-    return scene_from_dict(data, source=str(p))
+        raise ValueError(f"scene: not valid TOML in {given!r} ({exc})") from None
+    except ValueError as exc:  # e.g. an integer literal of more than 4300 digits
+        msg = str(exc).splitlines()[0].split(";")[0] if str(exc) else type(exc).__name__
+        raise ValueError(f"scene: cannot parse {given!r} ({msg})") from None
+    return scene_from_dict(data, source=given)
 
 
 def scene_from_dict(data: Mapping[str, Any], source: str = "") -> Scene:
@@ -501,7 +645,9 @@ def scene_from_dict(data: Mapping[str, Any], source: str = "") -> Scene:
     description = meta.string("description", "")
     effects_raw = meta.raw("effects")
     if not isinstance(effects_raw, list):
-        raise ValueError(f"scene.effects: must be a list of effect names (got {effects_raw!r})")
+        raise ValueError(
+            f"scene.effects: must be a list of effect names (got {_show(effects_raw)})"
+        )
     effects = set()
     for i, e in enumerate(effects_raw):
         try:
@@ -509,7 +655,7 @@ def scene_from_dict(data: Mapping[str, Any], source: str = "") -> Scene:
         except ValueError:
             allowed = ", ".join(repr(x.value) for x in Effect)
             raise ValueError(
-                f"scene.effects[{i}]: unknown effect {e!r} (allowed: {allowed})"
+                f"scene.effects[{i}]: unknown effect {_show(e)} (allowed: {allowed})"
             ) from None
     meta.finish()
 
@@ -542,11 +688,12 @@ def scene_from_dict(data: Mapping[str, Any], source: str = "") -> Scene:
     output = _parse_output(top.table("output", required=False))
     mj = _parse_mujoco(top.table("mujoco", required=False))
 
-    # Tables that later layers own (e.g. [thresholds]) are kept verbatim but must be tables.
+    # [thresholds] belongs to later layers (the comparison's names are checked where they are
+    # resolved, validation.thresholds); here its shape: numbers, or {value, reason} tables.
     extra = {}
-    for key in ("thresholds",):
-        if top.has(key):
-            extra[key] = dict(top.table(key).data)
+    th = top.table("thresholds", required=False)
+    if th is not None:
+        extra["thresholds"] = _parse_thresholds(th)
     top.finish()
 
     scene = Scene(
@@ -569,12 +716,79 @@ def scene_from_dict(data: Mapping[str, Any], source: str = "") -> Scene:
         extra=extra,
     )
     _check_effects_consistent(scene)
+    _check_horizon_fits_mujoco(scene)
+    _warn_unused_tables(data, scene)
     return scene
 
 
+# Tables and keys that only an effect reads: given while the effect is off, they are ignored.
+_EFFECT_DATA = (
+    ("gravity", Effect.GRAVITY),
+    ("external_torque", Effect.EXTERNAL_TORQUE),
+    ("control.omega", Effect.CONTROL_OMEGA),
+    ("control.masses", Effect.CONTROL_MASSES),
+    ("springs.k_linear", Effect.SPRINGS_LINEAR),
+    ("springs.k_cubic", Effect.SPRINGS_CUBIC),
+    ("masses.ring_radius", Effect.MASS_INERTIA),
+    ("masses.inertia_axial", Effect.MASS_INERTIA),
+    ("masses.inertia_transverse", Effect.MASS_INERTIA),
+    ("masses.inertia_body", Effect.MASS_INERTIA),
+)
+
+
+def _warn_unused_tables(data: Mapping[str, Any], scene: Scene) -> None:
+    """One warning (one line) naming the tables and keys given for effects that are not listed."""
+    unused: dict[str, Effect] = {}
+    for dotted, effect in _EFFECT_DATA:
+        node: Any = data
+        for key in dotted.split("."):
+            node = node.get(key) if isinstance(node, Mapping) else None
+        if node is not None and effect not in scene.effects:
+            unused[dotted] = effect
+    if not unused:
+        return
+    effects = ", ".join(dict.fromkeys(repr(e.value) for e in unused.values()))
+    one = len(set(unused.values())) == 1
+    warnings.warn(
+        f"{', '.join(unused)}: given but {'effect' if one else 'effects'} {effects} "
+        f"{'is' if one else 'are'} not listed in scene.effects, so ignored",
+        UserWarning,
+        stacklevel=3,
+    )
+
+
+def _parse_thresholds(t: _Table) -> dict[str, Any]:
+    """The ``[thresholds]`` table's shape: each entry a finite non-negative number or
+    ``{value = number, reason = "..."}``; the hard-case suite's ``hard_*`` entries a number or,
+    for its stated criterion, a sentence. Which names exist is for the layer that uses them."""
+    out: dict[str, Any] = {}
+    for key in list(t.data):
+        name = t.name(key)
+        v = t.raw(key)
+        if key.startswith("hard_"):
+            out[key] = v if isinstance(v, str) else _as_number(v, name, nonneg=True)
+        elif isinstance(v, Mapping):
+            sub = _Table(v, name)
+            sub.used.update(("value", "reason"))
+            sub.finish()  # an unknown key first: a misspelt "value" is named as such
+            entry = {"value": sub.number("value", nonneg=True)}
+            if sub.has("reason"):
+                entry["reason"] = sub.string("reason")
+            sub.finish()
+            out[key] = entry
+        else:
+            out[key] = _as_number(v, name, nonneg=True)
+    return out
+
+
 def _parse_body(t: _Table) -> Body:
-    mass = t.number("mass", positive=True)
+    mass = _mass_in_range(t.number("mass", positive=True), t.name("mass"))
     inertia = t.vector("inertia", 3, positive=True)
+    for i, x in enumerate(inertia.tolist()):
+        if x > MAX_INERTIA:
+            raise ValueError(
+                f"{t.name('inertia')}[{i}]: must be at most {MAX_INERTIA:g} kg·m² (got {x!r})"
+            )
     j = np.sort(inertia)
     if j[2] > j[0] + j[1] * (1 + 1e-12):
         raise ValueError(
@@ -625,7 +839,14 @@ def _parse_masses(t: _Table | None, axis: np.ndarray) -> Masses:
     if t is None:
         z = _frozen(np.zeros(0))
         return Masses(mass=z, p_e=z, inertia=_frozen(np.zeros((0, 3, 3))))
+    raw_m = t.raw("mass")
+    if isinstance(raw_m, list | tuple) and len(raw_m) > MAX_MASSES:
+        raise ValueError(
+            f"{t.name('mass')}: at most {MAX_MASSES:,} masses (got a list of {len(raw_m):,})"
+        )
     m = t.vector("mass", positive=True)
+    for i, x in enumerate(m):
+        _mass_in_range(float(x), f"{t.name('mass')}[{i}]")
     n = m.shape[0]
     p_e = t.vector("p_e", n)
     inertia = np.zeros((n, 3, 3))
@@ -641,10 +862,22 @@ def _parse_masses(t: _Table | None, axis: np.ndarray) -> Masses:
     if has_ring:
         # A thin ring about the rod: axial m r², transverse m r²/2 -> m r²/2 (I + a aᵀ) (ERRATA, Eq. 62).
         r = t.vector("ring_radius", n, nonneg=True)
+        for i in range(n):
+            if float(m[i]) * float(r[i]) * float(r[i]) > MAX_INERTIA:
+                raise ValueError(
+                    f"{t.name('ring_radius')}[{i}]: makes an axial moment m r² above "
+                    f"{MAX_INERTIA:g} kg·m² (got {float(r[i])!r} m)"
+                )
         inertia = (m * r**2 / 2)[:, None, None] * (np.eye(3) + aa)[None]
     elif has_axi:
         ia = t.vector("inertia_axial", n, nonneg=True)
         it = t.vector("inertia_transverse", n, nonneg=True)
+        for key, vals in (("inertia_axial", ia), ("inertia_transverse", it)):
+            for i, x in enumerate(vals.tolist()):
+                if x > MAX_INERTIA:
+                    raise ValueError(
+                        f"{t.name(key)}[{i}]: must be at most {MAX_INERTIA:g} kg·m² (got {x!r})"
+                    )
         for i in range(n):
             if ia[i] > 2 * it[i] * (1 + 1e-12):
                 raise ValueError(
@@ -655,14 +888,28 @@ def _parse_masses(t: _Table | None, axis: np.ndarray) -> Masses:
     elif has_full:
         raw = t.raw("inertia_body")
         if not isinstance(raw, list) or len(raw) != n:
-            raise ValueError(f"{t.name('inertia_body')}: must hold {n} 3x3 matrices (got {raw!r})")
+            raise ValueError(
+                f"{t.name('inertia_body')}: must hold {n} 3x3 matrices (got {_show(raw)})"
+            )
         for i, mat in enumerate(raw):
             name = f"{t.name('inertia_body')}[{i}]"
             J = _as_matrix(mat, name, 3, 3)
             if not np.allclose(J, J.T, rtol=1e-12, atol=0):
                 raise ValueError(f"{name}: must be symmetric (got {J.tolist()!r})")
-            if np.min(np.linalg.eigvalsh(J)) < 0:
+            if np.max(np.abs(J)) > MAX_INERTIA:
+                raise ValueError(
+                    f"{name}: entries must be at most {MAX_INERTIA:g} kg·m² (got {J.tolist()!r})"
+                )
+            e = np.linalg.eigvalsh(J)
+            if e[0] < 0:
                 raise ValueError(f"{name}: must be positive semidefinite (got {J.tolist()!r})")
+            # Principal moments of a rigid body satisfy A + B >= C (MuJoCo's compiler refuses
+            # them otherwise); round-off up to TRIANGLE_RTOL is what model_xml repairs.
+            if e[2] - e[0] - e[1] > TRIANGLE_RTOL * e[2]:
+                raise ValueError(
+                    f"{name}: principal moments {e.tolist()!r} violate the triangle inequality "
+                    f"A + B >= C (got {J.tolist()!r})"
+                )
             inertia[i] = J
     t.finish()
     return Masses(mass=m, p_e=p_e, inertia=_frozen(inertia))
@@ -671,11 +918,12 @@ def _parse_masses(t: _Table | None, axis: np.ndarray) -> Masses:
 def _parse_springs(t: _Table | None, n: int) -> Springs:
     if t is None:
         z = _frozen(np.zeros(n + 1))
-        return Springs(k_linear=z, k_cubic=z)
+        return Springs(k_linear=z, k_cubic=z, given=frozenset())
+    given = frozenset(k for k in ("k_linear", "k_cubic") if t.has(k))
     kl = t.vector("k_linear", n + 1, _frozen(np.zeros(n + 1)), nonneg=True)
     kn = t.vector("k_cubic", n + 1, _frozen(np.zeros(n + 1)), nonneg=True)
     t.finish()
-    return Springs(k_linear=kl, k_cubic=kn)
+    return Springs(k_linear=kl, k_cubic=kn, given=given)
 
 
 def _parse_initial(t: _Table, n: int) -> InitialState:
@@ -854,4 +1102,73 @@ def _check_effects_consistent(scene: Scene) -> None:
         raise ValueError(
             f"control.masses.indices: refer to masses beyond n = {scene.n} "
             f"(got {[i + 1 for i in scene.control.masses.indices]!r})"
+        )
+    if scene.n:  # (with no masses there is nothing for a spring to act on)
+        for key, effect in (("k_linear", Effect.SPRINGS_LINEAR), ("k_cubic", Effect.SPRINGS_CUBIC)):
+            if effect in e and key not in scene.springs.given:
+                raise ValueError(f"springs.{key}: required by effect {effect.value}")
+    _check_body_for_mujoco(scene)
+
+
+def _mass_in_range(x: float, name: str) -> float:
+    if x < MJ_MINVAL:
+        raise ValueError(
+            f"{name}: must be at least {MJ_MINVAL:g} kg (MuJoCo's mjMINVAL: its compiler refuses "
+            f"a lighter moving body) (got {x!r})"
+        )
+    if x > MAX_MASS:
+        raise ValueError(f"{name}: must be at most {MAX_MASS:g} kg (got {x!r})")
+    return x
+
+
+def twin_point_inertia(scene: Scene) -> tuple[float, int]:
+    """The isotropic inertia ``eps`` (kg·m²) that the MuJoCo twin gives each mass body without an
+    inertia of its own, and how many masses get it (``model_xml.builder.mass_inertias``: the
+    total ``count · eps`` is taken off BR's principal moments)."""
+    eps = max(POINT_INERTIA_REL * float(np.min(scene.body.inertia)), POINT_INERTIA_MIN)
+    if not scene.has(Effect.MASS_INERTIA):
+        return eps, scene.n
+    count = sum(1 for J in scene.masses.inertia if float(np.min(np.linalg.eigvalsh(J))) <= eps)
+    return eps, count
+
+
+def _check_body_for_mujoco(scene: Scene) -> None:
+    """BR's principal moments as the MuJoCo twin compiles them (less the point masses' padding):
+    at least mjMINVAL each and A + B >= C exactly, as MuJoCo's compiler requires."""
+    eps, count = twin_point_inertia(scene)
+    J = np.asarray(scene.body.inertia, float)
+    pad = eps * count
+    Jp = J - pad  # as model_xml.builder computes them
+    for i in range(3):
+        if not Jp[i] >= MJ_MINVAL:
+            given = f"less the {pad:.3g} kg·m² given to {count} point masses, " if count else ""
+            raise ValueError(
+                f"body.inertia[{i}]: too small for the MuJoCo twin: {given}below "
+                f"mjMINVAL = {MJ_MINVAL:g} kg·m², which MuJoCo's compiler refuses "
+                f"(got {float(J[i])!r})"
+            )
+    a, b, c = np.sort(Jp)
+    if a + b < c:
+        raise ValueError(
+            f"body.inertia: principal moments {J.tolist()!r} leave no room for the {pad:.3g} kg·m² "
+            f"the MuJoCo twin gives {count} point masses (A + B - C must be at least that, so "
+            "that MuJoCo's A + B >= C holds)"
+        )
+
+
+def _check_horizon_fits_mujoco(scene: Scene) -> None:
+    """The scene's own horizon against its MuJoCo step: at least one step, at most
+    MAX_MUJOCO_STEPS (the plants check overrides of t_end and dt themselves)."""
+    t_end, dt = scene.output.t_end, scene.mujoco.timestep
+    if t_end < dt * (1 - GRID_RTOL):
+        raise ValueError(
+            f"output.t_end: shorter than one MuJoCo step (mujoco.timestep = {dt!r} s) "
+            f"(got {t_end!r})"
+        )
+    steps = t_end / dt
+    if steps > MAX_MUJOCO_STEPS:
+        field_name = "output.t_end" if t_end / 20.0 >= 2.5e-4 / dt else "mujoco.timestep"
+        raise ValueError(
+            f"{field_name}: {t_end:g} s at mujoco.timestep = {dt:g} s is {steps:.3g} MuJoCo steps, "
+            f"at most {MAX_MUJOCO_STEPS:,} (got {t_end if field_name == 'output.t_end' else dt!r})"
         )

@@ -12,6 +12,7 @@ marked failed, with the reason and the time.
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable
 
@@ -23,7 +24,7 @@ from analytic.effects import Backend, Effect, SolverMethod
 from analytic.invariants import compute_invariants, tracking_errors
 from analytic.kinematics import omega_of
 from analytic.model import TumblingModel
-from analytic.scene import OutputSettings, Scene
+from analytic.scene import Scene
 from analytic.trajectory import Engine, RunStatus, Trajectory
 
 _SOLVERS = {
@@ -43,7 +44,11 @@ class _NonFinite(ArithmeticError):
 
 def evaluator(model: TumblingModel, backend: Backend) -> Callable:
     """``accel(t, q, qdot) -> (q̈, ControlOutput)`` for the chosen backend."""
-    backend = Backend(backend)
+    try:
+        backend = Backend(backend)
+    except ValueError:
+        allowed = ", ".join(repr(b.value) for b in Backend)
+        raise ValueError(f"backend: unknown value {backend!r} (allowed: {allowed})") from None
     if backend is Backend.NUMPY:
         return model.acceleration
     from analytic import fast
@@ -103,6 +108,20 @@ def _rhs(model: TumblingModel, accel: Callable) -> Callable[[float, np.ndarray],
     return g
 
 
+def _solver_method(method: SolverMethod | str) -> SolverMethod:
+    try:
+        return SolverMethod(method)
+    except ValueError:
+        allowed = ", ".join(repr(m.value) for m in SolverMethod)
+        raise ValueError(f"method: unknown value {method!r} (allowed: {allowed})") from None
+
+
+def _positive(x: float, name: str) -> float:
+    if isinstance(x, bool) or not isinstance(x, int | float) or not (math.isfinite(x) and x > 0):
+        raise ValueError(f"{name}: must be a positive finite number (got {x!r})")
+    return float(x)
+
+
 def simulate(
     scene: Scene,
     *,
@@ -121,13 +140,18 @@ def simulate(
 
     ``backend``: ``auto`` (the compiled kernel of :mod:`analytic.fast` when numba is installed,
     else numpy), ``numpy`` (the reference :class:`TumblingModel`) or ``numba``.
+
+    Samples: ``0, 1/rate, 2/rate, ...`` and ``t_end`` exactly (:meth:`analytic.scene.OutputSettings.times`).
+    A bad ``t_end``, ``method``, ``rtol``, ``atol`` or ``backend`` raises ``ValueError`` naming it,
+    before any work.
     """
+    # Bad arguments are refused, naming them, before any work.
+    out = scene.output.with_t_end(t_end, "t_end")
+    method = _solver_method(method or scene.solver.method)
+    rtol = scene.solver.rtol if rtol is None else _positive(rtol, "rtol")
+    atol = scene.solver.atol if atol is None else _positive(atol, "atol")
     model = TumblingModel(scene)
     accel = evaluator(model, backend)
-    method = SolverMethod(method or scene.solver.method)
-    rtol = scene.solver.rtol if rtol is None else rtol
-    atol = scene.solver.atol if atol is None else atol
-    out = scene.output if t_end is None else OutputSettings(t_end=t_end, rate=scene.output.rate)
     t_eval = out.times()
     nq = model.nq
     y0 = np.concatenate([scene.initial.q0(), scene.initial.qdot0(), np.zeros(N_AUX)])

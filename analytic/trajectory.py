@@ -208,6 +208,9 @@ class Trajectory:
                 f.flush()
                 os.fsync(f.fileno())
             os.replace(tmp, path)
+        except OSError as exc:  # named by the path asked for, not by the temporary file
+            tmp.unlink(missing_ok=True)
+            raise OSError(exc.errno, exc.strerror or str(exc), str(path)) from exc
         except BaseException:
             tmp.unlink(missing_ok=True)
             raise

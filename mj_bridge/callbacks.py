@@ -9,7 +9,9 @@ the body of the ``with`` raises. Nesting is refused (two twins cannot share the 
 
 from __future__ import annotations
 
+import re
 import threading
+import warnings
 from collections.abc import Callable
 
 import mujoco
@@ -75,6 +77,59 @@ class installed:
 
     def __exit__(self, *exc) -> None:
         self._remove()
+
+
+# Distinct MuJoCo warnings reported after one block of stepping (one line each, with a count); the
+# rest are summed in one more line. An unstable run warns at every step (340 lines for g = 1e300),
+# and what they say is in the first few; the run's status says the rest.
+MAX_WARNING_LINES = 3
+_TIME_SUFFIX = re.compile(r"\s*Time = [-+0-9.eE]+\.?\s*$")
+
+
+class collapsed_warnings:
+    """Context manager: MuJoCo's warnings (``mju_user_warning``, printed by MuJoCo one per step
+    otherwise) are collected while it is active and reported when it ends as Python warnings, one
+    line per distinct text (its ``Time = ...`` dropped) with how often and from when, at most
+    :data:`MAX_WARNING_LINES` lines plus one for the rest. Nested use collects in the outer one.
+    """
+
+    _depth = 0
+
+    def __init__(self) -> None:
+        self.seen: dict[str, list] = {}  # text -> [count, first time]
+        self.previous = None
+
+    def _handler(self, msg: str) -> None:
+        text = " ".join(str(msg).split())
+        m = _TIME_SUFFIX.search(text)
+        key = text[: m.start()] if m else text
+        first = m.group(0).strip().rstrip(".") if m else ""
+        entry = self.seen.setdefault(key, [0, first])
+        entry[0] += 1
+
+    def __enter__(self) -> collapsed_warnings:
+        collapsed_warnings._depth += 1
+        if collapsed_warnings._depth == 1:
+            self.previous = mujoco.get_mju_user_warning()
+            mujoco.set_mju_user_warning(self._handler)
+        return self
+
+    def __exit__(self, *exc) -> None:
+        collapsed_warnings._depth -= 1
+        if collapsed_warnings._depth:
+            return
+        mujoco.set_mju_user_warning(self.previous)
+        items = list(self.seen.items())
+        for text, (count, first) in items[:MAX_WARNING_LINES]:
+            times = f"{count} times, first at {first}" if count > 1 else first or "once"
+            warnings.warn(f"MuJoCo: {text} ({times})", UserWarning, stacklevel=2)
+        rest = items[MAX_WARNING_LINES:]
+        if rest:
+            n = sum(c for _, (c, _) in rest)
+            warnings.warn(
+                f"MuJoCo: {n} more warnings of {len(rest)} other kinds", UserWarning, stacklevel=2
+            )
+        self.seen.clear()
 
 
 def any_installed() -> bool:

@@ -2,7 +2,7 @@
 the same analytic controller, returning the same :class:`~analytic.trajectory.Trajectory` record as
 the analytic and MuJoCo plants (paper coordinates, Eq. 44).
 
-Pinocchio (PyPI ``pin`` >= 4.1) is optional: it is imported when a :class:`PinocchioPlant` is built.
+Pinocchio (PyPI ``pin`` >= 4.1) is optional: it is imported when a :class:`PinocchioDynamics` is built.
 
 State integrated by scipy (one ``OdeSolver`` step at a time, as :mod:`analytic.simulate` does)::
 
@@ -369,7 +369,7 @@ class NonFinite(ArithmeticError):
 # ----------------------------------------------------------------------------------------------
 
 
-class PinocchioPlant:
+class PinocchioDynamics:
     """One scene on Pinocchio, with the analytic controller in every right-hand side.
 
     Args:
@@ -548,7 +548,7 @@ def simulate(
     settings = settings or PinocchioSettings()
     if t_end is not None and not (math.isfinite(t_end) and t_end > 0):
         raise ValueError(f"t_end: must be a positive time in s (got {t_end!r})")
-    plant = PinocchioPlant(scene, settings.controller)
+    plant = PinocchioDynamics(scene, settings.controller)
     rtol, atol, max_step = settings.resolved(scene)
     out = scene.output if t_end is None else OutputSettings(t_end=t_end, rate=scene.output.rate)
     t_eval = out.times()
@@ -614,7 +614,7 @@ def simulate(
     )
 
 
-def _assemble(plant: PinocchioPlant, t, Y, status, message, info) -> Trajectory:
+def _assemble(plant: PinocchioDynamics, t, Y, status, message, info) -> Trajectory:
     """The Trajectory of the samples ``Y`` (N, ny): Pinocchio's ``v̇`` and the controller's output at
     each sample, mapped to paper coordinates; invariants and tracking as for every plant."""
     N = len(t)
@@ -664,7 +664,7 @@ def _assemble(plant: PinocchioPlant, t, Y, status, message, info) -> Trajectory:
 __all__ = [
     "SUPPORTED_EFFECTS",
     "NonFinite",
-    "PinocchioPlant",
+    "PinocchioDynamics",
     "PinocchioSettings",
     "simulate",
     "work_layout",

@@ -12,6 +12,7 @@ controller's outputs then describe that state).
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable
 
@@ -20,9 +21,9 @@ import numpy as np
 
 from analytic.effects import MjIntegrator, SpringModel
 from analytic.invariants import compute_invariants, tracking_errors
-from analytic.scene import OutputSettings, Scene
+from analytic.scene import MAX_MUJOCO_STEPS, Scene
 from analytic.trajectory import Engine, RunStatus, Trajectory
-from mj_bridge.twin import ControllerSource, Twin, bad_warnings
+from mj_bridge.twin import ControllerSource, Twin, _as_enum, bad_warnings
 from model_xml import BodyFrame
 from model_xml.state import mujoco_to_paper_batch
 
@@ -30,18 +31,67 @@ from model_xml.state import mujoco_to_paper_batch
 STEP_FIT_RTOL = 1e-9
 
 
-def steps_between(times: np.ndarray, dt: float) -> np.ndarray:
-    """Number of steps between consecutive output times; ValueError if dt does not divide them."""
+def steps_between(times: np.ndarray, dt: float, t_end_name: str = "t_end") -> np.ndarray:
+    """Number of steps between consecutive output times; ValueError if dt does not divide them.
+
+    The last interval ends at ``t_end`` (off the rate grid when it is not a multiple of
+    ``1/rate``): when only that one does not fit, the error names ``t_end_name``.
+    """
     gaps = np.diff(times)
-    k = np.rint(gaps / dt).astype(int)
-    bad = np.abs(k * dt - gaps) > STEP_FIT_RTOL * np.maximum(gaps, dt)
-    if np.any(bad) or np.any(k < 1):
-        i = int(np.argmax(bad | (k < 1)))
+    k = np.rint(gaps / dt).astype(np.int64)
+    bad = (np.abs(k * dt - gaps) > STEP_FIT_RTOL * np.maximum(gaps, dt)) | (k < 1)
+    if np.any(bad):
+        i = int(np.argmax(bad))
+        if i == len(gaps) - 1:  # only the interval that ends at t_end
+            raise ValueError(
+                f"{t_end_name}: not a whole number of MuJoCo steps after the last output sample at "
+                f"{float(times[-2])!r} s (dt = {dt!r} s; t_end must be a multiple of dt) "
+                f"(got {float(times[-1])!r})"
+            )
         raise ValueError(
             f"dt: {dt!r} s does not divide the output interval {float(gaps[i])!r} s "
             f"(output.rate and t_end must be whole multiples of dt)"
         )
     return k
+
+
+def plan_steps(
+    scene: Scene,
+    integrator: MjIntegrator | str | None = None,
+    dt: float | None = None,
+    t_end: float | None = None,
+) -> tuple[MjIntegrator, float, np.ndarray, np.ndarray]:
+    """Check a run's arguments against the scene before anything is built; ValueError naming the
+    bad one. Returns ``(integrator, dt, output times, steps between them)``.
+
+    The output grid is the analytic plant's (``0, 1/rate, ...`` and ``t_end`` exactly); MuJoCo
+    needs every interval of it to be a whole number of steps of ``dt``, so ``t_end`` must be at
+    least one step and a multiple of ``dt``, and a run at most ``MAX_MUJOCO_STEPS`` steps.
+    """
+    integ = _as_enum(
+        MjIntegrator, scene.mujoco.integrator if integrator is None else integrator, "integrator"
+    )
+    dt_name = "mujoco.timestep" if dt is None else "dt"
+    h = scene.mujoco.timestep if dt is None else dt
+    if isinstance(h, bool) or not isinstance(h, int | float) or not (math.isfinite(h) and h > 0):
+        raise ValueError(f"{dt_name}: must be a positive finite time step in s (got {h!r})")
+    h = float(h)
+    out = scene.output.with_t_end(t_end, "t_end")
+    t_name = "output.t_end" if t_end is None else "t_end"
+    if out.t_end < h * (1 - STEP_FIT_RTOL):
+        raise ValueError(
+            f"{t_name}: shorter than one MuJoCo step ({dt_name} = {h!r} s) (got {out.t_end!r})"
+        )
+    steps = out.t_end / h
+    if steps > MAX_MUJOCO_STEPS:
+        # whichever is further from the paper scenes' 20 s and 2.5e-4 s
+        name, value = (t_name, out.t_end) if out.t_end / 20.0 >= 2.5e-4 / h else (dt_name, h)
+        raise ValueError(
+            f"{name}: {out.t_end:g} s at {dt_name} = {h:g} s is {steps:.3g} MuJoCo steps, at most "
+            f"{MAX_MUJOCO_STEPS:,} (got {value!r})"
+        )
+    times = out.times()
+    return integ, h, times, steps_between(times, h, t_name)
 
 
 def simulate(
@@ -61,7 +111,8 @@ def simulate(
         scene: a validated scene.
         integrator: MuJoCo integrator (default ``scene.mujoco.integrator``, RK4).
         dt: time step, s (default ``scene.mujoco.timestep``); must divide the output interval.
-        t_end: horizon, s (default ``scene.output.t_end``).
+        t_end: horizon, s (default ``scene.output.t_end``); at least one step and a multiple of
+            ``dt``. Samples at ``0, 1/rate, ...`` and ``t_end`` exactly, as the analytic plant's.
         controller: the analytic controller, compiled (default; the numpy model answers where the
             kernel does not apply), or numpy (``analytic``), or the same law from MuJoCo's matrices.
         body_frame: BR's MuJoCo body frame relative to C (default at C).
@@ -73,7 +124,13 @@ def simulate(
     Returns:
         a :class:`Trajectory` with ``engine = mujoco``; a run that goes non-finite or is interrupted
         returns the samples reached with ``status = failed``.
+
+    Raises:
+        ValueError: naming a bad ``integrator``, ``dt`` or ``t_end`` (:func:`plan_steps`), before
+            anything is built.
     """
+    # Bad arguments are refused, naming them, before anything is built.
+    integrator, dt, times, ksteps = plan_steps(scene, integrator, dt, t_end)
     tw = Twin(
         scene,
         integrator=integrator,
@@ -82,11 +139,6 @@ def simulate(
         controller=controller,
         native_callback=native_callback,
     )
-    out = scene.output if t_end is None else OutputSettings(t_end=t_end, rate=scene.output.rate)
-    if t_end is not None and not (np.isfinite(t_end) and t_end > 0):
-        raise ValueError(f"t_end: must be a positive time in s (got {t_end!r})")
-    times = out.times()
-    ksteps = steps_between(times, tw.dt)
     d = tw.d
     tw.set_state(0.0, scene.initial.q0(), scene.initial.qdot0())
     tw.d.time = float(times[0])

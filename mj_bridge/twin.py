@@ -22,7 +22,7 @@ from analytic.effects import Effect, MjIntegrator, SpringModel, Weighting
 from analytic.model import ControlOutput, TumblingModel
 from analytic.scene import Scene
 from mj_bridge import fast_stage, native
-from mj_bridge.callbacks import installed, spring_user_bias
+from mj_bridge.callbacks import collapsed_warnings, installed, spring_user_bias
 from model_xml import (
     BODY,
     TORQUE_ACTUATORS,
@@ -282,14 +282,20 @@ class Twin:
     @contextlib.contextmanager
     def callbacks(self) -> Iterator[None]:
         """Install this twin's callbacks (control, user bias) as needed for a ``with`` block: the
-        native controller when available (:mod:`mj_bridge.native`), else :attr:`control_callback`."""
+        native controller when available (:mod:`mj_bridge.native`), else :attr:`control_callback`.
+        MuJoCo's warnings in the block are reported once each when it ends, with their count
+        (:class:`mj_bridge.callbacks.collapsed_warnings`), not once per step."""
         act_bias = spring_user_bias if self.needs_act_bias else None
         if self._ctx is None or not self.needs_control_cb:
             control = self.control_callback if self.needs_control_cb else None
-            with installed(control=control, act_bias=act_bias):
+            with collapsed_warnings(), installed(control=control, act_bias=act_bias):
                 yield
             return
-        with self._ctx, installed(control=native.callback(), act_bias=act_bias):
+        with (
+            collapsed_warnings(),
+            self._ctx,
+            installed(control=native.callback(), act_bias=act_bias),
+        ):
             self._native_bound = True
             try:
                 yield

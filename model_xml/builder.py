@@ -33,7 +33,7 @@ import mujoco
 import numpy as np
 
 from analytic.effects import Effect, MjIntegrator, ShapeKind, SpringModel
-from analytic.scene import Scene
+from analytic.scene import POINT_INERTIA_MIN, POINT_INERTIA_REL, TRIANGLE_RTOL, Scene
 from model_xml.rotations import (
     mat_to_quat,
     principal_frame,
@@ -66,9 +66,9 @@ CONTROL_GEAR = 2.0**24
 # MuJoCo refuses moving bodies whose inertia is below mjMINVAL (1e-15). A point mass gets an isotropic
 # inertia POINT_INERTIA_REL x min(J_BR) (floored at POINT_INERTIA_MIN), and exactly that much is taken
 # off BR's principal moments: the mass body rotates with BR (slide joint), so an isotropic inertia on
-# it adds exactly eps·I to the system's rotational inertia, and the total is unchanged.
-POINT_INERTIA_REL = 1e-9
-POINT_INERTIA_MIN = 1e-12
+# it adds exactly eps·I to the system's rotational inertia, and the total is unchanged. The two
+# numbers live with the scene, whose loader refuses a BR that cannot give that much up
+# (analytic.scene.twin_point_inertia).
 
 
 def mass_name(i: int) -> str:
@@ -278,7 +278,7 @@ def build_spec(scene: Scene, body_frame: BodyFrame | None = None) -> mujoco.MjSp
         mb.explicitinertial = True
         mb.mass = float(scene.masses.mass[i])
         moments, q_principal = principal_frame(Rt @ J_masses[i] @ Rf)
-        if 0.0 < moments[2] - moments[0] - moments[1] <= 1e-12 * moments[2]:
+        if 0.0 < moments[2] - moments[0] - moments[1] <= TRIANGLE_RTOL * moments[2]:
             moments[2] = moments[0] + moments[1]  # a ring's A + B = C, broken by eigh round-off
         mb.inertia = moments
         mb.iquat = q_principal

@@ -15,8 +15,17 @@ def unit(rng: np.random.Generator, k: int = 3) -> np.ndarray:
 
 
 def random_spd(rng: np.random.Generator, scale: float = 1.0) -> np.ndarray:
+    """A random rigid-body inertia: symmetric positive definite with principal moments that
+    satisfy A + B >= C (as every mass distribution's do, and as the scene loader and MuJoCo
+    require), in a random orientation; a matrix that satisfies it is the plain ``B Bᵀ + 0.1 I``."""
     B = rng.normal(size=(3, 3))
-    return scale * (B @ B.T + 0.1 * np.eye(3))
+    J = B @ B.T + 0.1 * np.eye(3)
+    e, V = np.linalg.eigh(J)
+    if e[2] > e[0] + e[1]:  # the largest moment brought down to the sum of the others
+        e[2] = e[0] + e[1]
+        J = V @ np.diag(e) @ V.T
+        J = (J + J.T) / 2
+    return scale * J
 
 
 def random_scene_dict(

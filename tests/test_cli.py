@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -72,3 +74,138 @@ def test_bad_scene_file_in_a_subprocess(tmp_path):
     lines = proc.stderr.strip().splitlines()
     assert lines == ["tumble: error: body.mass: must be positive (got -1)"]
     assert proc.stdout == ""
+
+
+# ------------------------------------------------------------------------------------------------
+# Bad input is caught before any work: one line naming the field, exit 2, no output directory
+# ------------------------------------------------------------------------------------------------
+
+PAPER1 = Path(__file__).resolve().parents[1] / "validation" / "scenes" / "paper_example1.toml"
+
+
+def _scene_file(tmp_path, replace=(), append="") -> str:
+    text = PAPER1.read_text(encoding="utf-8")
+    for old, new in replace:
+        assert old in text
+        text = text.replace(old, new)
+    path = tmp_path / "scene.toml"
+    path.write_text(text + append, encoding="utf-8")
+    return str(path)
+
+
+def _no_plant_may_run(monkeypatch):
+    import analytic.simulate  # noqa: F401  (the modules, not the functions of the same name)
+    import mj_bridge
+    import mj_bridge.simulate
+
+    def boom(*a, **k):
+        raise AssertionError("a plant ran")
+
+    for module in ("analytic.simulate", "mj_bridge.simulate"):
+        monkeypatch.setattr(sys.modules[module], "simulate", boom)
+    monkeypatch.setattr(mj_bridge, "simulate", boom)
+
+
+@pytest.mark.parametrize(
+    ("replace", "append", "args", "line"),
+    [
+        ((), "\n[thresholds]\npositon_C = 1e-6\n", (), "thresholds.positon_C: unknown threshold"),
+        (
+            (),
+            '\n[thresholds]\nposition_C = "1e-6"\n',
+            (),
+            "thresholds.position_C: must be a number",
+        ),
+        ((), "\n[thresholds]\nposition_C = nan\n", (), "thresholds.position_C: must be finite"),
+        ((), "\n[thresholds]\nposition_C = -1e-6\n", (), "thresholds.position_C: must be non-neg"),
+        ((), "\n[thresholds]\nposition_C = inf\n", (), "thresholds.position_C: must be finite"),
+        ((), "", ("--t-end", "0.0001"), "t_end: shorter than one MuJoCo step"),
+        ((), "", ("--t-end", "1e300"), "t_end: too large"),
+        ((("rate = 100.0 ", "rate = 1e12 "),), "", (), "output.rate: too large"),
+        ((("t_end = 20.0 ", "t_end = 1e300 "),), "", (), "output.t_end: too large"),
+        ((("delta1 = 0.5", "delta1 = " + "9" * 400),), "", (), "stabilization.delta1: must be"),
+        ((("[5.0e5, 4.0e5]", "[5.0e5, 1e-20]"),), "", (), "masses.mass[1]: must be at least 1e-15"),
+        ((("[5.0e5, 4.0e5]", "[5.0e5, 1e300]"),), "", (), "masses.mass[1]: must be at most"),
+        ((("k_cubic = [", "# k_cubic = ["),), "", (), "springs.k_cubic: required by effect"),
+    ],
+)
+def test_validate_refuses_bad_input_before_any_plant(
+    tmp_path, monkeypatch, capsys, replace, append, args, line
+):
+    scene = _scene_file(tmp_path, replace, append)
+    _no_plant_may_run(monkeypatch)
+    out = tmp_path / "out"
+    rc = main(["validate", scene, "--out", str(out), *args])
+    err = capsys.readouterr().err.splitlines()
+    assert rc == EXIT_USAGE
+    assert len(err) == 1 and err[0].startswith(f"tumble: error: {line}"), err
+    assert not out.exists()
+
+
+def test_table_for_an_unlisted_effect_is_one_warning_line(tmp_path, capsys):
+    scene = _scene_file(tmp_path, append="\n[external_torque]\nconstant = [1.0, 0.0, 0.0]\n")
+    rc = main(["simulate", scene, "--t-end", "0.01", "--out", str(tmp_path / "out")])
+    assert rc == 0
+    assert capsys.readouterr().err.splitlines() == [
+        "tumble: warning: external_torque: given but effect 'external_torque' is not listed in "
+        "scene.effects, so ignored"
+    ]
+
+
+def test_short_horizon_has_t0_and_t_end(tmp_path, capsys):
+    rc = main(["simulate", "paper_example1", "--t-end", "0.004", "--out", str(tmp_path)])
+    assert rc == 0
+    with np.load(tmp_path / "trajectory.npz") as z:
+        assert z["t"].tolist() == [0.0, 0.004]
+        assert not np.allclose(z["q"][1], z["q"][0])
+
+
+def _cli(*args, timeout=120):
+    return subprocess.run(
+        [sys.executable, "-m", "validation.cli", *args],
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+    )
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no FIFOs here")
+def test_fifo_scene_is_refused_without_reading_it(tmp_path):
+    fifo = tmp_path / "scene.toml"
+    os.mkfifo(fifo)
+    proc = _cli("simulate", str(fifo), timeout=60)  # reading it would wait for a writer forever
+    assert proc.returncode == EXIT_USAGE
+    assert proc.stderr.splitlines() == [
+        f"tumble: error: scene: not a regular file (got {str(fifo)!r})"
+    ]
+
+
+def test_unstable_run_keeps_stderr_readable(tmp_path):
+    """g = 1e300: MuJoCo warns at every step and numpy overflows; stderr stays a few one-line
+    warnings, without colour codes (it is a pipe here), and the run fails with exit 1."""
+    scene = _scene_file(tmp_path, (("[0.0, 0.0, -9.81]", "[0.0, 0.0, -1e300]"),))
+    proc = _cli("validate", scene, "--t-end", "0.01", "--out", str(tmp_path / "out"))
+    lines = proc.stderr.splitlines()
+    assert proc.returncode == 1, proc.stderr
+    assert "\x1b" not in proc.stderr and "Traceback" not in proc.stderr
+    assert len(lines) <= 12, proc.stderr
+    assert all(line.startswith("tumble: warning: ") for line in lines), proc.stderr
+    assert any(line.startswith("tumble: warning: MuJoCo: ") for line in lines), proc.stderr
+
+
+def test_no_colour_codes_when_stderr_is_not_a_terminal():
+    """Rerun's logger colours its lines unless NO_COLOR is set, which importing validation does
+    when stderr is not a terminal."""
+    code = (
+        "import validation, rerun as rr\n"
+        "rec = rr.RecordingStream('x')\n"
+        "stream = rec.binary_stream()\n"
+        "rr.log('a', rr.Points3D([[0.0, 0.0, 0.0]]), recording=rec)\n"
+        "del stream, rec\n"  # drops unread data: Rerun logs a warning
+    )
+    env = {k: v for k, v in os.environ.items() if k != "NO_COLOR"}
+    proc = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=120, env=env
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert "\x1b" not in proc.stderr

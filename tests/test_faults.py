@@ -4,6 +4,7 @@ hard-case table is written atomically and survives an interrupted suite."""
 from __future__ import annotations
 
 import json
+import math
 import subprocess
 import sys
 
@@ -67,12 +68,40 @@ def test_crash_during_write_keeps_previous_file(tmp_path, monkeypatch):
 
 
 def test_case_that_raises_is_an_error_row(monkeypatch):
-    def broken(scene, th):
+    def broken(scene, th, plants):
         raise RuntimeError("boom")
 
     monkeypatch.setitem(hc.CASES, "rod_through_C", (broken, True))
     row = hc.run_case("rod_through_C")
-    assert row.verdict == hc.ERROR and "RuntimeError: boom" in row.analytic["error"]
+    assert row.verdict == hc.ERROR and row.error == "RuntimeError: boom"
+    assert all(row.plant_verdict(e) == hc.ERROR for e in row.plants)
+    table = hc.HardCaseTable((row,), plants=row.plants)
+    assert "RuntimeError: boom" in table.to_markdown()
+    assert table.to_dict()["rows"][0]["error"] == "RuntimeError: boom"
+
+
+@pytest.mark.parametrize("engine", ["analytic", "mujoco", "pinocchio"])
+def test_ctrl_c_in_any_plant_stops_the_suite(tmp_path, monkeypatch, engine):
+    """Each plant keeps what it reached when interrupted and returns it (status interrupted); the
+    suite turns that back into KeyboardInterrupt, so Ctrl-C stops the whole suite (not only the
+    current case, which would otherwise become a FAIL row), leaving an incomplete table."""
+    from analytic.trajectory import Engine
+    from mj_bridge.plants import PLANTS
+
+    cls = PLANTS[Engine(engine)]
+    if cls.unavailable():
+        pytest.skip(cls.unavailable())
+    original = cls.simulate
+
+    def interrupted(self, scene, settings=None, t_end=None, progress=None):
+        return original(self, scene, settings, t_end=t_end, progress=_interrupt_after(0.05))
+
+    monkeypatch.setattr(cls, "simulate", interrupted)
+    with pytest.raises(KeyboardInterrupt, match="interrupted at t ="):
+        hc.run_hard_cases(tmp_path, names=["pass_through", "zero_gravity"])
+    data = json.loads((tmp_path / "hard_cases.json").read_text(encoding="utf-8"))
+    assert data["complete"] is False and data["rows"] == []
+    assert "interrupted during pass_through" in data["message"]
 
 
 @pytest.mark.parametrize("arg", ["no/such/scene.toml", "hard/nope"])
@@ -130,3 +159,119 @@ def test_fault_part_way_keeps_samples_before_it(monkeypatch, tmp_path, fault, ne
     path = tr.save_npz(tmp_path / "failed.npz")
     with np.load(path) as z:
         assert json.loads(str(z["meta_json"]))["status"] == "failed"
+
+
+# ------------------------------------------------------------------------------------------------
+# Bad input is refused before any plant runs, naming the field
+# ------------------------------------------------------------------------------------------------
+
+
+def _no_plant_may_run(monkeypatch):
+    """Each plant's simulate raises if called (and the callers check that no output appeared)."""
+    import analytic.simulate  # noqa: F401  (the modules, not the functions of the same name)
+    import mj_bridge
+    import mj_bridge.simulate
+
+    def boom(*a, **k):
+        raise AssertionError("a plant ran")
+
+    for module in ("analytic.simulate", "mj_bridge.simulate"):
+        monkeypatch.setattr(sys.modules[module], "simulate", boom)
+    monkeypatch.setattr(mj_bridge, "simulate", boom)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "thresholds", "field"),
+    [
+        ({}, {"positon_C": 1e-6}, "thresholds.positon_C: unknown threshold"),
+        ({"t_end": 1e-4}, None, "t_end: shorter than one MuJoCo step"),
+        ({"t_end": 0.0041}, None, "t_end: not a whole number of MuJoCo steps"),
+        ({"t_end": math.inf}, None, "t_end: must be finite"),
+        ({"t_end": 1e300}, None, "t_end: too large"),
+        ({"dt": 3e-3}, None, "dt: "),
+        ({"dt": -1.0}, None, "dt: must be a positive"),
+        ({"dt": 1e-15, "t_end": 0.01}, None, "dt: "),  # 1e13 MuJoCo steps
+        ({"integrator": "RK5"}, None, "integrator: unknown value 'RK5'"),
+    ],
+)
+def test_run_validation_refuses_bad_input_before_any_plant(
+    tmp_path, monkeypatch, kwargs, thresholds, field
+):
+    from validation.validate import run_validation
+
+    scene = load_scene(hc.SCENES_DIR / "paper_example1.toml")
+    if thresholds is not None:
+        scene = scene.replace(extra={"thresholds": thresholds})
+    _no_plant_may_run(monkeypatch)
+    out = tmp_path / "out"
+    with pytest.raises(ValueError) as exc:
+        run_validation(scene, out, **kwargs)
+    assert str(exc.value).startswith(field), str(exc.value)
+    assert "\n" not in str(exc.value)
+    assert not out.exists() and list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("t_end", [-1.0, math.nan, math.inf, 0.0, 10**400, "1"])
+def test_plants_name_a_bad_t_end(t_end):
+    import mj_bridge
+
+    scene = load_scene(hc.SCENES_DIR / "paper_example1.toml")
+    for sim in (simulate, mj_bridge.simulate):
+        with pytest.raises(ValueError, match=r"^t_end: must be"):
+            sim(scene, t_end=t_end)
+
+
+def test_both_plants_sample_t0_and_t_end_of_a_short_horizon():
+    """0.004 s at 100 Hz: the t = 0 sample and the t_end sample, on both plants, not one sample
+    labelled t_end that holds the initial state."""
+    import mj_bridge
+
+    scene = load_scene(hc.SCENES_DIR / "paper_example1.toml")
+    ana = simulate(scene, t_end=0.004)
+    mj = mj_bridge.simulate(scene, t_end=0.004)
+    for tr in (ana, mj):
+        assert tr.status is RunStatus.OK
+        assert tr.t.tolist() == [0.0, 0.004]
+        assert np.array_equal(tr.q[0], scene.initial.q0())
+        assert not np.allclose(tr.q[1], tr.q[0])  # moved: Ṙ(0) = (1, 2, 20) m/s
+    np.testing.assert_allclose(mj.q[1, :3], ana.q[1, :3], rtol=0, atol=1e-9)
+    # t_end shorter than one MuJoCo step, or not a whole number of them
+    with pytest.raises(ValueError, match=r"^t_end: shorter than one MuJoCo step"):
+        mj_bridge.simulate(scene, t_end=1e-4)
+    with pytest.raises(ValueError, match=r"^t_end: not a whole number of MuJoCo steps"):
+        mj_bridge.simulate(scene, t_end=0.0041)
+
+
+def test_mujoco_warnings_are_collapsed(capfd):
+    """An unstable run warns at every MuJoCo step; it is reported as a few lines with counts."""
+    import warnings
+
+    import mj_bridge
+    from mj_bridge.callbacks import MAX_WARNING_LINES
+
+    scene = load_scene(hc.SCENES_DIR / "paper_example1.toml")
+    scene = scene.replace(gravity=np.array([0.0, 0.0, -1e300]))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        tr = mj_bridge.simulate(scene, t_end=0.05)
+    assert tr.status is RunStatus.FAILED
+    mj = [str(w.message) for w in caught if str(w.message).startswith("MuJoCo:")]
+    assert 1 <= len(mj) <= MAX_WARNING_LINES + 1, mj
+    assert all("\n" not in m for m in mj)
+    assert any(" times, first at Time = " in m for m in mj), mj
+    assert "WARNING" not in capfd.readouterr().err  # MuJoCo's own printer is not used
+
+
+def test_save_npz_error_names_the_path_not_a_temporary_file(tmp_path, monkeypatch):
+    scene = load_scene(hc.HARD_DIR / "zero_gravity.toml")
+    tr = simulate(scene, t_end=0.02)
+
+    def refuse(src, dst):
+        raise OSError(28, "No space left on device", str(src))
+
+    monkeypatch.setattr("analytic.trajectory.os.replace", refuse)
+    target = tmp_path / "x.npz"
+    with pytest.raises(OSError) as exc:
+        tr.save_npz(target)
+    assert exc.value.filename == str(target)
+    assert not list(tmp_path.iterdir())

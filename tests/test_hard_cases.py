@@ -1,4 +1,5 @@
-"""The hard-case suite (issue 6): each case's stated criterion, judged against independent references.
+"""The hard-case suite (issue 6): each case's stated criterion, judged against independent references,
+on every installed plant (the analytic plant, MuJoCo and, with ``pin``, Pinocchio).
 
 The default run covers the fast subset (short horizons); ``pytest -m hard`` runs every case.
 """
@@ -12,18 +13,54 @@ import numpy as np
 import pytest
 
 from analytic import load_scene, scene_from_dict, simulate
+from mj_bridge.plants import PinocchioPlant, installed_plants
 from validation import hard_cases as hc
+
+INSTALLED = tuple(e.value for e in installed_plants())
+
+KNOWN_FAILURES: dict[tuple[str, str], tuple[set[str], str]] = {
+    ("rod_through_C", "pinocchio"): (
+        {"pinocchio: max |p_i|, m"},
+        "Pinocchio's masses leave C: max |p| 2.1e-11 m > 1e-12 m. pin.aba returns p'' ~ 1e-14 - "
+        "3e-13 m/s^2 of round-off at p = 0 (exactly 0 in the analytic plant), which seeds the spring "
+        "modes; DOP853 at the scene's rtol 1e-12 takes ~0.15 s steps there and lets it grow "
+        "(a recorded finding; the criterion is not loosened)",
+    ),
+}
+"""(case, plant) -> (the labels of the checks known to fail, why): findings, not test bugs. Each is
+asserted to fail exactly so (nothing else of that plant fails, every other plant passes); the test
+then xfails with the reason, and fails when the finding is gone (remove the entry then)."""
 
 
 def _failed(row: hc.HardCaseRow) -> str:
     bad = [f"{c.label} = {c.value:.3e} > {c.bound:.1e}" for c in row.checks if not c.passed]
-    return f"{row.case}: {row.verdict} {row.analytic.get('error', '')} " + "; ".join(bad)
+    return f"{row.case}: {row.verdict} {row.error} " + "; ".join(bad)
 
 
 def _assert_row(name: str) -> hc.HardCaseRow:
     row = hc.run_case(name)
     assert row.verdict != hc.ERROR, _failed(row)
+    assert row.plants == INSTALLED, row.plants
     assert row.checks, f"{name}: no check was made"
+    known = []
+    for e in row.plants:
+        verdict = row.plant_verdict(e)
+        if verdict == hc.NA:
+            # not applicable, said by name: the reason names the plant
+            assert hc.label(e) in row.not_applicable[e], row.not_applicable
+            assert e not in row.figures
+            continue
+        assert any(c.plant == e for c in row.checks), f"{name}: nothing judged on {e}"
+        if (name, e) in KNOWN_FAILURES:
+            labels, why = KNOWN_FAILURES[(name, e)]
+            failed = {c.label for c in row.failed_checks(e)}
+            assert failed, f"{name} now passes on {e}: remove it from KNOWN_FAILURES ({why})"
+            assert failed == labels, _failed(row)
+            known.append(f"{e}: {why}")
+            continue
+        assert verdict == hc.PASS, _failed(row)
+    if known:
+        pytest.xfail("; ".join(known))
     assert row.passed, _failed(row)
     return row
 
@@ -86,18 +123,115 @@ def test_run_hard_cases_writes_table(tmp_path):
     seen = []
     table = hc.run_hard_cases(
         tmp_path,
-        names=["rod_through_C", "long_horizon"],
+        names=["pass_through", "long_horizon"],
         fast_only=True,
         progress=lambda case, i, n: seen.append((case, i, n)),
     )
-    assert seen == [("rod_through_C", 0, 1)]
-    assert [r.case for r in table.rows] == ["rod_through_C"]
+    assert seen == [("pass_through", 0, 1)]
+    assert [r.case for r in table.rows] == ["pass_through"]
     assert table.passed and table.complete
-    data = json.loads((tmp_path / "hard_cases.json").read_text())
-    assert data["passed"] is True and data["rows"][0]["case"] == "rod_through_C"
-    md = (tmp_path / "hard_cases.md").read_text()
-    assert md.startswith("# Hard cases: PASSED") and "| rod_through_C |" in md
+    assert table.plants == INSTALLED
+    data = json.loads((tmp_path / "hard_cases.json").read_text(encoding="utf-8"))
+    assert data["passed"] is True and data["rows"][0]["case"] == "pass_through"
+    assert data["plants"] == list(INSTALLED)
+    # a mapping plant -> verdict and figures, for every plant
+    per_plant = data["rows"][0]["plants"]
+    assert list(per_plant) == list(INSTALLED)
+    for e in INSTALLED:
+        assert per_plant[e]["verdict"] == "PASS"
+        assert per_plant[e]["figures"]["crossings"] > 0
+    assert {c["plant"] for c in data["rows"][0]["checks"]} == set(INSTALLED)
+    md = (tmp_path / "hard_cases.md").read_text(encoding="utf-8")
+    assert md.startswith("# Hard cases: PASSED") and "| pass_through |" in md
+    header = next(line for line in md.splitlines() if line.startswith("| case |"))
+    assert header == (
+        "| case | criterion | "
+        + " | ".join(hc.label(e) for e in INSTALLED)
+        + " | verdict | wall s |"
+    )
     assert not list(tmp_path.glob(".*.tmp"))
+
+
+def test_suite_without_pinocchio_runs_on_two_plants(tmp_path, monkeypatch):
+    """Without ``pin`` the suite runs on the analytic plant and MuJoCo and says Pinocchio was not
+    installed (with the reason); the other plants are judged as before."""
+    why = "the Pinocchio plant needs the 'pin' package (>= 4.1): pip install it"
+    monkeypatch.setattr(PinocchioPlant, "unavailable", classmethod(lambda cls: why))
+    table = hc.run_hard_cases(tmp_path, names=["pass_through", "off_manifold"])
+    assert table.plants == ("analytic", "mujoco")
+    assert dict(table.not_installed) == {"pinocchio": why}
+    assert table.passed, [hc.HardCaseRow.to_dict(r) for r in table.rows]
+    pt, om = table.row("pass_through"), table.row("off_manifold")
+    assert set(pt.figures) == {"analytic", "mujoco"}
+    assert {c.plant for c in pt.checks} == {"analytic", "mujoco"}
+    assert set(om.not_applicable) == {"mujoco"}
+    data = json.loads((tmp_path / "hard_cases.json").read_text(encoding="utf-8"))
+    assert data["plants"] == ["analytic", "mujoco"]
+    assert data["not_installed"] == {"pinocchio": why}
+    assert all(list(r["plants"]) == ["analytic", "mujoco"] for r in data["rows"])
+    md = (tmp_path / "hard_cases.md").read_text(encoding="utf-8")
+    assert f"Pinocchio was not run: not installed ({why})." in md
+    assert "| case | criterion | analytic | MuJoCo | verdict | wall s |" in md
+
+
+def test_off_manifold_not_applicable_by_name():
+    """MuJoCo and Pinocchio cannot represent |u| = 1.1: the row says so, naming each; the analytic
+    plant is judged."""
+    row = hc.run_case("off_manifold")
+    others = [e for e in INSTALLED if e != "analytic"]
+    assert list(row.not_applicable) == others
+    for e in others:
+        assert row.plant_verdict(e) == hc.NA
+        assert hc.label(e) in row.not_applicable[e] and "not representable" in row.not_applicable[e]
+    assert row.plant_verdict("analytic") == hc.PASS and row.passed
+    d = row.to_dict()["plants"]
+    for e in others:
+        assert d[e] == {"verdict": "N/A", "not applicable": row.not_applicable[e]}
+
+
+def test_plant_verdicts_and_markdown_columns():
+    """A failing check fails its own plant's column and the case, not the other plants."""
+    checks = (
+        hc.Check("analytic: drift", 1e-12, 1e-10, "analytic"),
+        hc.Check("mujoco: drift", 1e-9, 1e-10, "mujoco"),
+        hc.Check("mujoco vs analytic dR_m", 1e-9, 1e-6, "mujoco"),
+    )
+    row = hc.HardCaseRow(
+        case="x",
+        criterion="c",
+        plants=("analytic", "mujoco", "pinocchio"),
+        figures={"analytic": {"drift": 1e-12}, "mujoco": {"drift": 1e-9}},
+        not_applicable={"pinocchio": "Pinocchio cannot"},
+        checks=checks,
+        verdict=hc.FAIL,
+        wall_time_s=0.1,
+    )
+    assert [row.plant_verdict(e) for e in row.plants] == ["PASS", "FAIL", "N/A"]
+    assert [c.label for c in row.failed_checks()] == ["mujoco: drift"]
+    d = row.to_dict()["plants"]
+    assert d["mujoco"]["failed"] == ["mujoco: drift"] and "failed" not in d["analytic"]
+    table = hc.HardCaseTable((row,), plants=row.plants)
+    md = table.to_markdown()
+    line = next(s for s in md.splitlines() if s.startswith("| x |"))
+    cells = [s.strip() for s in line.split(" | ")]
+    assert cells[2].startswith("**PASS**") and cells[3].startswith("**FAIL**")
+    assert cells[4] == "n/a: Pinocchio cannot" and "**FAIL**" in cells[5]
+    assert "- FAIL: mujoco: drift" in md
+
+
+def test_plant_specific_bound_overrides_the_general_one():
+    """``hard_<plant>_<x>`` is that plant's alone; every other plant gets ``hard_<x>``."""
+    th = {"hard_reference_rel": 1e-9, "hard_mujoco_reference_rel": 1e-8}
+    assert hc._bound(th, "hard_reference_rel", "mujoco") == 1e-8
+    assert hc._bound(th, "hard_reference_rel", "analytic") == 1e-9
+    assert hc._bound(th, "hard_reference_rel", "pinocchio") == 1e-9
+
+
+def test_suite_plants_need_the_analytic_plant(tmp_path):
+    with pytest.raises(ValueError, match=r"^plants: the hard cases need the analytic plant"):
+        hc.run_hard_cases(tmp_path, names=["pass_through"], plants=["mujoco"])
+    with pytest.raises(ValueError, match=r"^plants: unknown plant 'nope'"):
+        hc.run_hard_cases(tmp_path, names=["pass_through"], plants=["analytic", "nope"])
 
 
 def test_run_hard_cases_refuses_unknown_name(tmp_path):

@@ -211,6 +211,28 @@ def test_full_disk_leaves_the_previous_run_whole(tmp_path, monkeypatch, n_ok):
     assert _leftovers(tmp_path) == []
 
 
+def test_disk_filling_up_part_way_through_a_file(tmp_path, monkeypatch):
+    """A writer that gets a short write, then ENOSPC, half way through a 3 MiB recording."""
+    target = tmp_path / "run.rrd"
+    write_bytes(target, b"good")
+    real = os.write
+    budget = {"left": 3 * atomic_mod.WRITE_CHUNK // 2}
+
+    def write(fd, data):
+        if budget["left"] <= 0:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        n = real(fd, bytes(data[: budget["left"]]))  # a short write at the boundary
+        budget["left"] -= n
+        return n
+
+    monkeypatch.setattr(atomic_mod.os, "write", write)
+    with pytest.raises(OutputError, match="No space left on device") as info:
+        write_bytes(target, bytes(3 * atomic_mod.WRITE_CHUNK))
+    monkeypatch.undo()
+    assert str(target) in str(info.value) and "\n" not in str(info.value)
+    assert target.read_bytes() == b"good" and os.listdir(tmp_path) == ["run.rrd"]
+
+
 def test_atomic_write_checks_size_and_removes_its_temporary(tmp_path, monkeypatch):
     target = tmp_path / "f.json"
     write_text(target, "old")

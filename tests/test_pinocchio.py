@@ -36,7 +36,7 @@ from mj_bridge.pinocchio_model import (  # noqa: E402
     pinocchio_to_paper_batch,
 )
 from mj_bridge.pinocchio_plant import (  # noqa: E402
-    PinocchioPlant,
+    PinocchioDynamics,
     PinocchioSettings,
     simulate,
 )
@@ -374,7 +374,7 @@ def _pointwise_cases():
     ("label", "scene"), _pointwise_cases(), ids=lambda x: x if isinstance(x, str) else ""
 )
 def test_accelerations_equal_the_analytic_model_uncontrolled(label, scene):
-    plant = PinocchioPlant(scene)
+    plant = PinocchioDynamics(scene)
     model = TumblingModel(scene)
     rng = np.random.default_rng(len(label))
     for _ in range(10):
@@ -408,9 +408,9 @@ def test_accelerations_equal_the_analytic_model_controlled(label, scene):
     both sides use the very same control forces; the compiled controller is compared for the paper's
     weighting (its own agreement with the numpy one, 1e-12, is tests/test_fast.py's)."""
     model = TumblingModel(scene)
-    plants = [PinocchioPlant(scene, ControllerSource.ANALYTIC)]
+    plants = [PinocchioDynamics(scene, ControllerSource.ANALYTIC)]
     if scene.control.weighting == "M^-1":
-        plants.append(PinocchioPlant(scene, ControllerSource.ANALYTIC_FAST))
+        plants.append(PinocchioDynamics(scene, ControllerSource.ANALYTIC_FAST))
     rng = np.random.default_rng(len(label) + 1)
     for _ in range(10):
         t, q, qd = manifold_state(rng, scene)
@@ -429,7 +429,7 @@ def test_spring_and_given_forces_are_those_of_eq38_and_remark2():
     from analytic.model import spring_energy
 
     scene = _scene(9, 4)
-    plant = PinocchioPlant(scene)
+    plant = PinocchioDynamics(scene)
     model = TumblingModel(scene)
     rng = np.random.default_rng(9)
     t, q, qd = manifold_state(rng, scene)
@@ -559,7 +559,7 @@ def test_rhs_is_the_plants_dynamics():
     """The integrator's right-hand side (compiled stage + aba + compiled finish) equals the paper
     state's derivative from the plant's own pointwise acceleration."""
     scene = paper_scene("paper_example2_controlled")
-    plant = PinocchioPlant(scene)
+    plant = PinocchioDynamics(scene)
     rng = np.random.default_rng(4)
     t, q, qd = manifold_state(rng, scene, scale=0.1)
     y = plant.state_from_paper(q, qd)
@@ -582,7 +582,7 @@ def test_importing_without_pinocchio_works_and_building_says_how_to_install():
         "import mj_bridge.pinocchio_plant as pp, mj_bridge.pinocchio_model as pm\n"
         "from mj_scenes import paper_scene\n"
         "try:\n"
-        "    pp.PinocchioPlant(paper_scene('paper_example1'))\n"
+        "    pp.PinocchioDynamics(paper_scene('paper_example1'))\n"
         "except ImportError as e:\n"
         "    print('IMPORTERROR', e)\n"
     )

@@ -181,7 +181,9 @@ def corruption(draw):
     """A paper scene dict, one corruption that must be refused, and the field it must name."""
     name = draw(st.sampled_from(PAPER))
     data = _paper(name)
-    kind = draw(st.sampled_from(["type", "nan", "negative", "zero_axis", "length", "missing"]))
+    kind = draw(
+        st.sampled_from(["type", "nan", "huge_int", "negative", "zero_axis", "length", "missing"])
+    )
     if kind == "type":
         path, v = draw(st.sampled_from(sorted(_leaves(data))))
         if isinstance(v, list) and v and draw(st.booleans()):
@@ -191,7 +193,7 @@ def corruption(draw):
             _get(data, path)[path[-1]] = v
         else:
             _get(data, path)[path[-1]] = _wrong_type(v)
-    elif kind == "nan":
+    elif kind in ("nan", "huge_int"):
         numeric = [
             (p, v)
             for p, v in _leaves(data)
@@ -199,7 +201,10 @@ def corruption(draw):
             or (isinstance(v, list) and v and all(isinstance(x, int | float) for x in v))
         ]
         path, v = draw(st.sampled_from(sorted(numeric)))
-        bad = draw(st.sampled_from([math.nan, math.inf, -math.inf]))
+        if kind == "nan":
+            bad = draw(st.sampled_from([math.nan, math.inf, -math.inf]))
+        else:  # an integer literal no double holds (TOML integers are unbounded)
+            bad = draw(st.sampled_from([1, -1])) * 10 ** draw(st.integers(309, 4000))
         if isinstance(v, list):
             v = list(v)
             v[draw(st.integers(0, len(v) - 1))] = bad
@@ -243,3 +248,50 @@ def test_corrupted_paper_scene_raises_value_error_naming_field(case):
         pytest.fail(f"{name} {kind} {field}: {type(exc).__name__}: {exc}")
     else:
         pytest.fail(f"{name} {kind} {field}: accepted silently")
+
+
+# ----------------------------------------------------------------------------------------------
+# The output grid: t = 0 first, t_end last, every plant the same grid
+# ----------------------------------------------------------------------------------------------
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    t_end=st.floats(1e-6, 1e3, allow_nan=False, allow_infinity=False),
+    rate=st.floats(1e-3, 1e4, allow_nan=False, allow_infinity=False),
+)
+def test_output_grid_starts_at_zero_and_ends_at_t_end(t_end, rate):
+    from analytic.scene import MAX_OUTPUT_SAMPLES, OutputSettings
+
+    if t_end * rate + 2 > MAX_OUTPUT_SAMPLES:
+        with pytest.raises(ValueError, match=r"^output\.(t_end|rate): too large"):
+            OutputSettings(t_end=t_end, rate=rate)
+        return
+    t = OutputSettings(t_end=t_end, rate=rate).times()
+    assert t[0] == 0.0 and t[-1] == t_end
+    assert np.all(np.diff(t) > 0)
+    # every sample but the last is on the rate grid, and no interval is longer than 1/rate
+    np.testing.assert_array_equal(t[:-1], np.arange(len(t) - 1) / rate)
+    assert np.all(np.diff(t) <= (1 + 1e-9) / rate)
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    steps_per_sample=st.integers(1, 400),
+    samples=st.integers(1, 50),
+    extra_steps=st.integers(0, 399),
+    dt=st.sampled_from([1e-4, 2.5e-4, 5e-4, 1e-3]),
+)
+def test_mujoco_steps_land_on_the_output_grid(steps_per_sample, samples, extra_steps, dt):
+    """t_end a whole number of steps: MuJoCo's steps between samples add up to the same grid."""
+    from analytic.scene import OutputSettings
+    from mj_bridge.simulate import plan_steps
+
+    extra_steps %= steps_per_sample
+    base = scene_from_dict(_paper("paper_example1"))
+    rate = 1.0 / (steps_per_sample * dt)
+    t_end = (samples * steps_per_sample + extra_steps) * dt
+    scene = base.replace(output=OutputSettings(t_end=t_end, rate=rate))
+    _, h, times, k = plan_steps(scene, dt=dt)
+    assert times[0] == 0.0 and times[-1] == t_end
+    np.testing.assert_allclose(np.cumsum(k) * h, times[1:], rtol=1e-9, atol=0)

@@ -121,7 +121,7 @@ def test_writes_are_atomic(tmp_path, monkeypatch):
 def test_run_validation_with_both_plants(tmp_path):
     from validation.validate import run_validation
 
-    res = run_validation("paper_example1_controlled", tmp_path, t_end=0.1)
+    res = run_validation("paper_example1_controlled", tmp_path, t_end=0.1, plants="analytic,mujoco")
     assert dataclasses.is_dataclass(res)
     with pytest.raises(dataclasses.FrozenInstanceError):
         res.passed = False  # type: ignore[misc]
@@ -138,13 +138,16 @@ def test_run_validation_with_both_plants(tmp_path):
 
 
 def test_run_validation_without_the_mujoco_twin_is_failed_not_crashed(tmp_path, monkeypatch):
+    from mj_bridge.plants import MujocoPlant
     from validation import validate
 
-    def missing():
+    def missing(*args, **kwargs):
         raise ImportError("the MuJoCo twin (mj_bridge) is not available: planted")
 
-    monkeypatch.setattr(validate, "_mj_simulate", missing)
-    res = validate.run_validation("paper_example1_controlled", tmp_path, t_end=0.1)
+    monkeypatch.setattr(MujocoPlant, "_simulate", missing)
+    res = validate.run_validation(
+        "paper_example1_controlled", tmp_path, t_end=0.1, plants="analytic,mujoco"
+    )
     assert not res.passed and "mj_bridge" in res.failure
     md = (tmp_path / "report.md").read_text()
     assert "FAILED" in md.splitlines()[0] and "mj_bridge" in md

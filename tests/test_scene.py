@@ -6,17 +6,21 @@ Every bad input must raise ValueError whose message starts with the dotted field
 from __future__ import annotations
 
 import copy
+import dataclasses
 import math
 import tomllib
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
+from analytic import scene as S
+from analytic.effects import Effect
 from analytic.model import TumblingModel
-from analytic.scene import load_scene, scene_from_dict
-from validation.scenes import scene_path
+from analytic.scene import OutputSettings, load_scene, scene_from_dict
+from validation.scenes import resolve_scene, scene_path
 
 PAPER = [
     "paper_example1",
@@ -81,12 +85,14 @@ def test_effect_off_removes_its_term():
     """No springs.cubic: the model has no cubic term (Q does not depend on k_n at all)."""
     raw = _raw("paper_example1")
     raw["scene"]["effects"] = ["gravity", "springs.linear", "mass_inertia"]
-    sc = scene_from_dict(raw)
+    with pytest.warns(UserWarning, match=r"^springs\.k_cubic: given but effect 'springs.cubic'"):
+        sc = scene_from_dict(raw)
     model = TumblingModel(sc)
     assert "springs.cubic" not in model.force_terms
     raw2 = copy.deepcopy(raw)
     raw2["springs"]["k_cubic"] = [1e30, 1e30, 1e30]
-    model2 = TumblingModel(scene_from_dict(raw2))
+    with pytest.warns(UserWarning, match=r"^springs\.k_cubic:"):
+        model2 = TumblingModel(scene_from_dict(raw2))
     q, qd = sc.initial.q0(), sc.initial.qdot0()
     assert np.array_equal(model.generalized_force(0.0, q, qd), model2.generalized_force(0.0, q, qd))
     # and with it on, the huge stiffness shows
@@ -101,7 +107,8 @@ def test_mass_inertia_effect_switches_J():
     raw = _raw("paper_example1")
     on = TumblingModel(scene_from_dict(raw))
     raw["scene"]["effects"].remove("mass_inertia")
-    off = TumblingModel(scene_from_dict(raw))
+    with pytest.warns(UserWarning, match=r"^masses\.ring_radius: given but effect 'mass_inertia'"):
+        off = TumblingModel(scene_from_dict(raw))
     np.testing.assert_allclose(on.J - off.J, on.scene.masses.inertia.sum(axis=0))
     assert np.array_equal(off.J, np.diag(off.scene.body.inertia))
 
@@ -167,7 +174,39 @@ CORRUPTIONS = [
     ),
     ("paper_example2_controlled", "control.weighting", "M^-3", "control.weighting"),
     ("paper_example2_controlled", "control.omega", _DELETE, "control.omega"),
-]
+    # an effect's constants must be given
+    ("paper_example1", "springs.k_cubic", _DELETE, "springs.k_cubic"),
+    ("paper_example1", "springs.k_linear", _DELETE, "springs.k_linear"),
+    # sizes that cannot be held: output samples, MuJoCo steps, integer literals beyond a double
+    ("paper_example1", "output.rate", 1e12, "output.rate"),
+    ("paper_example1", "output.t_end", 1e300, "output.t_end"),
+    ("paper_example1", "mujoco.timestep", 1e-12, "mujoco.timestep"),
+    ("paper_example1", "stabilization.delta1", 10**400, "stabilization.delta1"),
+    ("paper_example1", "body.inertia", [10**400, 1.0, 1.0], "body.inertia[0]"),
+    ("paper_example1", "initial.omega", [1.0, -(10**400), 0.5], "initial.omega[1]"),
+    # a horizon shorter than one MuJoCo step
+    ("paper_example1", "output.t_end", 1e-4, "output.t_end"),
+    # what MuJoCo's compiler refuses (mjMINVAL, A + B >= C) and what does not fit a double
+    ("paper_example1", "masses.mass", [5e5, 1e-20], "masses.mass[1]"),
+    ("paper_example1", "masses.mass", [5e5, 1e300], "masses.mass[1]"),
+    ("paper_example1", "body.mass", 1e-20, "body.mass"),
+    ("paper_example1", "body.mass", 1e300, "body.mass"),
+    ("paper_example1", "body.inertia", [1e-20, 1e-20, 1e-20], "body.inertia[0]"),
+    ("paper_example1", "body.inertia", [1e300, 1e300, 1e300], "body.inertia[0]"),
+    ("paper_example1", "masses.ring_radius", [1e200, 1.0], "masses.ring_radius[0]"),
+    # a flat BR (A + B = C) cannot give up the point masses' inertia padding (MuJoCo refuses it)
+    ("paper_example2", "body.inertia", [1.0, 1.0, 2.0], "body.inertia"),
+    # [thresholds]: a table of finite non-negative numbers (or {value, reason})
+    ("paper_example1", "thresholds", {"position_C": "1e-6"}, "thresholds.position_C"),
+    ("paper_example1", "thresholds", {"position_C": float("nan")}, "thresholds.position_C"),
+    ("paper_example1", "thresholds", {"position_C": -1e-6}, "thresholds.position_C"),
+    ("paper_example1", "thresholds", {"position_C": float("inf")}, "thresholds.position_C"),
+    ("paper_example1", "thresholds", {"position_C": 10**400}, "thresholds.position_C"),
+    ("paper_example1", "thresholds", {"attitude": {"valu": 1e-6}}, "thresholds.attitude.valu"),
+    ("paper_example1", "thresholds", {"attitude": {"value": 1e-6, "reason": 3}}, "thresholds.attitude.reason"),
+    ("paper_example1", "thresholds", {"hard_x": float("nan")}, "thresholds.hard_x"),
+    ("paper_example1", "thresholds", [1e-6], "thresholds"),
+]  # fmt: skip
 
 
 @pytest.mark.parametrize(("name", "key", "value", "field"), CORRUPTIONS)
@@ -221,3 +260,179 @@ def test_missing_file_and_bad_toml(tmp_path):
     bad.write_text("[scene\nname = 1")
     with pytest.raises(ValueError, match=r"^scene: not valid TOML"):
         load_scene(bad)
+
+
+# ------------------------------------------------------------------------------------------------
+# Bad input caught at load, before any work, with the field named
+# ------------------------------------------------------------------------------------------------
+
+
+def test_missing_effect_constant_is_refused_also_when_switched_on_later():
+    raw = _raw("paper_example1")
+    del raw["springs"]["k_cubic"]
+    raw["scene"]["effects"].remove("springs.cubic")
+    sc = scene_from_dict(raw)  # not needed while the effect is off
+    with pytest.raises(ValueError, match=r"^springs\.k_cubic: required by effect springs\.cubic$"):
+        sc.with_effects(sc.effects | {Effect.SPRINGS_CUBIC})
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        (
+            lambda raw: raw.update(external_torque={"constant": [1.0, 0.0, 0.0]}),
+            "external_torque: given but effect 'external_torque' is not listed in scene.effects, "
+            "so ignored",
+        ),
+        (
+            lambda raw: raw["scene"]["effects"].remove("gravity"),
+            "gravity: given but effect 'gravity' is not listed in scene.effects, so ignored",
+        ),
+        (
+            lambda raw: (
+                raw.update(external_torque={"amplitude": [0.0, 1.0, 0.0]}),
+                raw["scene"]["effects"].remove("gravity"),
+            ),
+            "gravity, external_torque: given but effects 'gravity', 'external_torque' are not "
+            "listed in scene.effects, so ignored",
+        ),
+    ],
+)
+def test_table_for_an_unlisted_effect_gives_one_warning(change, message):
+    raw = _raw("paper_example1")
+    change(raw)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        scene_from_dict(raw)
+    assert [str(w.message) for w in caught] == [message]
+
+
+def test_threshold_names_are_checked_where_they_are_resolved(tmp_path):
+    """The loader checks the table's shape; the comparison's names are refused by resolve_scene
+    (the CLI's loader) and run_validation (tests/test_faults.py) before any plant runs."""
+    text = scene_path("paper_example1").read_text(encoding="utf-8")
+    bad = tmp_path / "typo.toml"
+    bad.write_text(text + "\n[thresholds]\npositon_C = 1e-6\n", encoding="utf-8")
+    load_scene(bad)  # a table of numbers: the analytic layer keeps it
+    with pytest.raises(ValueError) as exc:
+        resolve_scene(str(bad))
+    msg = str(exc.value)
+    assert msg.startswith("thresholds.positon_C: unknown threshold (did you mean 'position_C'?")
+    assert "\n" not in msg
+    # the hard-case suite's entries, and its stated criterion as a sentence, are kept
+    ok = tmp_path / "ok.toml"
+    ok.write_text(text + '\n[thresholds]\nhard_criterion = "a sentence"\nhard_x = 1e-9\n')
+    sc = resolve_scene(str(ok))
+    assert sc.extra["thresholds"] == {"hard_criterion": "a sentence", "hard_x": 1e-9}
+
+
+@pytest.mark.parametrize(
+    ("t_end", "rate", "expected"),
+    [
+        (0.004, 100.0, [0.0, 0.004]),  # shorter than one output interval
+        (0.016, 100.0, [0.0, 0.01, 0.016]),  # t_end appended after the grid
+        (0.3, 10.0, [0.0, 0.1, 0.2, 0.3]),  # 0.3 x 10 = 3.0000000000000004 is on the grid
+        (20.0, 100.0, np.arange(2001) / 100.0),
+    ],
+)
+def test_output_grid_has_t0_and_ends_at_t_end(t_end, rate, expected):
+    t = OutputSettings(t_end=t_end, rate=rate).times()
+    np.testing.assert_allclose(t, expected, rtol=0, atol=1e-15)
+    assert t[0] == 0.0 and t[-1] == t_end
+
+
+def test_output_settings_refuse_what_cannot_be_held():
+    with pytest.raises(ValueError, match=r"^output\.rate: too large: 20 s at 1e\+12 Hz"):
+        OutputSettings(rate=1e12)
+    with pytest.raises(ValueError, match=r"^t_end: too large"):
+        OutputSettings().with_t_end(1e300)
+    for bad in (-1.0, 0.0, math.nan, math.inf, "1", True):
+        with pytest.raises(ValueError, match=r"^t_end: must be"):
+            OutputSettings().with_t_end(bad)
+    assert S.MAX_OUTPUT_SAMPLES * 8 * 100 <= 1 << 30  # 100 doubles a sample: about 1 GB at most
+
+
+def test_scene_path_must_be_a_small_regular_file(tmp_path, monkeypatch):
+    with pytest.raises(ValueError, match=r"^scene: is a directory, not a scene file \(got '"):
+        load_scene(tmp_path)
+    if Path("/dev/zero").exists():
+        with pytest.raises(ValueError, match=r"^scene: not a regular file \(got '/dev/zero'\)$"):
+            load_scene("/dev/zero")
+    huge = tmp_path / "huge.toml"
+    with open(huge, "wb") as f:  # sparse: no disk space used
+        f.truncate(S.MAX_SCENE_BYTES + 1)
+    with pytest.raises(ValueError, match=r"^scene: file larger than 1,048,576 bytes"):
+        load_scene(huge)
+    # the path is named as the user gave it
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "sub" / "bad.toml").write_text("[scene\n")
+    with pytest.raises(ValueError, match=r"^scene: not valid TOML in './sub/../sub/bad.toml'"):
+        load_scene("./sub/../sub/bad.toml")
+
+
+def test_integer_beyond_the_toml_parser_is_one_named_line(tmp_path):
+    p = tmp_path / "big.toml"
+    p.write_text("x = " + "9" * 5000 + "\n")
+    with pytest.raises(ValueError) as exc:
+        load_scene(p)
+    msg = str(exc.value)
+    assert msg.startswith(f"scene: cannot parse {str(p)!r}") and "\n" not in msg
+    assert "set_int_max_str_digits" not in msg
+
+
+# ------------------------------------------------------------------------------------------------
+# The loader's MuJoCo bounds are MuJoCo's: accepted scenes compile, refused ones would not
+# ------------------------------------------------------------------------------------------------
+
+
+def test_loader_bounds_match_mujoco_and_the_builder():
+    mujoco = pytest.importorskip("mujoco")
+    from model_xml import builder
+
+    assert S.MJ_MINVAL == mujoco.mjMINVAL
+    assert builder.POINT_INERTIA_REL is S.POINT_INERTIA_REL
+    assert builder.POINT_INERTIA_MIN is S.POINT_INERTIA_MIN
+    for name in PAPER:
+        sc = load_scene(scene_path(name))
+        eps, count = S.twin_point_inertia(sc)
+        _, pad = builder.mass_inertias(sc)
+        assert pad == eps * count
+
+
+def _compiles(sc) -> bool:
+    from model_xml import build_spec
+
+    try:
+        build_spec(sc).compile()
+    except ValueError:
+        return False
+    return True
+
+
+def test_scenes_at_the_bounds_compile_and_beyond_them_mujoco_refuses():
+    pytest.importorskip("mujoco")
+    raw = _raw("paper_example1")
+    raw["masses"]["mass"] = [S.MJ_MINVAL, S.MAX_MASS]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # MuJoCo: the inertia matrix is nearly singular
+        assert _compiles(scene_from_dict(raw))
+    # Example 2 has point masses: BR gives up 5 eps of each moment, so a flat BR needs that margin.
+    raw = _raw("paper_example2")
+    raw["body"]["inertia"] = [1.0, 1.0, 2.0]
+    with pytest.raises(ValueError, match=r"^body\.inertia: principal moments"):
+        scene_from_dict(raw)
+    ok = scene_from_dict(_raw("paper_example2"))
+    flat = ok.replace(body=dataclasses.replace(ok.body, inertia=np.array([1.0, 1.0, 2.0])))
+    assert not _compiles(flat)  # what the loader refused, MuJoCo's compiler refuses too
+    eps, count = S.twin_point_inertia(flat)
+    raw["body"]["inertia"] = [1.0, 1.0, 2.0 - eps * count]
+    assert _compiles(scene_from_dict(raw))
+    # a mass's own inertia must satisfy A + B >= C
+    raw = _raw("paper_example1")
+    del raw["masses"]["ring_radius"]
+    raw["masses"]["inertia_body"] = [np.diag([1.0, 1.0, 2.001]).tolist(), np.eye(3).tolist()]
+    with pytest.raises(ValueError, match=r"^masses\.inertia_body\[0\]: principal moments"):
+        scene_from_dict(raw)
+    raw["masses"]["inertia_body"][0] = np.diag([1.0, 1.0, 2.0]).tolist()
+    assert _compiles(scene_from_dict(raw))

@@ -21,11 +21,14 @@ from scipy.linalg import expm
 from scipy.spatial.transform import Rotation
 
 import analytic
+from mj_bridge.plants import PinocchioPlant
 from validation import sweep
 from validation.scenes import resolve_scene
 from validation.summary import drift_figures
 
 SCENE = "paper_example1_controlled"
+HAS_PIN = not PinocchioPlant.unavailable()
+needs_pin = pytest.mark.skipif(not HAS_PIN, reason="Pinocchio (pin) is not installed")
 
 
 @pytest.fixture(scope="module")
@@ -50,7 +53,10 @@ def _ok(result, engine, method):
 
 def test_every_setting_of_the_grid_is_reported(result):
     cfg = sweep.SweepConfig.quick()
-    expected = len(cfg.solvers) * len(cfg.rtols) + len(cfg.integrators) * len(cfg.dts)
+    scipy_plants = 2 if HAS_PIN else 1  # the analytic engine and, when installed, Pinocchio
+    expected = scipy_plants * len(cfg.solvers) * len(cfg.rtols) + len(cfg.integrators) * len(
+        cfg.dts
+    )
     assert len(result.runs) == expected
     assert [r["run_id"] for r in result.runs] == list(range(expected))
     for r in result.runs:
@@ -158,7 +164,9 @@ def test_cheapest_setting_table(result):
     """For each level: the pick is below the level and no cheaper qualifying run exists."""
     levels = sweep.SweepConfig.quick().levels
     assert levels == tuple(10.0**-k for k in range(3, 11))
-    for engine in ("analytic", "mujoco"):
+    engines = ["analytic", "mujoco"] + (["pinocchio"] if HAS_PIN else [])
+    assert list(result.cheapest) == engines
+    for engine in engines:
         cands_all = [r for r in result.runs if r["engine"] == engine and r["status"] == "ok"]
         for lv in levels:
             pick = result.cheapest[engine][lv]
@@ -178,7 +186,7 @@ def test_cheapest_setting_table(result):
         .splitlines()
         if line.startswith("| ") and line.split("|")[1].strip().isdigit()
     }
-    for engine in ("analytic", "mujoco"):
+    for engine in engines:
         for lv, rid in result.cheapest[engine].items():
             if rid is not None:
                 assert "★" in md_rows[rid] and f"{lv:.0e}" in md_rows[rid]
@@ -206,6 +214,77 @@ def test_files_complete_and_written_atomically(result):
     store = RrdReader(str(result.files["rrd"])).store()  # raises without the footer
     ents = {str(e) for e in store.schema().entity_paths()}
     assert "/work_precision/mujoco/RK4" in ents and "/work_precision/analytic/DOP853" in ents
+    if HAS_PIN:
+        assert {f"/work_precision/pinocchio/{m}" for m in sweep.SweepConfig.quick().solvers} <= ents
+
+
+@needs_pin
+def test_pinocchio_series_errors_fall_with_rtol_like_the_analytic_ones(result):
+    """The Pinocchio plant integrates the same motion in other coordinates: over the same solvers
+    and rtols its error against the (analytic) reference falls with rtol by orders of magnitude, to
+    the level the analytic engine reaches (no model difference left above ~1e-10), and with DOP853
+    it stays within a small factor of the analytic engine's at every rtol."""
+    cfg = sweep.SweepConfig.quick()
+    for method in cfg.solvers:
+        rows = _ok(result, "pinocchio", method)
+        assert [r["rtol"] for r in rows] == list(cfg.rtols), method  # every setting ran ok
+        errs = [r["error"] for r in rows]
+        assert errs[-1] <= 1e-2 * errs[0], (method, errs)
+        for a, b in itertools.pairwise(errs):
+            assert b <= 2 * a, (method, errs)  # monotone within a factor 2
+        assert errs[-1] < 1e-10, (method, errs)
+        for r in rows:
+            assert r["nfev"] > 0 and r["wall_time_s"] > 0 and r["wall_time_repeats"] >= 1
+            assert r["setting_name"] == "rtol" and r["atol"] == pytest.approx(
+                r["rtol"] * cfg.atol_ratio
+            )
+    dop_p = [r["error"] for r in _ok(result, "pinocchio", "DOP853")]
+    dop_a = [r["error"] for r in _ok(result, "analytic", "DOP853")]
+    assert dop_p[-1] < 1e-5 * dop_p[0]  # as for the analytic engine
+    for ep, ea in zip(dop_p, dop_a, strict=True):
+        assert ea / 5 < ep < 5 * ea, (dop_p, dop_a)
+    # tracking: accurate Pinocchio runs report the same closed-form e_ω(T) as the analytic ones
+    acc = [r for r in result.runs if r["status"] == "ok" and r["error"] < 1e-8]
+    track = {r["engine"]: r["tracking_omega_final"] for r in acc}
+    assert track["pinocchio"] == pytest.approx(track["analytic"], rel=1e-6)
+    md = result.files["md"].read_text()
+    assert "## Pinocchio and the analytic engine at the same setting" in md
+    assert "| level | analytic | mujoco | pinocchio |" in md
+    doc = json.loads(result.files["json"].read_text())
+    assert doc["skipped_series"] == [] and result.skipped_series == {}
+    assert {"engine": "pinocchio", "method": "DOP853"} in doc["series"]
+    csv_engines = {r["engine"] for r in sweep.read_csv(result.files["csv"])}
+    assert csv_engines == {"analytic", "mujoco", "pinocchio"}
+
+
+def test_sweep_without_pinocchio_says_the_series_was_skipped(tmp_path, monkeypatch):
+    """Without pin the sweep runs the other plants and says, in sweep.md and sweep.json, that the
+    Pinocchio series was skipped and why."""
+    reason = "the Pinocchio plant needs the 'pin' package (>= 4.1) [test]"
+    monkeypatch.setattr(PinocchioPlant, "unavailable", classmethod(lambda cls: reason))
+
+    def never(*_a, **_k):
+        raise AssertionError("a Pinocchio run was attempted without pin")
+
+    monkeypatch.setattr(sweep, "_pinocchio_run", never)
+    with ThreadPoolExecutor(max_workers=2) as ex:  # threads: the patches hold in the workers
+        res = sweep.run_sweep(SCENE, tmp_path / "out", executor=ex, config=_tiny())
+    assert {r["engine"] for r in res.runs} == {"analytic", "mujoco"}
+    assert all(r["status"] == "ok" for r in res.runs)
+    assert res.skipped_series == {"pinocchio": reason}
+    assert list(res.cheapest) == ["analytic", "mujoco"]
+    md = res.files["md"].read_text()
+    assert f"Pinocchio series skipped: pin is not installed ({reason})" in md
+    assert "| level | analytic | mujoco | pinocchio |" in md and "series skipped |" in md
+    doc = json.loads(res.files["json"].read_text())
+    assert doc["skipped_series"] == [
+        {
+            "engine": "pinocchio",
+            "reason": reason,
+            "note": f"Pinocchio series skipped: pin is not installed ({reason})",
+        }
+    ]
+    assert all(s["engine"] != "pinocchio" for s in doc["series"])
 
 
 def test_effects_rows(result, scene):
@@ -266,6 +345,49 @@ def test_series_stops_when_too_slow_and_reports_it(scene, result, monkeypatch):
     assert [r["rtol"] for r in rows_a] == list(cfg_a.rtols)
     statuses = [r["status"] for r in rows_a]
     assert statuses == ["ok", "too_slow"] + ["skipped"] * (len(statuses) - 2), rows_a
+
+
+@needs_pin
+def test_pinocchio_series_keeps_the_budget_and_a_real_interrupt_stops_the_sweep(
+    scene, result, monkeypatch
+):
+    """The Pinocchio series is stopped for its budget as the analytic one is (made-up clock, as
+    above); a KeyboardInterrupt that is not the budget's (Ctrl-C) is not taken for 'too slow': it
+    propagates out of the run and the series."""
+    ref = sweep.ref_samples(sweep.reference_run(scene, 0.5, result.reference["max_step"]))
+
+    class Clock:
+        now = 0.0
+
+        def perf_counter(self):
+            self.now += 1e-3
+            return self.now
+
+    monkeypatch.setattr(sweep, "time", Clock())
+    cfg = dataclasses.replace(sweep.SweepConfig.quick(), max_run_wall_s=0.03)
+    rows = sweep.run_series(scene, "pinocchio", "Radau", cfg, ref)
+    statuses = [r["status"] for r in rows]
+    assert statuses == ["ok", "too_slow"] + ["skipped"] * (len(statuses) - 2), rows
+    assert "interrupted after 0.03 s" in rows[1]["note"]
+
+    class CtrlC:
+        """A user's Ctrl-C arriving inside the run (at the third clock reading: in progress)."""
+
+        calls = 0
+
+        def perf_counter(self):
+            self.calls += 1
+            if self.calls >= 3:
+                raise KeyboardInterrupt
+            return 0.0
+
+    monkeypatch.setattr(sweep, "time", CtrlC())
+    with pytest.raises(KeyboardInterrupt) as info:
+        sweep._pinocchio_run(scene, "DOP853", 1e-6, 1e-7, 0.5, budget=100.0)
+    assert not isinstance(info.value, sweep._TooSlow)
+    monkeypatch.setattr(sweep, "time", CtrlC())
+    with pytest.raises(KeyboardInterrupt):
+        sweep.run_series(scene, "pinocchio", "DOP853", cfg, ref)
 
 
 def test_divergence_stops_a_series(scene, result, monkeypatch):
@@ -343,3 +465,52 @@ def test_goal_same_accuracy_search():
             )
     assert Goal("x", 1.0, 1.0).holds and not Goal("x", 1.01, 1.0).holds
     assert not Goal("x", math.nan, 1.0).holds
+
+
+def test_pinocchio_goal_is_skipped_with_its_reason_without_pin(monkeypatch, tmp_path):
+    """No timing: the goal is skipped before anything runs; bench prints and writes it as
+    skipped, neither holding nor failing, and names no issue numbers."""
+    from validation import bench, goals
+
+    monkeypatch.setattr(
+        PinocchioPlant, "unavailable", classmethod(lambda cls: "no pin here [test]")
+    )
+    g = goals.goal_pinocchio(progress=lambda _s: pytest.fail("nothing is measured"))
+    assert g.skipped == "pin is not installed: no pin here [test]"
+    assert g.verdict == "SKIPPED" and not g.holds and g.limit == 3.0
+    assert g.line() == f"{g.name}: skipped (pin is not installed: no pin here [test])"
+
+    done = goals.Goal("a measured goal", 0.5, 1.0, "detail")
+    monkeypatch.setattr(goals, "measure", lambda skip_long, progress: [done, g])
+    monkeypatch.setattr(bench, "evaluation_table", lambda: [])
+    lines: list[str] = []
+    path = tmp_path / "bench.json"
+    assert bench.run(True, str(path), out=lines.append)  # a skipped goal does not fail the run
+    text = "\n".join(lines)
+    assert "issue" not in text.lower()
+    assert f"SKIPPED  {g.name}: pin is not installed" in text
+    assert "HOLDS  a measured goal: 0.5" in text
+    doc = json.loads(path.read_text())
+    by_name = {d["name"]: d for d in doc["goals"]}
+    assert by_name[g.name]["verdict"] == "SKIPPED" and by_name[g.name]["ratio"] is None
+    assert by_name[g.name]["skipped"].startswith("pin is not installed")
+    assert by_name["a measured goal"]["verdict"] == "HOLDS"
+
+
+@needs_pin
+def test_pinocchio_goal_structure():
+    """The goal's bookkeeping on a short horizon (speeds are not asserted): warm run first, then
+    interleaved rounds alternating who goes first, ratio = the ratio of the median walls, and both
+    plants ran the same motion."""
+    from validation.goals import goal_pinocchio
+
+    g = goal_pinocchio(t_end=0.5, rounds=3, progress=lambda _s: None)
+    d = g.data
+    assert not g.skipped and g.limit == 3.0
+    assert len(d["analytic_s"]) == len(d["pinocchio_s"]) == 3
+    a_first, p_first = ["analytic", "pinocchio"], ["pinocchio", "analytic"]
+    assert d["order"] == [a_first, p_first, a_first]
+    assert d["analytic_median_s"] == sorted(d["analytic_s"])[1]
+    assert g.value == pytest.approx(d["pinocchio_median_s"] / d["analytic_median_s"])
+    assert d["max_distance_C_m"] < 1e-9  # same motion (C falls ~1.2 m in 0.5 s)
+    assert g.verdict in {"HOLDS", "FAILS"}

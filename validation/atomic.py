@@ -19,6 +19,10 @@ import uuid
 from collections.abc import Callable
 from pathlib import Path
 
+WRITE_CHUNK = 1 << 20
+"""Bytes per ``os.write`` call (1 MiB): large enough to cost nothing, small enough that a full disk
+is met part way through a recording rather than after one huge call."""
+
 
 class OutputError(OSError):
     """A result could not be written (full disk, permissions ...); the target is unchanged.
@@ -62,17 +66,19 @@ def write_bytes(
     tmp = _temp_name(path)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        # "x": never follow or reuse an existing name; mode 0o666 & ~umask like any new file.
-        with open(tmp, "xb") as f:
+        # O_EXCL: never follow or reuse an existing name; mode 0o666 & ~umask like any new file.
+        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_CLOEXEC", 0), 0o666)
+        try:
             view = memoryview(data)
-            while view:  # a short write (full disk) returns fewer bytes: loop until an error
-                n = f.write(view)
-                if not n:
+            while view:  # a short write (a disk filling up) writes fewer bytes: go on until it errs
+                n = os.write(fd, view[:WRITE_CHUNK])
+                if n <= 0:
                     raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
                 view = view[n:]
-            f.flush()
-            os.fsync(f.fileno())
-            size = os.fstat(f.fileno()).st_size
+            os.fsync(fd)
+            size = os.fstat(fd).st_size
+        finally:
+            os.close(fd)
         if size != len(data):
             raise OSError(errno.EIO, f"wrote {size} of {len(data)} bytes")
         if check is not None:

@@ -118,7 +118,13 @@ def cmd_validate(args: argparse.Namespace) -> int:
 
     try:
         res = run_validation(
-            scene, out, integrator=args.integrator, dt=args.dt, t_end=args.t_end, progress=progress
+            scene,
+            out,
+            integrator=args.integrator,
+            dt=args.dt,
+            t_end=args.t_end,
+            progress=progress,
+            plants=args.plants,
         )
     finally:
         prog.close()
@@ -130,6 +136,11 @@ def cmd_validate(args: argparse.Namespace) -> int:
     for c in res.checks:
         if not c.passed:
             print(f"  failed: {c.label}: {c.value:.3e} > {c.threshold:.3e} {c.unit}")
+    from validation.referee import VerdictKind
+
+    for v in res.verdicts:
+        if v.kind is not VerdictKind.AGREE:
+            print(f"  referee: {v.text}")
     print(f"report: {res.out_dir / 'report.md'}  recording: {res.out_dir / 'run.rrd'}")
     return 0 if res.passed else EXIT_FAILED
 
@@ -271,6 +282,11 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--dt", type=_positive_float, help="MuJoCo timestep in seconds")
     p.add_argument("--t-end", type=_positive_float, help="horizon in seconds")
+    p.add_argument(
+        "--plants",
+        help="comma-separated plants to run (default: every installed one of "
+        "analytic,mujoco,pinocchio; with all three the referee names an outlier)",
+    )
     p.set_defaults(func=cmd_validate)
 
     p = sub.add_parser(

@@ -21,8 +21,10 @@ Each check compares one summarised value with a named threshold from :mod:`valid
 
 from __future__ import annotations
 
+import dataclasses
+import itertools
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from enum import StrEnum
 from typing import Any
@@ -30,7 +32,7 @@ from typing import Any
 import numpy as np
 from scipy.linalg import expm
 
-from analytic.trajectory import RunStatus, Trajectory
+from analytic.trajectory import Engine, RunStatus, Trajectory
 from validation.thresholds import Threshold, thresholds_for
 
 # Two sample times are the same sample when they agree to this (s).
@@ -47,11 +49,35 @@ class Group(StrEnum):
 
 
 class Subject(StrEnum):
-    """Whose quantity a series or check is: the difference of the plants, or one plant."""
+    """Whose quantity a series or check is: the difference of two plants, or one plant."""
 
     BOTH = "analytic vs mujoco"
+    ANALYTIC_PINOCCHIO = "analytic vs pinocchio"
+    MUJOCO_PINOCCHIO = "mujoco vs pinocchio"
     ANALYTIC = "analytic"
     MUJOCO = "mujoco"
+    PINOCCHIO = "pinocchio"
+
+    @classmethod
+    def pair(cls, a: str, b: str) -> Subject:
+        """The subject of the difference of plants ``a`` and ``b`` (engine names, either order)."""
+        order = [e.value for e in Engine]
+        first, second = sorted((str(a), str(b)), key=order.index)
+        return cls(f"{first} vs {second}")
+
+    @property
+    def is_pair(self) -> bool:
+        return " vs " in self.value
+
+    @property
+    def plants(self) -> tuple[str, ...]:
+        """The engine names this subject is about (two for a pair)."""
+        return tuple(self.value.split(" vs "))
+
+    @property
+    def slug(self) -> str:
+        """``analytic_vs_mujoco``: the subject in keys, labels and entity paths."""
+        return self.value.replace(" vs ", "_vs_")
 
 
 def _frozen(a: Any) -> np.ndarray:
@@ -158,7 +184,11 @@ class Check:
 
     @property
     def label(self) -> str:
-        return self.name if self.subject is Subject.BOTH else f"{self.subject.value}.{self.name}"
+        """``position_C`` (analytic vs MuJoCo), ``analytic_vs_pinocchio.position_C``,
+        ``mujoco.energy``: unique within a comparison."""
+        if self.subject is Subject.BOTH:
+            return self.name
+        return f"{self.subject.slug}.{self.name}"
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -281,6 +311,19 @@ def _common(a: Trajectory, b: Trajectory) -> int:
 # ----------------------------------------------------------------------------------------------
 
 
+def pair_subject(a: Trajectory, b: Trajectory) -> Subject:
+    """The subject of ``a`` vs ``b``; two runs of one engine are compared as the reference pair."""
+    if a.engine is b.engine:
+        return Subject.BOTH
+    return Subject.pair(a.engine.value, b.engine.value)
+
+
+def diff_key(subject: Subject, name: str) -> str:
+    """Key of a difference series: ``diff.<name>`` for analytic vs MuJoCo (the two-plant report's
+    keys), ``diff_<pair slug>.<name>`` for any other pair."""
+    return f"diff.{name}" if subject is Subject.BOTH else f"diff_{subject.slug}.{name}"
+
+
 def difference_series(a: Trajectory, b: Trajectory) -> tuple[Series, ...]:
     """Differences of two plants on their common samples (see the module docstring)."""
     if a.n != b.n:
@@ -288,7 +331,7 @@ def difference_series(a: Trajectory, b: Trajectory) -> tuple[Series, ...]:
     k = _common(a, b)
     t = a.t[:k]
     qa, qb, va, vb = a.q[:k], b.q[:k], a.qdot[:k], b.qdot[:k]
-    D, S = Group.DIFFERENCE, Subject.BOTH
+    D, S = Group.DIFFERENCE, pair_subject(a, b)
     rows = [
         ("position_C", "position of C |R_a − R_m|", "m", _norm(qa[:, :3] - qb[:, :3])),
         (
@@ -319,7 +362,7 @@ def difference_series(a: Trajectory, b: Trajectory) -> tuple[Series, ...]:
             _maxabs(a.rod_forces[:k] - b.rod_forces[:k]),
         ),
     ]
-    return tuple(Series(f"diff.{n}", lab, u, D, S, t, v) for n, lab, u, v in rows)
+    return tuple(Series(diff_key(S, n), lab, u, D, S, t, v) for n, lab, u, v in rows)
 
 
 def omega_error_reference(t: np.ndarray, e0: np.ndarray, gain: np.ndarray) -> np.ndarray:
@@ -498,6 +541,7 @@ def compare(
             )
 
     if mujoco is not None:
+        pair = pair_subject(analytic, mujoco)
         diffs = difference_series(analytic, mujoco)
         series.extend(diffs)
         by = {s.name: s for s in diffs}
@@ -510,11 +554,11 @@ def compare(
             "rod_velocities",
             "angular_velocity",
         ):
-            checks.append(_bound_check(th[name], Subject.BOTH, by[name]))
+            checks.append(_bound_check(th[name], pair, by[name]))
         checks.append(
             _bound_check(
                 th["control_torque"],
-                Subject.BOTH,
+                pair,
                 by["control_torque"],
                 _scale_max(analytic.torque[:k]),
             )
@@ -523,7 +567,7 @@ def compare(
             checks.append(
                 _bound_check(
                     th["rod_forces"],
-                    Subject.BOTH,
+                    pair,
                     by["rod_forces"],
                     float(np.max(np.abs(analytic.rod_forces[:k]), initial=0.0)),
                 )
@@ -571,6 +615,44 @@ def compare(
     )
 
 
+def compare_plants(
+    plants: Sequence[Trajectory],
+    scene: Any = None,
+    thresholds: Mapping[str, Threshold] | None = None,
+    t_end: float | None = None,
+) -> Comparison:
+    """Compare every pair of plants, and check each plant once.
+
+    The first plant is the reference of the first pair (the two-plant comparison of
+    :func:`compare`, keys ``diff.<name>``); every other pair adds its difference series
+    (``diff_<pair>.<name>``) and checks (labels ``<pair>.<name>``) under the same thresholds, and
+    every plant after the second adds its own checks (tracking, invariants).
+
+    Args:
+        plants: one trajectory per plant, in report order (the analytic plant first).
+        scene, thresholds, t_end: as for :func:`compare`.
+    """
+    if not plants:
+        raise ValueError("plants: no trajectory to compare")
+    first = compare(plants[0], plants[1] if len(plants) > 1 else None, scene, thresholds, t_end)
+    series, checks, notes = list(first.series), list(first.checks), list(first.notes)
+    for i, j in itertools.combinations(range(len(plants)), 2):
+        if (i, j) == (0, 1):
+            continue
+        c = compare(plants[i], plants[j], scene, first.thresholds, t_end)
+        pair = pair_subject(plants[i], plants[j])
+        series += [x for x in c.series if x.subject is pair]
+        checks += [x for x in c.checks if x.subject is pair]
+        if i == 0:  # plant j's own series and checks, once
+            own = Subject(plants[j].engine.value)
+            series += [x for x in c.series if x.subject is own]
+            checks += [x for x in c.checks if x.subject is own]
+            notes += [n for n in c.notes if n not in notes]
+    return dataclasses.replace(
+        first, series=tuple(series), checks=tuple(checks), notes=tuple(notes)
+    )
+
+
 __all__ = [
     "Check",
     "Comparison",
@@ -580,8 +662,11 @@ __all__ = [
     "Summary",
     "attitude_angle",
     "compare",
+    "compare_plants",
+    "diff_key",
     "difference_series",
     "mass_error_reference",
     "omega_error_reference",
+    "pair_subject",
     "plant_series",
 ]

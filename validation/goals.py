@@ -1,4 +1,4 @@
-"""The fast engine's goals (issue 5), each measured as a ratio in this one process, with whether it
+"""The fast engine's speed goals, each measured as a ratio in this one process, with whether it
 holds. Numbers are printed, never asserted (tests cover correctness, not speed).
 
 ``python -m validation.bench [--skip-long]`` (or ``tumble bench``) prints these:
@@ -21,6 +21,13 @@ holds. Numbers are printed, never asserted (tests cover correctness, not speed).
    reached within the time cap, the RK4 cost at the needed dt is extrapolated from its observed
    order and the ratio is marked as extrapolated. Holds when ≤ 1.
 4. **n scaling**: cost of one fast evaluation at n = 1000 / at n = 10. Holds when ≤ 150.
+5. **Pinocchio plant**: the controlled Example 1 over 20 s, DOP853 at rtol 1e-12 (atol 1e-13), on
+   the Pinocchio plant / on the analytic plant, both through the plant protocol
+   (``plant(name).simulate``). Each plant runs once first (compilation, cache loads), then the two
+   alternate for ``rounds`` repeats; the ratio is of the median walls (the integration, as each
+   plant measures it in ``info["wall_time_s"]``; the whole ``simulate`` call is printed too). Holds
+   when ≤ 3. Skipped, with the reason printed, when Pinocchio (``pin``) is not installed; it takes a
+   few seconds, so ``--skip-long`` keeps it.
 
 Timings are medians over interleaved rounds (both sides of a ratio measured alternately), with one
 BLAS thread.
@@ -53,12 +60,23 @@ class Goal:
     detail: str = ""
     extrapolated: bool = False
     data: dict[str, Any] = field(default_factory=dict)
+    skipped: str = ""
+    """Why the goal was not measured ("" when it was); a skipped goal neither holds nor fails."""
 
     @property
     def holds(self) -> bool:
-        return bool(math.isfinite(self.value) and self.value <= self.limit)
+        return bool(not self.skipped and math.isfinite(self.value) and self.value <= self.limit)
+
+    @property
+    def verdict(self) -> str:
+        """``HOLDS``, ``FAILS`` or ``SKIPPED``."""
+        if self.skipped:
+            return "SKIPPED"
+        return "HOLDS" if self.holds else "FAILS"
 
     def line(self) -> str:
+        if self.skipped:
+            return f"{self.name}: skipped ({self.skipped})"
         verdict = "holds" if self.holds else "fails"
         if self.extrapolated:
             verdict += " (extrapolated)"
@@ -266,6 +284,95 @@ def goal_scaling(rounds: int = 9) -> Goal:
     )
 
 
+PINOCCHIO_GOAL = (
+    "Pinocchio plant: 20 s controlled Example 1 at rtol 1e-12, Pinocchio wall / analytic wall"
+)
+PINOCCHIO_LIMIT = 3.0
+
+
+def goal_pinocchio(
+    t_end: float = 20.0,
+    rounds: int = 7,
+    scene_name: str = "paper_example1_controlled",
+    progress: Callable[[str], None] = print,
+) -> Goal:
+    """Goal 5 (see the module docstring): the Pinocchio plant's wall over the analytic plant's.
+
+    ``data`` holds every wall (``analytic_s``, ``pinocchio_s``: integration; ``*_call_s``: the whole
+    ``simulate`` call), their medians, the order of the rounds and the two plants' agreement (max
+    distance between their positions of C, m) as a check that both ran the same motion.
+    """
+    from mj_bridge.plants import AnalyticSettings, PinocchioPlant, PinocchioSettings, plant
+    from validation.scenes import resolve_scene
+
+    why = PinocchioPlant.unavailable()
+    if why:
+        return Goal(
+            PINOCCHIO_GOAL, math.nan, PINOCCHIO_LIMIT, skipped=f"pin is not installed: {why}"
+        )
+    sc = resolve_scene(scene_name)
+    runs = {
+        "analytic": (plant("analytic"), AnalyticSettings("DOP853", 1e-12, 1e-13)),
+        "pinocchio": (plant("pinocchio"), PinocchioSettings("DOP853", 1e-12, 1e-13)),
+    }
+
+    def once(name: str):
+        pl, settings = runs[name]
+        t0 = time.perf_counter()
+        tr = pl.simulate(sc, settings, t_end=t_end).raise_if_interrupted()
+        call = time.perf_counter() - t0
+        if tr.status.value != "ok":
+            raise RuntimeError(f"{name} plant: {tr.message}")
+        return tr, float(tr.info["wall_time_s"]), call
+
+    try:
+        first = {name: once(name) for name in runs}  # warm: compilation and cache loads
+        walls: dict[str, list[float]] = {name: [] for name in runs}
+        calls: dict[str, list[float]] = {name: [] for name in runs}
+        order = []
+        for k in range(rounds):
+            names = list(runs) if k % 2 == 0 else list(reversed(runs))  # alternate who goes first
+            order.append(names)
+            for name in names:
+                _, wall, call = once(name)
+                walls[name].append(wall)
+                calls[name].append(call)
+    except (RuntimeError, ValueError) as exc:
+        return Goal(PINOCCHIO_GOAL, math.inf, PINOCCHIO_LIMIT, f"a run failed: {exc}")
+    tr_a, tr_p = first["analytic"][0], first["pinocchio"][0]
+    dR = float(np.max(np.linalg.norm(tr_a.R - tr_p.R, axis=1)))
+    med = {name: statistics.median(v) for name, v in walls.items()}
+    med_call = {name: statistics.median(v) for name, v in calls.items()}
+    progress(
+        f"  {t_end:g} s, DOP853 rtol 1e-12: analytic {med['analytic']:.3f} s "
+        f"(nfev {tr_a.info['nfev']}), Pinocchio {med['pinocchio']:.3f} s "
+        f"(nfev {tr_p.info['nfev']}); median of {rounds} interleaved rounds"
+    )
+    return Goal(
+        PINOCCHIO_GOAL,
+        med["pinocchio"] / med["analytic"],
+        PINOCCHIO_LIMIT,
+        f"analytic {med['analytic']:.3f} s, Pinocchio {med['pinocchio']:.3f} s (integration, "
+        f"median of {rounds}); whole simulate call {med_call['analytic']:.3f} s / "
+        f"{med_call['pinocchio']:.3f} s ({med_call['pinocchio'] / med_call['analytic']:.2f}x); "
+        f"nfev {tr_a.info['nfev']} / {tr_p.info['nfev']}; the two plants' C within {dR:.2g} m",
+        data={
+            "t_end_s": t_end,
+            "rounds": rounds,
+            "analytic_s": walls["analytic"],
+            "pinocchio_s": walls["pinocchio"],
+            "analytic_call_s": calls["analytic"],
+            "pinocchio_call_s": calls["pinocchio"],
+            "analytic_median_s": med["analytic"],
+            "pinocchio_median_s": med["pinocchio"],
+            "warm_s": {name: first[name][1] for name in runs},
+            "order": order,
+            "nfev": {"analytic": tr_a.info["nfev"], "pinocchio": tr_p.info["nfev"]},
+            "max_distance_C_m": dR,
+        },
+    )
+
+
 def measure(skip_long: bool = False, progress: Callable[[str], None] = print) -> list[Goal]:
     from analytic import fast
 
@@ -278,6 +385,8 @@ def measure(skip_long: bool = False, progress: Callable[[str], None] = print) ->
         goals.append(goal_controller_in_rk4(name))
         progress(goals[-1].line())
     goals.append(goal_scaling())
+    progress(goals[-1].line())
+    goals.append(goal_pinocchio(progress=progress))
     progress(goals[-1].line())
     if not skip_long:
         goals.append(goal_example1_60s(progress=progress))

@@ -54,7 +54,14 @@ ANALYTIC_RGBA = {
     "torque": (200, 60, 200, 255),
 }
 GHOST_ALPHA = 70
-PLANT_COLOR = {Subject.ANALYTIC: (31, 119, 180, 255), Subject.MUJOCO: (255, 127, 14, 255)}
+PLANT_COLOR = {
+    Subject.ANALYTIC: (31, 119, 180, 255),
+    Subject.MUJOCO: (255, 127, 14, 255),
+    Subject.PINOCCHIO: (44, 160, 44, 255),
+    Subject.BOTH: (214, 39, 40, 255),
+    Subject.ANALYTIC_PINOCCHIO: (148, 103, 189, 255),
+    Subject.MUJOCO_PINOCCHIO: (140, 86, 75, 255),
+}
 
 
 def _xyzw(u_wxyz: np.ndarray) -> np.ndarray:
@@ -197,8 +204,8 @@ def log_run(
     narrative: str = "",
     prefix: str = "",
 ) -> tuple[list[str], ArrowScales]:
-    """Log one run (one or two plants) into ``rec`` under ``prefix``; returns the entity paths and
-    the arrow scales. The first plant is drawn solid, any other as a translucent ghost."""
+    """Log one run (one plant or several) into ``rec`` under ``prefix``; returns the entity paths
+    and the arrow scales. The first plant is drawn solid, every other as a translucent ghost."""
     import rerun as rr
 
     p0 = f"/{prefix.strip('/')}" if prefix.strip("/") else ""
@@ -314,7 +321,13 @@ def log_run(
                 continue
             if s.subject is Subject.BOTH:
                 path = f"{p0}/plots/errors/{s.name}"
-                name, color = f"log10 {s.label} [{s.unit}]", (214, 39, 40, 255)
+                name, color = f"log10 {s.label} [{s.unit}]", PLANT_COLOR[s.subject]
+            elif s.subject.is_pair:
+                path = f"{p0}/plots/errors/{s.name}/{s.subject.slug}"
+                name, color = (
+                    f"{s.subject.value}: log10 {s.name} [{s.unit}]",
+                    PLANT_COLOR[s.subject],
+                )
             else:
                 folder = "invariants" if s.group is Group.INVARIANT else s.group.value
                 path = f"{p0}/plots/{folder}/{s.name}/{s.subject.value}"
@@ -344,14 +357,23 @@ def default_narrative(
 ) -> str:
     """A short markdown text saying what the run is."""
     lines = [f"# {scene.name}", "", scene.description, ""]
-    names = " and ".join(p.engine.value for p in plants)
+    engines = [p.engine.value for p in plants]
+    names = (
+        " and ".join(engines)
+        if len(engines) < 3
+        else ", ".join(engines[:-1]) + f" and {engines[-1]}"
+    )
     lines.append(
-        f"Plants: {names}, both under the same analytic controller (Udwadia–Kalaba, Eq. 89)."
+        f"Plants: {names}, all under the same analytic controller (Udwadia–Kalaba, Eq. 89)."
         if len(plants) > 1
         else f"Plant: {names}."
     )
     if len(plants) > 1:
-        lines.append("The MuJoCo body is the translucent ghost over the analytic one.")
+        ghosts = " and ".join(engines[1:])
+        lines.append(
+            f"The {ghosts} bod{'ies are' if len(engines) > 2 else 'y is'} drawn as translucent "
+            f"ghost{'s' if len(engines) > 2 else ''} over the {engines[0]} one."
+        )
     lines += [
         "",
         f"Effects: {', '.join(sorted(e.value for e in scene.effects))}.",
@@ -382,9 +404,13 @@ def blueprint_for(
     p0 = f"/{prefix.strip('/')}" if prefix.strip("/") else ""
     plots = []
     if comparison is not None and two_plants:
-        plots.append(
-            rrb.TimeSeriesView(origin=f"{p0}/plots/errors", name="log10 |analytic − MuJoCo|")
+        pairs = {x.subject for x in comparison.series if x.subject.is_pair}
+        title = (
+            "log10 |analytic − MuJoCo|"
+            if pairs == {Subject.BOTH}
+            else "log10 differences of each pair of plants"
         )
+        plots.append(rrb.TimeSeriesView(origin=f"{p0}/plots/errors", name=title))
     if comparison is not None:
         groups = {s.group for s in comparison.series}
         if Group.TRACKING in groups:
@@ -402,7 +428,14 @@ def blueprint_for(
     plots.append(rrb.Tabs(*ctrl) if len(ctrl) > 1 else ctrl[0])
     view3d = rrb.Spatial3DView(
         origin=f"{p0}/world" if p0 else "/world",
-        name="analytic (solid) and MuJoCo (ghost)" if two_plants else "3D",
+        name=(
+            "first plant solid, the others as ghosts"
+            if comparison is not None
+            and len({x.subject for x in comparison.series if x.subject.is_pair}) > 1
+            else "analytic (solid) and MuJoCo (ghost)"
+            if two_plants
+            else "3D"
+        ),
         eye_controls=rrb.EyeControls3D(tracking_entity=f"{p0}/world/analytic/body"),
     )
     return rrb.Horizontal(

@@ -33,13 +33,18 @@ import numpy as np
 from analytic.trajectory import Trajectory
 from validation.atomic import write_bytes
 from validation.compare import Comparison, Group, Series, Subject
+from validation.referee import LABELS, Verdict, summary_lines
 
 PLANT_STYLE = {
     Subject.ANALYTIC: {"color": "tab:blue", "linestyle": "-"},
     Subject.MUJOCO: {"color": "tab:orange", "linestyle": "--"},
+    Subject.PINOCCHIO: {"color": "tab:green", "linestyle": ":"},
     Subject.BOTH: {"color": "tab:red", "linestyle": "-"},
+    Subject.ANALYTIC_PINOCCHIO: {"color": "tab:purple", "linestyle": "-"},
+    Subject.MUJOCO_PINOCCHIO: {"color": "tab:brown", "linestyle": "--"},
 }
 FIGURES = ("errors", "tracking", "invariants", "control")
+_LINESTYLE_NAME = {"-": "solid", "--": "dashed", ":": "dotted"}
 
 
 # ----------------------------------------------------------------------------------------------
@@ -129,7 +134,7 @@ def _log_plot(ax, series: Sequence[Series], threshold: float | None = None) -> N
     for s in series:
         v = np.where(s.values > 0, s.values, np.nan)
         style = PLANT_STYLE[s.subject]
-        label = s.subject.value if s.subject is not Subject.BOTH else s.label
+        label = s.subject.value
         if np.any(np.isfinite(v)):
             ax.plot(s.t, v, label=label, linewidth=1.2, **style)
             drawn = True
@@ -161,16 +166,22 @@ def _abs_threshold(cmp: Comparison, name: str, scale: float = 1.0) -> float | No
 
 
 def figure_errors(cmp: Comparison) -> bytes | None:
-    """Differences between the plants against time, log axes; None without a second plant."""
+    """Differences between the plants against time (one panel per quantity, one line per pair),
+    log axes; None without a second plant."""
     diffs = [s for s in cmp.series if s.group is Group.DIFFERENCE]
     if not diffs:
         return None
-    scales = {c.name: c.scale for c in cmp.checks if c.subject is Subject.BOTH}
-    fig, axes = _figure(len(diffs), f"{cmp.scene}: analytic vs MuJoCo")
-    for ax, s in zip(axes, diffs, strict=True):
-        _log_plot(ax, [s], _abs_threshold(cmp, s.name, scales.get(s.name, 1.0)))
-        ax.set_ylabel(s.unit)
-        ax.set_title(s.label, fontsize=9)
+    rows: dict[str, list[Series]] = {}
+    for s in diffs:
+        rows.setdefault(s.name, []).append(s)
+    first = {c.name: c.scale for c in reversed(cmp.checks) if c.subject.is_pair}
+    pairs = list(dict.fromkeys(s.subject.value for s in diffs))
+    fig, axes = _figure(len(rows), f"{cmp.scene}: {', '.join(pairs)}")
+    for ax, (name, ss) in zip(axes, rows.items(), strict=True):
+        _log_plot(ax, ss, _abs_threshold(cmp, name, first.get(name, 1.0)))
+        ax.set_ylabel(ss[0].unit)
+        title = ss[0].label if len(ss) == 1 else f"{LABELS.get(name, name)} ({ss[0].unit})"
+        ax.set_title(title, fontsize=9)
     axes[-1].set_xlabel("t (s)")
     return _png(fig)
 
@@ -178,7 +189,7 @@ def figure_errors(cmp: Comparison) -> bytes | None:
 def _plant_rows(cmp: Comparison, names: Sequence[str]) -> list[tuple[str, list[Series]]]:
     rows = []
     for name in names:
-        ss = [s for s in cmp.series if s.subject is not Subject.BOTH and s.name == name]
+        ss = [s for s in cmp.series if not s.subject.is_pair and s.name == name]
         if ss:
             rows.append((name, ss))
     return rows
@@ -218,7 +229,7 @@ def figure_control(plants: Sequence[Trajectory]) -> bytes | None:
     if not plants:
         return None
     n = plants[0].n
-    fig, axes = _figure(2 if n else 1, f"{plants[0].scene}: control forces of both plants")
+    fig, axes = _figure(2 if n else 1, f"{plants[0].scene}: control forces of every plant")
     for tr in plants:
         style = PLANT_STYLE[Subject(tr.engine.value)]
         for j in range(3):
@@ -240,7 +251,11 @@ def figure_control(plants: Sequence[Trajectory]) -> bytes | None:
                 color=f"C{i + 3}",
             )
     axes[0].set_ylabel("N·m")
-    axes[0].set_title("control torque, body axes (solid: analytic, dashed: MuJoCo)", fontsize=9)
+    styles = ", ".join(
+        f"{_LINESTYLE_NAME[PLANT_STYLE[Subject(tr.engine.value)]['linestyle']]}: {tr.engine.value}"
+        for tr in plants
+    )
+    axes[0].set_title(f"control torque, body axes ({styles})", fontsize=9)
     if n:
         axes[1].set_ylabel("N")
         axes[1].set_title("rod forces on the masses", fontsize=9)
@@ -269,14 +284,46 @@ def _fmt(x: float) -> str:
     return f"{x:.3e}" if x != 0 else "0"
 
 
+def _referee_lines(verdicts: Sequence[Verdict], meta: Mapping[str, Any]) -> list[str]:
+    """The referee's section: one sentence per quantity, then the pairwise table."""
+    if not verdicts:
+        note = meta.get("referee_note", "")
+        return ["## Referee", "", f"No referee verdict: {note}.", ""] if note else []
+    lines = ["## Referee", ""]
+    plants = meta.get("plants", [])
+    if plants:
+        lines += ["Plants: " + "; ".join(p["settings"] for p in plants) + ".", ""]
+    lines += [f"- {t}" for t in summary_lines(verdicts)]
+    pairs = list(verdicts[0].values)
+    lines += [
+        "",
+        "| quantity | " + " | ".join(pairs) + " | threshold | unit | verdict |",
+        "|---|" + "---|" * (len(pairs) + 3),
+    ]
+    for v in verdicts:
+        cells = " | ".join(_fmt(v.values.get(p, math.nan)) for p in pairs)
+        who = f"{v.kind.value}: {v.outlier}" if v.outlier else v.kind.value
+        lines.append(f"| {v.quantity} | {cells} | {_fmt(v.threshold)} | {v.unit} | {who} |")
+    lines += [
+        "",
+        "Values are each pair's maximum over time (relative for the forces). A plant is the "
+        "outlier when its distances to the other two exceed theirs to each other tenfold "
+        "(`validation.thresholds.REFEREE_SEPARATION`).",
+        "",
+    ]
+    return lines
+
+
 def render_markdown(
     cmp: Comparison | None,
     verdict: str,
     failure: str,
     figures: Sequence[str],
     meta: Mapping[str, Any],
+    verdicts: Sequence[Verdict] = (),
 ) -> str:
-    """The text of ``report.md``: the verdict first, then checks, summaries, figures, metadata."""
+    """The text of ``report.md``: the verdict first, then the referee, checks, summaries,
+    figures, thresholds and the run's metadata."""
     scene = meta.get("scene", {}).get("name", cmp.scene if cmp else "?")
     lines = [f"# {scene}: {verdict}", ""]
     if failure:
@@ -294,6 +341,7 @@ def render_markdown(
             lines.append(f"> {n}")
         if cmp.notes:
             lines.append("")
+        lines += _referee_lines(verdicts, meta)
         lines += [
             "## Checks",
             "",
@@ -340,6 +388,15 @@ def render_markdown(
     return "\n".join(lines)
 
 
+def _pairwise(cmp: Comparison | None) -> dict[str, dict[str, float]]:
+    """Quantity -> pair (``analytic vs mujoco``) -> the pair's checked value."""
+    out: dict[str, dict[str, float]] = {}
+    for c in cmp.checks if cmp is not None else ():
+        if c.subject.is_pair:
+            out.setdefault(c.name, {})[c.subject.value] = c.value
+    return out
+
+
 @dataclass(frozen=True)
 class ReportFiles:
     """Paths written by :func:`write_report` (figures only those that were drawn)."""
@@ -355,6 +412,7 @@ def write_report(
     plants: Sequence[Trajectory],
     meta: Mapping[str, Any],
     failure: str = "",
+    verdicts: Sequence[Verdict] = (),
 ) -> ReportFiles:
     """Write ``report.md``, ``report.json`` and the figures into ``out_dir`` (atomically).
 
@@ -421,13 +479,16 @@ def write_report(
             }
             for p in plants
         ],
+        "referee": [v.to_dict() for v in verdicts],
+        "pairwise": _pairwise(cmp),
         "figures": [f.name for f in figs],
         "run": meta,
     }
     doc["passed"] = passed  # cmp.to_dict() has its own; the failure overrides
     js = write_atomic(out / "report.json", json.dumps(_jsonable(doc), indent=2) + "\n")
     md = write_atomic(
-        out / "report.md", render_markdown(cmp, verdict, failure, [f.name for f in figs], meta)
+        out / "report.md",
+        render_markdown(cmp, verdict, failure, [f.name for f in figs], meta, verdicts),
     )
     return ReportFiles(md, js, tuple(figs))
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from analytic.scene import Scene, load_scene
+from validation.thresholds import thresholds_for
 
 SCENES_DIR = Path(__file__).resolve().parent / "scenes"
 DEFAULT_SIMULATE_SCENE = "paper_example1"
@@ -21,8 +22,11 @@ def builtin_names() -> list[str]:
 def scene_path(name_or_path: str) -> Path:
     """A path as given if it exists, else the built-in scene of that name."""
     p = Path(name_or_path)
-    if p.exists():
-        return p
+    try:
+        if p.exists():
+            return p
+    except (OSError, ValueError) as exc:  # a name too long for the file system, a NUL byte
+        raise ValueError(f"scene: cannot look up {name_or_path!r} ({exc})") from None
     candidate = SCENES_DIR / f"{name_or_path.removesuffix('.toml')}.toml"
     if candidate.exists():
         return candidate
@@ -33,5 +37,14 @@ def scene_path(name_or_path: str) -> Path:
 
 
 def resolve_scene(name_or_path: str | None, default: str = DEFAULT_SIMULATE_SCENE) -> Scene:
-    """Load a scene given by path or built-in name (``default`` when None)."""
-    return load_scene(scene_path(name_or_path or default))
+    """Load a scene given by path or built-in name (``default`` when None).
+
+    Everything in it is checked here, before any work: its fields by the loader, and the names
+    and values of its ``[thresholds]`` against :data:`validation.thresholds.DEFAULTS`. Messages
+    name a file as the user gave it.
+    """
+    given = name_or_path or default
+    p = scene_path(given)
+    scene = load_scene(given if p == Path(given) else p)
+    thresholds_for(scene)
+    return scene

@@ -1,4 +1,4 @@
-"""What accuracy costs in time: a work-precision study of both engines on one scene.
+"""What accuracy costs in time: a work-precision study of the plants on one scene.
 
 ``run_sweep(scene, out_dir)`` (CLI: ``tumble sweep [SCENE] [--out DIR]``):
 
@@ -9,11 +9,15 @@
    error ~256x: the difference bounds the coarser run's error and hence the reference's (what is
    left is round-off). Runs whose error is within :data:`FLOOR_FACTOR` of that estimate are marked
    ``at_reference_floor`` (their error is not resolved by the reference).
-2. **Grid.** The analytic engine over solvers x rtol (atol = rtol x ``atol_ratio``) and MuJoCo over
-   integrators x timestep, one series per solver / integrator, from cheap to expensive. A series
-   stops when a run is too slow (measured for the analytic engine: interrupted at
-   ``max_run_wall_s``; predicted for MuJoCo: cost ∝ 1/dt from the previous run) or fails/diverges
-   after an earlier setting worked; the settings not run are listed as ``skipped`` with the reason.
+2. **Grid.** The analytic engine over solvers x rtol (atol = rtol x ``atol_ratio``), MuJoCo over
+   integrators x timestep, and, when Pinocchio (``pin``) is installed, the Pinocchio plant over the
+   same solvers x rtol as the analytic engine (through the plant protocol,
+   ``plant("pinocchio").simulate(scene, PinocchioSettings(method, rtol, atol))``); one series per
+   plant and solver / integrator, from cheap to expensive. Without ``pin`` the Pinocchio series are
+   skipped and ``sweep.md`` / ``sweep.json`` say so. A series stops when a run is too slow
+   (measured for the scipy plants: interrupted at ``max_run_wall_s``; predicted for MuJoCo: cost
+   ∝ 1/dt from the previous run) or fails/diverges after an earlier setting worked; the settings
+   not run are listed as ``skipped`` with the reason.
 3. **Per run**: error against the reference on the common output samples, final and maximum over
    the trajectory, of the position of C (relative to the largest displacement of C in the
    reference), the attitude (angle of the relative rotation, rad) and the rod positions (relative to
@@ -22,20 +26,21 @@
    tracking errors, and cost: median wall time of ``repeats`` runs timed serially in this process
    (one run at a time, repeats round-robin over the grid; the integration only, as measured by
    the engines), right-hand-side
-   evaluations (analytic ``nfev``; MuJoCo steps x stages, 4 for RK4) and steps.
+   evaluations (analytic and Pinocchio ``nfev``; MuJoCo steps x stages, 4 for RK4) and steps.
    A MuJoCo run is ``diverged`` when it is non-finite or its error exceeds ``diverge_error`` (MuJoCo
    resets an unstable simulation to its initial state, so a diverged run can look finite).
 4. **Stabilisation**: the quaternion norm error under several (δ1, δ2), from the exact initial
    attitude and from one off the unit sphere by ``delta_norm_offset``.
-5. **Effects**: the cost of one dynamics evaluation with each effect switched off, both engines
-   (:mod:`validation.effects_cost`).
+5. **Effects**: the cost of one dynamics evaluation with each effect switched off, the analytic
+   engine and MuJoCo (:mod:`validation.effects_cost`).
 
 Accuracy runs go through a ``concurrent.futures`` executor (a local process pool unless one is
-passed, e.g. a Dask ``Client.get_executor()``); timings are taken afterwards one run at a time.
+passed, e.g. a Dask ``Client.get_executor()``); timings are taken afterwards one run at a time,
+after a warm-up run of every plant and method (JIT compilation and cache loading stay outside).
 
 Outputs in ``out_dir`` (each written atomically): ``sweep.csv`` and ``sweep.json`` (every run),
-``sweep.md`` (tables; for each engine the cheapest setting reaching each accuracy level
-1e-3 … 1e-10 marked), ``work_precision.png`` and ``sweep.rrd``.
+``sweep.md`` (tables; for each plant the cheapest setting reaching each accuracy level
+1e-3 … 1e-10 marked), ``work_precision.png`` and ``sweep.rrd`` (one series per plant and method).
 """
 
 from __future__ import annotations
@@ -76,6 +81,11 @@ FLOOR_FACTOR = 3.0
 """A run's error within this factor of the reference's estimated error is not resolved."""
 ANALYTIC = "analytic"
 MUJOCO = "mujoco"
+PINOCCHIO = "pinocchio"
+ENGINES = (ANALYTIC, MUJOCO, PINOCCHIO)
+"""The plants of the sweep, in report order (as ``mj_bridge.plants.PLANTS``)."""
+RTOL_ENGINES = frozenset({ANALYTIC, PINOCCHIO})
+"""Plants integrated by scipy: their series run over ``rtols`` (MuJoCo's over ``dts``)."""
 MJ_MAXVAL = 1e10  # MuJoCo's mjMAXVAL: a larger |ctrl| is "Nan, Inf or huge value in CTRL"
 STAGES = {"RK4": 4, "Euler": 1, "implicitfast": 1, "implicit": 1}
 
@@ -159,7 +169,7 @@ class SweepConfig:
 
     @classmethod
     def quick(cls) -> SweepConfig:
-        """A small grid (about 40 runs over 0.5 s) for tests and CI."""
+        """A small grid (40 runs over 0.5 s, 60 with Pinocchio) for tests and CI."""
         return cls(
             t_end=0.5,
             rtols=(1e-3, 1e-5, 1e-7, 1e-9, 1e-11),
@@ -186,9 +196,11 @@ class SweepResult:
         reference: how the reference was computed, its cost and estimated error.
         runs: one row per setting (keys :data:`COLUMNS`), in grid order.
         cheapest: ``{engine: {level: run_id or None}}``, the cheapest run (median wall time) whose
-            error is at most the level.
+            error is at most the level, for every plant that ran.
         stabilization: rows of the (δ1, δ2) study.
         effects: rows of the per-evaluation cost with each effect off.
+        skipped_series: ``{engine: reason}`` for the plants whose series were not run (Pinocchio
+            when ``pin`` is not installed).
         files: name -> path of every file written.
         wall_time_s: the whole sweep.
     """
@@ -201,6 +213,7 @@ class SweepResult:
     cheapest: Mapping[str, Mapping[float, int | None]]
     stabilization: tuple[Mapping[str, Any], ...]
     effects: tuple[Mapping[str, Any], ...]
+    skipped_series: Mapping[str, str] = field(default_factory=dict)
     files: Mapping[str, Path] = field(default_factory=dict)
     wall_time_s: float = 0.0
 
@@ -294,20 +307,20 @@ def _tracking(tr) -> dict[str, float | None]:
 
 
 class _TooSlow(KeyboardInterrupt):
-    """Raised from the analytic engine's progress callback; the engine ends the run interrupted."""
+    """Raised from a scipy plant's progress callback; the plant ends the run interrupted."""
 
 
 TOO_SLOW_INFO = "stopped_over_budget"
-"""``Trajectory.info`` key set (True) on a run that :func:`_analytic_run` stopped for its budget."""
+"""``Trajectory.info`` key set (True) on a run that :func:`_analytic_run` or
+:func:`_pinocchio_run` stopped for its budget."""
 
 
-def _analytic_run(scene: Scene, method: str, rtol: float, atol: float, t_end: float, budget=None):
-    """One analytic run; with ``budget`` (s of wall time), stopped when it exceeds it.
+def _within_budget(run: Callable[[Callable[[float], None] | None], Any], budget: float | None):
+    """``run(progress)`` (a scipy plant's run), stopped when it takes more than ``budget`` s.
 
     A run stopped for its budget comes back INTERRUPTED with ``info[TOO_SLOW_INFO]``; a run
     interrupted by the user (Ctrl-C, SIGTERM) raises KeyboardInterrupt, so the sweep stops.
     """
-    import analytic
     from analytic.trajectory import RunStatus
 
     progress = None
@@ -321,17 +334,46 @@ def _analytic_run(scene: Scene, method: str, rtol: float, atol: float, t_end: fl
                 raise _TooSlow
 
     with warnings.catch_warnings():
-        # the engine's quadrature states carry atol 1e300 (outside error control); scipy's
+        # the plants' quadrature states carry atol 1e300 (outside error control); scipy's
         # first-step heuristic then overflows harmlessly
         warnings.filterwarnings("ignore", "overflow encountered", RuntimeWarning)
-        tr = analytic.simulate(
-            scene, method=method, rtol=rtol, atol=atol, t_end=t_end, progress=progress
-        )
+        tr = run(progress)
     if tr.status is RunStatus.INTERRUPTED:
         if not over:
             tr.raise_if_interrupted()
         tr = dataclasses.replace(tr, info={**tr.info, TOO_SLOW_INFO: True})
     return tr
+
+
+def _analytic_run(scene: Scene, method: str, rtol: float, atol: float, t_end: float, budget=None):
+    """One analytic run; with ``budget`` (s of wall time), stopped when it exceeds it
+    (:func:`_within_budget`)."""
+    import analytic
+
+    return _within_budget(
+        lambda progress: analytic.simulate(
+            scene, method=method, rtol=rtol, atol=atol, t_end=t_end, progress=progress
+        ),
+        budget,
+    )
+
+
+def _pinocchio_run(scene: Scene, method: str, rtol: float, atol: float, t_end: float, budget=None):
+    """One Pinocchio run through the plant protocol; ``budget`` as for :func:`_analytic_run`."""
+    from mj_bridge.plants import PinocchioSettings, plant
+
+    settings = PinocchioSettings(method, rtol, atol)
+    return _within_budget(
+        lambda progress: plant(PINOCCHIO).simulate(scene, settings, t_end=t_end, progress=progress),
+        budget,
+    )
+
+
+def _scipy_run(engine: str, *args, **kw):
+    """:func:`_analytic_run` or :func:`_pinocchio_run`, by ``engine``."""
+    if engine == PINOCCHIO:
+        return _pinocchio_run(*args, **kw)
+    return _analytic_run(*args, **kw)
 
 
 def _mujoco_run(scene: Scene, integrator: str, dt: float, t_end: float):
@@ -342,10 +384,17 @@ def _mujoco_run(scene: Scene, integrator: str, dt: float, t_end: float):
     ).raise_if_interrupted()
 
 
+def pinocchio_unavailable() -> str:
+    """Why the Pinocchio series cannot run here ("" when ``pin`` is installed)."""
+    from mj_bridge.plants import PinocchioPlant
+
+    return PinocchioPlant.unavailable()
+
+
 def _blank_row(engine: str, method: str, setting: float, cfg: SweepConfig) -> dict[str, Any]:
     row: dict[str, Any] = dict.fromkeys(COLUMNS)
     row.update(engine=engine, method=method, setting=setting, note="")
-    if engine == ANALYTIC:
+    if engine in RTOL_ENGINES:
         row.update(setting_name="rtol", rtol=setting, atol=setting * cfg.atol_ratio)
     else:
         row.update(setting_name="dt", dt=setting)
@@ -358,7 +407,7 @@ def _fill_row(row: dict[str, Any], tr, ref: RefSamples) -> None:
     row.update(_tracking(tr))
     row["wall_time_pool_s"] = float(tr.info["wall_time_s"])
     row["nsteps"] = int(tr.info.get("nsteps", 0))
-    if row["engine"] == ANALYTIC:
+    if row["engine"] in RTOL_ENGINES:
         row["nfev"] = int(tr.info["nfev"])
     else:
         row["nfev"] = row["nsteps"] * STAGES.get(row["method"], 1)
@@ -376,12 +425,13 @@ def _fill_row(row: dict[str, Any], tr, ref: RefSamples) -> None:
 def run_series(
     scene: Scene, engine: str, method: str, cfg: SweepConfig, ref: RefSamples
 ) -> list[dict[str, Any]]:
-    """One solver (rtols loose → tight) or integrator (dts large → small); rows for every setting.
+    """One solver of a scipy plant (``analytic`` or ``pinocchio``: rtols loose → tight) or one
+    MuJoCo integrator (dts large → small); rows for every setting.
 
     Stops on a run that is too slow, or that fails or diverges after an earlier setting worked;
     the rest of the series is reported as ``skipped`` with the reason.
     """
-    settings = cfg.rtols if engine == ANALYTIC else cfg.dts
+    settings = cfg.rtols if engine in RTOL_ENGINES else cfg.dts
     rows: list[dict[str, Any]] = []
     stop_reason = ""
     any_ok = False
@@ -403,9 +453,15 @@ def run_series(
                 stop_reason = f"series stopped at dt = {s:.3g} s: {stop_reason}"
                 continue
         try:
-            if engine == ANALYTIC:
-                tr = _analytic_run(
-                    scene, method, s, s * cfg.atol_ratio, cfg.t_end, budget=cfg.max_run_wall_s
+            if engine in RTOL_ENGINES:
+                tr = _scipy_run(
+                    engine,
+                    scene,
+                    method,
+                    s,
+                    s * cfg.atol_ratio,
+                    cfg.t_end,
+                    budget=cfg.max_run_wall_s,
                 )
             else:
                 tr = _mujoco_run(scene, method, s, cfg.t_end)
@@ -415,7 +471,7 @@ def run_series(
                 stop_reason = f"series stopped: failed at {s:.3g}"
             continue
         _fill_row(row, tr, ref)
-        if engine == ANALYTIC and tr.info.get(TOO_SLOW_INFO):
+        if engine in RTOL_ENGINES and tr.info.get(TOO_SLOW_INFO):
             row.update(
                 status="too_slow",
                 note=f"interrupted after {cfg.max_run_wall_s:g} s ({tr.message})",
@@ -496,11 +552,28 @@ def stabilization_row(
 
 def _time_once(scene: Scene, row: Mapping[str, Any], cfg: SweepConfig) -> float:
     """Wall time (s) of one run of a setting, as the engine measures it (integration only)."""
-    if row["engine"] == ANALYTIC:
-        tr = _analytic_run(scene, row["method"], row["rtol"], row["atol"], cfg.t_end)
+    if row["engine"] in RTOL_ENGINES:
+        tr = _scipy_run(row["engine"], scene, row["method"], row["rtol"], row["atol"], cfg.t_end)
     else:
         tr = _mujoco_run(scene, row["method"], row["dt"], cfg.t_end)
     return float(tr.info["wall_time_s"])
+
+
+def warm_up(scene: Scene, runs: Sequence[Mapping[str, Any]]) -> None:
+    """One short run (one output interval, at the first setting that ran ``ok``) of every plant and
+    method among the ``ok`` runs, so that compilation, cache loads and first-call imports stay out
+    of the timings."""
+    interval = 1.0 / scene.output.rate
+    done = set()
+    for r in runs:
+        key = (r["engine"], r["method"])
+        if r["status"] != "ok" or key in done:
+            continue
+        done.add(key)
+        if r["engine"] in RTOL_ENGINES:
+            _scipy_run(r["engine"], scene, r["method"], r["rtol"], r["atol"], interval)
+        else:
+            _mujoco_run(scene, r["method"], r["dt"], interval)
 
 
 def time_runs(scene: Scene, runs: Sequence[dict[str, Any]], cfg: SweepConfig) -> None:
@@ -527,14 +600,20 @@ def time_runs(scene: Scene, runs: Sequence[dict[str, Any]], cfg: SweepConfig) ->
 
 
 def cheapest_settings(
-    runs: Sequence[Mapping[str, Any]], levels: Sequence[float] = LEVELS, floor: float = 0.0
+    runs: Sequence[Mapping[str, Any]],
+    levels: Sequence[float] = LEVELS,
+    floor: float = 0.0,
+    engines: Sequence[str] | None = None,
 ) -> dict[str, dict[float, int | None]]:
     """For each engine and level, the ``ok`` run of least median wall time with error ≤ level.
 
-    Levels at or below ``floor`` (what the reference can resolve) get None.
+    Levels at or below ``floor`` (what the reference can resolve) get None. ``engines``: the plants
+    to report, in order (default: those of :data:`ENGINES` that have runs).
     """
+    if engines is None:
+        engines = [e for e in ENGINES if any(r["engine"] == e for r in runs)]
     out: dict[str, dict[float, int | None]] = {}
-    for engine in (ANALYTIC, MUJOCO):
+    for engine in engines:
         ok = [
             r
             for r in runs
@@ -617,11 +696,86 @@ def _json_safe(x: Any) -> Any:
     return x
 
 
+def skipped_note(engine: str, reason: str) -> str:
+    """The sentence ``sweep.md`` gives for a plant whose series were skipped."""
+    if engine == PINOCCHIO:
+        return f"Pinocchio series skipped: pin is not installed ({reason})"
+    return f"{engine} series skipped: {reason}"
+
+
+def _plants_markdown(
+    cfg: SweepConfig, runs: Sequence[Mapping[str, Any]], skipped: Mapping[str, str]
+) -> list[str]:
+    """One bullet per plant: its series, or why they were skipped."""
+    rtols = ", ".join(f"{r:.0e}" for r in cfg.rtols)
+    dts = f"{max(cfg.dts):.3g} … {min(cfg.dts):.3g} s" if cfg.dts else "none"
+    what = {
+        ANALYTIC: f"the paper's model, scipy {', '.join(cfg.solvers)} over rtol {rtols} "
+        f"(atol = {cfg.atol_ratio:g} rtol)",
+        MUJOCO: f"the MJCF twin, {', '.join(cfg.integrators)} over dt {dts}",
+        PINOCCHIO: "the same body in Pinocchio (`pin.aba`), the same scipy solvers and rtol grid "
+        "as the analytic engine, through the plant protocol",
+    }
+    out = []
+    for e in ENGINES:
+        if e in skipped:
+            out.append(f"- **{e}**: {skipped_note(e, skipped[e])}.")
+            continue
+        mine = [r for r in runs if r["engine"] == e]
+        if not mine:
+            continue
+        ok = sum(r["status"] == "ok" for r in mine)
+        out.append(f"- **{e}**: {what[e]}; {ok}/{len(mine)} runs ok.")
+    out += [
+        "",
+        "Every plant is measured against the same reference (the analytic engine's), with the same "
+        "error measure and the same timing rules (warm-up run first, median of serial repeats, "
+        "the same budget per run).",
+    ]
+    return out
+
+
+def _pinocchio_vs_analytic_markdown(runs: Sequence[Mapping[str, Any]]) -> list[str]:
+    """The two scipy plants side by side at each solver and rtol they both ran."""
+    a = {(r["method"], r["rtol"]): r for r in runs if r["engine"] == ANALYTIC}
+    pairs = [
+        (a[(r["method"], r["rtol"])], r)
+        for r in runs
+        if r["engine"] == PINOCCHIO and (r["method"], r["rtol"]) in a
+    ]
+    if not pairs:
+        return []
+    L = [
+        "",
+        "## Pinocchio and the analytic engine at the same setting",
+        "",
+        "Same solver, rtol and atol; errors against the same reference.",
+        "",
+        "| method | rtol | analytic error | Pinocchio error | analytic ms | Pinocchio ms | "
+        "wall ratio | analytic nfev | Pinocchio nfev |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for ra, rp in pairs:
+        wa, wp = ra["wall_time_s"], rp["wall_time_s"]
+        ratio = wp / wa if wa and wp and ra["status"] == rp["status"] == "ok" else None
+        L.append(
+            f"| {rp['method']} | {rp['rtol']:.0e} | "
+            f"{_fmt(ra['error'], '.2e') if ra['status'] == 'ok' else ra['status']} | "
+            f"{_fmt(rp['error'], '.2e') if rp['status'] == 'ok' else rp['status']} | "
+            f"{_fmt(None if wa is None else wa * 1e3, '.3g')} | "
+            f"{_fmt(None if wp is None else wp * 1e3, '.3g')} | {_fmt(ratio, '.2f')} | "
+            f"{_fmt(ra['nfev'])} | {_fmt(rp['nfev'])} |"
+        )
+    return L
+
+
 def _markdown(res_parts: dict[str, Any]) -> str:
     cfg: SweepConfig = res_parts["cfg"]
     ref = res_parts["reference"]
     runs = res_parts["runs"]
     cheapest = res_parts["cheapest"]
+    skipped = res_parts.get("skipped_series", {})
+    columns = list(cheapest) + [e for e in skipped if e not in cheapest]
     marked = {rid: [] for rid in range(len(runs))}
     for by_level in cheapest.values():
         for lv, rid in by_level.items():
@@ -645,16 +799,24 @@ def _markdown(res_parts: dict[str, Any]) -> str:
         f"rad, rod {ref['error_components']['rod']:.2e}). Runs within {FLOOR_FACTOR:g}x of it are "
         f"marked 'floor': their error is not resolved.",
         "",
+        "## Plants",
+        "",
+    ]
+    L += _plants_markdown(cfg, runs, skipped)
+    L += [
+        "",
         "## Cheapest setting per accuracy level",
         "",
-        "| level | " + " | ".join(cheapest) + " |",
-        "|---|" + "---|" * len(cheapest),
+        "| level | " + " | ".join(columns) + " |",
+        "|---|" + "---|" * len(columns),
     ]
     for lv in cfg.levels:
         cells = []
-        for engine in cheapest:
-            rid = cheapest[engine].get(lv)
-            if lv <= FLOOR_FACTOR * ref["error_estimate"]:
+        for engine in columns:
+            rid = cheapest.get(engine, {}).get(lv)
+            if engine in skipped:
+                cells.append("series skipped")
+            elif lv <= FLOOR_FACTOR * ref["error_estimate"]:
                 cells.append("below the reference's resolution")
             elif rid is None:
                 cells.append("not reached")
@@ -665,6 +827,7 @@ def _markdown(res_parts: dict[str, Any]) -> str:
                     f"{r['wall_time_s'] * 1e3:.3g} ms (error {r['error']:.2g})"
                 )
         L.append(f"| {lv:.0e} | " + " | ".join(cells) + " |")
+    L += _pinocchio_vs_analytic_markdown(runs)
     L += [
         "",
         "## Every run",
@@ -732,9 +895,23 @@ def _figure_png(runs, ref_error: float, title: str) -> bytes:
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(8, 5.5))
-    for (engine, method), pts in _series_points(runs).items():
-        style = "-o" if engine == ANALYTIC else "--s"
-        ax.loglog(pts[:, 0], pts[:, 1], style, ms=4, label=f"{engine} {method}")
+    series = _series_points(runs)
+    # one colour per method (a scipy solver has the same colour on both scipy plants), one line
+    # style and marker per plant
+    methods = list(dict.fromkeys(m for _, m in series))
+    colours = plt.get_cmap("tab10").colors
+    styles = {ANALYTIC: ("-", "o"), MUJOCO: ("--", "s"), PINOCCHIO: (":", "^")}
+    for (engine, method), pts in series.items():
+        ls, marker = styles.get(engine, ("-.", "x"))
+        ax.loglog(
+            pts[:, 0],
+            pts[:, 1],
+            ls=ls,
+            marker=marker,
+            ms=4,
+            color=colours[methods.index(method) % len(colours)],
+            label=f"{engine} {method}",
+        )
     if ref_error > 0:
         ax.axhline(ref_error, color="gray", ls=":", label="reference estimated error")
     ax.set_xlabel("wall time per run (s, median)")
@@ -826,6 +1003,11 @@ def _sweep_into(
     """:func:`run_sweep`'s work, writing into the staging directory ``out``."""
     t_start = time.perf_counter()
     say = progress or (lambda _msg: None)
+    skipped_series: dict[str, str] = {}
+    why = pinocchio_unavailable()
+    if why:
+        skipped_series[PINOCCHIO] = why
+        say(f"  {skipped_note(PINOCCHIO, why)}")
     own = executor is None
     # spawn, not fork: the parent may hold threads (BLAS, numba, a Dask client) that fork would copy
     # mid-state; workers import the engines afresh
@@ -869,6 +1051,8 @@ def _sweep_into(
             "drift": fine["drift"],
         }
         series = [(ANALYTIC, m) for m in cfg.solvers] + [(MUJOCO, i) for i in cfg.integrators]
+        if PINOCCHIO not in skipped_series:
+            series += [(PINOCCHIO, m) for m in cfg.solvers]
         futs = [ex.submit(run_series, sc, e, m, cfg, ref) for e, m in series]
         stab_futs = [
             ex.submit(stabilization_row, sc, d1, d2, rt, off, cfg.t_end)
@@ -893,13 +1077,15 @@ def _sweep_into(
             and math.isfinite(err)
             and err <= FLOOR_FACTOR * reference["error_estimate"]
         )
-    # 3. Timings, one run at a time in this process (after a warm-up of both engines).
+    # 3. Timings, one run at a time in this process, after a warm-up run of every plant and method
+    # timed (JIT compilation, cache loads and first-call imports outside the timings).
     say("timing: serial runs")
-    interval = 1.0 / sc.output.rate
-    _analytic_run(sc, "DOP853", 1e-6, 1e-7, interval)  # JIT / cache load outside the timings
-    _mujoco_run(sc, "RK4", interval, interval)
+    warm_up(sc, runs)
     time_runs(sc, runs, cfg)
-    cheapest = cheapest_settings(runs, cfg.levels, FLOOR_FACTOR * reference["error_estimate"])
+    engines = list(dict.fromkeys(e for e, _ in series))
+    cheapest = cheapest_settings(
+        runs, cfg.levels, FLOOR_FACTOR * reference["error_estimate"], engines=engines
+    )
     # 4. Effects.
     say("effects: cost of one evaluation with each effect off")
     from validation.effects_cost import effects_cost
@@ -914,6 +1100,7 @@ def _sweep_into(
         "cheapest": cheapest,
         "stabilization": stabilization,
         "effects": effects,
+        "skipped_series": skipped_series,
     }
     md = _markdown(parts)
     png = _figure_png(runs, reference["error_estimate"], f"work-precision: {sc.name}")
@@ -931,6 +1118,11 @@ def _sweep_into(
         "reference": reference,
         "levels": list(cfg.levels),
         "cheapest": {e: {repr(lv): rid for lv, rid in d.items()} for e, d in cheapest.items()},
+        "series": [{"engine": e, "method": m} for e, m in series],
+        "skipped_series": [
+            {"engine": e, "reason": why, "note": skipped_note(e, why)}
+            for e, why in skipped_series.items()
+        ],
         "runs": runs,
         "stabilization": stabilization,
         "effects": effects,
@@ -948,6 +1140,7 @@ def _sweep_into(
         cheapest=cheapest,
         stabilization=tuple(stabilization),
         effects=tuple(effects),
+        skipped_series=skipped_series,
         files=files,
         wall_time_s=time.perf_counter() - t_start,
     )
@@ -981,6 +1174,8 @@ def main(argv: list[str] | None = None) -> int:
     sc = _resolve(args.scene)
     res = run_sweep(sc, args.out or default_out_dir("sweep_", sc.name), config=cfg, progress=print)
     print(f"reference estimated error {res.reference['error_estimate']:.2e}")
+    for engine, why in res.skipped_series.items():
+        print(f"  {skipped_note(engine, why)}")
     for engine, by_level in res.cheapest.items():
         for lv, rid in by_level.items():
             if rid is None:

@@ -28,6 +28,7 @@ inertia term, a wrong spring force, a sign).
 
 from __future__ import annotations
 
+import difflib
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
@@ -179,6 +180,19 @@ DEFAULTS: Mapping[str, Threshold] = {
 }
 
 
+REFEREE_SEPARATION = 10.0
+"""The referee names plant X the outlier of a quantity when X's distances to the other two are at
+least this many times the distance between those two. A decade: two independent engines that
+model the same body agree to their integration error, so a factor of ten between "X vs the
+others" and "the others vs each other" is a difference of kind (a coarser step, a modelling slip),
+not the scatter of three errors of one size (which stay within a factor of ~3 of each other)."""
+
+REFEREE_NOISE_FRACTION = 1e-3
+"""Pairwise differences below this fraction of the quantity's threshold count as agreement: three
+plants that all agree a thousand times better than the threshold asks have no outlier worth
+naming, and round-off-level differences (1e-12 m beside a 1e-6 m bound) do not decide verdicts."""
+
+
 # Keys of a scene's [thresholds] table that belong to the hard-case suite, not to the comparison.
 HARD_CASE_PREFIX = "hard_"
 
@@ -210,7 +224,9 @@ def thresholds_for(
                 continue  # criteria of the hard-case suite (validation/hard_cases.py reads them)
             if name not in DEFAULTS:
                 known = ", ".join(sorted(DEFAULTS))
-                raise ValueError(f"thresholds.{name}: unknown threshold (known: {known})")
+                close = difflib.get_close_matches(str(name), list(DEFAULTS), n=1)
+                hint = f"did you mean {close[0]!r}? " if close else ""
+                raise ValueError(f"thresholds.{name}: unknown threshold ({hint}known: {known})")
             out[name] = _override(out[name], spec)
     return out
 
@@ -240,4 +256,10 @@ def _override(base: Threshold, spec: Any) -> Threshold:
     )
 
 
-__all__ = ["DEFAULTS", "Threshold", "thresholds_for"]
+__all__ = [
+    "DEFAULTS",
+    "REFEREE_NOISE_FRACTION",
+    "REFEREE_SEPARATION",
+    "Threshold",
+    "thresholds_for",
+]

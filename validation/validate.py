@@ -14,23 +14,25 @@ import dataclasses
 import inspect
 import time
 import traceback
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from analytic.effects import Effect
 from analytic.scene import Scene, load_scene
-from analytic.trajectory import RunStatus, Trajectory
+from analytic.trajectory import Engine, RunStatus, Trajectory
 from validation.atomic import OutputError
-from validation.compare import Check, Comparison, compare
+from validation.compare import Check, Comparison, compare, compare_plants
 from validation.outputs import OutputRun, output_run
+from validation.preflight import check_validation_inputs
 from validation.recording import (
     atomic_stream,
     blueprint_for,
     log_run,
     write_recording,
 )
+from validation.referee import Verdict, referee
 from validation.report import versions, write_atomic, write_report
 
 SCENES = Path(__file__).resolve().parent / "scenes"
@@ -69,7 +71,8 @@ class ValidationResult:
         comparison: the comparison (None if no analytic trajectory exists).
         failure: why the run failed ("" if it did not).
         files: name -> path of every file written.
-        wall_times: stage -> seconds (analytic, mujoco, compare, report, recording, total).
+        wall_times: stage -> seconds (each plant, compare, report, recording, total).
+        verdicts: the referee's rulings (three plants), see :mod:`validation.referee`.
     """
 
     scene: str
@@ -80,6 +83,7 @@ class ValidationResult:
     failure: str = ""
     files: dict[str, Path] = field(default_factory=dict)
     wall_times: dict[str, float] = field(default_factory=dict)
+    verdicts: tuple[Verdict, ...] = ()
 
     @property
     def failed_checks(self) -> tuple[Check, ...]:
@@ -95,17 +99,20 @@ def _scene(scene: Scene | str | Path) -> Scene:
     return load_scene(p)
 
 
-def _mj_simulate():
-    """mj_bridge.simulate, or an ImportError that says what is missing."""
-    try:
-        from mj_bridge import simulate
-    except ImportError as exc:
-        raise ImportError(f"the MuJoCo twin (mj_bridge) is not available: {exc}") from exc
-    return simulate
-
-
 def _one_line(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {exc}".splitlines()[0]
+
+
+def _plant_settings(engine: Engine, sc: Scene, integrator: Any, dt: float | None) -> Any:
+    """Each plant's settings: the scene's, with the MuJoCo overrides of the command line."""
+    from mj_bridge.plants import MujocoRunSettings, plant
+
+    if engine is Engine.MUJOCO:
+        return MujocoRunSettings(
+            sc.mujoco.integrator if integrator is None else integrator,
+            sc.mujoco.timestep if dt is None else dt,
+        )
+    return plant(engine).default_settings(sc)
 
 
 def run_validation(
@@ -115,8 +122,10 @@ def run_validation(
     dt: float | None = None,
     t_end: float | None = None,
     progress: Progress | None = None,
+    plants: Sequence[Engine | str] | str | None = None,
 ) -> ValidationResult:
-    """Run ``scene`` on the analytic plant and on MuJoCo, compare, write the report and ``run.rrd``.
+    """Run ``scene`` on every chosen plant under one controller, compare every pair, rule on
+    disagreements, and write the report and ``run.rrd``.
 
     Args:
         scene: a :class:`Scene`, a scene file, or a built-in scene name.
@@ -127,24 +136,44 @@ def run_validation(
         integrator: MuJoCo integrator (default the scene's ``[mujoco] integrator``).
         dt: MuJoCo time step, s (default the scene's ``[mujoco] timestep``).
         t_end: horizon, s (default the scene's ``[output] t_end``).
-        progress: optional ``progress(stage, t)`` callback (the analytic plant reports as it goes;
-            MuJoCo reports when it is done).
+        progress: optional ``progress(stage, t)`` callback, stage the plant's name (a one-argument
+            callable hears the analytic plant only).
+        plants: which plants (engine names, or ``"analytic,mujoco"``); default every installed
+            plant (:func:`mj_bridge.plants.installed_plants`). With three, the referee names the
+            plant that disagrees with the two that agree (:mod:`validation.referee`).
 
     Returns:
         a frozen :class:`ValidationResult`; ``passed`` is False when any check fails or a plant
         could not run.
 
     Raises:
-        ValueError: bad input (scene, integrator, dt, t_end, out_dir), before any plant runs.
+        ValueError: bad input (scene, plants, integrator, dt, t_end, out_dir), before any plant
+            runs.
         OutputBusy: another run is writing into ``out_dir``.
         OutputError: the files could not be written; ``out_dir`` keeps its previous contents.
     """
+    from mj_bridge.plants import installed_plants, parse_plants, plant
+
     sc = _scene(scene)
+    if plants is None:
+        chosen = installed_plants()
+    elif isinstance(plants, str):
+        chosen = parse_plants(plants)
+    else:
+        chosen = parse_plants(",".join(str(getattr(p, "value", p)) for p in plants))
+    check_validation_inputs(  # before any plant runs
+        sc, integrator=integrator, dt=dt, t_end=t_end, mujoco=Engine.MUJOCO in chosen
+    )
     if t_end is not None and not (t_end > 0):
         raise ValueError(f"t_end: must be a positive time in s (got {t_end!r})")
     horizon = float(t_end) if t_end is not None else sc.output.t_end
+    runs = []
+    for e in chosen:
+        pl = plant(e)
+        pl.check_scene(sc)
+        runs.append((pl, _plant_settings(e, sc, integrator, dt)))
     with output_run(out_dir, "validate") as run:
-        res = _validate_into(run, sc, integrator, dt, horizon, progress)
+        res = _validate_into(run, sc, runs, horizon, progress)
     files = {name: run.final(name) for name in res.files}
     files["manifest.json"] = run.final("manifest.json")
     return dataclasses.replace(res, out_dir=run.target, files=files)
@@ -153,12 +182,13 @@ def run_validation(
 def _validate_into(
     run: OutputRun,
     sc: Scene,
-    integrator: Any,
-    dt: float | None,
+    runs: Sequence[tuple[Any, Any]],
     horizon: float,
     progress: Progress | None,
 ) -> ValidationResult:
     """:func:`run_validation`'s work, writing into the staging directory ``run.path``."""
+    from mj_bridge.plants import PinocchioPlant
+
     out = run.path
     walls: dict[str, float] = {}
     failures: list[str] = []
@@ -171,62 +201,57 @@ def _validate_into(
         finally:
             walls[stage] = time.perf_counter() - t0
 
-    from analytic.simulate import simulate as analytic_simulate
-
-    ana: Trajectory | None = None
-    try:
-        ana = timed(
-            "analytic",
-            lambda: analytic_simulate(
-                sc,
-                t_end=horizon,
-                progress=_stage_progress(progress, "analytic"),
-            ),
-        )
-    except Exception as exc:
-        failures.append(f"analytic plant: {_one_line(exc)}")
-    interrupted = ana is not None and ana.status is RunStatus.INTERRUPTED
-    mj: Trajectory | None = None
-    if not interrupted:  # Ctrl-C stops the run, it does not skip to the next plant
+    trajectories: list[Trajectory] = []
+    names: dict[str, str] = {}
+    interrupted = False
+    for pl, settings in runs:
+        name = pl.engine.value
+        names[name] = pl.describe(settings)
+        if interrupted:  # Ctrl-C stops the run, it does not skip to the next plant
+            failures.append(f"{pl.label} plant: not run (interrupted)")
+            continue
         try:
-            mj_sim = _mj_simulate()
-            mj_progress = _stage_progress(progress, "mujoco")
-            mj = timed(
-                "mujoco",
-                lambda: mj_sim(
-                    sc, integrator=integrator, dt=dt, t_end=horizon, progress=mj_progress
+            tr = timed(
+                name,
+                lambda pl=pl, settings=settings, name=name: pl.simulate(
+                    sc, settings, t_end=horizon, progress=_stage_progress(progress, name)
                 ),
             )
         except ValueError:
-            raise  # bad integrator / dt: the caller's input, not a failed run
+            raise  # the caller's input, not a failed run
         except Exception as exc:
-            failures.append(f"MuJoCo plant: {_one_line(exc)}")
-        interrupted = mj is not None and mj.status is RunStatus.INTERRUPTED
-    else:
-        failures.append("MuJoCo plant: not run (interrupted)")
-    plants = [p for p in (ana, mj) if p is not None]
-    for p in plants:
-        if p.status is not RunStatus.OK:
-            failures.append(f"{p.engine.value} plant stopped early: {p.message}")
+            failures.append(f"{pl.label} plant: {_one_line(exc)}")
+            continue
+        trajectories.append(tr)
+        interrupted = tr.status is RunStatus.INTERRUPTED
+        if tr.status is not RunStatus.OK:
+            failures.append(f"{name} plant stopped early: {tr.message}")
 
     cmp: Comparison | None = None
-    if ana is not None and ana.t.size:
+    verdicts: tuple[Verdict, ...] = ()
+    if trajectories and trajectories[0].t.size:
         try:
-            cmp = timed("compare", lambda: compare(ana, mj, sc, t_end=horizon))
+            cmp = timed("compare", lambda: compare_plants(trajectories, sc, t_end=horizon))
+            verdicts = referee(cmp, names)
         except Exception as exc:
             failures.append(f"comparison: {_one_line(exc)}")
             traceback.print_exc()
     failure = "; ".join(failures)
-    passed = cmp is not None and cmp.passed and not failure and mj is not None
+    passed = cmp is not None and cmp.passed and not failure and len(trajectories) == len(runs) >= 2
+    if len(runs) < 2 and not failure:
+        failure = "only one plant: nothing to compare it with"
+        passed = False
 
     files: dict[str, Path] = {}
     try:
         rinfo = (
             timed(
                 "recording",
-                lambda: write_recording(out / "run.rrd", sc, plants, cmp, recording_id=run.run_id),
+                lambda: write_recording(
+                    out / "run.rrd", sc, trajectories, cmp, recording_id=run.run_id
+                ),
             )
-            if plants
+            if trajectories
             else None
         )
         if rinfo is not None:
@@ -236,6 +261,17 @@ def _validate_into(
         failure = "; ".join([*failures, f"recording: {why}"])
         passed = False
     walls["total"] = time.perf_counter() - t_all
+    by_engine = {pl.engine: (pl, st) for pl, st in runs}
+    mj = by_engine.get(Engine.MUJOCO)
+    referee_note = (
+        ""
+        if len(runs) >= 3
+        else (
+            "the referee (Pinocchio) is not installed: pip install 'tumbling-testbed[pinocchio]'"
+            if PinocchioPlant.unavailable()
+            else "the referee needs three plants"
+        )
+    )
     meta = {
         "run_id": run.run_id,
         "scene": {
@@ -246,6 +282,9 @@ def _validate_into(
         },
         "horizon_s": horizon,
         "output_rate_hz": sc.output.rate,
+        "plants": [
+            {"engine": pl.engine.value, "settings": names[pl.engine.value]} for pl, _ in runs
+        ],
         "analytic_solver": {
             "method": sc.solver.method.value,
             "rtol": sc.solver.rtol,
@@ -253,18 +292,18 @@ def _validate_into(
             "max_step": sc.solver.max_step,
         },
         "mujoco_settings": {
-            "integrator": str(
-                getattr(integrator, "value", integrator) or sc.mujoco.integrator.value
-            ),
-            "timestep": dt or sc.mujoco.timestep,
+            "integrator": (mj[1].integrator.value if mj else sc.mujoco.integrator.value),
+            "timestep": mj[1].dt if mj else sc.mujoco.timestep,
             "spring_model": sc.mujoco.spring_model.value,
         },
-        "controller": "analytic (Udwadia–Kalaba, Eq. 89) in both plants",
+        "controller": "analytic (Udwadia–Kalaba, Eq. 89) in every plant",
+        "referee": [v.to_dict() for v in verdicts],
+        "referee_note": referee_note,
         "versions": versions(),
         "wall_times_s": dict(walls),
     }
     t0 = time.perf_counter()
-    rep = write_report(out, cmp, plants, meta, failure=failure)
+    rep = write_report(out, cmp, trajectories, meta, failure=failure, verdicts=verdicts)
     walls["report"] = time.perf_counter() - t0
     files.update({"report.md": rep.markdown, "report.json": rep.json})
     files.update({f.name: f for f in rep.figures})
@@ -281,6 +320,7 @@ def _validate_into(
         failure=failure,
         files=files,
         wall_times=walls,
+        verdicts=verdicts,
     )
 
 

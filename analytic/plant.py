@@ -1,0 +1,188 @@
+"""Plants behind one protocol: an engine that runs a scene and returns a :class:`Trajectory`.
+
+Modelled on scipy's ``OdeSolver``: the small base class :class:`Plant` keeps the bookkeeping that
+every engine shares (which effects it can simulate, refusing a scene it cannot run *before* it
+runs, checking the horizon, default settings from the scene, a one-line description of the
+settings for reports); each engine fills in :meth:`Plant._simulate` in its own module:
+
+* :class:`AnalyticPlant` (here): the paper's model, Eqs. (50)-(58) with the controller of Eq. (89),
+  integrated by scipy (:func:`analytic.simulate.simulate`);
+* ``mj_bridge.plants.MujocoPlant``: the MJCF twin in MuJoCo, the same controller inside every
+  integrator stage;
+* ``mj_bridge.plants.PinocchioPlant``: the same body in Pinocchio (``aba``), the same controller,
+  integrated by scipy in Pinocchio's coordinates.
+
+Every plant returns its trajectory in the paper's coordinates ``q = [R (3), u (4, w first), p (n)]``
+(Eq. 44) on the scene's output grid, so every comparison is engine-agnostic. ``mj_bridge.plants``
+holds the registry of all three (this layer does not import the engines).
+"""
+
+from __future__ import annotations
+
+import abc
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+from analytic.effects import Backend, Effect, SolverMethod
+from analytic.scene import Scene
+from analytic.trajectory import Engine, Trajectory
+
+Progress = Callable[[float], None]
+"""``progress(t)``: the simulated time reached, s."""
+
+
+def check_horizon(t_end: Any, field: str = "t_end") -> float | None:
+    """``t_end`` as a float (None stays None), or ``ValueError`` naming ``field``."""
+    if t_end is None:
+        return None
+    try:
+        t = float(t_end)
+    except (TypeError, ValueError, OverflowError):
+        raise ValueError(f"{field}: must be a positive time in s (got {t_end!r})") from None
+    if not (t > 0 and math.isfinite(t)):
+        raise ValueError(f"{field}: must be a positive finite time in s (got {t_end!r})")
+    return t
+
+
+class Plant(abc.ABC):
+    """One engine behind the protocol (see the module docstring).
+
+    Class attributes a subclass sets:
+        engine: its :class:`Engine` (the name used on the command line and in reports).
+        label: how reports name it (``"MuJoCo"``).
+        effects: the :class:`Effect` members it can simulate.
+        settings_type: its frozen settings dataclass.
+    """
+
+    engine: ClassVar[Engine]
+    label: ClassVar[str]
+    effects: ClassVar[frozenset[Effect]] = frozenset(Effect)
+    settings_type: ClassVar[type]
+
+    @classmethod
+    def unavailable(cls) -> str:
+        """Why this plant cannot run on this installation ("" when it can)."""
+        return ""
+
+    @abc.abstractmethod
+    def default_settings(self, scene: Scene) -> Any:
+        """The settings the scene asks for (its ``[solver]`` or ``[mujoco]`` table)."""
+
+    @abc.abstractmethod
+    def describe(self, settings: Any) -> str:
+        """One line naming the engine and its settings, e.g. ``MuJoCo RK4 dt 0.00025 s``."""
+
+    @abc.abstractmethod
+    def _simulate(
+        self, scene: Scene, settings: Any, t_end: float | None, progress: Progress | None
+    ) -> Trajectory:
+        """Run the scene (already checked); ``t_end`` None means the scene's horizon."""
+
+    def check_scene(self, scene: Scene) -> None:
+        """``ValueError`` naming ``scene.effects`` and the effects this plant cannot simulate."""
+        missing = sorted(e.value for e in scene.effects - self.effects)
+        if missing:
+            raise ValueError(
+                f"scene.effects: the {self.engine.value} plant cannot simulate {', '.join(missing)}"
+            )
+
+    def simulate(
+        self,
+        scene: Scene,
+        settings: Any = None,
+        t_end: float | None = None,
+        progress: Progress | None = None,
+    ) -> Trajectory:
+        """Run ``scene`` on this plant; samples at the scene's output rate, paper coordinates.
+
+        Args:
+            scene: a validated scene.
+            settings: an instance of :attr:`settings_type` (default :meth:`default_settings`).
+            t_end: horizon, s (default the scene's ``[output] t_end``).
+            progress: called with the simulated time reached, s.
+
+        Raises:
+            ValueError: the scene needs an effect this plant lacks, bad settings or ``t_end``,
+                before anything runs.
+            ImportError: the engine is not installed (:meth:`unavailable` says why).
+        """
+        why = self.unavailable()
+        if why:
+            raise ImportError(why)
+        self.check_scene(scene)
+        t = check_horizon(t_end)
+        if settings is None:
+            settings = self.default_settings(scene)
+        elif not isinstance(settings, self.settings_type):
+            raise ValueError(
+                f"settings: the {self.engine.value} plant takes {self.settings_type.__name__} "
+                f"(got {type(settings).__name__})"
+            )
+        return self._simulate(scene, settings, t, progress)
+
+
+@dataclass(frozen=True)
+class AnalyticSettings:
+    """How the analytic plant integrates (scipy ``solve_ivp`` methods).
+
+    Attributes:
+        method: the scipy method.
+        rtol, atol: tolerances on the motion (dimensionless; atol in the state's SI units).
+        backend: the right-hand side, compiled or the numpy reference (:class:`Backend`).
+    """
+
+    method: SolverMethod = SolverMethod.DOP853
+    rtol: float = 1e-12
+    atol: float = 1e-13
+    backend: Backend = Backend.AUTO
+
+    def __post_init__(self) -> None:
+        for name, enum in (("method", SolverMethod), ("backend", Backend)):
+            try:
+                object.__setattr__(self, name, enum(getattr(self, name)))
+            except ValueError:
+                raise ValueError(
+                    f"{name}: must be one of {[m.value for m in enum]} (got {getattr(self, name)!r})"
+                ) from None
+        for name in ("rtol", "atol"):
+            v = getattr(self, name)
+            if not (isinstance(v, int | float) and v > 0 and math.isfinite(v)):
+                raise ValueError(f"{name}: must be a positive finite number (got {v!r})")
+
+
+class AnalyticPlant(Plant):
+    """The paper's model (:func:`analytic.simulate.simulate`)."""
+
+    engine = Engine.ANALYTIC
+    label = "analytic"
+    settings_type = AnalyticSettings
+
+    def default_settings(self, scene: Scene) -> AnalyticSettings:
+        return AnalyticSettings(scene.solver.method, scene.solver.rtol, scene.solver.atol)
+
+    def describe(self, settings: AnalyticSettings) -> str:
+        return f"analytic {settings.method.value} rtol {settings.rtol:g}"
+
+    def _simulate(self, scene, settings, t_end, progress):
+        from analytic.simulate import simulate
+
+        return simulate(
+            scene,
+            method=settings.method,
+            rtol=settings.rtol,
+            atol=settings.atol,
+            t_end=t_end,
+            progress=progress,
+            backend=settings.backend,
+        )
+
+
+__all__ = [
+    "AnalyticPlant",
+    "AnalyticSettings",
+    "Plant",
+    "Progress",
+    "check_horizon",
+]

@@ -1,0 +1,204 @@
+"""The referee: with three plants, name the one that disagrees with the two that agree.
+
+For each difference quantity (position of C, attitude, rod positions, velocities, angular velocity,
+control torque, rod forces) the three pairwise checks of :func:`validation.compare.compare_plants`
+give three values ``d1 ≤ d2 ≤ d3`` (each the check's value: a maximum over time, relative for the
+forces), in the threshold's unit. With ``floor = REFEREE_NOISE_FRACTION × threshold`` and
+``k = REFEREE_SEPARATION`` (both in :mod:`validation.thresholds`, with their reasons):
+
+* ``d3 ≤ floor``: all three agree (``AGREE``), far inside the threshold;
+* ``d2 ≥ k · max(d1, floor)``: the plant outside the closest pair is the **outlier** (``OUTLIER``):
+  its distances to the other two are ``d2``, ``d3``; the other two agree to ``d1``;
+* otherwise no single plant stands out: ``AGREE`` when every pair passes its threshold, else
+  ``DISAGREE`` (all three disagree; the report says so).
+
+With fewer than three plants no verdict can be given: a disagreement between two plants cannot be
+attributed to either.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from enum import StrEnum
+from typing import Any
+
+from validation.compare import Check, Comparison, Subject
+from validation.thresholds import REFEREE_NOISE_FRACTION, REFEREE_SEPARATION
+
+QUANTITIES = (
+    "position_C",
+    "attitude",
+    "rod_positions",
+    "velocity_C",
+    "rod_velocities",
+    "angular_velocity",
+    "control_torque",
+    "rod_forces",
+)
+"""The difference quantities the referee rules on (names of :mod:`validation.thresholds`)."""
+
+LABELS = {
+    "position_C": "position of C",
+    "attitude": "attitude",
+    "rod_positions": "rod positions",
+    "velocity_C": "velocity of C",
+    "rod_velocities": "rod velocities",
+    "angular_velocity": "angular velocity",
+    "control_torque": "control torque (relative)",
+    "rod_forces": "rod forces (relative)",
+}
+
+
+class VerdictKind(StrEnum):
+    """What the referee found for one quantity."""
+
+    AGREE = "agree"
+    OUTLIER = "outlier"
+    DISAGREE = "all disagree"
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """The referee's ruling on one quantity.
+
+    Attributes:
+        quantity: the threshold name (``rod_positions``).
+        kind: see :class:`VerdictKind`.
+        outlier: the outlier's engine name ("" unless ``kind`` is OUTLIER).
+        text: one sentence for people, naming plants by their settings.
+        values: pair subject (``analytic vs mujoco``) -> the check's value.
+        unit: unit of the values and the threshold.
+        threshold: the quantity's threshold.
+    """
+
+    quantity: str
+    kind: VerdictKind
+    outlier: str
+    text: str
+    values: Mapping[str, float] = field(default_factory=dict)
+    unit: str = ""
+    threshold: float = math.nan
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "quantity": self.quantity,
+            "verdict": self.kind.value,
+            "outlier": self.outlier,
+            "text": self.text,
+            "values": dict(self.values),
+            "unit": self.unit,
+            "threshold": self.threshold,
+        }
+
+
+def _fmt(x: float, unit: str) -> str:
+    u = "" if unit == "1" else f" {unit}"
+    return f"{x:.2g}{u}"
+
+
+def _span(lo: float, hi: float, unit: str) -> str:
+    a, b = _fmt(lo, unit), _fmt(hi, unit)
+    return a if a == b else f"{a} to {b}"
+
+
+def rule(
+    quantity: str,
+    checks: Mapping[Subject, Check],
+    names: Mapping[str, str] | None = None,
+) -> Verdict:
+    """The verdict on one quantity from its three pairwise checks (subject -> check).
+
+    Args:
+        quantity: the threshold name.
+        checks: exactly three pair subjects covering three plants.
+        names: engine name -> how to name it in the text (e.g. ``MuJoCo RK4 dt 0.00025 s``).
+    """
+    if len(checks) != 3:
+        raise ValueError(
+            f"checks: the referee needs the three pairs of three plants (got {len(checks)})"
+        )
+    names = dict(names or {})
+
+    def size(c: Check) -> float:  # a value that could not be computed is the worst
+        return math.inf if math.isnan(c.value) else c.value
+
+    items = sorted(checks.items(), key=lambda kv: (size(kv[1]), kv[0].value))
+    (p1, c1), (_, c2), (_, c3) = items
+    d1, d2, d3 = size(c1), size(c2), size(c3)
+    unit, threshold = c1.unit, c1.threshold
+    floor = REFEREE_NOISE_FRACTION * threshold
+    values = {p.value: checks[p].value for p in sorted(checks, key=list(Subject).index)}
+    label = LABELS.get(quantity, quantity)
+    plants = {e for p, _ in items for e in p.plants}
+    y, z = p1.plants
+    (x,) = plants - {y, z}
+
+    def nm(e: str) -> str:
+        return names.get(e, e)
+
+    if d3 <= floor:
+        return Verdict(
+            quantity,
+            VerdictKind.AGREE,
+            "",
+            f"{label}: all three agree to {_fmt(d3, unit)}",
+            values,
+            unit,
+            threshold,
+        )
+    if d2 >= REFEREE_SEPARATION * max(d1, floor):
+        return Verdict(
+            quantity,
+            VerdictKind.OUTLIER,
+            x,
+            f"{label}: {nm(x)} is the outlier, {_span(d2, d3, unit)} from the others; "
+            f"{nm(y)} and {nm(z)} agree to {_fmt(d1, unit)}",
+            values,
+            unit,
+            threshold,
+        )
+    if all(c.passed for c in (c1, c2, c3)):
+        return Verdict(
+            quantity,
+            VerdictKind.AGREE,
+            "",
+            f"{label}: no outlier; the three agree within their threshold "
+            f"(largest difference {_fmt(d3, unit)}, threshold {_fmt(threshold, unit)})",
+            values,
+            unit,
+            threshold,
+        )
+    return Verdict(
+        quantity,
+        VerdictKind.DISAGREE,
+        "",
+        f"{label}: all three disagree ({_fmt(d1, unit)} to {_fmt(d3, unit)}, threshold "
+        f"{_fmt(threshold, unit)}); no two plants confirm each other",
+        values,
+        unit,
+        threshold,
+    )
+
+
+def referee(cmp: Comparison, names: Mapping[str, str] | None = None) -> tuple[Verdict, ...]:
+    """Verdicts on every quantity that all three pairs of ``cmp`` checked (empty otherwise)."""
+    pairs = {c.subject for c in cmp.checks if c.subject.is_pair}
+    if len(pairs) != 3:
+        return ()
+    out = []
+    for q in QUANTITIES:
+        by = {c.subject: c for c in cmp.checks if c.subject.is_pair and c.name == q}
+        if len(by) == 3:
+            out.append(rule(q, by, names))
+    return tuple(out)
+
+
+def summary_lines(verdicts: Sequence[Verdict]) -> list[str]:
+    """One line per verdict, outliers and disagreements first."""
+    order = {VerdictKind.OUTLIER: 0, VerdictKind.DISAGREE: 1, VerdictKind.AGREE: 2}
+    return [v.text for v in sorted(verdicts, key=lambda v: order[v.kind])]
+
+
+__all__ = ["QUANTITIES", "Verdict", "VerdictKind", "referee", "rule", "summary_lines"]
