@@ -27,9 +27,11 @@ KNOWN_FAILURES: dict[tuple[str, str], tuple[set[str], str]] = {
         "(a recorded finding; the criterion is not loosened)",
     ),
 }
-"""(case, plant) -> (the labels of the checks known to fail, why): findings, not test bugs. Each is
-asserted to fail exactly so (nothing else of that plant fails, every other plant passes); the test
-then xfails with the reason, and fails when the finding is gone (remove the entry then)."""
+"""(case, plant) -> (the labels of the checks known to fail, why): findings, not test bugs. Where
+one shows, it must fail exactly so (nothing else of that plant fails, every other plant passes) and
+the test xfails with the reason. The failure grows out of round-off, whose last bits differ between
+CPUs and library builds, so a machine on which the plant passes the case passes the test too (no
+test may depend on bit-level behaviour across machines)."""
 
 
 def _failed(row: hc.HardCaseRow) -> str:
@@ -54,10 +56,10 @@ def _assert_row(name: str) -> hc.HardCaseRow:
         if (name, e) in KNOWN_FAILURES:
             labels, why = KNOWN_FAILURES[(name, e)]
             failed = {c.label for c in row.failed_checks(e)}
-            assert failed, f"{name} now passes on {e}: remove it from KNOWN_FAILURES ({why})"
-            assert failed == labels, _failed(row)
-            known.append(f"{e}: {why}")
-            continue
+            if failed:
+                assert failed == labels, _failed(row)
+                known.append(f"{e}: {why}")
+                continue
         assert verdict == hc.PASS, _failed(row)
     if known:
         pytest.xfail("; ".join(known))

@@ -172,18 +172,31 @@ def cmd_demo(args: argparse.Namespace) -> int:
 def cmd_hard_cases(args: argparse.Namespace) -> int:
     from validation.hard_cases import run_hard_cases
 
-    out = Path(args.out or Path("out") / "hard_cases")
+    out = Path(args.out) if args.out else Path("out") / "hard_cases"
+    plants = None
+    if args.plants:
+        from mj_bridge.plants import parse_plants
+
+        plants = [e.value for e in parse_plants(args.plants)]
 
     def progress(case: str, i: int, total: int) -> None:
         if sys.stderr.isatty():
             print(f"hard case {i + 1}/{total}: {case}", file=sys.stderr)
 
-    table = run_hard_cases(out, names=args.case or None, fast_only=args.fast, progress=progress)
+    table = run_hard_cases(
+        out, names=args.case or None, fast_only=args.fast, progress=progress, plants=plants
+    )
     for r in table.rows:
-        print(f"  {'PASS' if r.passed else 'FAIL'}  {r.case}")
+        per_plant = ", ".join(f"{e} {r.plant_verdict(e)}" for e in table.plants)
+        print(f"  {'PASS' if r.passed else 'FAIL'}  {r.case}  ({per_plant})")
+    for e, why in table.not_installed.items():
+        print(f"  {e}: not run ({why})")
     n_pass = sum(1 for r in table.rows if r.passed)
     verdict = "PASS" if table.passed else "FAIL"
-    print(f"{verdict}: {n_pass}/{len(table.rows)} hard cases; table in {out / 'hard_cases.md'}")
+    print(
+        f"{verdict}: {n_pass}/{len(table.rows)} hard cases on {', '.join(table.plants)}; "
+        f"table in {out / 'hard_cases.md'}"
+    )
     return 0 if table.passed else EXIT_FAILED
 
 
@@ -319,6 +332,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", help="output directory (default: out/hard_cases)")
     p.add_argument("--fast", action="store_true", help="only the fast subset")
     p.add_argument("--case", action="append", help="run only this case (repeatable)")
+    p.add_argument(
+        "--plants",
+        help="comma-separated plants (default: every installed one of analytic,mujoco,pinocchio)",
+    )
     p.set_defaults(func=cmd_hard_cases)
 
     p = sub.add_parser(

@@ -78,14 +78,21 @@ def _z_to(axis: np.ndarray) -> np.ndarray:
     return rot.as_quat()
 
 
-def _ghost(rgba: tuple[int, int, int, int], ghost: bool) -> tuple[int, int, int, int]:
-    if not ghost:
+Ghost = bool | tuple[int, int, int, int]
+"""False for the solid first plant; True, or the plant's RGBA tint, for a translucent ghost."""
+
+
+def _ghost(rgba: tuple[int, int, int, int], ghost: Ghost) -> tuple[int, int, int, int]:
+    """``rgba`` as drawn: unchanged for the first plant; paler, translucent and (with a tint)
+    shifted toward the plant's colour for a ghost, so two ghosts can be told apart."""
+    if ghost is False:
         return rgba
     r, g, b, _ = rgba
+    tr, tg, tb = (255, 255, 255) if ghost is True else ghost[:3]
     return (
-        int(0.6 * r + 0.4 * 255),
-        int(0.6 * g + 0.4 * 255),
-        int(0.6 * b + 0.4 * 255),
+        int(0.5 * r + 0.5 * tr),
+        int(0.5 * g + 0.5 * tg),
+        int(0.5 * b + 0.5 * tb),
         GHOST_ALPHA,
     )
 
@@ -120,7 +127,7 @@ class RecordingInfo:
     wall_time_s: float
 
 
-def _log_shape(rec, base: str, scene: Any, ghost: bool) -> None:
+def _log_shape(rec, base: str, scene: Any, ghost: Ghost) -> None:
     import rerun as rr
 
     sh = scene.body.shape
@@ -224,8 +231,8 @@ def log_run(
         entities.append(path)
 
     for k, tr in enumerate(plants):
-        ghost = k > 0
         subj = Subject(tr.engine.value)
+        ghost: Ghost = False if k == 0 else PLANT_COLOR[subj]
         base = f"{p0}/world/{subj.value}"
         body = f"{base}/body"
         t, N = tr.t, tr.t.shape[0]
