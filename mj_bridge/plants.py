@@ -91,7 +91,7 @@ class PinocchioPlant(Plant):
         if importlib.util.find_spec("pinocchio") is None:
             return (
                 "the Pinocchio plant needs the 'pin' package (>= 4.1): "
-                "pip install 'tumbling-testbed[pinocchio]'"
+                "pip install 'pin>=4.1' (the [pinocchio] extra)"
             )
         return ""
 

@@ -267,7 +267,7 @@ def _validate_into(
         ""
         if len(runs) >= 3
         else (
-            "the referee (Pinocchio) is not installed: pip install 'tumbling-testbed[pinocchio]'"
+            "the referee (Pinocchio) is not installed: pip install 'pin>=4.1' (the [pinocchio] extra)"
             if PinocchioPlant.unavailable()
             else "the referee needs three plants"
         )
