@@ -469,8 +469,8 @@ def _core(t, q, qd, fp, ip, out):
     sq = 0.0
     spq = 0.0
     sl2 = 2.0 * sLau
-    # spring forces F^S = -∂U_s/∂p (Eq. 38, ERRATA 2): spring j joins x_{j-1} and x_j (x = p - p_e,
-    # x_{-1} = x_n = 0) with force f_j; Q_p,i += f_{i+1} - f_i
+    # spring forces F^S = -∂U_s/∂p (Eq. 38; docs/errata.md item 2): spring j joins x_{j-1} and x_j
+    # (x = p - p_e, x_{-1} = x_n = 0) with force f_j; Q_p,i += f_{i+1} - f_i
     x = 0.0
     f_prev = 0.0
     if springs:
@@ -839,7 +839,7 @@ def _core(t, q, qd, fp, ip, out):
             v += w[_H + 4 * (ip[I_COMP + j] & _IX) + c] * w[_NU + 1 + j]
         w[_PM + c] = v
         out[oc + 3 + c] = v + q[3 + c] * lam_m
-    # torque τ = ¼ H Q^C_u of the applied control force (ERRATA), residual A_c q̈ - b_c
+    # torque τ = ¼ H Q^C_u of the applied control force (docs/errata.md C4), residual A_c q̈ - b_c
     ot = 2 * nq
     for r in range(3):
         v = 0.0
@@ -985,7 +985,7 @@ def _minv2(q, fp, ip, out, w, n, kw, kp, s, mu0, mu1, mu2, alpha, b_m, uu):
         QC[i] = Qc[i]
     for c in range(4):
         QC[3 + c] += u[c] * corr
-    # torque τ = ¼ H Q^C_u of the applied control force (ERRATA), residual A_c q̈ - b_c
+    # torque τ = ¼ H Q^C_u of the applied control force (docs/errata.md C4), residual A_c q̈ - b_c
     for rr in range(3):
         vv = 0.0
         for c in range(4):

@@ -1,4 +1,4 @@
-"""Invariants of the tumbling system and their balances (Sec. V, Fig. 8; ERRATA conventions).
+"""Invariants of the tumbling system and their balances (Sec. V, Fig. 8; docs/errata.md, conventions C4-C5).
 
 Computed from the state alone, in the paper's coordinates, for any engine's samples:
 

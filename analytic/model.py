@@ -227,7 +227,7 @@ class TumblingModel:
 
     def _q_springs_linear(self, t: float, k: _Kin, Q: np.ndarray) -> None:
         f = self.k_l * self._spring_extension(k.p)
-        Q[7:] += f[1:] - f[:-1]  # F^S = -∂U_s/∂p (Eq. 53 with the ERRATA fix)
+        Q[7:] += f[1:] - f[:-1]  # F^S = -∂U_s/∂p (Eq. 53 corrected, docs/errata.md item 2)
 
     def _q_springs_cubic(self, t: float, k: _Kin, Q: np.ndarray) -> None:
         f = self.k_n * self._spring_extension(k.p) ** 3
@@ -340,7 +340,7 @@ class TumblingModel:
         )  # = QC up to the norm-constraint reaction along [0, u, 0], which H u = 0 removes
         ctrl = ControlOutput(
             QC=sol.QC,
-            torque=0.25 * (k.Hm @ Qc[3:7]),  # τ = ¼ H Q^C_u (ERRATA: Q^C_u = Hᵀτ + c u)
+            torque=0.25 * (k.Hm @ Qc[3:7]),  # τ = ¼ H Q^C_u (docs/errata.md C4: Q^C_u = Hᵀτ + c u)
             rod_forces=Qc[7:].copy(),
             force_at_C=Qc[:3].copy(),
             residual=sol.residual,

@@ -39,7 +39,7 @@ from analytic.effects import (
     Weighting,
 )
 
-# Quaternion norm tolerances on load (issue 2): silently exact below, renormalised with a warning up
+# Quaternion norm tolerances on load: silently exact below, renormalised with a warning up
 # to the refusal bound, refused above it unless the scene asks to start off the manifold (Eq. 58).
 QUAT_NORMALISE_TOL = 1e-12
 QUAT_REFUSE_TOL = 1e-3
@@ -63,9 +63,11 @@ MAX_OUTPUT_SAMPLES = 1_000_000
 # MuJoCo steps of one run: 10⁹ steps at the measured 10-17 µs per RK4 step with the controller
 # are three to five hours; the longest built-in run is 2·10⁶ steps (hard/long_horizon).
 MAX_MUJOCO_STEPS = 1_000_000_000
-# t_end·rate within this relative distance of an integer puts t_end on the output grid: decimal
-# horizons and rates are not exact in binary (0.3 s x 10 Hz = 3.0000000000000004), and a sample
-# interval must fit a whole number of MuJoCo steps to the same relative tolerance
+# t_end·rate within this distance of an integer (in sample intervals, so the last interval is never
+# longer than 1/rate by more than this fraction) puts t_end on the output grid: decimal horizons
+# and rates are not exact in binary (0.3 s x 10 Hz = 3.0000000000000004); the product's round-off,
+# at most 2.2e-16 x MAX_OUTPUT_SAMPLES = 2.2e-10 intervals, stays below it. A sample interval must
+# fit a whole number of MuJoCo steps to the same relative tolerance
 # (mj_bridge.simulate.STEP_FIT_RTOL).
 GRID_RTOL = 1e-9
 
@@ -334,12 +336,12 @@ class OutputSettings:
 def output_times(t_end: float, rate: float) -> np.ndarray:
     """The output grid ``0, 1/rate, 2/rate, ...``, ending at ``t_end`` exactly, s.
 
-    ``t_end`` replaces the last grid point when ``t_end·rate`` is an integer to :data:`GRID_RTOL`,
-    else it is appended after the last grid point below it.
+    ``t_end`` replaces the last grid point when ``t_end·rate`` is within :data:`GRID_RTOL` of an
+    integer, else it is appended after the last grid point below it.
     """
     x = t_end * rate
     k = round(x)
-    if k >= 1 and abs(x - k) <= GRID_RTOL * x:
+    if k >= 1 and abs(x - k) <= GRID_RTOL:
         t = np.arange(k + 1) / rate
         t[-1] = t_end
         return t
@@ -860,7 +862,8 @@ def _parse_masses(t: _Table | None, axis: np.ndarray) -> Masses:
         )
     aa = np.outer(axis, axis)
     if has_ring:
-        # A thin ring about the rod: axial m r², transverse m r²/2 -> m r²/2 (I + a aᵀ) (ERRATA, Eq. 62).
+        # A thin ring about the rod: axial m r², transverse m r²/2 -> m r²/2 (I + a aᵀ) (Eq. 62;
+        # docs/errata.md item 8).
         r = t.vector("ring_radius", n, nonneg=True)
         for i in range(n):
             if float(m[i]) * float(r[i]) * float(r[i]) > MAX_INERTIA:
@@ -940,8 +943,8 @@ def _parse_initial(t: _Table, n: int) -> InitialState:
 def _parse_attitude(t: _Table) -> np.ndarray:
     """Quaternion (w first) or axis-angle composed with a reference-from-principal rotation.
 
-    ``S(u(0)) = Rot(axis, angle) · reference_from_principal`` (ERRATA: Example 1 needs the principal
-    -> block rotation ``P`` of Eq. 63 here).
+    ``S(u(0)) = Rot(axis, angle) · reference_from_principal`` (Example 1 needs the principal -> block
+    rotation ``P`` of Eq. 63 here: ``docs/errata.md``, item 6).
     """
     allow_off = t.boolean("allow_off_manifold", False)
     if t.has("quaternion"):

@@ -5,41 +5,26 @@ the control and given torque (``Ẇ = τ·ω + F·ṗ + F_C·Ṙ + τ_g·ω``), 
 external moments about the system centre of mass c (``İ_L = S(u)(τ + τ_g) + (R - c)×F_C``) and the impulse of a force at C, so that the momentum
 and energy balances are integrated to the same tolerance as the motion.
 
-Steps are taken one at a time with scipy's ``OdeSolver`` classes (what ``solve_ivp`` does
-internally), so a run that fails or is interrupted part way returns every sample it reached,
-marked failed, with the reason and the time.
+Steps are taken one at a time with scipy's ``OdeSolver`` classes (:func:`analytic.stepping.
+step_and_sample`, shared with the Pinocchio plant), so a run that fails or is interrupted part way
+returns every sample it reached, marked failed, with the reason and the time; the record is built by
+:func:`analytic.assemble.assemble`, as for every plant.
 """
 
 from __future__ import annotations
 
 import math
-import time
 from collections.abc import Callable
 
 import numpy as np
-from scipy import integrate
 
+from analytic.assemble import N_AUX, assemble
 from analytic.aux_rates import aux_rates
 from analytic.effects import Backend, Effect, SolverMethod
-from analytic.invariants import compute_invariants, tracking_errors
-from analytic.kinematics import omega_of
 from analytic.model import TumblingModel
 from analytic.scene import Scene
+from analytic.stepping import NonFinite, step_and_sample
 from analytic.trajectory import Engine, RunStatus, Trajectory
-
-_SOLVERS = {
-    SolverMethod.DOP853: integrate.DOP853,
-    SolverMethod.RK45: integrate.RK45,
-    SolverMethod.RK23: integrate.RK23,
-    SolverMethod.RADAU: integrate.Radau,
-    SolverMethod.BDF: integrate.BDF,
-    SolverMethod.LSODA: integrate.LSODA,
-}
-N_AUX = 7  # W, I_L (3), I_P (3)
-
-
-class _NonFinite(ArithmeticError):
-    pass
 
 
 def evaluator(model: TumblingModel, backend: Backend) -> Callable:
@@ -78,7 +63,7 @@ def _rhs(model: TumblingModel, accel: Callable) -> Callable[[float, np.ndarray],
         # Work, and the external moments about the system centre of mass (analytic/aux_rates.py)
         aux_rates(q, qd, tau, c.rod_forces, c.force_at_C, a, d, m, mu0, m_T, out[2 * nq :])
         if not np.isfinite(out).all():
-            raise _NonFinite(f"non-finite acceleration at t = {t:.6g} s")
+            raise NonFinite(f"non-finite acceleration at t = {t:.6g} s")
         return out
 
     fm = getattr(accel, "__self__", None)
@@ -101,7 +86,7 @@ def _rhs(model: TumblingModel, accel: Callable) -> Callable[[float, np.ndarray],
             return f(t, y)  # the kernel declined: the numpy model answers (f counts it)
         counter["nfev"] += 1
         if status == STATUS_NONFINITE:
-            raise _NonFinite(f"non-finite acceleration at t = {t:.6g} s")
+            raise NonFinite(f"non-finite acceleration at t = {t:.6g} s")
         return out
 
     g.counter = counter  # type: ignore[attr-defined]
@@ -156,62 +141,25 @@ def simulate(
     nq = model.nq
     y0 = np.concatenate([scene.initial.q0(), scene.initial.qdot0(), np.zeros(N_AUX)])
     f = _rhs(model, accel)
-    status, message = RunStatus.OK, ""
-    ys = [y0]
-    ts = [t_eval[0]]
-    i_next = 1
-    wall0 = time.perf_counter()
-    nsteps = 0
-    # |u|² - 1 at the integrator's own steps (the paper's measure); samples between steps come from
-    # the method's dense output, which for DOP853 is one order lower (7 vs 8).
-    norm_err_steps = 0.0
-    # The work and impulse integrals ride along as quadratures: they are left out of the error
-    # control (their atol is huge) so that round-off in the power of a zero control cannot shrink
-    # the steps; they are integrated with the steps the motion needs, to the same order.
-    atol_vec = np.concatenate([np.full(2 * nq, atol), np.full(N_AUX, 1e300)])
-    try:
-        solver = _SOLVERS[method](
-            f, t_eval[0], y0, t_eval[-1], rtol=rtol, atol=atol_vec, max_step=scene.solver.max_step
-        )
-        while solver.status == "running":
-            msg = solver.step()
-            nsteps += 1
-            u_step = solver.y[3:7]
-            norm_err_steps = max(norm_err_steps, abs(float(u_step @ u_step) - 1.0))
-            if solver.status == "failed":
-                status, message = (
-                    RunStatus.FAILED,
-                    f"{method.value} failed at t = {solver.t:.6g} s: {msg}",
-                )
-                break
-            j = np.searchsorted(t_eval, solver.t, side="right")
-            if j > i_next:
-                dense = solver.dense_output()
-                for tt in t_eval[i_next:j]:
-                    ys.append(dense(tt))
-                    ts.append(tt)
-                i_next = j
-                if progress is not None:
-                    progress(float(solver.t))
-    except _NonFinite as exc:
-        status, message = RunStatus.FAILED, str(exc)
-    except KeyboardInterrupt:
-        status, message = RunStatus.INTERRUPTED, f"interrupted at t = {ts[-1]:.6g} s"
-    except np.linalg.LinAlgError as exc:
-        status, message = (
-            RunStatus.FAILED,
-            f"mass matrix not positive definite near t = {ts[-1]:.6g} s ({exc})",
-        )
-    wall = time.perf_counter() - wall0
-    Y = np.array(ys)
-    t = np.array(ts)
+    run = step_and_sample(
+        f,
+        t_eval,
+        y0,
+        method=method,
+        rtol=rtol,
+        atol=atol,
+        n_motion=2 * nq,
+        max_step=scene.solver.max_step,
+        progress=progress,
+        linalg_failure="mass matrix not positive definite",
+    )
     return _assemble(
         model,
         accel,
-        t,
-        Y,
-        status,
-        message,
+        run.t,
+        run.y,
+        run.status,
+        run.message,
         {
             "method": method.value,
             "backend": "numba"
@@ -220,52 +168,34 @@ def simulate(
             "rtol": rtol,
             "atol": atol,
             "nfev": f.counter["nfev"],
-            "nsteps": nsteps,
-            "wall_time_s": wall,
-            "max_quat_norm_error_at_steps": norm_err_steps,
+            "nsteps": run.nsteps,
+            "wall_time_s": run.wall_time_s,
+            "max_quat_norm_error_at_steps": run.max_quat_norm_error_at_steps,
         },
     )
 
 
-def _assemble(model, accel, t, Y, status, message, info) -> Trajectory:
+def _assemble(
+    model: TumblingModel,
+    accel: Callable,
+    t: np.ndarray,
+    Y: np.ndarray,
+    status: RunStatus,
+    message: str,
+    info: dict,
+) -> Trajectory:
+    """The record of the samples ``Y`` (N, 2 nq + 7): q̈ and the controller's output evaluated at
+    each sample (NaN and none where the model cannot be evaluated), then :func:`assemble`."""
     nq = model.nq
     q, qd = Y[:, :nq], Y[:, nq : 2 * nq]
-    N = len(t)
-    qdd = np.zeros((N, nq))
-    QC = np.zeros((N, nq))
-    torque = np.zeros((N, 3))
-    rod = np.zeros((N, model.n))
-    fC = np.zeros((N, 3))
-    res = np.zeros(N)
-    for i in range(N):
+    qdd = np.zeros((len(t), nq))
+    controls = []
+    for i in range(len(t)):
         try:
-            a, c = accel(t[i], q[i], qd[i])
+            qdd[i], c = accel(t[i], q[i], qd[i])
         except (np.linalg.LinAlgError, ValueError):
-            a = np.full(nq, np.nan)
-            c = None
-        qdd[i] = a
-        if c is not None:
-            QC[i], torque[i], rod[i], fC[i] = c.QC, c.torque, c.rod_forces, c.force_at_C
-            res[i] = float(np.linalg.norm(c.residual))
-    tracking = tracking_errors(model, t, q, omega_of(q[:, 3:7], qd[:, 3:7]))
-    inv = compute_invariants(
-        model, t, q, qd, Y[:, 2 * nq], Y[:, 2 * nq + 1 : 2 * nq + 4], Y[:, 2 * nq + 4 : 2 * nq + 7]
-    )
-    return Trajectory(
-        engine=Engine.ANALYTIC,
-        scene=model.scene.name,
-        t=t,
-        q=q,
-        qdot=qd,
-        qddot=qdd,
-        QC=QC,
-        torque=torque,
-        rod_forces=rod,
-        force_at_C=fC,
-        residual_norm=res,
-        invariants=inv,
-        tracking=tracking,
-        status=status,
-        message=message,
-        info=info,
+            qdd[i], c = np.nan, None
+        controls.append(c)
+    return assemble(
+        model, Engine.ANALYTIC, t, q, qd, qdd, controls, Y[:, 2 * nq :], status, message, info
     )

@@ -1,10 +1,13 @@
 """MuJoCo's process-global callbacks, installed only for the duration of a ``with`` block.
 
-MuJoCo 4.0 (../shared/notes/mujoco-4.md): Python ``mjcb_*`` callbacks are global, compiling a model
+MuJoCo 4.0, as measured on it: Python ``mjcb_*`` callbacks are global, compiling a model
 fails while one is installed, and with RK4 ``mjcb_control`` / ``mjcb_act_bias`` run at each of the
 four stages (a force computed there keeps RK4 fourth order; one set once per step is first order).
 :class:`installed` sets them after the model has been compiled and always removes them, also when
 the body of the ``with`` raises. Nesting is refused (two twins cannot share the global slots).
+
+MuJoCo's warnings are collected while a block steps (:class:`collapsed_warnings`), and
+:func:`bad_warnings` names those after which a step is not the model's dynamics.
 """
 
 from __future__ import annotations
@@ -18,6 +21,34 @@ import mujoco
 
 _lock = threading.Lock()
 _active = False
+
+# MuJoCo warnings after which the step is not the model's dynamics (MuJoCo resets or zeroes silently).
+BAD_WARNINGS = {
+    mujoco.mjtWarning.mjWARN_BADQPOS: "bad qpos (MuJoCo reset the state)",
+    mujoco.mjtWarning.mjWARN_BADQVEL: "bad qvel (MuJoCo reset the state)",
+    mujoco.mjtWarning.mjWARN_BADQACC: "bad qacc (MuJoCo reset the state)",
+    mujoco.mjtWarning.mjWARN_BADCTRL: "bad ctrl (MuJoCo zeroed every control)",
+}
+
+
+def bad_warnings(d: mujoco.MjData) -> list[str]:
+    """Descriptions of the MuJoCo warnings raised so far that invalidate the dynamics."""
+    return [
+        f"{w.name} x{d.warning[int(w)].number}: {text}"
+        for w, text in BAD_WARNINGS.items()
+        if d.warning[int(w)].number > 0
+    ]
+
+
+def bad_warning_counts(d: mujoco.MjData) -> list[int]:
+    """The counts of :data:`BAD_WARNINGS` in ``d``, in that order."""
+    return [d.warning[int(w)].number for w in BAD_WARNINGS]
+
+
+def set_bad_warning_counts(d: mujoco.MjData, counts: list[int]) -> None:
+    """Set the counts of :data:`BAD_WARNINGS` in ``d`` (undo those of a step that is redone)."""
+    for w, k in zip(BAD_WARNINGS, counts, strict=True):
+        d.warning[int(w)].number = k
 
 
 def spring_user_bias(m: mujoco.MjModel, d: mujoco.MjData, i: int) -> float:

@@ -1,8 +1,9 @@
 """The analytic controller at one MuJoCo integrator stage, compiled (numba).
 
-One call does what :meth:`mj_bridge.twin.Twin._control_callback` does in Python, for BR's body
+One call does what :meth:`mj_bridge.stages.Stages.control_callback` does in Python, for BR's body
 frame at C (the default model): map MuJoCo's ``(qpos, qvel)`` to the paper's ``(q, q̇)``
-(``u = q_b``, ``u̇ = ¼ Hᵀ ω / |u|²``), evaluate the analytic side's compiled kernel
+(``u = q_b``, ``u̇ = ¼ Hᵀ ω / |u|²``: :func:`model_xml.coordinates.mujoco_to_paper_state`, written
+out for numba and tested against it), evaluate the analytic side's compiled kernel
 (:func:`analytic.fast_kernel.evaluate`, the paper's Eq. 89), write the actuators' ``ctrl``
 (torque + given torque on ``torque_x..z``, rod forces on ``force1..N``, divided by the gear) and, with weight ``w > 0``,
 add ``w·[P, S(u)(τ+τ_g) + (R-c)×F_C, F_C]`` to the work/impulse accumulator.

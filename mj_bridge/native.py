@@ -3,7 +3,7 @@ integrator stage, with no Python in the loop.
 
 Why: a Python ``mjcb_control`` costs about 0.6 µs per call before it does anything, and handing
 sixteen arguments to a numba function another ~1.5 µs; RK4 makes four calls per step, so the
-interpreter alone cost about as much as MuJoCo's whole step (issue 5's goal is that the controller
+interpreter alone cost about as much as MuJoCo's whole step (the speed goal is that the controller
 adds no more than the step it sits in). MuJoCo 4's ``set_mjcb_control`` also accepts a C function
 pointer; this module provides one, a numba ``cfunc`` of C type ``void(const mjModel*, mjData*)``.
 
@@ -26,8 +26,8 @@ How it finds its data (nothing here is evaluated from user input):
 
 When the kernel declines a stage (``status != 0``: a Schur complement not numerically positive
 definite), the callback cannot call the numpy model (no interpreter in the loop). It counts the
-failure and leaves ``ctrl`` as it was; :class:`mj_bridge.twin.Twin` checks the count after every
-``mj_step``/``mj_forward`` and reruns that batch of steps from its saved start with the Python
+failure and leaves ``ctrl`` as it was; :class:`mj_bridge.stepper.Stepper` checks the count after
+every ``mj_step``/``mj_forward`` and reruns that batch of steps from its saved start with the Python
 callback, which answers such stages with the numpy model.
 """
 
@@ -115,7 +115,7 @@ def _make_native_stage(deps: int):
     """:func:`_native_stage` closing over ``deps`` (see :data:`DEPS`)."""
 
     def _native_stage(d_addr, ctx_addr):  # pragma: no cover - compiled
-        """One ``mjcb_control`` call: what ``Twin._stage_callback`` does, from raw addresses."""
+        """One ``mjcb_control`` call: what ``Stages.stage_callback`` does, from raw addresses."""
         if deps < 0:  # never true: ties numba's cache key to the kernel's sources
             return
         ctx = carray(_as_iptr(ctx_addr), (CTX_LEN,))
@@ -408,7 +408,7 @@ class Context:
         CTX[:] = 0
         _bind_lock.release()
 
-    # accumulator state, mirrored for mj_bridge.twin._Accumulator
+    # accumulator state, mirrored for mj_bridge.accumulator.Accumulator
     def start(self, h: float) -> None:
         """Accumulate the next steps' work and impulses with step ``h``; resets the call count."""
         CTX_F[F_H] = h

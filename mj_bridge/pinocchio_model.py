@@ -1,7 +1,8 @@
-"""The body of a scene as a Pinocchio model, and the maps between Pinocchio's state and the paper's.
+"""The body of a scene as a Pinocchio model.
 
 Pinocchio (PyPI ``pin``, 4.1, ``import pinocchio``) is an optional dependency: this module imports
-it only inside :func:`build_model`; the coordinate maps are pure numpy.
+it only inside :func:`build_model`. The maps between Pinocchio's state and the paper's are in
+:mod:`model_xml.coordinates` (pure numpy; re-exported here under the names they had).
 
 Model (joint names as in the MJCF twin, :mod:`model_xml.builder`; mass indices 1-based):
 
@@ -21,18 +22,8 @@ mass properties (``tests/test_pinocchio.py``), except that Pinocchio 4.1's reade
 axis, and carries the MJCF's tiny isotropic padding of point masses (taken off BR); tendons and
 actuators are not read. This module builds the model from the scene directly.
 
-Coordinates (``n`` masses; paper ``q = [R, u, p]`` of Eq. 44, ``u`` w first; ``S = S(u)`` of
-Eq. 11, ``ω = H(u) u̇`` of Eq. 12):
-
-* Pinocchio ``q_pin = [x, y, z, qx, qy, qz, qw, p]`` (n + 7): C and the quaternion **scalar last**;
-* Pinocchio ``v_pin = [v, ω, ṗ]`` (n + 6), twist of the free flyer in its **local** frame:
-  ``v = Sᵀ Ṙ`` (body axes, m/s), ``ω`` the body-axis angular velocity (rad/s);
-* ``a_pin = v̇_pin`` (what ``pin.aba`` returns): ``R̈ = S (v̇ + ω × v)``, ``ω̇ = a_pin[3:6]``,
-  ``ü = ¼ (H(u̇)ᵀ ω + H(u)ᵀ ω̇)``, ``p̈ = a_pin[6:]``.
-
-The Pinocchio → paper direction is done by converting to MuJoCo's free-joint layout
-(``[x, qw, qx, qy, qz, p]``, ``[Ṙ, ω, ṗ]``, ``[R̈, ω̇, p̈]`` for a body frame at C) and reusing
-:func:`model_xml.state.mujoco_to_paper_batch`, so that map exists once.
+Coordinates: ``q_pin = [R, qx, qy, qz, qw, p]`` (the quaternion **scalar last**), ``v_pin = [Sᵀ Ṙ,
+ω, ṗ]`` (the free flyer's twist in its **local** frame); see :mod:`model_xml.coordinates`.
 """
 
 from __future__ import annotations
@@ -42,17 +33,18 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from analytic.effects import Effect
-from analytic.kinematics import S as S_of
-from analytic.kinematics import S_batch, omega_of
 from analytic.scene import Scene
 from model_xml.builder import BODY, ROOT, joint_name, mass_name
-from model_xml.state import mujoco_to_paper_batch
+from model_xml.coordinates import (
+    paper_to_pinocchio,
+    pinocchio_to_mujoco_layout,
+    pinocchio_to_paper,
+    pinocchio_to_paper_acc,
+    pinocchio_to_paper_batch,
+)
 
 if TYPE_CHECKING:  # pragma: no cover
     import pinocchio
-
-_IPOS0 = np.zeros(3)
-_IQUAT0 = np.array([1.0, 0.0, 0.0, 0.0])
 
 
 def import_pinocchio():
@@ -110,85 +102,6 @@ def build_model(scene: Scene) -> pinocchio.Model:
         model.addBodyFrame(mass_name(i), jid, pin.SE3.Identity(), frame)
     model.gravity = pin.Motion(gravity_vector(scene), np.zeros(3))
     return model
-
-
-# ----------------------------------------------------------------------------------------------
-# Coordinate maps
-# ----------------------------------------------------------------------------------------------
-
-
-def paper_to_pinocchio(q: np.ndarray, qdot: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Paper ``(q, q̇)`` (n+7 each) -> Pinocchio ``(q_pin (n+7), v_pin (n+6))``.
-
-    u is normalised (Pinocchio's quaternion is a rotation); ``ω = H(u) u̇`` is evaluated at the given,
-    possibly non-unit, u (as :func:`model_xml.state.paper_to_mujoco_state` does), ``v = S(û)ᵀ Ṙ``.
-    """
-    q = np.asarray(q, dtype=float)
-    qdot = np.asarray(qdot, dtype=float)
-    u = q[3:7] / np.linalg.norm(q[3:7])
-    omega = omega_of(q[3:7], qdot[3:7])
-    q_pin = np.concatenate([q[:3], u[1:4], u[:1], q[7:]])
-    v_pin = np.concatenate([S_of(u).T @ qdot[:3], omega, qdot[7:]])
-    return q_pin, v_pin
-
-
-def pinocchio_to_mujoco_layout(
-    q_pin: np.ndarray, v_pin: np.ndarray, a_pin: np.ndarray | None = None
-) -> tuple[np.ndarray, ...]:
-    """Pinocchio's state (and acceleration) in MuJoCo's free-joint layout, batched.
-
-    Args:
-        q_pin (N, n+7), v_pin (N, n+6), a_pin (N, n+6) or None.
-
-    Returns:
-        ``qpos = [x, qw, qx, qy, qz, p]``, ``qvel = [S v, ω, ṗ]`` and, when ``a_pin`` is given,
-        ``qacc = [S (v̇ + ω × v), ω̇, p̈]`` (a body frame at C along the principal axes).
-    """
-    q_pin = np.atleast_2d(np.asarray(q_pin, dtype=float))
-    v_pin = np.atleast_2d(np.asarray(v_pin, dtype=float))
-    quat = np.concatenate([q_pin[:, 6:7], q_pin[:, 3:6]], axis=1)  # w first
-    qpos = np.concatenate([q_pin[:, :3], quat, q_pin[:, 7:]], axis=1)
-    Sm = _rot_rows(quat)
-    v, w = v_pin[:, :3], v_pin[:, 3:6]
-    qvel = np.concatenate([np.einsum("nij,nj->ni", Sm, v), v_pin[:, 3:]], axis=1)
-    if a_pin is None:
-        return qpos, qvel
-    a_pin = np.atleast_2d(np.asarray(a_pin, dtype=float))
-    Rdd = np.einsum("nij,nj->ni", Sm, a_pin[:, :3] + np.cross(w, v))
-    qacc = np.concatenate([Rdd, a_pin[:, 3:]], axis=1)
-    return qpos, qvel, qacc
-
-
-def pinocchio_to_paper_batch(
-    q_pin: np.ndarray, v_pin: np.ndarray, a_pin: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Pinocchio ``(q_pin, v_pin, a_pin)`` for N samples -> paper ``(q, q̇, q̈)`` (N, n+7 each) and
-    ``ω`` (N, 3), body axes, rad/s. ``u`` is the quaternion as given (not renormalised);
-    ``u̇ = H(u)ᵀ ω / (4|u|²)``."""
-    qpos, qvel, qacc = pinocchio_to_mujoco_layout(q_pin, v_pin, a_pin)
-    return mujoco_to_paper_batch(qpos, qvel, qacc, _IPOS0, _IQUAT0)
-
-
-def pinocchio_to_paper(q_pin: np.ndarray, v_pin: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """One Pinocchio state ``(q_pin (n+7), v_pin (n+6))`` -> paper ``(q, q̇)`` (n+7 each)."""
-    q_pin = np.asarray(q_pin, dtype=float)
-    v_pin = np.asarray(v_pin, dtype=float)
-    q, qd, _, _ = pinocchio_to_paper_batch(q_pin[None], v_pin[None], np.zeros((1, v_pin.size)))
-    return q[0], qd[0]
-
-
-def pinocchio_to_paper_acc(q_pin: np.ndarray, v_pin: np.ndarray, a_pin: np.ndarray) -> np.ndarray:
-    """Pinocchio's ``v̇`` (n+6) at ``(q_pin, v_pin)`` -> the paper's ``q̈`` (n+7)."""
-    return pinocchio_to_paper_batch(
-        np.asarray(q_pin, float)[None],
-        np.asarray(v_pin, float)[None],
-        np.asarray(a_pin, float)[None],
-    )[2][0]
-
-
-def _rot_rows(quat: np.ndarray) -> np.ndarray:
-    """Rotation matrices of (N, 4) w-first quaternions, normalised first, shape (N, 3, 3)."""
-    return S_batch(quat / np.linalg.norm(quat, axis=1, keepdims=True))
 
 
 __all__ = [

@@ -4,7 +4,8 @@ the analytic and MuJoCo plants (paper coordinates, Eq. 44).
 
 Pinocchio (PyPI ``pin`` >= 4.1) is optional: it is imported when a :class:`PinocchioDynamics` is built.
 
-State integrated by scipy (one ``OdeSolver`` step at a time, as :mod:`analytic.simulate` does)::
+State integrated by scipy (one ``OdeSolver`` step at a time, :func:`analytic.stepping.step_and_sample`,
+the analytic plant's loop)::
 
     y = [x (3), qx, qy, qz, qw, p (n) | Ṙ (3), ω (3), ṗ (n) | W, I_L (3), I_P (3)]
         '---------- q_pin ----------'   '-- velocities ---'   '---- quadratures ----'
@@ -18,7 +19,7 @@ at every stage (``S`` the rotation of the normalised quaternion). Integrating Pi
 rtol-1e-14 run (C falls ~1.6 km: these are ~4e-12 relative).
 
 ``ẏ = [Ṙ, ½ q ⊗ (0, ω), ṗ | S (v̇ + ω × v), ω̇, p̈ | Ẇ, İ_L, İ_P]`` with ``v̇ = aba(q_pin, v_pin, τ)``
-(see :mod:`mj_bridge.pinocchio_model` for the maps). The work and impulse rates are those of
+(see :mod:`model_xml.coordinates` for the maps). The work and impulse rates are those of
 :mod:`analytic.aux_rates` and ride along outside the error control, as in the analytic plant.
 
 The generalized force ``τ`` (n + 6) handed to ``aba`` at every right-hand side (so at every stage of
@@ -35,46 +36,39 @@ The controller is the analytic one (Eq. 89), evaluated at the paper state mapped
 or does not apply (identity weighting, no numba); ``ControllerSource.ANALYTIC`` uses the numpy model
 always. The mapping, the controller, the springs, the given torque, the quaternion and position
 rates and the quadratures are one compiled call (:func:`_make_stage`); ``pin.aba`` is a second call,
-and a third compiled call (:func:`_finish`) maps its result into ``ẏ`` and checks it is finite.
+and a third compiled call (:func:`_finish`) maps its result into ``ẏ`` and checks it is finite. The
+maps written out there for numba are those of :mod:`model_xml.coordinates`
+(:func:`~model_xml.coordinates.pinocchio_plant_to_pinocchio`,
+:func:`~model_xml.coordinates.pinocchio_plant_to_paper`), and tested against them.
+
+The run is stepped by :func:`analytic.stepping.step_and_sample` and its record built by
+:func:`analytic.assemble.assemble`, as the analytic plant's.
 """
 
 from __future__ import annotations
 
 import math
-import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import integrate
 
 from analytic import aux_rates as _aux
 from analytic import fast_kernel as fk
+from analytic.assemble import N_AUX, assemble
 from analytic.effects import Effect, SolverMethod
 from analytic.fast import FastModel
-from analytic.invariants import compute_invariants, tracking_errors
 from analytic.model import ControlOutput, TumblingModel
 from analytic.scene import OutputSettings, Scene
+from analytic.stepping import NonFinite, step_and_sample
 from analytic.trajectory import Engine, RunStatus, Trajectory
-from mj_bridge.pinocchio_model import (
-    build_model,
-    import_pinocchio,
-    paper_to_pinocchio,
+from mj_bridge.pinocchio_model import build_model, import_pinocchio
+from mj_bridge.stages import ControllerSource
+from model_xml.coordinates import (
+    paper_to_pinocchio_plant,
     pinocchio_to_paper_acc,
     pinocchio_to_paper_batch,
 )
-from mj_bridge.twin import ControllerSource
-
-N_AUX = 7  # W, I_L (3), I_P (3), as in analytic.simulate
-
-_SOLVERS = {
-    SolverMethod.DOP853: integrate.DOP853,
-    SolverMethod.RK45: integrate.RK45,
-    SolverMethod.RK23: integrate.RK23,
-    SolverMethod.RADAU: integrate.Radau,
-    SolverMethod.BDF: integrate.BDF,
-    SolverMethod.LSODA: integrate.LSODA,
-}
 
 # Modes of the compiled stage
 MODE_GIVEN = 0  # use the control already in the work array
@@ -360,10 +354,6 @@ stage = fk._jit(_make_stage(DEPS))
 finish = fk._jit(_finish)
 
 
-class NonFinite(ArithmeticError):
-    """A right-hand side produced a NaN or an infinity."""
-
-
 # ----------------------------------------------------------------------------------------------
 # The plant
 # ----------------------------------------------------------------------------------------------
@@ -420,9 +410,7 @@ class PinocchioDynamics:
     def state_from_paper(self, q: np.ndarray, qdot: np.ndarray) -> np.ndarray:
         """The integrated state ``y`` (2n + 20) of a paper state, with zero quadratures:
         ``[q_pin, Ṙ, ω, ṗ, 0]`` (u normalised, ``ω = H(u) u̇``)."""
-        q_pin, v_pin = paper_to_pinocchio(q, qdot)
-        qdot = np.asarray(qdot, dtype=float)
-        return np.concatenate([q_pin, qdot[:3], v_pin[3:], np.zeros(N_AUX)])
+        return np.concatenate([paper_to_pinocchio_plant(q, qdot), np.zeros(N_AUX)])
 
     def initial_state(self) -> np.ndarray:
         """``y(0)`` from the scene's ``[initial]`` table."""
@@ -551,113 +539,75 @@ def simulate(
     plant = PinocchioDynamics(scene, settings.controller)
     rtol, atol, max_step = settings.resolved(scene)
     out = scene.output if t_end is None else OutputSettings(t_end=t_end, rate=scene.output.rate)
-    t_eval = out.times()
-    y0 = plant.initial_state()
-    nmotion = plant.nq + plant.nv
-    # the quadratures ride along outside the error control (as in analytic.simulate)
-    atol_vec = np.concatenate([np.full(nmotion, atol), np.full(N_AUX, 1e300)])
-    f = plant.rhs
-    status, message = RunStatus.OK, ""
-    ys, ts = [y0], [float(t_eval[0])]
-    i_next = 1
-    nsteps = 0
-    norm_err_steps = 0.0
-    wall0 = time.perf_counter()
-    try:
-        solver = _SOLVERS[settings.method](
-            f, t_eval[0], y0, t_eval[-1], rtol=rtol, atol=atol_vec, max_step=max_step
-        )
-        while solver.status == "running":
-            msg = solver.step()
-            nsteps += 1
-            qq = solver.y[3:7]
-            norm_err_steps = max(norm_err_steps, abs(float(qq @ qq) - 1.0))
-            if solver.status == "failed":
-                status = RunStatus.FAILED
-                message = f"{settings.method.value} failed at t = {solver.t:.6g} s: {msg}"
-                break
-            j = int(np.searchsorted(t_eval, solver.t, side="right"))
-            if j > i_next:
-                dense = solver.dense_output()
-                for tt in t_eval[i_next:j]:
-                    ys.append(dense(tt))
-                    ts.append(float(tt))
-                i_next = j
-                if progress is not None:
-                    progress(float(solver.t))
-    except NonFinite as exc:
-        status, message = RunStatus.FAILED, str(exc)
-    except KeyboardInterrupt:
-        status, message = RunStatus.INTERRUPTED, f"interrupted at t = {ts[-1]:.6g} s"
-    except np.linalg.LinAlgError as exc:
-        status, message = RunStatus.FAILED, f"linear algebra failed near t = {ts[-1]:.6g} s ({exc})"
-    wall = time.perf_counter() - wall0
-    nfev = plant.nfev
+    run = step_and_sample(
+        plant.rhs,
+        out.times(),
+        plant.initial_state(),
+        method=settings.method,
+        rtol=rtol,
+        atol=atol,
+        n_motion=plant.nq + plant.nv,
+        max_step=max_step,
+        progress=progress,
+    )
     return _assemble(
         plant,
-        np.array(ts),
-        np.array(ys),
-        status,
-        message,
+        run.t,
+        run.y,
+        run.status,
+        run.message,
         {
             "method": settings.method.value,
             "rtol": rtol,
             "atol": atol,
             "controller": plant.controller.value,
-            "nfev": nfev,
-            "nsteps": nsteps,
+            "nfev": plant.nfev,
+            "nsteps": run.nsteps,
             "controller_fallbacks": plant.fallbacks,
-            "wall_time_s": wall,
-            "max_quat_norm_error_at_steps": norm_err_steps,
+            "wall_time_s": run.wall_time_s,
+            "max_quat_norm_error_at_steps": run.max_quat_norm_error_at_steps,
             "pinocchio_version": plant.pin.__version__,
         },
     )
 
 
-def _assemble(plant: PinocchioDynamics, t, Y, status, message, info) -> Trajectory:
-    """The Trajectory of the samples ``Y`` (N, ny): Pinocchio's ``v̇`` and the controller's output at
-    each sample, mapped to paper coordinates; invariants and tracking as for every plant."""
-    N = len(t)
-    n, nq, nv = plant.n, plant.nq, plant.nv
+def _assemble(
+    plant: PinocchioDynamics,
+    t: np.ndarray,
+    Y: np.ndarray,
+    status: RunStatus,
+    message: str,
+    info: dict,
+) -> Trajectory:
+    """The record of the samples ``Y`` (N, ny): Pinocchio's ``v̇`` and the controller's output at
+    each sample (NaN and none where they cannot be evaluated), mapped to paper coordinates, then
+    :func:`analytic.assemble.assemble`."""
+    N, nq, nv = len(t), plant.nq, plant.nv
     a_pin = np.full((N, nv), np.nan)
     v_pin = np.full((N, nv), np.nan)
-    QC = np.zeros((N, nq))
-    torque = np.zeros((N, 3))
-    rod = np.zeros((N, n))
-    fC = np.zeros((N, 3))
-    res = np.zeros(N)
+    controls: list[ControlOutput | None] = [None] * N
     for i in range(N):
         try:
             a_pin[i] = plant.v_dot(float(t[i]), Y[i])
             v_pin[i] = plant._vpin
-            c = plant.control_output(float(t[i]))
+            controls[i] = plant.control_output(float(t[i]))
         except (NonFinite, np.linalg.LinAlgError, ValueError):
             continue
-        if c is not None:
-            QC[i], torque[i], rod[i], fC[i] = c.QC, c.torque, c.rod_forces, c.force_at_C
-            res[i] = float(np.linalg.norm(c.residual))
     # the integrated quaternion as it is (not renormalised: its norm error is the run's)
     q, qd, qdd, omega = pinocchio_to_paper_batch(Y[:, :nq], v_pin, a_pin)
-    o = nq + nv
-    model = plant.analytic
-    inv = compute_invariants(model, t, q, qd, Y[:, o], Y[:, o + 1 : o + 4], Y[:, o + 4 : o + 7])
-    return Trajectory(
-        engine=Engine.PINOCCHIO,
-        scene=plant.scene.name,
-        t=t,
-        q=q,
-        qdot=qd,
-        qddot=qdd,
-        QC=QC,
-        torque=torque,
-        rod_forces=rod,
-        force_at_C=fC,
-        residual_norm=res,
-        invariants=inv,
-        tracking=tracking_errors(model, t, q, omega),
-        status=status,
-        message=message,
-        info=info,
+    return assemble(
+        plant.analytic,
+        Engine.PINOCCHIO,
+        t,
+        q,
+        qd,
+        qdd,
+        controls,
+        Y[:, nq + nv :],
+        status,
+        message,
+        info,
+        omega=omega,
     )
 
 

@@ -19,13 +19,15 @@ from collections.abc import Callable
 import mujoco
 import numpy as np
 
+from analytic.assemble import assemble
 from analytic.effects import MjIntegrator, SpringModel
-from analytic.invariants import compute_invariants, tracking_errors
 from analytic.scene import MAX_MUJOCO_STEPS, Scene
 from analytic.trajectory import Engine, RunStatus, Trajectory
-from mj_bridge.twin import ControllerSource, Twin, _as_enum, bad_warnings
+from mj_bridge.callbacks import bad_warnings
+from mj_bridge.stages import ControllerSource
+from mj_bridge.twin import Twin
+from mj_bridge.twin_model import as_enum
 from model_xml import BodyFrame
-from model_xml.state import mujoco_to_paper_batch
 
 # A sample interval must be a whole number of steps to this relative tolerance.
 STEP_FIT_RTOL = 1e-9
@@ -68,7 +70,7 @@ def plan_steps(
     needs every interval of it to be a whole number of steps of ``dt``, so ``t_end`` must be at
     least one step and a multiple of ``dt``, and a run at most ``MAX_MUJOCO_STEPS`` steps.
     """
-    integ = _as_enum(
+    integ = as_enum(
         MjIntegrator, scene.mujoco.integrator if integrator is None else integrator, "integrator"
     )
     dt_name = "mujoco.timestep" if dt is None else "dt"
@@ -142,9 +144,7 @@ def simulate(
     d = tw.d
     tw.set_state(0.0, scene.initial.q0(), scene.initial.qdot0())
     tw.d.time = float(times[0])
-    nq = tw.n + 7
-    rec = {k: [] for k in ("t", "qpos", "qvel", "qacc", "QC", "tau", "rod", "fC", "res")}
-    rec.update(W=[], IL=[], IP=[], energy_mj=[])
+    rec = {k: [] for k in ("t", "qpos", "qvel", "qacc", "control", "aux", "energy_mj")}
     status, message = RunStatus.OK, ""
     acc = tw.acc
     stages = len(acc.weights)
@@ -156,15 +156,8 @@ def simulate(
         rec["qpos"].append(d.qpos.copy())
         rec["qvel"].append(d.qvel.copy())
         rec["qacc"].append(d.qacc.copy())
-        c = tw.last_control if tw.controlled else None
-        rec["QC"].append(c.QC if c is not None else np.zeros(nq))
-        rec["tau"].append(c.torque if c is not None else np.zeros(3))
-        rec["rod"].append(c.rod_forces if c is not None else np.zeros(tw.n))
-        rec["fC"].append(c.force_at_C if c is not None else np.zeros(3))
-        rec["res"].append(float(np.linalg.norm(c.residual)) if c is not None else 0.0)
-        rec["W"].append(acc.work)
-        rec["IL"].append(acc.angular_impulse.copy())
-        rec["IP"].append(acc.linear_impulse.copy())
+        rec["control"].append(tw.last_control if tw.controlled else None)
+        rec["aux"].append(acc.v.copy())  # W, I_L, I_P
         rec["energy_mj"].append(float(d.energy[0] + d.energy[1]))
 
     wall0 = time.perf_counter()
@@ -202,32 +195,21 @@ def simulate(
     wall = time.perf_counter() - wall0
 
     t = np.array(rec["t"])
-    q, qd, qdd, omega = mujoco_to_paper_batch(
-        np.array(rec["qpos"]), np.array(rec["qvel"]), np.array(rec["qacc"]), tw.ipos, tw.iquat
+    q, qd, qdd, omega = tw.tm.to_paper_batch(
+        np.array(rec["qpos"]), np.array(rec["qvel"]), np.array(rec["qacc"])
     )
-    N = len(t)
-    model = tw.model
-    tracking = tracking_errors(model, t, q, omega)
-    inv = compute_invariants(
-        model, t, q, qd, np.array(rec["W"]), np.array(rec["IL"]), np.array(rec["IP"])
-    )
-    return Trajectory(
-        engine=Engine.MUJOCO,
-        scene=scene.name,
-        t=t,
-        q=q,
-        qdot=qd,
-        qddot=qdd,
-        QC=np.array(rec["QC"]),
-        torque=np.array(rec["tau"]),
-        rod_forces=np.array(rec["rod"]).reshape(N, tw.n),
-        force_at_C=np.array(rec["fC"]),
-        residual_norm=np.array(rec["res"]),
-        invariants=inv,
-        tracking=tracking,
-        status=status,
-        message=message,
-        info={
+    return assemble(
+        tw.model,
+        Engine.MUJOCO,
+        t,
+        q,
+        qd,
+        qdd,
+        rec["control"],
+        np.array(rec["aux"]),
+        status,
+        message,
+        {
             "integrator": tw.integrator.value,
             "dt": tw.dt,
             "nsteps": nsteps,
@@ -239,4 +221,5 @@ def simulate(
             "mujoco_version": mujoco.__version__,
             "mujoco_energy": [float(e) for e in rec["energy_mj"]],
         },
+        omega=omega,
     )

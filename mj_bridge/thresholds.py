@@ -1,4 +1,4 @@
-"""Named acceptance thresholds of the MuJoCo-twin tests (issue 3), each with its reason.
+"""Named acceptance thresholds of the MuJoCo-twin tests, each with its reason.
 
 Relative errors are ``max|x - y| / max|y|`` unless stated.
 """
@@ -15,7 +15,7 @@ PRIMITIVE_SIG_DIGITS_REL = 5e-4
 """The paper prints Example 1's mass and moments to 4 significant digits (half a unit in the 4th)."""
 
 PRIMITIVE_ROD_ABS = 1e-3
-"""The paper prints a and d to 4 decimals (m / unit vector); the issue asks for 1e-3."""
+"""The paper prints a and d to 4 decimals (m / unit vector); they are checked to 1e-3."""
 
 # --- pointwise dynamics and control --------------------------------------------------------------
 POINTWISE_QDDOT_REL = 1e-9
@@ -31,11 +31,11 @@ STATE_MAP_ROUNDTRIP = 1e-13
 
 # --- trajectories --------------------------------------------------------------------------------
 EX1_POSITION_ABS_M = 1e-9
-"""Example 1 uncontrolled, 20 s, RK4 dt = 2.5e-4 vs analytic rtol 1e-12: issue 3 test 2 (position
-of C and of every mass, m)."""
+"""Example 1 uncontrolled, 20 s, RK4 dt = 2.5e-4 vs analytic rtol 1e-12 (position of C and of
+every mass, m)."""
 
 EX1_ATTITUDE_RAD = 1e-9
-"""Same run: attitude angle between the two plants, rad (issue 3 test 2)."""
+"""Same run: attitude angle between the two plants, rad."""
 
 CONVERGENCE_ORDER = 4.0
 CONVERGENCE_ORDER_TOL = 0.3
@@ -49,8 +49,7 @@ UNCONTROLLED_ROD_FORCE_REL = 1e-12
 weighting puts the control only on tracked coordinates (Q^C = A_cᵀ μ)."""
 
 RK4_INVARIANT_DRIFT_REL = 1e-10
-"""MuJoCo RK4 at dt = 1e-3, 20 s uncontrolled: energy and momentum conserved to this (issue 3
-test 4)."""
+"""MuJoCo RK4 at dt = 1e-3, 20 s uncontrolled: energy and momentum conserved to this."""
 
 BALANCE_REL_CONTROLLED = 1e-7
 """Controlled runs at dt = 1e-3: energy and angular-momentum balances with the work/impulse

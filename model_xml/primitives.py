@@ -197,7 +197,7 @@ def rod_in_principal(
 
 
 def paper_example1_primitives(density: float = ALUMINIUM_DENSITY) -> tuple[list[Primitive], dict]:
-    """Example 1's block and rod (Sec. V.A.1, ERRATA "Geometry is consistent").
+    """Example 1's block and rod (Sec. V.A.1; the geometry is consistent: ``docs/errata.md``, item 9).
 
     A 10 x 6 x 2 m block centred at the origin of block coordinates and a solid rod (r0 = 1 m,
     16 m) standing on its top face with its axis at (4, 2). Returns the primitives and the rod line

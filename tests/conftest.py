@@ -10,3 +10,6 @@ import os
 
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
+
+# tests/test_plugin.py runs pytest inside pytest on scene files (the tumble plugin)
+pytest_plugins = ["pytester"]

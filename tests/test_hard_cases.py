@@ -1,4 +1,4 @@
-"""The hard-case suite (issue 6): each case's stated criterion, judged against independent references,
+"""The hard-case suite: each case's stated criterion, judged against independent references,
 on every installed plant (the analytic plant, MuJoCo and, with ``pin``, Pinocchio).
 
 The default run covers the fast subset (short horizons); ``pytest -m hard`` runs every case.

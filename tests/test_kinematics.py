@@ -1,4 +1,4 @@
-"""Issue 2, test 2: quaternion identities of Eqs. (11)-(43) and the structure of M (Eq. 51).
+"""Quaternion identities of Eqs. (11)-(43) and the structure of M (Eq. 51).
 
 Derivatives are checked with complex steps, ``∂f/∂u · v = Im f(u + i h v) / h``, which is exact (no
 truncation, no cancellation) for the quadratic S and the linear H, L.

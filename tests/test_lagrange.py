@@ -1,4 +1,4 @@
-"""Issue 2, test 1: ``M`` and ``Q`` of the model agree with Lagrange's equations derived
+"""``M`` and ``Q`` of the model agree with Lagrange's equations derived
 independently (symbolically, :mod:`reference_lagrange`) from the paper's ``T - U``
 (Eqs. 21, 32, 36-38, 45-47), at random states (u not unit), for n = 0..4 and random a, d, masses,
 inertias, stiffnesses, gravity and given torque; and each effect contributes exactly its own term.

@@ -1,7 +1,8 @@
-"""mj_bridge: the MuJoCo twin against the analytic model (issue 3, tests 1-4).
+"""mj_bridge: the MuJoCo twin against the analytic model (state maps, pointwise q̈ and controller,
+trajectories, convergence order).
 
 References: the analytic model of the paper (q̈ and the controller at a state, and its trajectory),
-MuJoCo's own kinematics and invariants, closed-form error dynamics of the control (ERRATA 3:
+MuJoCo's own kinematics and invariants, closed-form error dynamics of the control (docs/errata.md, item 3:
 ``e_ω(t) = e_ω(0) e^{-γt}``, ``ë_p + α ė_p + β e_p = 0``), and observed convergence orders.
 """
 
@@ -108,9 +109,9 @@ def test_state_map_round_trip_and_mujoco_kinematics(frame):
 
 @pytest.mark.parametrize("frame", [None, "offset"])
 def test_batched_state_map_is_the_per_sample_map(frame):
-    """mj_bridge.simulate maps all samples at once (model_xml.state.mujoco_to_paper_batch): the
+    """mj_bridge.simulate maps all samples at once (model_xml.coordinates.mujoco_to_paper_batch): the
     same q, q̇, q̈ as the per-sample maps, and ω = R_Iᵀ ω_b."""
-    from model_xml.state import mujoco_to_paper_acc, mujoco_to_paper_batch
+    from model_xml.coordinates import mujoco_to_paper_acc, mujoco_to_paper_batch
 
     scene = paper_scene("paper_example2")
     tw = Twin(scene, body_frame=_offset_frame() if frame else None)
@@ -239,7 +240,7 @@ def test_mujoco_bad_warning_is_an_error_not_silence():
             residual=c.residual, rank=c.rank,
         )  # fmt: skip
 
-    tw._controller_fn = huge
+    tw.stages.controller_fn = huge
     with pytest.raises(RuntimeError, match="mjWARN_BADCTRL"):
         tw.forward(0.0, scene.initial.q0(), scene.initial.qdot0())
 
@@ -264,7 +265,7 @@ def test_simulate_reports_mujoco_bad_warning_as_failed(monkeypatch):
                     force_at_C=c.force_at_C, residual=c.residual, rank=c.rank,
                 )  # fmt: skip
 
-            self._controller_fn = huge
+            self.stages.controller_fn = huge
 
     monkeypatch.setattr(sim, "Twin", HugeTwin)
     tr = sim.simulate(paper_scene("paper_example1_controlled"), dt=5e-3, t_end=0.2)
@@ -300,7 +301,7 @@ def test_callbacks_removed_after_run_and_on_exception():
     def explode(*_):
         raise Boom("in callback")
 
-    tw._controller_fn = explode
+    tw.stages.controller_fn = explode
     with pytest.raises(Boom):
         tw.forward(0.0, scene.initial.q0(), scene.initial.qdot0())
     assert not any_installed()
@@ -394,7 +395,7 @@ def _held_controller_run(scene, dt, t_end):
     for _ in range(round(t_end / dt)):
         q, qd = tw.state()
         _, c = tw.model.acceleration(tw.d.time, q, qd)
-        tw._write_controls(c.torque, c.rod_forces, c.force_at_C)
+        tw.stages.write_controls(tw.d, c.torque, c.rod_forces, c.force_at_C)
         mujoco.mj_step(tw.m, tw.d)
 
     class R:
@@ -420,7 +421,7 @@ def test_order_test_detects_a_held_controller():
 
 
 def _closed_form_errors(scene, t, e_w0, e_p0, e_pd0):
-    """ERRATA 3: e_ω(t) = e_ω(0) e^{-γt}; e_p solves ë + αė + βe = 0 (underdamped for the paper)."""
+    """docs/errata.md, item 3: e_ω(t) = e_ω(0) e^{-γt}; e_p solves ë + αė + βe = 0 (underdamped for the paper)."""
     model = TumblingModel(scene)
     gamma = np.diag(model.omega_track.gain)
     e_w = e_w0[None] * np.exp(-np.outer(t, gamma))

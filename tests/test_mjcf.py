@@ -1,4 +1,4 @@
-"""model_xml: the MJCF twin built from a scene (issue 3, first half).
+"""model_xml: the MJCF twin built from a scene.
 
 References: closed forms (spring law of Eq. 38, the paper's mass properties of Example 1), the
 scene's own data, and the spec compiled directly (for the text round trip).

@@ -13,8 +13,9 @@ import numpy as np
 import pytest
 
 from mj_bridge import native
+from mj_bridge.callbacks import bad_warnings
 from mj_bridge.simulate import simulate
-from mj_bridge.twin import Twin, bad_warnings
+from mj_bridge.twin import Twin
 from tests.mj_scenes import paper_scene, random_scene
 
 pytestmark = pytest.mark.skipif(not native.available(), reason="native callback unavailable")
@@ -89,7 +90,7 @@ def test_declined_stage_reruns_the_batch_with_python():
     tw.set_state(0.0, sc.initial.q0(), sc.initial.qdot0())
     k = round(0.01 / tw.dt)
     with tw.callbacks():
-        tw._ctx.decline_at(7)
+        tw.stepper.context.decline_at(7)
         tw.forward_here()
         qs = []
         for _ in range(10):

@@ -1,8 +1,8 @@
-"""Issue 2, tests 3-5: the paper's two examples, uncontrolled and controlled, on the analytic engine.
+"""The paper's two examples, uncontrolled and controlled, on the analytic engine.
 
 References are independent of the code: conservation laws (gravity is uniform, so angular momentum
 about the system centre of mass is constant and linear momentum grows by m_T g t), their balances
-under control, and the closed-form error dynamics the constraints impose (ERRATA item 3):
+under control, and the closed-form error dynamics the constraints impose (docs/errata.md, item 3):
 ``e_ω(t) = e_ω(0) e^{-γt}`` and ``ë_p + α ė_p + β e_p = 0``.
 """
 
@@ -88,7 +88,7 @@ def test_controlled_error_dynamics_closed_form(controlled):
     assert np.max(np.abs(tr.tracking.e_p - e_p_ref)) <= th.ERROR_DYNAMICS_ABS_P
 
 
-# ERRATA's table of the paper's claims at 20 s: (e_p order, e_ω order).
+# The paper's claims (docs/errata.md, "What reproduced means"): (e_p order, e_ω order).
 PAPER_ORDERS_20S = {
     "paper_example1_controlled": (1e-8, 1e-4),
     "paper_example2_controlled": (1e-8, 1e-3),

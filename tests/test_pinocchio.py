@@ -1,4 +1,5 @@
-"""The Pinocchio plant (issue 11): a third, independent rigid-body engine against the analytic model.
+"""The Pinocchio plant, the referee: a third, independent rigid-body engine against the analytic
+model.
 
 References: the analytic model of the paper (``TumblingModel.acceleration``: q̈ and the controller at a
 state; its trajectories), Pinocchio's own kinematics (``getVelocity``, ``getClassicalAcceleration``)
@@ -27,28 +28,27 @@ from analytic.kinematics import S, omega_of  # noqa: E402
 from analytic.model import TumblingModel  # noqa: E402
 from analytic.scene import Scene, scene_from_dict  # noqa: E402
 from analytic.trajectory import Engine, RunStatus  # noqa: E402
-from mj_bridge.pinocchio_model import (  # noqa: E402
-    build_model,
-    mass_inertias,
-    paper_to_pinocchio,
-    pinocchio_to_paper,
-    pinocchio_to_paper_acc,
-    pinocchio_to_paper_batch,
-)
+from mj_bridge.pinocchio_model import build_model, mass_inertias  # noqa: E402
 from mj_bridge.pinocchio_plant import (  # noqa: E402
     PinocchioDynamics,
     PinocchioSettings,
     simulate,
 )
-from mj_bridge.twin import ControllerSource  # noqa: E402
+from mj_bridge.stages import ControllerSource  # noqa: E402
 from model_xml import to_mjcf  # noqa: E402
+from model_xml.coordinates import (  # noqa: E402
+    paper_to_pinocchio,
+    pinocchio_to_paper,
+    pinocchio_to_paper_acc,
+    pinocchio_to_paper_batch,
+)
 
 # ----------------------------------------------------------------------------------------------
 # Tolerances (test-only), each with its reason
 # ----------------------------------------------------------------------------------------------
 
 ACC_REL = 1e-12
-"""Pinocchio's q̈ against the analytic model's at one state, relative (Euclidean norms); issue 11.
+"""Pinocchio's q̈ against the analytic model's at one state, relative (Euclidean norms).
 Two independent computations of the same dynamics in double precision under the same control
 forces. Seen (worst over the cases below): 2.2e-15 uncontrolled, 5.5e-15 under the paper's weighting
 M^-1 (either controller), 4e-15 on the paper scenes; 5.8e-14 (identity) and 1.4e-13 (M^-2) where the
@@ -65,7 +65,7 @@ MAP_ABS = 1e-14
 
 AGREE_M = 1e-9
 """Pinocchio against the analytic plant, m (position of C, rod positions) and rad (attitude angle of
-the relative quaternion): issue 11, over the scenes' 20 s. Both plants at the same DOP853 tolerance;
+the relative quaternion), over the scenes' 20 s. Both plants at the same DOP853 tolerance;
 what is left is each integrator's error. Seen at rtol 1e-12 (C, p, attitude): Example 1 7.0e-12 m,
 1.8e-11 m, 4.6e-13 rad; Example 2 4.6e-12 m, 1.2e-11 m, 7.0e-13 rad; controlled Example 2 2.5e-10 m,
 6.4e-11 m, 9.4e-13 rad; controlled Example 1 see CONTROLLED_EX1_RTOL. Over 2 s at rtol 1e-12 the
@@ -496,7 +496,7 @@ def test_trajectory_record_and_short_agreement_controlled_example1():
     ["paper_example1", "paper_example1_controlled", "paper_example2", "paper_example2_controlled"],
 )
 def test_twenty_seconds_agree_with_the_analytic_plant(name):
-    """Issue 11: over the scene's 20 s, Pinocchio and the analytic plant agree to 1e-9 m / rad in C,
+    """Over the scene's 20 s, Pinocchio and the analytic plant agree to 1e-9 m / rad in C,
     the rod positions and the attitude (figures at AGREE_M); about 1 s each."""
     scene = paper_scene(name)
     rtol = atol = None

@@ -49,7 +49,7 @@ def test_paper_scenes_load_with_unit_quaternion(name):
 
 
 def test_example1_attitude_matches_printed_values():
-    """ERRATA: S(u(0)) = Rot(ν, π/3)·P reproduces the printed u(0) and u̇(0) to their 4 digits."""
+    """docs/errata.md, item 6: S(u(0)) = Rot(ν, π/3)·P reproduces the printed u(0) and u̇(0) to their 4 digits."""
     sc = load_scene(scene_path("paper_example1"))
     np.testing.assert_allclose(sc.initial.u, [0.8034, 0.1600, 0.4272, 0.3828], atol=1e-4)
     np.testing.assert_allclose(sc.initial.udot, [0.0379, 0.6999, -0.2503, -0.0927], atol=1.5e-4)
@@ -62,7 +62,7 @@ def test_example2_attitude_closed_form():
     np.testing.assert_allclose(
         sc.initial.u, np.r_[math.cos(th / 2), math.sin(th / 2) * nu], atol=1e-15
     )
-    # printed u̇(0) with ERRATA's transposed digits fixed (third entry -0.5774)
+    # printed u̇(0) with its transposed digits fixed (third entry -0.5774; docs/errata.md, item 12)
     np.testing.assert_allclose(sc.initial.udot, [-0.2887, 0.8660, -0.5774, 0.5774], atol=1e-4)
 
 

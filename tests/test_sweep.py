@@ -130,7 +130,7 @@ def test_errors_match_an_independent_computation(result, scene):
 
 
 def test_tracking_error_follows_the_closed_form(result, scene):
-    """ERRATA 3: e_ω(t) = exp(-P t) e_ω(0) exactly; accurate runs must report |e_ω(T)|."""
+    """docs/errata.md, item 3: e_ω(t) = exp(-P t) e_ω(0) exactly; accurate runs must report |e_ω(T)|."""
     ot = scene.control.omega
     comps = list(ot.components)
     e0 = scene.initial.omega[comps] - ot.b[comps]  # ω̄(0) = b cos 0

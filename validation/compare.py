@@ -9,7 +9,7 @@ final value and time of the max, plotted on a log axis and logged to Rerun):
   velocities (m/s); body angular velocity ``|ω_a - ω_m|`` (rad/s, body axes); control torque
   ``|τ_a - τ_m|`` (N·m, body axes); rod forces ``max_i |F_a,i - F_m,i|`` (N);
 * each plant (key ``<plant>.<name>``): tracking errors against the requirement ``|e_ω|`` (rad/s) and
-  ``max_i |e_p,i|`` (m); their deviations from the closed-form error dynamics (ERRATA item 3:
+  ``max_i |e_p,i|`` (m); their deviations from the closed-form error dynamics (``docs/errata.md``, item 3:
   ``e_ω(t) = exp(-P t) e_ω(0)``, and ``ë + α ė + β e = 0`` for each controlled mass, Eq. 78);
   the quaternion norm error ``|uᵀu - 1|``; the balances of linear momentum (against gravity),
   angular momentum about the system centre of mass (against the impulse of the control torque) and
@@ -366,7 +366,7 @@ def difference_series(a: Trajectory, b: Trajectory) -> tuple[Series, ...]:
 
 
 def omega_error_reference(t: np.ndarray, e0: np.ndarray, gain: np.ndarray) -> np.ndarray:
-    """``e_ω(t) = exp(-P (t - t0)) e_ω(t0)`` (Eq. 84 with ERRATA item 3), shape (N, k), rad/s."""
+    """``e_ω(t) = exp(-P (t - t0)) e_ω(t0)`` (Eq. 84 with ``docs/errata.md``, item 3), shape (N, k), rad/s."""
     t = np.asarray(t, float)
     gain = np.asarray(gain, float)
     if gain.size == 0:

@@ -5,8 +5,8 @@ holds. Numbers are printed, never asserted (tests cover correctness, not speed).
 
 1. **evaluation**: one evaluation of the analytic controlled dynamics (``M``, ``Q``, Udwadia–Kalaba
    with control; ``FastModel.qddot``, the integrator's right-hand side) / MuJoCo's ``mj_forward``
-   on the same body (``model_xml.build_spec(scene).compile()``), for ``validation.bench.chain_scene``
-   n = 2 and n = 5. Holds when ≤ 1.
+   on the same body (``model_xml.build_spec(scene).compile()``), for
+   ``validation.timing.chain_scene`` n = 2 and n = 5. Holds when ≤ 1.
 2. **controller in RK4**: the extra cost per RK4 step of the analytic controller running in
    ``mjcb_control`` (four stages; the twin's default: the compiled stage as a native callback,
    :mod:`mj_bridge.native`, with work and impulses accumulated as in a run) / the bare ``mj_step``
@@ -109,7 +109,7 @@ def _chain(n: int):
 
     from analytic import fast
     from model_xml import build_spec
-    from validation.bench import chain_scene
+    from validation.timing import chain_scene
 
     sc = chain_scene(n)
     fm = fast.FastModel(sc)
@@ -266,7 +266,7 @@ def goal_example1_60s(
 
 def goal_scaling(rounds: int = 9) -> Goal:
     from analytic import fast
-    from validation.bench import chain_scene
+    from validation.timing import chain_scene
 
     fns = {}
     for n in (10, 1000):
@@ -392,14 +392,3 @@ def measure(skip_long: bool = False, progress: Callable[[str], None] = print) ->
         goals.append(goal_example1_60s(progress=progress))
         progress(goals[-1].line())
     return goals
-
-
-def main(argv: list[str] | None = None) -> int:
-    """Same as ``python -m validation.bench`` (the table, then these goals)."""
-    from validation.bench import main as bench_main
-
-    return bench_main(argv)
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

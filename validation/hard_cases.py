@@ -1,4 +1,4 @@
-"""The hard-case suite: what the testbed survives, as a table (issue 6).
+"""The hard-case suite: what the testbed survives, as a table.
 
 Each case is a scene in ``validation/scenes/hard/`` whose header states its criterion and whose
 ``[thresholds]`` table carries the same bounds machine-readably (keys ``hard_*``). A case runs on
@@ -426,7 +426,7 @@ def finite(tr: Trajectory) -> bool:
 
 
 def tracking_law_error(tr: Trajectory, scene: Scene) -> float:
-    """Max deviation of the tracking errors from their closed forms (Eqs. 78, 84, ERRATA 3),
+    """Max deviation of the tracking errors from their closed forms (Eqs. 78, 84; ``docs/errata.md``, item 3),
     relative to the largest initial error."""
     t = tr.t
     errs, scales = [], []

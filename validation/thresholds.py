@@ -125,7 +125,7 @@ DEFAULTS: Mapping[str, Threshold] = {
             relative=True,
             floor=1.0,  # N
         ),
-        # ---- each plant against the requirement (closed-form error dynamics, ERRATA item 3) ----
+        # ---- each plant against the requirement (closed-form error dynamics, docs/errata.md item 3) ----
         Threshold(
             "tracking_omega",
             1e-6,

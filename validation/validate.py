@@ -409,7 +409,8 @@ Remark 4: the requirements can be any subset. Here only masses 1, 2 and 4 are as
 `p̄_i = p_e,i + l_i cos(λ_i t)` (Eq. 75 with the rows of A in Eq. 80 kept for i = 1, 2, 4 only), and
 the angular velocity tracks `ω̄` (Eq. 76). Masses 3 and 5 are left to the springs: their motion is
 whatever the dynamics give, and the control leaves them no force of their own (their rod-force
-plot stays at zero). Linear stiffnesses are this project's assumption (ERRATA: Eq. 64 is missing).""",
+plot stays at zero). Linear stiffnesses are this project's assumption (Eq. 64 is missing from the paper; docs/errata.md,
+item 10).""",
     ),
     DemoStep(
         "step4_no_cubic_springs",

@@ -1,13 +1,16 @@
 """Benchmark of the fast engine (numbers printed, never asserted).
 
-``python -m analytic.fast_bench`` prints, for ``validation.bench.chain_scene(n)`` (controlled: ω and
-every mass tracked, Gauss weighting) with n = 2, 5, 10, 50, 1000, the median cost of one evaluation of
-the controlled dynamics in µs: the numpy path (``TumblingModel.acceleration``), the fast path
+``python -m validation.fast_bench`` prints, for ``validation.timing.chain_scene(n)`` (controlled:
+ω and every mass tracked, Gauss weighting) with n = 2, 5, 10, 50, 1000, the median cost of one
+evaluation of the controlled dynamics in µs: the numpy path (``TumblingModel.acceleration``), the fast path
 (``FastModel.qddot``, the integrator's right-hand side, and ``FastModel.acceleration``, which also
 returns the control outputs) and MuJoCo's ``mj_forward`` on the twin built by
 ``model_xml.build_spec(scene).compile()`` (columns shown as n/a when the twin is not importable), the
 ratio fast / mj_forward, the ratio of the fast cost at n = 1000 to n = 10 (goal ≤ 150), and the JIT
 time of the first call (compile, or load from numba's cache) measured separately.
+
+It times the analytic engine's fast path against MuJoCo, so it lives in ``validation`` (the layer
+that may import both), not beside the kernel in ``analytic``.
 """
 
 from __future__ import annotations
@@ -42,7 +45,7 @@ def _mujoco(scene):
 def main(argv: list[str] | None = None) -> int:
     from analytic import fast, fast_kernel
     from analytic.model import TumblingModel
-    from validation.bench import chain_scene, time_call
+    from validation.timing import chain_scene, time_call
 
     print(f"numba available: {fast.available()}; cache: {fast_kernel.cache_dir_note()}")
     sc2 = chain_scene(2)

@@ -1,0 +1,144 @@
+"""Integrate ``ẏ = f(t, y)`` with scipy's ``OdeSolver`` classes one step at a time, sampled on an
+output grid: the loop the analytic plant (:mod:`analytic.simulate`) and the Pinocchio plant
+(:mod:`mj_bridge.pinocchio_plant`) share.
+
+The state is ``y = [motion (n_motion), quadratures]``: the coordinates and velocities of a plant
+(``y[3:7]`` its attitude quaternion, in either order of components) followed by integrals that ride
+along (the work and impulses of :mod:`analytic.assemble`). The quadratures are left out of the error
+control (their ``atol`` is huge) so that round-off in the power of a zero control cannot shrink the
+steps; they are integrated with the steps the motion needs, to the same order.
+
+Steps are taken one at a time (what ``solve_ivp`` does internally) and the samples between steps
+come from the method's dense output, so a run that fails or is interrupted part way keeps every
+sample it reached: a solver failure or a :class:`NonFinite` right-hand side ends it ``failed``, a
+``KeyboardInterrupt`` ``interrupted``, a ``LinAlgError`` ``failed`` with the words the plant gives.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import integrate
+
+from analytic.effects import SolverMethod
+from analytic.trajectory import RunStatus
+
+SOLVERS: dict[SolverMethod, type[integrate.OdeSolver]] = {
+    SolverMethod.DOP853: integrate.DOP853,
+    SolverMethod.RK45: integrate.RK45,
+    SolverMethod.RK23: integrate.RK23,
+    SolverMethod.RADAU: integrate.Radau,
+    SolverMethod.BDF: integrate.BDF,
+    SolverMethod.LSODA: integrate.LSODA,
+}
+"""scipy's solver class for each :class:`SolverMethod`."""
+
+QUADRATURE_ATOL = 1e300
+"""``atol`` of the quadratures: large enough that they never take part in the error control."""
+
+
+class NonFinite(ArithmeticError):
+    """A right-hand side produced a NaN or an infinity (the run ends ``failed``)."""
+
+
+@dataclass(frozen=True)
+class Stepped:
+    """The samples a run reached.
+
+    Attributes:
+        t: sample times reached, s, shape (N,) (the output grid up to where the run ended).
+        y: the state at those times, shape (N, len(y0)).
+        status: ``ok``, ``failed`` or ``interrupted``; message: why it ended early ("" when ok).
+        nsteps: steps taken.
+        max_quat_norm_error_at_steps: ``max | |y[3:7]|² - 1 |`` at the solver's own steps (the
+            samples between steps come from the dense output, one order lower for DOP853).
+        wall_time_s: wall time of the loop, s.
+    """
+
+    t: np.ndarray
+    y: np.ndarray
+    status: RunStatus
+    message: str
+    nsteps: int
+    max_quat_norm_error_at_steps: float
+    wall_time_s: float
+
+
+def step_and_sample(
+    f: Callable[[float, np.ndarray], np.ndarray],
+    t_eval: np.ndarray,
+    y0: np.ndarray,
+    *,
+    method: SolverMethod,
+    rtol: float,
+    atol: float,
+    n_motion: int,
+    max_step: float = np.inf,
+    progress: Callable[[float], None] | None = None,
+    linalg_failure: str = "linear algebra failed",
+) -> Stepped:
+    """Integrate ``y' = f(t, y)`` from ``y0`` at ``t_eval[0]`` and sample it at ``t_eval``.
+
+    Args:
+        f: the right-hand side; raises :class:`NonFinite` for a non-finite ``ẏ``.
+        t_eval: output times, s, increasing, shape (N,); the run ends at ``t_eval[-1]``.
+        y0: the state at ``t_eval[0]``: ``n_motion`` components under error control, then the
+            quadratures.
+        method, rtol, max_step (s): passed to the solver; atol: of the motion components.
+        progress: called with the time reached, s, after each step that passes a sample.
+        linalg_failure: what the message says when ``f`` raises ``LinAlgError``.
+    """
+    atol_vec = np.concatenate(
+        [np.full(n_motion, atol), np.full(len(y0) - n_motion, QUADRATURE_ATOL)]
+    )
+    status, message = RunStatus.OK, ""
+    ys = [y0]
+    ts = [t_eval[0]]
+    i_next = 1
+    nsteps = 0
+    norm_err_steps = 0.0
+    wall0 = time.perf_counter()
+    try:
+        solver = SOLVERS[method](
+            f, t_eval[0], y0, t_eval[-1], rtol=rtol, atol=atol_vec, max_step=max_step
+        )
+        while solver.status == "running":
+            msg = solver.step()
+            nsteps += 1
+            u_step = solver.y[3:7]
+            norm_err_steps = max(norm_err_steps, abs(float(u_step @ u_step) - 1.0))
+            if solver.status == "failed":
+                status = RunStatus.FAILED
+                message = f"{method.value} failed at t = {solver.t:.6g} s: {msg}"
+                break
+            j = np.searchsorted(t_eval, solver.t, side="right")
+            if j > i_next:
+                dense = solver.dense_output()
+                for tt in t_eval[i_next:j]:
+                    ys.append(dense(tt))
+                    ts.append(tt)
+                i_next = j
+                if progress is not None:
+                    progress(float(solver.t))
+    except NonFinite as exc:
+        status, message = RunStatus.FAILED, str(exc)
+    except KeyboardInterrupt:
+        status, message = RunStatus.INTERRUPTED, f"interrupted at t = {ts[-1]:.6g} s"
+    except np.linalg.LinAlgError as exc:
+        status, message = RunStatus.FAILED, f"{linalg_failure} near t = {ts[-1]:.6g} s ({exc})"
+    wall = time.perf_counter() - wall0
+    return Stepped(
+        t=np.array(ts),
+        y=np.array(ys),
+        status=status,
+        message=message,
+        nsteps=nsteps,
+        max_quat_norm_error_at_steps=norm_err_steps,
+        wall_time_s=wall,
+    )
+
+
+__all__ = ["QUADRATURE_ATOL", "SOLVERS", "NonFinite", "Stepped", "step_and_sample"]
