@@ -240,3 +240,10 @@ def test_assert_agree_passes_on_the_paper_examples(name: str) -> None:
     scene = validation.resolve_scene(name)
     chosen = tuple(c.subject.value for c in res.checks if c.name == "completed")
     assert pytest_plugin.expected_labels(scene, chosen) == [c.label for c in res.checks]
+
+
+def test_pair_checks_are_the_compared_differences():
+    from validation.agree import PAIR_CHECKS
+    from validation.compare import Difference
+
+    assert PAIR_CHECKS == tuple(d.value for d in Difference)

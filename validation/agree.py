@@ -30,7 +30,9 @@ PAIR_CHECKS = (
     "control_torque",
     "rod_forces",
 )
-"""Checks made on every pair of plants, in report order (``rod_forces`` only with masses)."""
+"""Checks made on every pair of plants, in report order (``rod_forces`` only with masses): the
+values of :class:`validation.compare.Difference`, spelled out here so that importing the plugin
+does not import numpy (``tests/test_plugin.py`` checks the two agree)."""
 
 
 def _num(x: float) -> str:

@@ -48,6 +48,21 @@ class Group(StrEnum):
     CONTROL = "control"
 
 
+class Difference(StrEnum):
+    """The quantities compared between two plants, in report order (the names of their
+    thresholds in :mod:`validation.thresholds`); the last two are relative to the reference
+    plant's largest control force, ``rod_forces`` only with masses."""
+
+    POSITION_C = "position_C"
+    ATTITUDE = "attitude"
+    ROD_POSITIONS = "rod_positions"
+    VELOCITY_C = "velocity_C"
+    ROD_VELOCITIES = "rod_velocities"
+    ANGULAR_VELOCITY = "angular_velocity"
+    CONTROL_TORQUE = "control_torque"
+    ROD_FORCES = "rod_forces"
+
+
 class Subject(StrEnum):
     """Whose quantity a series or check is: the difference of two plants, or one plant."""
 
@@ -546,14 +561,7 @@ def compare(
         series.extend(diffs)
         by = {s.name: s for s in diffs}
         k = by["position_C"].t.shape[0]
-        for name in (
-            "position_C",
-            "attitude",
-            "rod_positions",
-            "velocity_C",
-            "rod_velocities",
-            "angular_velocity",
-        ):
+        for name in list(Difference)[:6]:  # the absolute ones; the forces are relative, below
             checks.append(_bound_check(th[name], pair, by[name]))
         checks.append(
             _bound_check(
@@ -656,6 +664,7 @@ def compare_plants(
 __all__ = [
     "Check",
     "Comparison",
+    "Difference",
     "Group",
     "Series",
     "Subject",

@@ -24,19 +24,10 @@ from dataclasses import dataclass, field
 from enum import StrEnum
 from typing import Any
 
-from validation.compare import Check, Comparison, Subject
+from validation.compare import Check, Comparison, Difference, Subject
 from validation.thresholds import REFEREE_NOISE_FRACTION, REFEREE_SEPARATION
 
-QUANTITIES = (
-    "position_C",
-    "attitude",
-    "rod_positions",
-    "velocity_C",
-    "rod_velocities",
-    "angular_velocity",
-    "control_torque",
-    "rod_forces",
-)
+QUANTITIES = tuple(d.value for d in Difference)
 """The difference quantities the referee rules on (names of :mod:`validation.thresholds`)."""
 
 LABELS = {
