@@ -7,22 +7,31 @@ interpreter alone cost about as much as MuJoCo's whole step (the speed goal is t
 adds no more than the step it sits in). MuJoCo 4's ``set_mjcb_control`` also accepts a C function
 pointer; this module provides one, a numba ``cfunc`` of C type ``void(const mjModel*, mjData*)``.
 
-How it finds its data (nothing here is evaluated from user input):
+Where its numbers come from, each from a documented source (nothing is read at a guessed offset):
 
-* **MuJoCo's fields.** The callback receives the ``mjData*``. The byte offsets of ``time``, ``qpos``,
-  ``qvel`` and ``ctrl`` inside ``struct mjData_`` are found once per process by reading a probe
-  ``MjData`` (:func:`layout`): a pointer field is located by its value (``d.qpos.ctypes.data``,
-  taking the last match, since zero-sized arrays just before it share its address), ``time`` by two
-  distinctive values written in turn. The offsets are then checked on a second, differently sized
-  ``MjData``. If anything is ambiguous, :func:`available` is False and the Python callback is used.
+* **MuJoCo's arrays.** ``qpos``, ``qvel``, ``ctrl`` and ``xfrc_applied`` are buffers of the twin's
+  ``MjData`` that keep their addresses for its life; the bindings give them
+  (``d.qpos.ctypes.data``, :func:`data_arrays`) and :class:`Context` binds them with their sizes.
+* **The time of the stage.** ``mjData.time`` is a scalar, with no array address. The callback asks
+  MuJoCo for it with the public C function ``mj_getState(m, d, state, mjSTATE_TIME)`` (MuJoCo's
+  ``mujoco.h``), resolved in the ``libmujoco`` that the bindings loaded; the value lands in a slot
+  of the context (``F_TIME``).
+* **The ``mjData`` it serves.** The first call after binding records the ``mjData*`` MuJoCo passes
+  (the verification probe makes that call on the twin's own data, see
+  :class:`mj_bridge.stepper.Stepper`); a call with any other ``mjData*`` touches nothing and counts
+  as a failure.
 * **The twin's data.** One process-wide context block ``CTX`` (int64 slots, layout ``C_*`` below;
-  float slots read through a float64 view) holds the addresses and sizes of the twin's packed
-  parameters and work arrays, the accumulator's state (active flag, step ``h``, stage weights, call
-  counter) and a failure counter. The cfunc reaches ``CTX`` through an external
-  symbol registered with LLVM (``llvmlite.binding.add_symbol``) when this module is imported, so the
-  compiled code, cached on disk by numba, finds the context wherever it lies in this process.
+  float slots read through a float64 view) holds the addresses and sizes of the bound arrays
+  (numpy's ``.ctypes.data``), the accumulator's state (active flag, step ``h``, stage weights, call
+  counter) and a failure counter. The cfunc reaches ``CTX`` and ``mj_getState`` through external
+  symbols registered with LLVM (``llvmlite.binding.add_symbol``) when this module is imported, so
+  the compiled code, cached on disk by numba, finds both wherever they lie in this process.
   MuJoCo's callbacks are process-global anyway, so one context suffices; :class:`Context` refuses a
   second binding.
+
+Before a twin trusts this path, :class:`mj_bridge.stepper.Stepper` runs one stage through it and
+through the Python callback and compares every output bit for bit; on any difference it uses the
+Python callback and says so in one warning.
 
 When the kernel declines a stage (``status != 0``: a Schur complement not numerically positive
 definite), the callback cannot call the numpy model (no interpreter in the loop). It counts the
@@ -36,7 +45,7 @@ from __future__ import annotations
 import ctypes
 import functools
 import threading
-from dataclasses import dataclass
+from pathlib import Path
 
 import mujoco
 import numpy as np
@@ -86,36 +95,82 @@ if HAVE_NUMBA:
 # Context layout (int64 slots; F_* slots hold float64 bit patterns)
 # ----------------------------------------------------------------------------------------------
 C_ARMED, C_ACTIVE, C_CALLS, C_FAILS, C_NSTAGE = 0, 1, 2, 3, 4
-C_OFF_TIME, C_OFF_QPOS, C_OFF_QVEL, C_OFF_CTRL = 5, 6, 7, 8
-C_NQ, C_NV, C_NU, C_NQP = 9, 10, 11, 12  # MuJoCo nq, nv, nu; paper nq = n + 7
-C_FP, C_FP_LEN, C_IP, C_IP_LEN = 13, 14, 15, 16
-C_OUT, C_OUT_LEN, C_Q, C_QD = 17, 18, 19, 20
-C_TQ, C_NTQ, C_F, C_NF = 21, 22, 23, 24
-C_TAUG, C_GEO, C_GEO_LEN, C_ACC = 25, 26, 27, 28
-C_HAS_TORQUE = 29
-F_H, F_INV_GEAR = 30, 31
-F_WEIGHTS = 32  # 4 slots
-C_TOTAL = 36  # stage calls since binding
-C_DECLINE_AT = 37  # fault injection for tests: treat call number C_DECLINE_AT (1-based) as declined
-C_OFF_XFRC = 38  # mjData.xfrc_applied
-C_FORCE_BODY = 39  # -1: no force at C (Gauss); else the body whose xfrc_applied[:3] receives it
-C_NBODY = 40
-CTX_LEN = 41
+C_DATA = 5  # the mjData* served; 0: recorded at the next call
+C_QPOS, C_QVEL, C_CTRL, C_XFRC = 6, 7, 8, 9  # addresses of the MjData's buffers
+F_TIME = 10  # the stage's time, written by mj_getState(m, d, &CTX[F_TIME], mjSTATE_TIME)
+C_NQ, C_NV, C_NU, C_NQP = 11, 12, 13, 14  # MuJoCo nq, nv, nu; paper nq = n + 7
+C_FP, C_FP_LEN, C_IP, C_IP_LEN = 15, 16, 17, 18
+C_OUT, C_OUT_LEN, C_Q, C_QD = 19, 20, 21, 22
+C_TQ, C_NTQ, C_F, C_NF = 23, 24, 25, 26
+C_TAUG, C_GEO, C_GEO_LEN, C_ACC = 27, 28, 29, 30
+C_HAS_TORQUE = 31
+F_H, F_INV_GEAR = 32, 33
+F_WEIGHTS = 34  # 4 slots
+C_FORCE_BODY = 38  # -1: no force at C (Gauss); else the body whose xfrc_applied[:3] receives it
+C_NBODY = 39
+CTX_LEN = 40
+
+MJSTATE_TIME = int(mujoco.mjtState.mjSTATE_TIME)
+
+_CTX_SYMBOL = "tumble_mj_bridge_native_ctx"
+_GETSTATE_SYMBOL = "mj_getState"
 
 
-def _data_array(d_addr, ctx, slot, n):  # pragma: no cover - compiled
-    """The ``mjtNum*`` field of ``mjData`` whose byte offset is in ``ctx[slot]``, as n float64."""
-    return carray(_as_ptr(carray(_as_iptr(d_addr + ctx[slot]), (1,))[0]), (n,))
+def _libmujoco_get_state() -> int | None:
+    """Address of ``mj_getState`` in the ``libmujoco`` beside the bindings (the one they loaded),
+    or None when it is not found."""
+    pkg = Path(mujoco.__file__).parent
+    for pattern in ("libmujoco.so*", "libmujoco*.dylib", "mujoco.dll"):
+        for path in sorted(pkg.glob(pattern)):
+            try:
+                lib = ctypes.CDLL(str(path))
+                return ctypes.cast(lib.mj_getState, ctypes.c_void_p).value
+            except (OSError, AttributeError):
+                continue
+    return None
 
 
-data_array = fk._jit(_data_array) if HAVE_NUMBA else None
+_GET_STATE = _libmujoco_get_state() if HAVE_NUMBA else None
+
+
+if HAVE_NUMBA:
+    import llvmlite.binding as _llvm
+
+    @intrinsic
+    def _get_time(typingctx, m_addr, d_addr, dst_addr):  # pragma: no cover - compiled
+        """``mj_getState(m, d, dst, mjSTATE_TIME)``: MuJoCo writes ``d->time`` to ``*dst``."""
+        sig = types.void(types.int64, types.int64, types.int64)
+
+        def codegen(context, builder, signature, args):
+            i8p = ir.IntType(8).as_pointer()
+            fnty = ir.FunctionType(
+                ir.VoidType(), [i8p, i8p, ir.PointerType(ir.DoubleType()), ir.IntType(32)]
+            )
+            mod = builder.module
+            try:
+                fn = mod.get_global(_GETSTATE_SYMBOL)
+            except KeyError:
+                fn = ir.Function(mod, fnty, name=_GETSTATE_SYMBOL)
+            m, d, dst = args
+            builder.call(
+                fn,
+                [
+                    builder.inttoptr(m, i8p),
+                    builder.inttoptr(d, i8p),
+                    builder.inttoptr(dst, ir.PointerType(ir.DoubleType())),
+                    ir.Constant(ir.IntType(32), MJSTATE_TIME),
+                ],
+            )
+            return context.get_dummy_value()
+
+        return sig, codegen
 
 
 def _make_native_stage(deps: int):
     """:func:`_native_stage` closing over ``deps`` (see :data:`DEPS`)."""
 
-    def _native_stage(d_addr, ctx_addr):  # pragma: no cover - compiled
-        """One ``mjcb_control`` call: what ``Stages.stage_callback`` does, from raw addresses."""
+    def _native_stage(m_addr, d_addr, ctx_addr):  # pragma: no cover - compiled
+        """One ``mjcb_control`` call: what ``Stages.stage_callback`` does, from the bound arrays."""
         if deps < 0:  # never true: ties numba's cache key to the kernel's sources
             return
         ctx = carray(_as_iptr(ctx_addr), (CTX_LEN,))
@@ -123,10 +178,16 @@ def _make_native_stage(deps: int):
         if ctx[C_ARMED] == 0:
             ctx[C_FAILS] += 1
             return
-        t = carray(_as_ptr(d_addr + ctx[C_OFF_TIME]), (1,))[0]
-        qpos = data_array(d_addr, ctx, C_OFF_QPOS, ctx[C_NQ])
-        qvel = data_array(d_addr, ctx, C_OFF_QVEL, ctx[C_NV])
-        ctrl = data_array(d_addr, ctx, C_OFF_CTRL, ctx[C_NU])
+        if ctx[C_DATA] == 0:
+            ctx[C_DATA] = d_addr
+        elif ctx[C_DATA] != d_addr:  # not the MjData whose arrays are bound
+            ctx[C_FAILS] += 1
+            return
+        _get_time(m_addr, d_addr, ctx_addr + 8 * F_TIME)
+        t = ctxf[F_TIME]
+        qpos = carray(_as_ptr(ctx[C_QPOS]), (ctx[C_NQ],))
+        qvel = carray(_as_ptr(ctx[C_QVEL]), (ctx[C_NV],))
+        ctrl = carray(_as_ptr(ctx[C_CTRL]), (ctx[C_NU],))
         fp = carray(_as_ptr(ctx[C_FP]), (ctx[C_FP_LEN],))
         ip = carray(_as_iptr(ctx[C_IP]), (ctx[C_IP_LEN],))
         out = carray(_as_ptr(ctx[C_OUT]), (ctx[C_OUT_LEN],))
@@ -137,43 +198,22 @@ def _make_native_stage(deps: int):
         tau_g = carray(_as_ptr(ctx[C_TAUG]), (3,))
         geo = carray(_as_ptr(ctx[C_GEO]), (ctx[C_GEO_LEN],))
         acc = carray(_as_ptr(ctx[C_ACC]), (7,))
-        if ctx[
-            C_HAS_TORQUE
-        ]:  # the given torque of Remark 2: constant + amplitude cos(freq t), body
+        if ctx[C_HAS_TORQUE]:  # the given torque of Remark 2: constant + amplitude cos(freq t)
             ct = np.cos(fp[fk.F_TFREQ] * t)
             for r in range(3):
                 tau_g[r] = fp[fk.F_TC + r] + fp[fk.F_TA + r] * ct
         w = 0.0
         if ctx[C_ACTIVE]:
             w = ctxf[F_H] * ctxf[F_WEIGHTS + ctx[C_CALLS] % ctx[C_NSTAGE]]
-        ctx[C_TOTAL] += 1
-        if ctx[C_TOTAL] == ctx[C_DECLINE_AT]:
-            status = fk.STATUS_NOT_PD
-        else:
-            status = fast_stage.stage(
-                t,
-                qpos,
-                qvel,
-                ctrl,
-                tq,
-                fi,
-                fp,
-                ip,
-                out,
-                q,
-                qd,
-                tau_g,
-                geo,
-                ctxf[F_INV_GEAR],
-                w,
-                acc,
-            )
+        status = fast_stage.stage(
+            t, qpos, qvel, ctrl, tq, fi, fp, ip, out, q, qd, tau_g, geo, ctxf[F_INV_GEAR], w, acc
+        )
         if status != fk.STATUS_OK:
             ctx[C_FAILS] += 1
             return
         b = ctx[C_FORCE_BODY]
         if b >= 0:  # the force at C of a non-Gauss weighting: a world force at BR's CoM (= C)
-            xfrc = data_array(d_addr, ctx, C_OFF_XFRC, 6 * ctx[C_NBODY])
+            xfrc = carray(_as_ptr(ctx[C_XFRC]), (6 * ctx[C_NBODY],))
             nqp = ctx[C_NQP]
             for r in range(3):
                 xfrc[6 * b + r] = out[nqp + r]
@@ -189,92 +229,15 @@ DEPS = fk.source_fingerprint(fk, fast_stage)
 native_stage = fk._jit(_make_native_stage(DEPS)) if HAVE_NUMBA else None
 
 
-# ----------------------------------------------------------------------------------------------
-# mjData layout
-# ----------------------------------------------------------------------------------------------
-
-
-@dataclass(frozen=True)
-class DataLayout:
-    """Byte offsets of fields inside ``struct mjData_`` (this MuJoCo build)."""
-
-    time: int
-    qpos: int
-    qvel: int
-    ctrl: int
-    xfrc_applied: int
-
-
-_PROBE_XML = """<mujoco><worldbody><body><freejoint/><geom size="0.1"/>
-<body><joint name="s{i}" type="slide"/><geom size="0.1"/></body></body></worldbody>
-<actuator><motor joint="s{i}"/></actuator></mujoco>"""
-_SCAN_LIMIT = 1 << 22  # bytes; the fields sought sit after MuJoCo's fixed-size statistics arrays
-
-
-def _scan(d: mujoco.MjData, targets: dict[str, int], times: tuple[float, float]) -> DataLayout:
-    base = d._address
-    found: dict[str, list[int]] = {k: [] for k in targets}
-    time_hits: list[int] = []
-    d.time = times[0]
-    off = 0
-    pending = set(targets)
-    while off < _SCAN_LIMIT:
-        word = ctypes.c_int64.from_address(base + off).value
-        for k, v in targets.items():
-            if word == v:
-                found[k].append(off)
-        if ctypes.c_double.from_address(base + off).value == times[0]:
-            time_hits.append(off)
-        pending -= {k for k in targets if found[k] and found[k][-1] < off - 64}
-        if not pending and time_hits:
-            break
-        off += 8
-    d.time = times[1]
-    time_hits = [o for o in time_hits if ctypes.c_double.from_address(base + o).value == times[1]]
-    if len(time_hits) != 1 or any(not found[k] for k in targets):
-        raise LookupError("mjData layout: time or a pointer field not found uniquely")
-    # last match: a zero-sized array allocated just before a field shares its address
-    return DataLayout(
-        time_hits[0],
-        found["qpos"][-1],
-        found["qvel"][-1],
-        found["ctrl"][-1],
-        found["xfrc_applied"][-1],
-    )
-
-
-def _probe(i: int) -> DataLayout:
-    m = mujoco.MjModel.from_xml_string(_PROBE_XML.format(i=i))
-    d = mujoco.MjData(m)
-    targets = {k: getattr(d, k).ctypes.data for k in ("qpos", "qvel", "ctrl", "xfrc_applied")}
-    return _scan(d, targets, (1.2345678901234567e-3 + i, -7.654321098765432e-5 - i))
-
-
-@functools.cache
-def layout() -> DataLayout | None:
-    """The offsets, found on one probe and confirmed on a second; None when not found."""
-    try:
-        a, b = _probe(0), _probe(1)
-    except LookupError:
-        return None
-    return a if a == b else None
-
-
-def read_fields(d: mujoco.MjData, lay: DataLayout) -> tuple[float, int, int, int, int]:
-    """``(time, qpos, qvel, ctrl, xfrc_applied addresses)`` read through the offsets (for tests)."""
-    base = d._address
-    return (
-        ctypes.c_double.from_address(base + lay.time).value,
-        ctypes.c_int64.from_address(base + lay.qpos).value,
-        ctypes.c_int64.from_address(base + lay.qvel).value,
-        ctypes.c_int64.from_address(base + lay.ctrl).value,
-        ctypes.c_int64.from_address(base + lay.xfrc_applied).value,
-    )
-
-
 def available() -> bool:
-    """True when numba is present and the mjData layout was found: the native callback can run."""
-    return HAVE_NUMBA and layout() is not None
+    """True when numba is present and MuJoCo's ``mj_getState`` was found: the native callback can
+    run (whether it agrees with the Python callback is checked per twin before it is used)."""
+    return HAVE_NUMBA and _GET_STATE is not None
+
+
+def data_arrays(d: mujoco.MjData) -> dict[str, np.ndarray]:
+    """The ``MjData`` buffers the callback reads and writes, by their context names."""
+    return {"qpos": d.qpos, "qvel": d.qvel, "ctrl": d.ctrl, "xfrc_applied": d.xfrc_applied}
 
 
 # ----------------------------------------------------------------------------------------------
@@ -286,15 +249,13 @@ CTX_F = CTX.view(np.float64)
 _bind_lock = threading.Lock()
 
 
-_CTX_SYMBOL = "tumble_mj_bridge_native_ctx"
-
-
 if HAVE_NUMBA:
-    import llvmlite.binding as _llvm
-
-    # The compiled callback refers to the context through this external symbol, resolved when the
-    # (disk-cached) code is loaded; so the cfunc itself can be cached although CTX moves between runs.
+    # The compiled callback refers to the context and to mj_getState through these external
+    # symbols, resolved when the (disk-cached) code is loaded; so the cfunc itself can be cached
+    # although both move between processes.
     _llvm.add_symbol(_CTX_SYMBOL, int(CTX.ctypes.data))
+    if _GET_STATE is not None:
+        _llvm.add_symbol(_GETSTATE_SYMBOL, int(_GET_STATE))
 
     @intrinsic
     def _ctx_addr(typingctx):  # pragma: no cover - compiled
@@ -315,7 +276,7 @@ if HAVE_NUMBA:
     def _make_cb(deps: int):
         def _cb(m, d):  # pragma: no cover - compiled
             if deps >= 0:  # always: ties the cache key to the kernel's sources (see DEPS)
-                native_stage(_addr(d), _ctx_addr())
+                native_stage(_addr(m), _addr(d), _ctx_addr())
 
         return _cb
 
@@ -342,18 +303,23 @@ class Context:
     """Binds one twin's arrays into :data:`CTX` for the duration of a ``with`` block.
 
     Args:
-        m: the twin's ``MjModel``.
+        m: the twin's ``MjModel``; d: its ``MjData`` (its buffers are bound, :func:`data_arrays`).
         arrays: ``fp, ip, out, q, qd, tq_ids, f_ids, tau_g, geo, acc`` (contiguous; kept alive by
             this object while bound).
         weights: the integrator's stage weights; ``inv_gear``: 1 / the control actuators' gear;
         has_torque: whether the given torque of Remark 2 is on;
         force_body: the body (BR) whose ``xfrc_applied[:3]`` receives the control's force at C,
             or None when the weighting puts none there (Gauss).
+
+    Attributes:
+        data_ptr: the ``mjData*`` the callback serves (0: the next call records the one MuJoCo
+            passes; :class:`mj_bridge.stepper.Stepper` keeps the one its verified probe saw).
     """
 
     def __init__(
         self,
         m,
+        d,
         arrays: dict[str, np.ndarray],
         weights,
         inv_gear: float,
@@ -362,31 +328,42 @@ class Context:
     ):
         self.force_body = -1 if force_body is None else int(force_body)
         self.arrays = arrays
-        self.m = m
+        self.m, self.d = m, d
         self.weights = tuple(float(w) for w in weights)
         self.inv_gear = float(inv_gear)
         self.has_torque = bool(has_torque)
+        self.data_ptr = 0
         if len(self.weights) > 4:
             raise ValueError(f"weights: at most 4 stages (got {len(self.weights)})")
+        if self.force_body >= m.nbody:
+            raise ValueError(f"force_body: {self.force_body} is not a body of the model")
         for k, a in arrays.items():
             if not a.flags.c_contiguous:
                 raise ValueError(f"{k}: must be C-contiguous for the native callback")
 
+    def _data_arrays(self) -> dict[str, np.ndarray]:
+        """The MjData's buffers, checked: float64, contiguous, of the model's sizes."""
+        m = self.m
+        want = {"qpos": m.nq, "qvel": m.nv, "ctrl": m.nu, "xfrc_applied": 6 * m.nbody}
+        arrays = data_arrays(self.d)
+        for k, size in want.items():
+            a = arrays[k]
+            if a.dtype != np.float64 or not a.flags.c_contiguous or a.size != size:
+                raise ValueError(f"mjData.{k}: not a contiguous float64 buffer of {size} values")
+        return arrays
+
     def __enter__(self) -> Context:
-        lay = layout()
-        if lay is None:
+        if not available():
             raise RuntimeError("the native controller callback is not available here")
+        data = self._data_arrays()
         if not _bind_lock.acquire(blocking=False):
             raise RuntimeError("the native callback context is already bound")
         a = self.arrays
         CTX[:] = 0
-        CTX[C_OFF_TIME], CTX[C_OFF_QPOS] = lay.time, lay.qpos
-        CTX[C_OFF_QVEL], CTX[C_OFF_CTRL] = lay.qvel, lay.ctrl
-        CTX[C_OFF_XFRC], CTX[C_FORCE_BODY], CTX[C_NBODY] = (
-            lay.xfrc_applied,
-            self.force_body,
-            self.m.nbody,
-        )
+        CTX[C_DATA] = self.data_ptr
+        CTX[C_QPOS], CTX[C_QVEL] = data["qpos"].ctypes.data, data["qvel"].ctypes.data
+        CTX[C_CTRL], CTX[C_XFRC] = data["ctrl"].ctypes.data, data["xfrc_applied"].ctypes.data
+        CTX[C_FORCE_BODY], CTX[C_NBODY] = self.force_body, self.m.nbody
         CTX[C_NQ], CTX[C_NV], CTX[C_NU] = self.m.nq, self.m.nv, self.m.nu
         CTX[C_NQP] = a["q"].shape[0]
         for slot, key, len_slot in (
@@ -422,16 +399,22 @@ class Context:
 
     @property
     def failures(self) -> int:
-        """Stages the kernel declined since binding or the last :meth:`clear_failures`."""
+        """Stages the kernel declined (or calls refused) since binding or the last
+        :meth:`clear_failures`."""
         return int(CTX[C_FAILS])
 
     def clear_failures(self) -> None:
         CTX[C_FAILS] = 0
 
-    def decline_at(self, call: int) -> None:
-        """Fault injection (tests): the ``call``-th stage call from binding on (1-based) behaves as
-        if the kernel had declined it. 0 switches this off."""
-        CTX[C_DECLINE_AT] = int(call)
+    @property
+    def data_seen(self) -> int:
+        """The ``mjData*`` the callback serves (recorded at its first call after binding)."""
+        return int(CTX[C_DATA])
+
+    @property
+    def time_seen(self) -> float:
+        """The time the callback read from MuJoCo at its last call."""
+        return float(CTX_F[F_TIME])
 
 
-__all__ = ["Context", "DataLayout", "available", "callback", "compiled", "layout", "read_fields"]
+__all__ = ["Context", "available", "callback", "compiled", "data_arrays"]

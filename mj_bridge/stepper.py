@@ -7,11 +7,19 @@ leaves ``ctrl`` as it was. :meth:`Stepper.step` saves MuJoCo's integration state
 the warning counts before each batch of ``mj_step`` calls and, when the batch had a declined stage,
 restores them and reruns the batch with the Python callback (:class:`mj_bridge.stages.Stages`),
 which answers such stages with the numpy model. The result is the run the Python callback gives.
+
+Before the native callback drives a twin, :meth:`Stepper.callbacks` verifies it once (per twin, so
+per model and ``MjData``): one stage, with accumulation on, through MuJoCo into the native callback
+and the same stage through the Python one, at the current state and a time away from it; the
+controls, ``xfrc_applied``, the stage's outputs, the accumulated work and impulses, the stage count
+and the time read must agree bit for bit. If anything differs, the twin uses the Python callback
+from then on, and one warning says why.
 """
 
 from __future__ import annotations
 
 import contextlib
+import warnings
 from collections.abc import Iterator
 
 import mujoco
@@ -30,6 +38,8 @@ from mj_bridge.stages import INV_GEAR, Stages
 from mj_bridge.twin_model import TwinModel
 
 _SAVE = mujoco.mjtState.mjSTATE_INTEGRATION
+_PROBE_DT = 0.3183098861837907  # s; the verification stage's time is d.time + this (1/π: no
+# special value, so a time read from the wrong place shows)
 
 
 class Stepper:
@@ -41,7 +51,9 @@ class Stepper:
         native_callback: use the native callback where the compiled stage applies.
 
     Attributes:
-        context: the native callback's :class:`mj_bridge.native.Context`, or None.
+        context: the native callback's :class:`mj_bridge.native.Context`, or None (also after
+            a failed verification).
+        verified: whether the native callback was checked against the Python one (once).
         redos: batches rerun with the Python callback after a declined stage.
     """
 
@@ -60,10 +72,12 @@ class Stepper:
         self.needs_control = needs_control
         self.bound = False
         self.redos = 0
+        self.verified = False
         self.context: native.Context | None = None
         if stages.compiled and native_callback and native.available():
             self.context = native.Context(
                 tm.m,
+                d,
                 stages.native_arrays(),
                 acc.weights,
                 INV_GEAR,
@@ -78,6 +92,17 @@ class Stepper:
         reported once each when it ends, with their count
         (:class:`mj_bridge.callbacks.collapsed_warnings`), not once per step."""
         act_bias = spring_user_bias if self.tm.needs_act_bias else None
+        if self.context is not None and self.needs_control and not self.verified:
+            differs = self._verify(act_bias)
+            self.verified = True
+            if differs:
+                self.context = None
+                warnings.warn(
+                    "native controller callback disagrees with the Python one on this model "
+                    f"({', '.join(differs)}); using the Python callback",
+                    RuntimeWarning,
+                    stacklevel=3,
+                )
         if self.context is None or not self.needs_control:
             control = self.stages.callback if self.needs_control else None
             with collapsed_warnings(), installed(control=control, act_bias=act_bias):
@@ -130,6 +155,61 @@ class Stepper:
                 self._python_forward()
             return
         self.stages.last_control = self.stages.stage_output()
+
+    def _verify(self, act_bias) -> list[str]:
+        """One stage through the native callback (inside ``mj_forward``) and the same stage through
+        the Python one, with accumulation on; the names of what differs (empty: bit-identical).
+        Leaves the integration state, the accumulator and the warning counts as they were."""
+        ctx, d, acc, stages = self.context, self.d, self.acc, self.stages
+        arrays = stages.native_arrays()
+        saved = self._save()
+        kept = acc.calls, acc.active, acc.h, stages.fast.fallbacks
+        t = d.time + _PROBE_DT
+
+        def outputs() -> dict[str, np.ndarray]:
+            return {
+                "ctrl": d.ctrl.copy(), "xfrc_applied": d.xfrc_applied.copy(),
+                "stage output": arrays["out"].copy(), "given torque": arrays["tau_g"].copy(),
+                "work and impulses": acc.v.copy(),
+            }  # fmt: skip
+
+        def at_probe_time() -> None:
+            d.time = t
+            d.ctrl[:] = 0.0
+            d.xfrc_applied[:] = 0.0
+
+        try:
+            with (
+                collapsed_warnings(),
+                ctx,
+                installed(control=native.callback(), act_bias=act_bias),
+            ):
+                at_probe_time()
+                ctx.clear_failures()
+                ctx.start(self.tm.dt)
+                mujoco.mj_forward(self.m, d)
+                got = outputs()
+                got["stages"] = np.array([ctx.stop(), ctx.failures])
+                got["time"] = np.array([ctx.time_seen])
+                data_ptr = ctx.data_seen
+            self._restore(saved)
+            at_probe_time()
+            acc.calls, acc.active, acc.h = 0, True, self.tm.dt
+            stages.stage_callback(self.m, d)
+            want = outputs()
+            want["stages"] = np.array([acc.calls, 0])
+            want["time"] = np.array([t])
+        finally:
+            acc.calls, acc.active, acc.h, stages.fast.fallbacks = kept
+            self._restore(saved)
+        differs = [
+            k
+            for k in want
+            if got[k].dtype != want[k].dtype or got[k].tobytes() != want[k].tobytes()
+        ]
+        if not differs:
+            ctx.data_ptr = data_ptr
+        return differs
 
     def _python_steps(self, nstep: int) -> None:
         acc = self.acc

@@ -1,4 +1,7 @@
-"""Random scenes and states for the MuJoCo-twin tests (helpers, not tests)."""
+"""The tests' random scenes and on-manifold states (helpers, not tests): the MuJoCo-twin,
+Pinocchio, coordinate and MJCF tests and the hypothesis property tests (``test_properties.py``)
+all draw from :func:`random_scene`. (``tests/random_scenes.py`` keeps the model tests' draws: body
+inertias in any orientation and states off the unit sphere, which no engine plant accepts.)"""
 
 from __future__ import annotations
 
@@ -30,19 +33,32 @@ def random_scene(
     spring_model: str = "tendon",
     external_torque: bool = False,
     effects: list[str] | None = None,
+    mass_exponents: np.ndarray | None = None,
 ) -> Scene:
-    """A random valid scene: n <= 6 masses, random a, d, masses, stiffnesses, ring inertias."""
+    """A random valid scene: random a, d, masses, stiffnesses, ring inertias, initial state.
+
+    ``n``: the number of masses (0 allowed; default a random 1…6). ``mass_exponents`` (length n):
+    the masses are ``J̄/10 · 10^e`` (spread over as many decades as the exponents span; the
+    hypothesis tests draw them) instead of ``J̄/10`` times a factor in [0.2, 3]. The scene is built
+    through the public schema (``scene_from_dict``), so the loader validates it."""
     n = int(rng.integers(1, 7)) if n is None else n
     J = rng.uniform(1.0, 1.9, 3) * 10.0 ** rng.uniform(0, 3)
     a = rng.normal(size=3)
     a /= np.linalg.norm(a)
-    m = rng.uniform(0.2, 3.0, n) * J.mean() / 10
+    if mass_exponents is None:
+        m = rng.uniform(0.2, 3.0, n) * J.mean() / 10
+    else:
+        m = J.mean() / 10 * 10.0 ** np.asarray(mass_exponents, float)
     p_e = np.sort(rng.uniform(-3, 3, n))
     eff = effects or ["gravity", "springs.linear", "springs.cubic", "mass_inertia"]
     eff = list(eff)
+    m_scale = float(m.mean()) if n else J.mean() / 10
     data = {
         "scene": {"name": f"random_n{n}", "effects": eff},
-        "body": {"mass": float(rng.uniform(1, 10) * m.sum()), "inertia": J.tolist()},
+        "body": {
+            "mass": float(rng.uniform(1, 10) * (m.sum() if n else m_scale)),
+            "inertia": J.tolist(),
+        },
         "rod": {"axis": a.tolist(), "offset": rng.normal(size=3).tolist()},
         "masses": {
             "mass": m.tolist(),
@@ -50,8 +66,8 @@ def random_scene(
             "ring_radius": rng.uniform(0.0, 0.5, n).tolist(),
         },
         "springs": {
-            "k_linear": (rng.uniform(1, 10, n + 1) * m.mean()).tolist(),
-            "k_cubic": (rng.uniform(0, 1, n + 1) * m.mean()).tolist(),
+            "k_linear": (rng.uniform(1, 10, n + 1) * m_scale).tolist(),
+            "k_cubic": (rng.uniform(0, 1, n + 1) * m_scale).tolist(),
         },
         "gravity": {"vector": rng.normal(size=3).tolist()},
         "initial": {
@@ -64,11 +80,18 @@ def random_scene(
         },
         "mujoco": {"spring_model": spring_model},
     }
-    if controlled:
+    if not n:  # a rigid body alone: no per-mass tables (the loader refuses empty ones)
+        for key in ("masses", "springs"):
+            del data[key]
+        for key in ("p", "pdot"):
+            del data["initial"][key]
+        data["scene"]["effects"] = eff = [e for e in eff if not e.startswith("springs")]
+    if controlled:  # (draws in this order for every n: the seeded scenes of the tests)
         comps = sorted(rng.choice(3, size=int(rng.integers(1, 4)), replace=False) + 1)
-        idx = sorted(rng.choice(n, size=int(rng.integers(1, n + 1)), replace=False) + 1)
-        k = len(idx)
-        data["scene"]["effects"] = [*eff, "control.omega", "control.masses"]
+        idx = (
+            sorted(rng.choice(n, size=int(rng.integers(1, n + 1)), replace=False) + 1) if n else []
+        )
+        data["scene"]["effects"] = [*eff, "control.omega"]
         data["control"] = {
             "omega": {
                 "components": [int(c) for c in comps],
@@ -76,14 +99,17 @@ def random_scene(
                 "sigma": rng.uniform(0, 3, 3).tolist(),
                 "gamma": float(rng.uniform(0.1, 2)),
             },
-            "masses": {
+        }
+        if n:
+            k = len(idx)
+            data["scene"]["effects"].append("control.masses")
+            data["control"]["masses"] = {
                 "indices": [int(i) for i in idx],
                 "l": rng.normal(scale=0.5, size=k).tolist(),
                 "lambda": rng.uniform(0, 3, k).tolist(),
                 "alpha": rng.uniform(0.5, 3, k).tolist(),
                 "beta": rng.uniform(1, 10, k).tolist(),
-            },
-        }
+            }
     if external_torque:
         data["scene"]["effects"] = [*data["scene"]["effects"], "external_torque"]
         data["external_torque"] = {

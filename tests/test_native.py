@@ -30,16 +30,58 @@ def _same(a, b) -> None:
         np.testing.assert_array_equal(getattr(a.invariants, f), getattr(b.invariants, f), f)
 
 
-def test_layout_reads_the_fields_of_any_mjdata():
-    """The offsets found on the probes read time, qpos, qvel and ctrl of a twin's own MjData."""
-    tw = Twin(paper_scene("paper_example2_controlled"))
-    tw.d.time = 0.123456789
-    lay = native.layout()
-    t, *addresses = native.read_fields(tw.d, lay)
-    assert t == tw.d.time
-    assert addresses == [
-        getattr(tw.d, k).ctypes.data for k in ("qpos", "qvel", "ctrl", "xfrc_applied")
-    ]
+def test_verified_once_against_python_before_use():
+    """Entering the callbacks the first time runs the verification stage (native vs Python, bit for
+    bit); it leaves the state as it was and records the MjData the callback serves."""
+    sc = paper_scene("paper_example2_controlled")
+    tw = Twin(sc)
+    tw.set_state(0.25, sc.initial.q0(), sc.initial.qdot0())
+    before = tw.d.qpos.copy(), tw.d.qvel.copy(), tw.d.ctrl.copy(), tw.acc.v.copy()
+    assert not tw.stepper.verified
+    with tw.callbacks():
+        assert tw.native and tw.stepper.verified
+        assert tw.stepper.context.data_ptr != 0
+        assert tw.d.time == 0.25
+        for a, b in zip(before, (tw.d.qpos, tw.d.qvel, tw.d.ctrl, tw.acc.v), strict=True):
+            np.testing.assert_array_equal(a, b)
+        tw.forward_here()  # the native stage reads MuJoCo's time through mj_getState
+        assert tw.stepper.context.time_seen == 0.25
+    assert tw.native_redos == 0
+
+
+def test_a_wrong_binding_falls_back_to_python_with_one_warning(monkeypatch):
+    """If the native callback reads anything else than the Python one (here: qacc bound as qvel),
+    the verification stage sees it, the twin uses the Python callback, one warning says so, and
+    the run is the Python callback's."""
+    sc = paper_scene("paper_example1_controlled")
+    ref = simulate(sc, t_end=0.1, native_callback=False)
+    real = native.data_arrays
+
+    def wrong(d):
+        return {**real(d), "qvel": d.qacc}
+
+    monkeypatch.setattr(native, "data_arrays", wrong)
+    with pytest.warns(RuntimeWarning, match="disagrees") as record:
+        tr = simulate(sc, t_end=0.1)
+    assert len([w for w in record if "native" in str(w.message)]) == 1
+    assert not tr.info["native_callback"]
+    _same(ref, tr)
+
+
+def test_another_mjdata_is_refused():
+    """The callbacks are process-global: while one twin's native callback is installed, a step of
+    another MjData reaches it; it touches nothing and counts a failure."""
+    sc = paper_scene("paper_example1_controlled")
+    tw1, tw2 = Twin(sc), Twin(sc)
+    tw1.set_state(0.0, sc.initial.q0(), sc.initial.qdot0())
+    tw2.set_state(0.0, sc.initial.q0(), sc.initial.qdot0())
+    with tw1.callbacks():
+        ctrl1 = tw1.d.ctrl.copy()
+        tw1.stepper.context.clear_failures()
+        mujoco.mj_forward(tw2.m, tw2.d)
+        assert tw1.stepper.context.failures == 1
+        np.testing.assert_array_equal(tw1.d.ctrl, ctrl1)
+        assert not tw2.d.ctrl.any()
 
 
 @pytest.mark.parametrize("name", ["paper_example1_controlled", "paper_example2_controlled"])
@@ -80,17 +122,32 @@ def test_native_with_given_torque_and_python_act_bias(spring_model):
     assert np.any(a.torque != 0.0)
 
 
-def test_declined_stage_reruns_the_batch_with_python():
-    """Fault injection: the 7th native stage call reports a declined kernel; the batch is rerun from
-    its start with the Python callback and the run ends exactly as a clean one."""
+def test_declined_stage_reruns_the_batch_with_python(monkeypatch):
+    """Fault injection: the 7th native stage call reports a declined kernel (as the compiled stage
+    does: a failure counted, ctrl untouched); the batch is rerun from its start with the Python
+    callback and the run ends exactly as a clean one."""
+    import ctypes
+
     sc = paper_scene("paper_example1_controlled")
     ref = simulate(sc, t_end=0.1, native_callback=False)
+    real = native.compiled().ctypes
+    calls = {"n": 0, "decline": 0}
+
+    def flaky(m, d):
+        calls["n"] += 1
+        if calls["n"] == calls["decline"]:
+            native.CTX[native.C_FAILS] += 1
+            return
+        real(m, d)
+
+    flaky_cb = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_void_p)(flaky)
+    monkeypatch.setattr(native, "callback", lambda: flaky_cb)
     tw = Twin(sc)
     assert tw.native
     tw.set_state(0.0, sc.initial.q0(), sc.initial.qdot0())
     k = round(0.01 / tw.dt)
     with tw.callbacks():
-        tw.stepper.context.decline_at(7)
+        calls["n"], calls["decline"] = 0, 7
         tw.forward_here()
         qs = []
         for _ in range(10):
@@ -99,7 +156,8 @@ def test_declined_stage_reruns_the_batch_with_python():
             tw.d.time = round(tw.d.time, 12)
             tw.forward_here()
             qs.append(tw.state()[0])
-    assert tw.native_redos == 1
+    assert calls["n"] > 7
+    assert tw.native and tw.native_redos == 1
     np.testing.assert_array_equal(np.array(qs), ref.q[1:])
     assert not bad_warnings(tw.d)
 

@@ -17,7 +17,7 @@ from hypothesis import strategies as st
 
 import mj_bridge
 from analytic import TumblingModel, scene_from_dict
-from analytic.kinematics import udot_of
+from tests.mj_scenes import random_scene, random_state
 
 SCENES = Path(__file__).resolve().parents[1] / "validation" / "scenes"
 PAPER = [
@@ -31,7 +31,8 @@ REL = 1e-8
 
 @st.composite
 def scene_and_state(draw):
-    """A random valid scene (n <= 8, masses over 6 decades) and an on-manifold state.
+    """A random valid scene (n <= 8, masses over 6 decades) and an on-manifold state, from the
+    tests' one random-scene generator (``tests/mj_scenes.py``).
 
     Hypothesis draws n, the mass exponents, whether it is controlled and a seed; the remaining
     continuous data come from a numpy generator seeded by it (keeps the examples small)."""
@@ -39,66 +40,9 @@ def scene_and_state(draw):
     expo = draw(st.lists(st.floats(-3, 3), min_size=n, max_size=n))
     controlled = draw(st.booleans())
     rng = np.random.default_rng(draw(st.integers(0, 2**32 - 1)))
-
-    def unit(k):
-        v = rng.normal(size=k)
-        return v / np.linalg.norm(v)
-
-    mBR = 10.0 ** rng.uniform(0, 3)
-    J = mBR * rng.uniform(1.0, 1.9, 3)
-    m = mBR * 10.0 ** np.array(expo)
-    p_e = np.sort(rng.uniform(-3, 3, n))
-    mref = float(np.mean(m)) if n else 1.0
-    kscale = 10.0 ** rng.uniform(-1, 2, n + 1)
-    eff = ["gravity", "springs.linear", "springs.cubic", "mass_inertia"]
-    data = {
-        "scene": {"name": "random", "effects": eff},
-        "body": {"mass": mBR, "inertia": J.tolist()},
-        "rod": {"axis": unit(3).tolist(), "offset": rng.uniform(-2, 2, 3).tolist()},
-        "gravity": {"vector": rng.uniform(-10, 10, 3).tolist()},
-        "initial": {"attitude": {"quaternion": [1.0, 0.0, 0.0, 0.0]}},
-    }
-    if n:
-        data["masses"] = {
-            "mass": m.tolist(),
-            "p_e": p_e.tolist(),
-            "ring_radius": rng.uniform(0.0, 0.5, n).tolist(),
-        }
-        data["springs"] = {
-            "k_linear": (kscale * mref).tolist(),
-            "k_cubic": (kscale * mref * rng.uniform()).tolist(),
-        }
-        data["initial"]["p"] = p_e.tolist()
-    if controlled:
-        comps = sorted(int(c) + 1 for c in rng.choice(3, int(rng.integers(1, 4)), replace=False))
-        data["scene"]["effects"] = [*eff, "control.omega"]
-        data["control"] = {
-            "omega": {
-                "components": comps,
-                "b": rng.uniform(-3, 3, 3).tolist(),
-                "sigma": rng.uniform(0, 3, 3).tolist(),
-                "gamma": float(rng.uniform(0.1, 2.0)),
-            }
-        }
-        if n:
-            idx = sorted(
-                int(i) + 1 for i in rng.choice(n, int(rng.integers(1, n + 1)), replace=False)
-            )
-            k = len(idx)
-            data["scene"]["effects"].append("control.masses")
-            data["control"]["masses"] = {
-                "indices": idx,
-                "l": rng.uniform(-0.5, 0.5, k).tolist(),
-                "lambda": rng.uniform(0, 3, k).tolist(),
-                "alpha": rng.uniform(0.5, 3, k).tolist(),
-                "beta": rng.uniform(1, 10, k).tolist(),
-            }
-    scene = scene_from_dict(data)
-    u = unit(4)
-    omega = rng.uniform(-3, 3, 3)
-    q = np.concatenate([rng.uniform(-5, 5, 3), u, p_e + rng.uniform(-0.5, 0.5, n)])
-    qd = np.concatenate([rng.uniform(-5, 5, 3), udot_of(u, omega), rng.uniform(-1, 1, n)])
-    return scene, float(rng.uniform(0, 20)), q, qd
+    scene = random_scene(rng, n, controlled=controlled, mass_exponents=np.array(expo))
+    t, q, qd = random_state(rng, scene)
+    return scene, t, q, qd
 
 
 def _rel(x, ref) -> float:

@@ -436,35 +436,77 @@ def test_dask_local_cluster(tmp_path, result):
     _compare_with_quick(res, result)
 
 
-def test_goal_same_accuracy_search():
-    """The 60 s goal's search (here over 1 s): the RK4 run it stops at is the first as accurate,
-    the two last runs show RK4's order, and the ratio uses MuJoCo's wall interpolated to exactly
-    the analytic accuracy (between the walls of those two runs)."""
-    from validation.goals import Goal, goal_example1_60s
+RK4_COST_S = 1e-4  # made-up MuJoCo wall of a 1 s run at dt: RK4_COST_S / dt (0.1 s at dt = 1e-3)
 
-    g = goal_example1_60s(t_end=1.0, cap_s=5.0, progress=lambda _s: None)
+
+def _goal_with_made_up_walls(monkeypatch, cap_s):
+    """The 60 s goal's search over 1 s with MuJoCo's wall made up as ``RK4_COST_S / dt`` (exactly
+    linear in the step count, so where the search stops and what it predicts do not depend on the
+    machine's speed or load); the errors are the real ones."""
+    import mj_bridge
+    from validation.goals import goal_example1_60s
+
+    real = mj_bridge.simulate
+
+    def costed(sc, *, dt, **kw):
+        tr = real(sc, dt=dt, **kw)
+        return dataclasses.replace(tr, info={**tr.info, "wall_time_s": RK4_COST_S / dt})
+
+    monkeypatch.setattr(mj_bridge, "simulate", costed)
+    return goal_example1_60s(t_end=1.0, cap_s=cap_s, progress=lambda _s: None)
+
+
+def _dt_reaching(e_target, pts):
+    """The dt at which the power law through the two (dt, error) points reaches ``e_target``,
+    fitted here as a straight line in log-log (numpy's least squares on two points), and its
+    order (the slope)."""
+    (dt1, e1, _), (dt2, e2, _) = pts
+    order, log_c = np.polyfit(np.log([dt1, dt2]), np.log([e1, e2]), 1)
+    return float(np.exp((np.log(e_target) - log_c) / order)), float(order)
+
+
+def test_goal_same_accuracy_search_interpolates_to_the_analytic_accuracy(monkeypatch):
+    """Without a cap the search halves dt until RK4 is as accurate as the analytic run and stops
+    at the first such run; the two last runs show RK4's order (the controller inside every stage),
+    and the ratio uses MuJoCo's wall at exactly the analytic accuracy. With walls exactly
+    ``RK4_COST_S / dt`` that wall is known independently: ``RK4_COST_S / dt_need``."""
+    from validation.goals import Goal
+
+    g = _goal_with_made_up_walls(monkeypatch, cap_s=1e9)
     e_a, w_a = g.data["analytic"]
     pts = g.data["rk4"]
-    dts = [p[0] for p in pts]
-    assert all(math.isclose(a, 2 * b) for a, b in itertools.pairwise(dts))
-    if not g.extrapolated:
-        assert pts[-1][1] <= e_a
-        assert all(p[1] > e_a for p in pts[:-1])
-        if len(pts) == 1:
-            assert g.value == pytest.approx(w_a / pts[-1][2])
-        else:  # MuJoCo's wall at exactly e_a, interpolated between the last two runs
-            (dt1, e1, w1), (dt2, e2, w2) = pts[-2], pts[-1]
-            order = math.log(e1 / e2) / math.log(dt1 / dt2)
-            assert 3.5 < order < 4.5  # RK4, with the controller inside every stage
-            w_need = w_a / g.value
-            assert min(w1, w2) <= w_need <= max(w1, w2)
-            dt_need = dt2 * (e_a / e2) ** (1 / order)
-            assert dt2 <= dt_need <= dt1
-            assert w_need == pytest.approx(
-                w1 + (w2 - w1) * (1 / dt_need - 1 / dt1) / (1 / dt2 - 1 / dt1)
-            )
+    assert not g.extrapolated
+    assert len(pts) >= 2, pts  # RK4 at dt = 1e-3 is not as accurate as DOP853 at rtol 1e-12
+    assert all(math.isclose(a[0], 2 * b[0]) for a, b in itertools.pairwise(pts))
+    assert pts[-1][1] <= e_a < pts[-2][1]
+    assert all(p[1] > e_a for p in pts[:-1])  # stopped at the first run as accurate
+    dt_need, order = _dt_reaching(e_a, pts[-2:])
+    assert 3.5 < order < 4.5, order  # RK4, with the controller evaluated in every stage
+    assert pts[-1][0] <= dt_need <= pts[-2][0]
+    assert g.value == pytest.approx(w_a / (RK4_COST_S / dt_need), rel=1e-9)
+    # the first run found as accurate would have flattered MuJoCo less: it did more work than needed
+    assert g.value > w_a / pts[-1][2]
     assert Goal("x", 1.0, 1.0).holds and not Goal("x", 1.01, 1.0).holds
     assert not Goal("x", math.nan, 1.0).holds
+
+
+def test_goal_same_accuracy_search_extrapolates_when_capped(monkeypatch):
+    """A cap that stops the search after two runs (0.1 s and 0.2 s of made-up wall: the next, 0.4 s,
+    would pass 2 x 0.2 s > 0.3 s) before RK4 reaches the analytic accuracy: the goal says it is
+    extrapolated and predicts MuJoCo's wall at the dt where RK4's observed power law reaches that
+    accuracy, wall ∝ 1/dt from the last run, i.e. exactly ``RK4_COST_S / dt_need`` here."""
+    g = _goal_with_made_up_walls(monkeypatch, cap_s=0.3)
+    e_a, w_a = g.data["analytic"]
+    pts = g.data["rk4"]
+    assert g.extrapolated and "(extrapolated)" in g.line()
+    assert [p[0] for p in pts] == pytest.approx([1e-3, 5e-4])
+    assert all(p[1] > e_a for p in pts)  # the cap, not the accuracy, stopped the search
+    dt_need, order = _dt_reaching(e_a, pts)
+    assert 3.5 < order < 4.5, order
+    assert dt_need < pts[-1][0]  # a finer step than any run made
+    assert g.value == pytest.approx(w_a / (RK4_COST_S / dt_need), rel=1e-9)
+    assert g.value < w_a / pts[-1][2]  # MuJoCo needs more than its last run's wall
+    assert f"{order:.2f}" in g.detail and "did not reach it" in g.detail
 
 
 def test_pinocchio_goal_is_skipped_with_its_reason_without_pin(monkeypatch, tmp_path):
