@@ -204,3 +204,21 @@ def test_no_colour_codes_when_stderr_is_not_a_terminal():
     )
     assert proc.returncode == 0, proc.stderr
     assert "\x1b" not in proc.stderr
+
+
+def test_version_and_python_dash_m_validation():
+    import subprocess
+    import sys
+    from importlib import metadata
+
+    proc = subprocess.run(
+        [sys.executable, "-m", "validation", "--version"], capture_output=True, text=True
+    )
+    assert proc.returncode == 0
+    assert proc.stdout.strip() == f"tumble {metadata.version('tumbling-testbed')}"
+    proc = subprocess.run(
+        [sys.executable, "-m", "validation", "simulate", "--rtol", "-1"],
+        capture_output=True,
+        text=True,
+    )
+    assert proc.returncode == EXIT_USAGE and proc.stdout == ""

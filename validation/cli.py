@@ -242,6 +242,16 @@ def cmd_bench(args: argparse.Namespace) -> int:
     return 0
 
 
+def _version() -> str:
+    """The installed distribution's version ("unknown" when run from a bare checkout)."""
+    from importlib import metadata
+
+    try:
+        return metadata.version("tumbling-testbed")
+    except metadata.PackageNotFoundError:
+        return "unknown"
+
+
 def build_parser() -> argparse.ArgumentParser:
     from analytic.effects import Backend, MjIntegrator, SolverMethod
     from validation.scenes import DEFAULT_SIMULATE_SCENE, builtin_names
@@ -252,6 +262,7 @@ def build_parser() -> argparse.ArgumentParser:
         description="Cross-validation testbed for tumbling multibody dynamics: the Koganti-Udwadia "
         "analytic model and a MuJoCo twin under one closed-form controller.",
     )
+    parser.add_argument("--version", action="version", version=f"%(prog)s {_version()}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
 

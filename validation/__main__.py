@@ -1,0 +1,7 @@
+"""``python -m validation`` is ``tumble``: the same commands, options and exit statuses."""
+
+import sys
+
+from validation.cli import main
+
+sys.exit(main())
