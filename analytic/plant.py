@@ -46,6 +46,33 @@ def check_horizon(t_end: Any, field: str = "t_end") -> float | None:
     return t
 
 
+def coerce_enum(record: Any, name: str, enum: type) -> None:
+    """Set the field ``name`` of a frozen settings ``record`` to its ``enum`` member, or raise
+    ``ValueError`` naming the field and listing the choices."""
+    value = getattr(record, name)
+    try:
+        object.__setattr__(record, name, enum(value))
+    except ValueError:
+        raise ValueError(
+            f"{name}: must be one of {[m.value for m in enum]} (got {value!r})"
+        ) from None
+
+
+def check_positive(
+    record: Any, name: str, *, allow_none: bool = False, allow_inf: bool = False, what: str = ""
+) -> None:
+    """``ValueError`` naming the field unless ``record.name`` is a positive number (finite unless
+    ``allow_inf``; None passes when ``allow_none``). ``what`` replaces "number" in the message."""
+    v = getattr(record, name)
+    if v is None and allow_none:
+        return
+    ok = isinstance(v, int | float) and not isinstance(v, bool) and v > 0
+    if not (ok and (allow_inf or math.isfinite(v))):
+        kind = what or ("positive number" if allow_inf else "positive finite number")
+        tail = " or None" if allow_none else ""
+        raise ValueError(f"{name}: must be a {kind}{tail} (got {v!r})")
+
+
 class Plant(abc.ABC):
     """One engine behind the protocol (see the module docstring).
 
@@ -139,17 +166,10 @@ class AnalyticSettings:
     backend: Backend = Backend.AUTO
 
     def __post_init__(self) -> None:
-        for name, enum in (("method", SolverMethod), ("backend", Backend)):
-            try:
-                object.__setattr__(self, name, enum(getattr(self, name)))
-            except ValueError:
-                raise ValueError(
-                    f"{name}: must be one of {[m.value for m in enum]} (got {getattr(self, name)!r})"
-                ) from None
-        for name in ("rtol", "atol"):
-            v = getattr(self, name)
-            if not (isinstance(v, int | float) and v > 0 and math.isfinite(v)):
-                raise ValueError(f"{name}: must be a positive finite number (got {v!r})")
+        coerce_enum(self, "method", SolverMethod)
+        coerce_enum(self, "backend", Backend)
+        check_positive(self, "rtol")
+        check_positive(self, "atol")
 
 
 class AnalyticPlant(Plant):
@@ -185,4 +205,6 @@ __all__ = [
     "Plant",
     "Progress",
     "check_horizon",
+    "check_positive",
+    "coerce_enum",
 ]

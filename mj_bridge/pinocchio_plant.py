@@ -59,6 +59,7 @@ from analytic.assemble import N_AUX, assemble
 from analytic.effects import Effect, SolverMethod
 from analytic.fast import FastModel
 from analytic.model import ControlOutput, TumblingModel
+from analytic.plant import check_positive, coerce_enum
 from analytic.scene import OutputSettings, Scene
 from analytic.stepping import NonFinite, step_and_sample
 from analytic.trajectory import Engine, RunStatus, Trajectory
@@ -100,12 +101,7 @@ class PinocchioSettings:
     controller: ControllerSource = ControllerSource.ANALYTIC_FAST
 
     def __post_init__(self):
-        try:
-            object.__setattr__(self, "method", SolverMethod(self.method))
-        except ValueError:
-            raise ValueError(
-                f"method: must be one of {[m.value for m in SolverMethod]} (got {self.method!r})"
-            ) from None
+        coerce_enum(self, "method", SolverMethod)
         try:
             ctrl = ControllerSource(self.controller)
         except ValueError:
@@ -115,13 +111,9 @@ class PinocchioSettings:
                 f"controller: must be 'analytic' or 'analytic_fast' (got {self.controller!r})"
             )
         object.__setattr__(self, "controller", ctrl)
-        for name in ("rtol", "atol", "max_step"):
-            v = getattr(self, name)
-            if v is None:
-                continue
-            ok = isinstance(v, int | float) and v > 0 and (math.isfinite(v) or name == "max_step")
-            if not ok:
-                raise ValueError(f"{name}: must be a positive number or None (got {v!r})")
+        check_positive(self, "rtol", allow_none=True, what="positive number")
+        check_positive(self, "atol", allow_none=True, what="positive number")
+        check_positive(self, "max_step", allow_none=True, allow_inf=True)
 
     def resolved(self, scene: Scene) -> tuple[float, float, float]:
         """``(rtol, atol, max_step)`` with the scene's values where these are None."""

@@ -12,11 +12,10 @@
 from __future__ import annotations
 
 import importlib.util
-import math
 from dataclasses import dataclass
 
 from analytic.effects import MjIntegrator
-from analytic.plant import AnalyticPlant, AnalyticSettings, Plant
+from analytic.plant import AnalyticPlant, AnalyticSettings, Plant, check_positive, coerce_enum
 from analytic.scene import Scene
 from analytic.trajectory import Engine, Trajectory
 from mj_bridge.pinocchio_plant import PinocchioSettings
@@ -41,15 +40,9 @@ class MujocoRunSettings:
     native_callback: bool = True
 
     def __post_init__(self) -> None:
-        for name, enum in (("integrator", MjIntegrator), ("controller", ControllerSource)):
-            try:
-                object.__setattr__(self, name, enum(getattr(self, name)))
-            except ValueError:
-                raise ValueError(
-                    f"{name}: must be one of {[m.value for m in enum]} (got {getattr(self, name)!r})"
-                ) from None
-        if not (isinstance(self.dt, int | float) and self.dt > 0 and math.isfinite(self.dt)):
-            raise ValueError(f"dt: must be a positive finite time step in s (got {self.dt!r})")
+        coerce_enum(self, "integrator", MjIntegrator)
+        coerce_enum(self, "controller", ControllerSource)
+        check_positive(self, "dt", what="positive finite time step in s")
 
 
 class MujocoPlant(Plant):

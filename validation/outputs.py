@@ -308,12 +308,12 @@ def _lock(target: Path) -> Iterator[None]:
 
 def _clean_stale(target: Path) -> None:
     """Remove staging/old siblings that killed runs left behind (we hold the lock)."""
-    for p in target.parent.glob(f".{glob_escape(target.name)}.*"):
+    for p in target.parent.glob(f".{_glob_escape(target.name)}.*"):
         if p.is_dir() and (p.name.endswith(".partial") or p.name.endswith(".old")):
             shutil.rmtree(p, ignore_errors=True)
 
 
-def glob_escape(s: str) -> str:
+def _glob_escape(s: str) -> str:
     return re.sub(r"([*?\[])", r"[\1]", s)
 
 
