@@ -10,7 +10,9 @@ Units are SI. Frames: vectors marked *body* are in BR's principal axes at its ce
 Mass and control indices in files are 1-based, as in the paper (masses 1, 2, 4 of Example 2); the
 loaded records hold 0-based indices.
 
-See ``validation/scenes/paper_example1.toml`` for a fully commented example of every table.
+Every key, with its type, unit, default and meaning, is declared in :mod:`analytic.scene_keys`
+(rendered as ``docs/scene-format.md``); ``analytic/scenes/paper_example1.toml`` is a fully commented
+example of every table.
 """
 
 from __future__ import annotations
@@ -29,6 +31,7 @@ from typing import Any
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from analytic.builtin_scenes import builtin_scene_names, builtin_scene_path
 from analytic.effects import (
     CONTROL_EFFECTS,
     Effect,
@@ -37,6 +40,15 @@ from analytic.effects import (
     SolverMethod,
     SpringModel,
     Weighting,
+)
+from analytic.scene_keys import (
+    DEFAULT_GRAVITY,
+    NO_DEFAULT,
+    Key,
+    Kind,
+    Need,
+    generic_table,
+    key_spec,
 )
 
 # Quaternion norm tolerances on load: silently exact below, renormalised with a warning up
@@ -424,23 +436,51 @@ class Scene:
 # ----------------------------------------------------------------------------------------------
 
 
-class _Table:
-    """A TOML table being read: tracks its dotted path and which keys were consumed."""
+_VECTOR_KINDS = (Kind.VECTOR3, Kind.VECTOR4, Kind.VECTOR_N, Kind.VECTOR_N1, Kind.VECTOR_K)
 
-    def __init__(self, data: Any, path: str):
+
+class _Table:
+    """A TOML table being read: tracks its dotted path and which keys were consumed.
+
+    Every key is read through its declaration in :data:`analytic.scene_keys.KEYS` (``schema`` is
+    the table's generic name there, e.g. ``thresholds.<name>``): reading an undeclared key, or a
+    key as another kind than declared, is a programming error (``LookupError``, ``TypeError``),
+    and a key's default is the declared one. A caller passes a default of its own only for a key
+    declared without one (a default that depends on n, such as zeros of length n + 1).
+    """
+
+    def __init__(self, data: Any, path: str, schema: str | None = None):
         if not isinstance(data, Mapping):
             raise ValueError(f"{path or 'scene'}: must be a table (got {_show(data)})")
         self.data = data
         self.path = path
+        self.schema = path if schema is None else schema
         self.used: set[str] = set()
 
     def name(self, key: str) -> str:
         return f"{self.path}.{key}" if self.path else key
 
+    def spec(self, key: str, *kinds: Kind) -> Key:
+        """The declaration of ``key``; ``kinds``: those the caller reads it as."""
+        spec = key_spec(self.schema, key)
+        if kinds and spec.kind not in kinds:
+            raise TypeError(
+                f"the loader reads {spec.dotted} as {' or '.join(kinds)}, declared {spec.kind}"
+            )
+        return spec
+
     def has(self, key: str) -> bool:
+        self.spec(key)
         return key in self.data
 
-    def raw(self, key: str, default: Any = ...) -> Any:
+    def raw(self, key: str, default: Any = ..., *, kinds: tuple[Kind, ...] = ()) -> Any:
+        spec = self.spec(key, *kinds)
+        if default is not ... and spec.default is not NO_DEFAULT:
+            raise LookupError(
+                f"{spec.dotted}: has a declared default; the loader must not pass one"
+            )
+        if default is ... and spec.default is not NO_DEFAULT:
+            default = spec.default
         self.used.add(key)
         if key not in self.data:
             if default is ...:
@@ -448,36 +488,43 @@ class _Table:
             return default
         return self.data[key]
 
-    def table(self, key: str, required: bool = True) -> _Table | None:
+    def table(self, key: str) -> _Table | None:
+        """The sub-table ``key``; None when it is absent and optional, refused when required."""
+        spec = self.spec(key, Kind.TABLE)
         if key not in self.data:
-            if required:
+            if spec.need is Need.REQUIRED:
                 raise ValueError(f"{self.name(key)}: missing required table")
             self.used.add(key)
             return None
-        return _Table(self.raw(key), self.name(key))
+        return _Table(self.raw(key), self.name(key), generic_table(self.schema, key))
+
+    def table_or_empty(self, key: str) -> _Table:
+        """The sub-table ``key``, or an empty one (every key at its default) when it is absent."""
+        t = self.table(key)
+        return t if t is not None else _Table({}, self.name(key), generic_table(self.schema, key))
 
     def number(self, key: str, default: Any = ..., *, positive=False, nonneg=False) -> float:
-        v = self.raw(key, default)
+        v = self.raw(key, default, kinds=(Kind.NUMBER,))
         return _as_number(v, self.name(key), positive=positive, nonneg=nonneg)
 
     def vector(self, key: str, length: int | None = None, default: Any = ..., **kw) -> np.ndarray:
-        v = self.raw(key, default)
+        v = self.raw(key, default, kinds=_VECTOR_KINDS)
         return _as_vector(v, self.name(key), length, **kw)
 
     def string(self, key: str, default: Any = ...) -> str:
-        v = self.raw(key, default)
+        v = self.raw(key, default, kinds=(Kind.STRING,))
         if not isinstance(v, str):
             raise ValueError(f"{self.name(key)}: must be a string (got {_show(v)})")
         return v
 
     def boolean(self, key: str, default: Any = ...) -> bool:
-        v = self.raw(key, default)
+        v = self.raw(key, default, kinds=(Kind.BOOLEAN,))
         if not isinstance(v, bool):
             raise ValueError(f"{self.name(key)}: must be true or false (got {_show(v)})")
         return v
 
     def enum(self, key: str, kind: type, default: Any = ...):
-        v = self.raw(key, default)
+        v = self.raw(key, default, kinds=(Kind.CHOICE,))
         if isinstance(v, kind):
             return v
         try:
@@ -593,19 +640,33 @@ def _indices(v: Any, name: str, upper: int) -> tuple[int, ...]:
 
 
 def load_scene(path: str | Path) -> Scene:
-    """Read and validate a scene file (TOML). Raises ``ValueError`` naming the field on bad input.
+    """Read and validate a scene file (TOML), or a built-in scene by name. Raises ``ValueError``
+    naming the field on bad input.
 
-    Only a regular file of at most :data:`MAX_SCENE_BYTES` is read (a FIFO, a device such as
-    ``/dev/zero`` or a directory is refused without reading it); messages name ``path`` as given.
+    ``path`` is a file when one exists there, else the name of a built-in scene
+    (``"paper_example1"``, see :func:`analytic.builtin_scenes.builtin_scene_names`). Only a regular
+    file of at most :data:`MAX_SCENE_BYTES` is read (a FIFO, a device such as ``/dev/zero`` or a
+    directory is refused without reading it); messages name ``path`` as given.
     """
     p = Path(path)
     given = str(path)
+    source = given
     try:
         st = os.stat(p)
     except FileNotFoundError:
-        raise ValueError(f"scene: file not found (got {given!r})") from None
+        builtin = builtin_scene_path(given)
+        if builtin is None:
+            raise ValueError(
+                f"scene: file not found and no built-in scene of that name (got {given!r}; "
+                f"built-in: {', '.join(builtin_scene_names())})"
+            ) from None
+        p = builtin
+        source = str(builtin)
+        st = os.stat(p)
     except OSError as exc:
         raise ValueError(f"scene: cannot read {given!r} ({exc.strerror or exc})") from None
+    except ValueError as exc:  # a NUL byte in the path
+        raise ValueError(f"scene: cannot look up {given!r} ({exc})") from None
     if stat.S_ISDIR(st.st_mode):
         raise ValueError(f"scene: is a directory, not a scene file (got {given!r})")
     if not stat.S_ISREG(st.st_mode):
@@ -635,7 +696,7 @@ def load_scene(path: str | Path) -> Scene:
     except ValueError as exc:  # e.g. an integer literal of more than 4300 digits
         msg = str(exc).splitlines()[0].split(";")[0] if str(exc) else type(exc).__name__
         raise ValueError(f"scene: cannot parse {given!r} ({msg})") from None
-    return scene_from_dict(data, source=given)
+    return scene_from_dict(data, source=source)
 
 
 def scene_from_dict(data: Mapping[str, Any], source: str = "") -> Scene:
@@ -644,8 +705,8 @@ def scene_from_dict(data: Mapping[str, Any], source: str = "") -> Scene:
 
     meta = top.table("scene")
     name = meta.string("name")
-    description = meta.string("description", "")
-    effects_raw = meta.raw("effects")
+    description = meta.string("description")
+    effects_raw = meta.raw("effects", kinds=(Kind.CHOICES,))
     if not isinstance(effects_raw, list):
         raise ValueError(
             f"scene.effects: must be a list of effect names (got {_show(effects_raw)})"
@@ -663,37 +724,34 @@ def scene_from_dict(data: Mapping[str, Any], source: str = "") -> Scene:
 
     body = _parse_body(top.table("body"))
     rod = _parse_rod(top.table("rod"))
-    masses = _parse_masses(top.table("masses", required=False), rod.axis)
+    masses = _parse_masses(top.table("masses"), rod.axis)
     n = masses.n
-    springs = _parse_springs(top.table("springs", required=False), n)
+    springs = _parse_springs(top.table("springs"), n)
 
-    g_tab = top.table("gravity", required=False)
-    gravity = _frozen(np.array([0.0, 0.0, -9.81]))
+    g_tab = top.table("gravity")
+    gravity = _frozen(np.array(DEFAULT_GRAVITY))
     if g_tab is not None:
         gravity = g_tab.vector("vector", 3)
         g_tab.finish()
 
     initial = _parse_initial(top.table("initial"), n)
 
-    s_tab = top.table("stabilization", required=False)
-    stab = Stabilization()
-    if s_tab is not None:
-        stab = Stabilization(
-            delta1=s_tab.number("delta1", 0.5, nonneg=True),
-            delta2=s_tab.number("delta2", 8.0, nonneg=True),
-        )
-        s_tab.finish()
+    s_tab = top.table_or_empty("stabilization")
+    stab = Stabilization(
+        delta1=s_tab.number("delta1", nonneg=True), delta2=s_tab.number("delta2", nonneg=True)
+    )
+    s_tab.finish()
 
-    control = _parse_control(top.table("control", required=False), n)
-    ext = _parse_external_torque(top.table("external_torque", required=False))
-    solver = _parse_solver(top.table("solver", required=False))
-    output = _parse_output(top.table("output", required=False))
-    mj = _parse_mujoco(top.table("mujoco", required=False))
+    control = _parse_control(top.table_or_empty("control"), n)
+    ext = _parse_external_torque(top.table("external_torque"))
+    solver = _parse_solver(top.table_or_empty("solver"))
+    output = _parse_output(top.table_or_empty("output"))
+    mj = _parse_mujoco(top.table_or_empty("mujoco"))
 
     # [thresholds] belongs to later layers (the comparison's names are checked where they are
     # resolved, validation.thresholds); here its shape: numbers, or {value, reason} tables.
     extra = {}
-    th = top.table("thresholds", required=False)
+    th = top.table("thresholds")
     if th is not None:
         extra["thresholds"] = _parse_thresholds(th)
     top.finish()
@@ -720,7 +778,37 @@ def scene_from_dict(data: Mapping[str, Any], source: str = "") -> Scene:
     _check_effects_consistent(scene)
     _check_horizon_fits_mujoco(scene)
     _warn_unused_tables(data, scene)
+    _warn_masses_off_the_drawn_rod(scene)
     return scene
+
+
+def _warn_masses_off_the_drawn_rod(scene: Scene) -> None:
+    """One warning (one line) naming each ``masses.p_e`` and ``initial.p`` beyond the drawn rod.
+
+    The rod of ``[body.shape]`` is a picture: the dynamics let the masses slide on an unbounded
+    line (no end stops), so a mass beyond the drawing is allowed, but the picture would show it
+    floating off the rod, which is usually a mistake in the scene (a length or a sign).
+    """
+    shape = scene.body.shape
+    if shape.kind is ShapeKind.NONE or not scene.n:
+        return
+    lo, hi = shape.rod_start, shape.rod_start + shape.rod_length
+    off = [
+        f"{name}[{i}] = {x:g} m"
+        for name, values in (("masses.p_e", scene.masses.p_e), ("initial.p", scene.initial.p))
+        for i, x in enumerate(values.tolist())
+        if not lo <= x <= hi
+    ]
+    if not off:
+        return
+    where = f"{lo:g} m to {hi:g} m from O'"
+    warnings.warn(
+        f"{', '.join(off)}: {'lies' if len(off) == 1 else 'lie'} beyond the drawn rod "
+        f"(body.shape.rod_start = {lo:g} m, rod_length = {shape.rod_length:g} m: {where}); the "
+        "rod's length is a picture only, the masses slide on an unbounded line",
+        UserWarning,
+        stacklevel=3,
+    )
 
 
 # Tables and keys that only an effect reads: given while the effect is off, they are ignored.
@@ -766,11 +854,11 @@ def _parse_thresholds(t: _Table) -> dict[str, Any]:
     out: dict[str, Any] = {}
     for key in list(t.data):
         name = t.name(key)
-        v = t.raw(key)
+        v = t.raw(key, kinds=(Kind.NUMBER_OR_VALUE_TABLE, Kind.NUMBER_OR_STRING))
         if key.startswith("hard_"):
             out[key] = v if isinstance(v, str) else _as_number(v, name, nonneg=True)
         elif isinstance(v, Mapping):
-            sub = _Table(v, name)
+            sub = _Table(v, name, generic_table(t.schema, key))
             sub.used.update(("value", "reason"))
             sub.finish()  # an unknown key first: a misspelt "value" is named as such
             entry = {"value": sub.number("value", nonneg=True)}
@@ -797,7 +885,7 @@ def _parse_body(t: _Table) -> Body:
             f"body.inertia: principal moments violate the triangle inequality (got {inertia.tolist()!r})"
         )
     shape = BodyShape()
-    st = t.table("shape", required=False)
+    st = t.table("shape")
     if st is not None:
         shape = _parse_shape(st)
     t.finish()
@@ -809,11 +897,13 @@ def _parse_shape(t: _Table) -> BodyShape:
     kw: dict[str, Any] = {"kind": kind}
     if kind is ShapeKind.BOX_AND_ROD:
         kw["box_half_sizes"] = t.vector("box_half_sizes", 3, positive=True)
-        kw["box_center"] = t.vector("box_center", 3, _frozen(np.zeros(3)))
+        kw["box_center"] = t.vector("box_center", 3)
         if t.has("box_rotation"):
             kw["box_rotation"] = _frozen(
                 _nearest_rotation(
-                    _as_matrix(t.raw("box_rotation"), t.name("box_rotation"), 3, 3),
+                    _as_matrix(
+                        t.raw("box_rotation", kinds=(Kind.MATRIX3,)), t.name("box_rotation"), 3, 3
+                    ),
                     t.name("box_rotation"),
                 )
             )
@@ -823,9 +913,9 @@ def _parse_shape(t: _Table) -> BodyShape:
         kw["cylinder_thickness"] = t.number("cylinder_thickness", positive=True)
         kw["cylinder_axis"] = _direction(t.vector("cylinder_axis", 3), t.name("cylinder_axis"))
     if kind is not ShapeKind.NONE:
-        kw["rod_radius"] = t.number("rod_radius", 0.05, positive=True)
-        kw["rod_start"] = t.number("rod_start", 0.0)
-        kw["rod_length"] = t.number("rod_length", 1.0, positive=True)
+        kw["rod_radius"] = t.number("rod_radius", positive=True)
+        kw["rod_start"] = t.number("rod_start")
+        kw["rod_length"] = t.number("rod_length", positive=True)
     t.finish()
     return BodyShape(**kw)
 
@@ -841,7 +931,7 @@ def _parse_masses(t: _Table | None, axis: np.ndarray) -> Masses:
     if t is None:
         z = _frozen(np.zeros(0))
         return Masses(mass=z, p_e=z, inertia=_frozen(np.zeros((0, 3, 3))))
-    raw_m = t.raw("mass")
+    raw_m = t.raw("mass", kinds=(Kind.VECTOR_N,))
     if isinstance(raw_m, list | tuple) and len(raw_m) > MAX_MASSES:
         raise ValueError(
             f"{t.name('mass')}: at most {MAX_MASSES:,} masses (got a list of {len(raw_m):,})"
@@ -889,7 +979,7 @@ def _parse_masses(t: _Table | None, axis: np.ndarray) -> Masses:
                 )
         inertia = it[:, None, None] * (np.eye(3) - aa)[None] + ia[:, None, None] * aa[None]
     elif has_full:
-        raw = t.raw("inertia_body")
+        raw = t.raw("inertia_body", kinds=(Kind.MATRICES_N,))
         if not isinstance(raw, list) or len(raw) != n:
             raise ValueError(
                 f"{t.name('inertia_body')}: must hold {n} 3x3 matrices (got {_show(raw)})"
@@ -930,9 +1020,9 @@ def _parse_springs(t: _Table | None, n: int) -> Springs:
 
 
 def _parse_initial(t: _Table, n: int) -> InitialState:
-    R = t.vector("R", 3, _frozen(np.zeros(3)))
-    Rdot = t.vector("Rdot", 3, _frozen(np.zeros(3)))
-    omega = t.vector("omega", 3, _frozen(np.zeros(3)))
+    R = t.vector("R", 3)
+    Rdot = t.vector("Rdot", 3)
+    omega = t.vector("omega", 3)
     p = t.vector("p", n) if n else t.vector("p", 0, _frozen(np.zeros(0)))
     pdot = t.vector("pdot", n, _frozen(np.zeros(n)))
     u = _parse_attitude(t.table("attitude"))
@@ -946,7 +1036,7 @@ def _parse_attitude(t: _Table) -> np.ndarray:
     ``S(u(0)) = Rot(axis, angle) · reference_from_principal`` (Example 1 needs the principal -> block
     rotation ``P`` of Eq. 63 here: ``docs/errata.md``, item 6).
     """
-    allow_off = t.boolean("allow_off_manifold", False)
+    allow_off = t.boolean("allow_off_manifold")
     if t.has("quaternion"):
         for k in ("axis", "angle", "angle_deg", "reference_from_principal"):
             if t.has(k):
@@ -976,7 +1066,8 @@ def _parse_attitude(t: _Table) -> np.ndarray:
     ref = np.eye(3)
     if t.has("reference_from_principal"):
         name = t.name("reference_from_principal")
-        ref = _nearest_rotation(_as_matrix(t.raw("reference_from_principal"), name, 3, 3), name)
+        raw_ref = t.raw("reference_from_principal", kinds=(Kind.MATRIX3,))
+        ref = _nearest_rotation(_as_matrix(raw_ref, name, 3, 3), name)
     t.finish()
     if allow_off:
         raise ValueError(f"{t.name('allow_off_manifold')}: only meaningful with a quaternion")
@@ -985,25 +1076,19 @@ def _parse_attitude(t: _Table) -> np.ndarray:
     return _frozen(u / np.linalg.norm(u))
 
 
-def _parse_control(t: _Table | None, n: int) -> Control:
-    if t is None:
-        return Control()
-    weighting = t.enum("weighting", Weighting, Weighting.M_INV)
+def _parse_control(t: _Table, n: int) -> Control:
+    weighting = t.enum("weighting", Weighting)
     omega = None
-    ot = t.table("omega", required=False)
+    ot = t.table("omega")
     if ot is not None:
-        comps = (
-            _indices(ot.raw("components"), ot.name("components"), 3)
-            if ot.has("components")
-            else (0, 1, 2)
-        )
+        comps = _indices(ot.raw("components", kinds=(Kind.INDICES,)), ot.name("components"), 3)
         b = ot.vector("b", 3)
         sigma = ot.vector("sigma", 3)
         k = len(comps)
         if ot.has("gamma") and ot.has("gain"):
             raise ValueError(f"{ot.name('gain')}: give gamma or gain, not both")
         if ot.has("gain"):
-            gain = _as_matrix(ot.raw("gain"), ot.name("gain"), k, k)
+            gain = _as_matrix(ot.raw("gain", kinds=(Kind.MATRIX_K,)), ot.name("gain"), k, k)
             if (
                 not np.allclose(gain, gain.T, rtol=1e-12, atol=0)
                 or np.min(np.linalg.eigvalsh(gain)) <= 0
@@ -1016,12 +1101,12 @@ def _parse_control(t: _Table | None, n: int) -> Control:
         ot.finish()
         omega = OmegaTrack(components=comps, b=b, sigma=sigma, gain=_frozen(gain))
     masses = None
-    mt = t.table("masses", required=False)
+    mt = t.table("masses")
     if mt is not None:
         if n == 0:
             raise ValueError(f"{mt.path}: there are no masses to control (n = 0)")
         idx = (
-            _indices(mt.raw("indices"), mt.name("indices"), n)
+            _indices(mt.raw("indices", kinds=(Kind.INDICES,)), mt.name("indices"), n)
             if mt.has("indices")
             else tuple(range(n))
         )
@@ -1041,46 +1126,37 @@ def _parse_control(t: _Table | None, n: int) -> Control:
 def _parse_external_torque(t: _Table | None) -> ExternalTorque | None:
     if t is None:
         return None
-    z = _frozen(np.zeros(3))
     et = ExternalTorque(
-        constant=t.vector("constant", 3, z),
-        amplitude=t.vector("amplitude", 3, z),
-        frequency=t.number("frequency", 0.0),
+        constant=t.vector("constant", 3),
+        amplitude=t.vector("amplitude", 3),
+        frequency=t.number("frequency"),
     )
     t.finish()
     return et
 
 
-def _parse_solver(t: _Table | None) -> SolverSettings:
-    if t is None:
-        return SolverSettings()
+def _parse_solver(t: _Table) -> SolverSettings:
     s = SolverSettings(
-        method=t.enum("method", SolverMethod, SolverMethod.DOP853),
-        rtol=t.number("rtol", 1e-12, positive=True),
-        atol=t.number("atol", 1e-13, positive=True),
+        method=t.enum("method", SolverMethod),
+        rtol=t.number("rtol", positive=True),
+        atol=t.number("atol", positive=True),
         max_step=t.number("max_step", positive=True) if t.has("max_step") else math.inf,
     )
     t.finish()
     return s
 
 
-def _parse_output(t: _Table | None) -> OutputSettings:
-    if t is None:
-        return OutputSettings()
-    o = OutputSettings(
-        t_end=t.number("t_end", 20.0, positive=True), rate=t.number("rate", 100.0, positive=True)
-    )
+def _parse_output(t: _Table) -> OutputSettings:
+    o = OutputSettings(t_end=t.number("t_end", positive=True), rate=t.number("rate", positive=True))
     t.finish()
     return o
 
 
-def _parse_mujoco(t: _Table | None) -> MujocoSettings:
-    if t is None:
-        return MujocoSettings()
+def _parse_mujoco(t: _Table) -> MujocoSettings:
     m = MujocoSettings(
-        integrator=t.enum("integrator", MjIntegrator, MjIntegrator.RK4),
-        timestep=t.number("timestep", 2.5e-4, positive=True),
-        spring_model=t.enum("spring_model", SpringModel, SpringModel.TENDON),
+        integrator=t.enum("integrator", MjIntegrator),
+        timestep=t.number("timestep", positive=True),
+        spring_model=t.enum("spring_model", SpringModel),
     )
     t.finish()
     return m

@@ -1,6 +1,6 @@
 """Regenerate the checked-in MJCF files of the paper scenes: ``python -m model_xml.regenerate``.
 
-Each ``validation/scenes/<name>.toml`` listed in :data:`PAPER_SCENES` becomes
+Each built-in scene ``analytic/scenes/<name>.toml`` listed in :data:`PAPER_SCENES` becomes
 ``model_xml/<name>.xml`` (full precision, see :mod:`model_xml.mjcf_text`).
 """
 
@@ -9,6 +9,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from analytic.builtin_scenes import BUILTIN_DIR
 from analytic.scene import load_scene
 from model_xml.mjcf_text import to_mjcf
 
@@ -19,11 +20,10 @@ PAPER_SCENES = (
     "paper_example2_controlled",
 )
 XML_DIR = Path(__file__).resolve().parent
-SCENE_DIR = XML_DIR.parent / "validation" / "scenes"
 
 
 def scene_path(name: str) -> Path:
-    return SCENE_DIR / f"{name}.toml"
+    return BUILTIN_DIR / f"{name}.toml"
 
 
 def xml_path(name: str) -> Path:

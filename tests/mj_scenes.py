@@ -12,7 +12,7 @@ import numpy as np
 from analytic.kinematics import udot_of
 from analytic.scene import Scene, load_scene, scene_from_dict
 
-SCENE_DIR = Path(__file__).resolve().parents[1] / "validation" / "scenes"
+SCENE_DIR = Path(__file__).resolve().parents[1] / "analytic" / "scenes"
 PAPER = (
     "paper_example1",
     "paper_example1_controlled",

@@ -75,7 +75,7 @@ def test_bad_scene_file_in_a_subprocess(tmp_path):
 # Bad input is caught before any work: one line naming the field, exit 2, no output directory
 # ------------------------------------------------------------------------------------------------
 
-PAPER1 = Path(__file__).resolve().parents[1] / "validation" / "scenes" / "paper_example1.toml"
+PAPER1 = Path(__file__).resolve().parents[1] / "analytic" / "scenes" / "paper_example1.toml"
 
 
 def _scene_file(tmp_path, replace=(), append="") -> str:

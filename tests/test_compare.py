@@ -22,7 +22,7 @@ from validation.compare import (
 )
 from validation.thresholds import DEFAULTS, thresholds_for
 
-SCENES = Path(__file__).resolve().parents[1] / "validation" / "scenes"
+SCENES = Path(__file__).resolve().parents[1] / "analytic" / "scenes"
 T_END = 0.5
 
 

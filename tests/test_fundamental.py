@@ -30,7 +30,7 @@ except ImportError:  # tests/ made a package
     from tests.random_scenes import FORCE_EFFECTS, random_scene_dict, random_state, rel_err
 
 RTOL = 1e-10
-SCENES = Path(__file__).resolve().parents[1] / "validation" / "scenes"
+SCENES = Path(__file__).resolve().parents[1] / "analytic" / "scenes"
 WEIGHTINGS = (Weighting.M_INV, Weighting.M_INV2, Weighting.IDENTITY)
 
 

@@ -34,7 +34,7 @@ from validation.outputs import (
 )
 
 ROOT = Path(__file__).resolve().parents[1]
-SCENE = ROOT / "validation" / "scenes" / "paper_example1.toml"
+SCENE = ROOT / "analytic" / "scenes" / "paper_example1.toml"
 
 
 def _snapshot(d: Path) -> dict[str, bytes]:

@@ -19,7 +19,7 @@ import mj_bridge
 from analytic import TumblingModel, scene_from_dict
 from tests.mj_scenes import random_scene, random_state
 
-SCENES = Path(__file__).resolve().parents[1] / "validation" / "scenes"
+SCENES = Path(__file__).resolve().parents[1] / "analytic" / "scenes"
 PAPER = [
     "paper_example1",
     "paper_example1_controlled",

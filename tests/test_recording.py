@@ -17,7 +17,7 @@ from validation.compare import compare
 from validation.recording import TIMELINE, write_recording
 from validation.validate import write_demo
 
-SCENES = Path(__file__).resolve().parents[1] / "validation" / "scenes"
+SCENES = Path(__file__).resolve().parents[1] / "analytic" / "scenes"
 T_END = 0.4
 
 

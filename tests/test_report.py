@@ -17,7 +17,7 @@ from validation import atomic as atomic_mod
 from validation.compare import compare
 from validation.report import versions, write_atomic, write_report
 
-SCENES = Path(__file__).resolve().parents[1] / "validation" / "scenes"
+SCENES = Path(__file__).resolve().parents[1] / "analytic" / "scenes"
 T_END = 0.3
 PNG = b"\x89PNG\r\n\x1a\n"
 

@@ -436,3 +436,87 @@ def test_scenes_at_the_bounds_compile_and_beyond_them_mujoco_refuses():
         scene_from_dict(raw)
     raw["masses"]["inertia_body"][0] = np.diag([1.0, 1.0, 2.0]).tolist()
     assert _compiles(scene_from_dict(raw))
+
+
+# ------------------------------------------------------------------------------------------------
+# Built-in scenes by name
+# ------------------------------------------------------------------------------------------------
+
+
+def test_load_scene_accepts_every_builtin_name_the_command_line_lists():
+    """``analytic.load_scene(name)`` loads the same file as the command line's lookup, for every
+    built-in name outside the hard-case suite (which is the validation layer's, ``hard/<name>``)."""
+    from analytic import load_scene as api_load_scene
+    from analytic.builtin_scenes import builtin_scene_names
+    from validation.scenes import HARD_PREFIX, builtin_names
+
+    names = builtin_scene_names()
+    assert {"paper_example1", "paper_example2_controlled"} <= set(names)
+    assert [n for n in builtin_names() if not n.startswith(HARD_PREFIX)] == names
+    for name in names:
+        by_name = api_load_scene(name)
+        assert by_name.name == name
+        assert Path(by_name.source) == scene_path(name)  # the file the CLI resolves
+        assert api_load_scene(f"{name}.toml").name == name
+        assert api_load_scene(Path(name)).name == name  # validation.validate passes a Path
+    with pytest.raises(ValueError, match=r"^scene: file not found and no built-in scene") as exc:
+        load_scene("hard/zero_gravity")
+    assert "paper_example1" in str(exc.value) and "\n" not in str(exc.value)
+    assert scene_path("hard/zero_gravity").name == "zero_gravity.toml"  # the CLI's
+
+
+def test_builtin_names_are_looked_up_never_joined_onto_a_path(tmp_path, monkeypatch):
+    """A name that walks out of the scenes' directory is no built-in scene; a file at the given
+    path wins over a built-in of the same name."""
+    from analytic.builtin_scenes import BUILTIN_DIR, builtin_scene_path
+
+    monkeypatch.chdir(tmp_path)
+    for name in ("../scenes/paper_example1", "scenes/paper_example1", str(BUILTIN_DIR), "a\0b"):
+        assert builtin_scene_path(name) is None
+        with pytest.raises(ValueError, match=r"^scene: "):
+            load_scene(name)
+    text = scene_path("paper_example2").read_text(encoding="utf-8")
+    Path("paper_example1").write_text(text, encoding="utf-8")
+    assert load_scene("paper_example1").name == "paper_example2"
+
+
+# ------------------------------------------------------------------------------------------------
+# Masses off the drawn rod
+# ------------------------------------------------------------------------------------------------
+
+
+def _one_warning(raw: dict) -> list[str]:
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        scene_from_dict(raw)
+    return [str(w.message) for w in caught]
+
+
+def test_masses_beyond_the_drawn_rod_get_one_warning_naming_them():
+    """The rod's length is a picture (the masses slide on an unbounded line): a rest or initial
+    position beyond it loads, with one line naming each field and value and the drawn rod."""
+    raw = _raw("paper_example1")  # rod drawn from 0 to 16 m along a from O'
+    assert _one_warning(copy.deepcopy(raw)) == []
+    raw["masses"]["p_e"] = [4.0, 17.5]
+    raw["initial"]["p"] = [-0.5, 11.0]
+    (msg,) = _one_warning(raw)
+    assert msg == (
+        "masses.p_e[1] = 17.5 m, initial.p[0] = -0.5 m: lie beyond the drawn rod "
+        "(body.shape.rod_start = 0 m, rod_length = 16 m: 0 m to 16 m from O'); the rod's length "
+        "is a picture only, the masses slide on an unbounded line"
+    )
+    raw["initial"]["p"] = [5.0, 11.0]
+    (msg,) = _one_warning(raw)
+    assert msg.startswith("masses.p_e[1] = 17.5 m: lies beyond the drawn rod")
+    # the same scene without a picture has no drawn rod to leave
+    del raw["body"]["shape"]
+    assert _one_warning(raw) == []
+
+
+def test_no_builtin_scene_draws_a_mass_off_its_rod():
+    from validation.scenes import builtin_names
+
+    for name in builtin_names():
+        with warnings.catch_warnings():
+            warnings.filterwarnings("error", message=".*beyond the drawn rod")
+            load_scene(scene_path(name))

@@ -242,6 +242,18 @@ def cmd_bench(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_scene_reference(args: argparse.Namespace) -> int:
+    from validation.atomic import write_text
+    from validation.scene_reference import render
+
+    if args.out:
+        write_text(Path(args.out), render())
+        print(f"wrote {args.out}")
+    else:
+        sys.stdout.write(render())
+    return 0
+
+
 def _version() -> str:
     """The installed distribution's version ("unknown" when run from a bare checkout)."""
     from importlib import metadata
@@ -375,6 +387,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", help="also write OUT/bench.json")
     p.add_argument("--skip-long", action="store_true", help="skip the 60 s Example 1 goal")
     p.set_defaults(func=cmd_bench)
+
+    p = sub.add_parser(
+        "scene-reference",
+        help="print the scene format's reference (every key; docs/scene-format.md)",
+        description="Render the reference of the scene format, every key with its type, unit, "
+        "default and meaning, from the loader's own declarations (markdown, on stdout).",
+    )
+    p.add_argument("--out", help="write it to this file instead")
+    p.set_defaults(func=cmd_scene_reference)
     return parser
 
 

@@ -57,10 +57,9 @@ from model_xml.state import mujoco_to_paper_acc
 from validation.atomic import write_text
 from validation.compare import attitude_angle, mass_error_reference, omega_error_reference
 from validation.outputs import output_run
-from validation.scenes import SCENES_DIR
+from validation.scenes import HARD_DIR, SCENES_DIR
 from validation.summary import drift_figures
 
-HARD_DIR = SCENES_DIR / "hard"
 
 ANALYTIC, MUJOCO, PINOCCHIO = Engine.ANALYTIC.value, Engine.MUJOCO.value, Engine.PINOCCHIO.value
 REFERENCE = ANALYTIC

@@ -1,35 +1,57 @@
-"""Built-in scenes shipped with the package, found by name or by path."""
+"""Scenes by name or by path: the built-in scenes and the hard-case suite's.
+
+The built-in scenes (the paper's examples, the spacecraft with propellant slosh) live with the
+scene format in ``analytic/scenes/`` (:mod:`analytic.builtin_scenes`), so
+``analytic.load_scene("paper_example1")`` finds them too. The hard-case suite's scenes are this
+layer's (``validation/scenes/hard/``, with the criteria of :mod:`validation.hard_cases`); the
+command line also accepts them, as ``hard/<name>``.
+"""
 
 from __future__ import annotations
 
 from pathlib import Path
 
+from analytic.builtin_scenes import BUILTIN_DIR, builtin_scene_names, builtin_scene_path
 from analytic.scene import Scene, load_scene
 from validation.thresholds import thresholds_for
 
-SCENES_DIR = Path(__file__).resolve().parent / "scenes"
+SCENES_DIR = BUILTIN_DIR
+"""The built-in scenes (``analytic/scenes``)."""
+HARD_DIR = Path(__file__).resolve().parent / "scenes" / "hard"
+"""The hard-case suite's scenes."""
+HARD_PREFIX = "hard/"
 DEFAULT_SIMULATE_SCENE = "paper_example1"
 DEFAULT_VALIDATE_SCENE = "paper_example1_controlled"
 
 
+def _hard_files() -> list[Path]:
+    return sorted(HARD_DIR.glob("*.toml"))
+
+
 def builtin_names() -> list[str]:
-    """Names of the built-in scenes (``validation/scenes/*.toml`` and ``hard/*.toml``)."""
-    names = [p.stem for p in sorted(SCENES_DIR.glob("*.toml"))]
-    names += [f"hard/{p.stem}" for p in sorted((SCENES_DIR / "hard").glob("*.toml"))]
-    return names
+    """Names the command line accepts: the built-in scenes, then ``hard/<name>`` for each hard case."""
+    return builtin_scene_names() + [f"{HARD_PREFIX}{p.stem}" for p in _hard_files()]
 
 
 def scene_path(name_or_path: str) -> Path:
-    """A path as given if it exists, else the built-in scene of that name."""
+    """A path as given if it exists, else the built-in or hard-case scene of that name.
+
+    A name is matched against the list of scene files, never joined onto a directory.
+    """
     p = Path(name_or_path)
     try:
         if p.exists():
             return p
     except (OSError, ValueError) as exc:  # a name too long for the file system, a NUL byte
         raise ValueError(f"scene: cannot look up {name_or_path!r} ({exc})") from None
-    candidate = SCENES_DIR / f"{name_or_path.removesuffix('.toml')}.toml"
-    if candidate.exists():
-        return candidate
+    found = builtin_scene_path(name_or_path)
+    if found is not None:
+        return found
+    stem = name_or_path.removesuffix(".toml")
+    if stem.startswith(HARD_PREFIX):
+        for h in _hard_files():
+            if h.stem == stem.removeprefix(HARD_PREFIX):
+                return h
     raise ValueError(
         f"scene: no file and no built-in scene named {name_or_path!r} "
         f"(built-in: {', '.join(builtin_names())})"
