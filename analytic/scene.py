@@ -12,7 +12,7 @@ loaded records hold 0-based indices.
 
 Every key, with its type, unit, default and meaning, is declared in :mod:`analytic.scene_keys`
 (rendered as ``docs/scene-format.md``); ``analytic/scenes/paper_example1.toml`` is a fully commented
-example of every table.
+example of every table, ``analytic/scenes/spacecraft_slosh.toml`` one of a system beyond the paper.
 """
 
 from __future__ import annotations

@@ -451,7 +451,7 @@ def test_load_scene_accepts_every_builtin_name_the_command_line_lists():
     from validation.scenes import HARD_PREFIX, builtin_names
 
     names = builtin_scene_names()
-    assert {"paper_example1", "paper_example2_controlled"} <= set(names)
+    assert {"paper_example1", "paper_example2_controlled", "spacecraft_slosh"} <= set(names)
     assert [n for n in builtin_names() if not n.startswith(HARD_PREFIX)] == names
     for name in names:
         by_name = api_load_scene(name)
