@@ -60,7 +60,6 @@ from validation.outputs import output_run
 from validation.scenes import HARD_DIR, SCENES_DIR
 from validation.summary import drift_figures
 
-
 ANALYTIC, MUJOCO, PINOCCHIO = Engine.ANALYTIC.value, Engine.MUJOCO.value, Engine.PINOCCHIO.value
 REFERENCE = ANALYTIC
 """The plant the others are compared with (between-engine checks)."""
