@@ -216,11 +216,10 @@ def test_spring_actuator_trajectory_matches_tendon_springs():
 def test_control_above_mjmaxval_is_applied():
     """Rod forces above mjMAXVAL (1e10 N, where MuJoCo zeroes every ctrl) still reach the plant:
     the control actuators' power-of-two gear keeps ctrl small (hard case: masses 1e3 x m_BR)."""
-    from mj_scenes import SCENE_DIR
-
     from analytic.scene import load_scene
+    from validation.scenes import HARD_DIR
 
-    scene = load_scene(SCENE_DIR / "hard" / "heavy_masses.toml")
+    scene = load_scene(HARD_DIR / "heavy_masses.toml")
     q, qd = scene.initial.q0(), scene.initial.qdot0()
     ref, c = TumblingModel(scene).acceleration(0.0, q, qd)
     assert np.max(np.abs(c.rod_forces)) > mujoco.mjMAXVAL
