@@ -4,6 +4,7 @@ Koganti & Udwadia, "Dynamics and Precision Control of Tumbling Multibody Systems
 Control, and Dynamics 40(3), 2017. Notation and equation numbers as in the paper.
 """
 
+from analytic.builtin_scenes import builtin_scene_names
 from analytic.effects import Effect, SolverMethod, Weighting
 from analytic.model import ControlOutput, TumblingModel
 from analytic.scene import Scene, load_scene, scene_from_dict
@@ -22,6 +23,7 @@ __all__ = [
     "Trajectory",
     "TumblingModel",
     "Weighting",
+    "builtin_scene_names",
     "load_scene",
     "scene_from_dict",
     "simulate",
