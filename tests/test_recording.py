@@ -19,7 +19,7 @@ from analytic.scene import load_scene
 from analytic.simulate import simulate
 from analytic.trajectory import Engine, Trajectory
 from validation.compare import Group, compare
-from validation.recording import TIMELINE, log_run, new_stream, write_recording
+from validation.recording import TIMELINE, log_run, narrative_for, new_stream, write_recording
 from validation.rrd_layout import difference_title, legend_markdown, overlay_title
 from validation.rrd_plots import plot_of, series_path
 from validation.rrd_style import power_of_ten, unit_text
@@ -423,7 +423,10 @@ def test_demo_has_four_narrated_steps(tmp_path):
         text = narrative(store, f"/{step.prefix}/narrative")
         assert text.startswith(step.narrative)
         # the demo's recording states its arrow scales and its difference view's factor
-        assert "m per rad/s" in text and "m per N·m" in text and "difference ×" in text
+        assert "m per rad/s" in text and "difference ×" in text
+        uncontrolled = step.scene == "paper_example1"  # steps 1 and 4: no control at all
+        assert ("no control torque arrow (τ = 0 throughout)" in text) == uncontrolled
+        assert ("m per N·m" in text) != uncontrolled
         xyz = np.ravel(column(store, f"/{step.prefix}/world", "ViewCoordinates:xyz", static=True))
         assert xyz.tolist() == [3, 5, 1]
     assert rows(store, "/step1_uncontrolled/world/analytic/body") == 21
@@ -462,3 +465,14 @@ def test_a_diverged_plant_is_drawn_as_is(ex1, tmp_path):
     store = RrdReader(info.path).store()
     assert rows(store, "/world/exaggerated/mujoco/body") == tr.t.shape[0]
     assert f'"{difference_title("analytic", "mujoco", 1.0)}"' in narrative(store, "/narrative")
+
+
+def test_narrative_for_is_what_the_recording_carries(ex1):
+    """The text a document showing the same run can embed (the demo's markdown) is the logged
+    narrative; without its heading, it adds no heading to the document."""
+    scene, tr, cmp, info = ex1
+    plants = [tr, perturbed(tr)]
+    store = RrdReader(info.path).store()
+    assert narrative_for(scene, plants, cmp) == narrative(store, "/narrative")
+    text = narrative_for(scene, plants, cmp, "# Step\n\nBody.", heading=None)
+    assert text.count("#") == 1 and "m per rad/s" in text

@@ -37,6 +37,7 @@ from validation.rrd_layout import (
     default_narrative,
     legend_for,
     legend_markdown,
+    narrative_for,
     with_legend,
 )
 from validation.rrd_plots import log_plots
@@ -154,6 +155,7 @@ __all__ = [
     "legend_for",
     "legend_markdown",
     "log_run",
+    "narrative_for",
     "new_stream",
     "rrd_bytes",
     "with_legend",

@@ -115,43 +115,61 @@ def _difference_text(legend: Legend, plant: str) -> str:
     )
 
 
-def legend_markdown(legend: Legend) -> str:
+LEGEND_HEADING = "## In this recording"
+INVISIBLE_FACTOR = 100.0
+"""A plant whose difference view needs at least this factor differs from the reference by under
+0.3 % of BR's size (DIFFERENCE_TARGET / 100): the bodies overlap in the view with every plant."""
+
+
+def _agreement_text(legend: Legend) -> str:
+    """How close the other plants stay to the reference, and whether that can be seen."""
+    others = legend.plants[1:]
+    known = [p for p in others if math.isfinite(legend.largest.get(p, math.inf))]
+    if not known:
+        return ""
+    if len(known) == 1:
+        text = f" It stays within {legend.largest[known[0]]:.1g} m of it"
+    else:
+        text = (
+            f" They stay within {_and([f'{legend.largest[p]:.1g} m ({p})' for p in known])} of it"
+        )
+    if all(legend.factors.get(p, 1.0) >= INVISIBLE_FACTOR for p in others):
+        return text + ", so the bodies overlap: only the coloured edges show."
+    return text + "."
+
+
+def legend_markdown(legend: Legend, heading: str | None = LEGEND_HEADING) -> str:
     """Markdown describing the views: what each body, arrow, line and plot is, with the arrow
-    scales and the exaggeration factors."""
+    scales and the exaggeration factors; a list under ``heading`` (None: the list alone, e.g. to
+    embed in a document with headings of its own)."""
     names = legend.plants
-    out = ["## In this recording", ""]
+    out = [heading, ""] if heading else []
     if names:
         ref = names[0]
         view = f'"{overlay_title(names)}"'
         if len(names) > 1:
             others = [f"{p} ({_colour(p)})" for p in names[1:]]
-            close = [
-                f"{d:.1g} m ({p})"
-                for p in names[1:]
-                if (d := legend.largest.get(p)) is not None and math.isfinite(d)
-            ]
-            agree = (
-                f" Their largest differences from it are {_and(close)}"
-                if len(close) > 1
-                else f" Its largest difference from it is {close[0]}"
-                if close
-                else ""
-            )
+            agree = _agreement_text(legend)
             out.append(
                 f"- {view} (Z up, gravity along −Z): the {ref} body is solid {_colour(ref)}; "
                 f"{_and(others)} {'are wireframes' if len(others) > 1 else 'is a wireframe'} "
-                f"with translucent masses over it.{agree}"
-                + (", so the bodies overlap: only the coloured edges show. " if close else ". ")
-                + "Show or hide a plant with the eye icon next to `world/<plant>` in the "
-                "blueprint panel."
+                f"with translucent masses over it.{agree} Show or hide a plant with the eye icon "
+                "next to `world/<plant>` in the blueprint panel."
             )
             out += [t for p in names[1:] if (t := _difference_text(legend, p))]
         else:
             out.append(f"- {view} (Z up, gravity along −Z): the {ref} body.")
+    w, tau = legend.arrows.omega, legend.arrows.torque
     out += [
-        f"- Arrows at C, in body axes: green ω ({legend.arrows.omega:.3g} m per rad/s), purple "
-        f"control torque τ ({legend.arrows.torque:.3g} m per N·m); each plant's line is the path "
-        "of its C up to the time cursor.",
+        "- Arrows at C, in body axes: "
+        + (f"green ω ({w:.3g} m per rad/s)" if w > 0 else "no ω arrow (ω = 0 throughout)")
+        + ", "
+        + (
+            f"purple control torque τ ({tau:.3g} m per N·m)"
+            if tau > 0
+            else "no control torque arrow (τ = 0 throughout)"
+        )
+        + "; each plant's line is the path of its C up to the time cursor.",
         "- Plots (one per unit): differences, tracking errors and balance drifts are log10 of "
         "the value in the unit of the plot's title (−9 is 1e-9); an exact zero has no log and "
         "is not plotted. The grey line is the check's threshold: a curve passes while it stays "
@@ -188,12 +206,28 @@ def default_narrative(
     return "\n".join(lines)
 
 
-def with_legend(narrative: str, legend: Legend) -> str:
+def with_legend(narrative: str, legend: Legend, heading: str | None = LEGEND_HEADING) -> str:
     """``narrative`` followed by :func:`legend_markdown` (once)."""
-    text = legend_markdown(legend)
+    text = legend_markdown(legend, heading)
     if text in narrative:
         return narrative
     return f"{narrative.rstrip()}\n\n{text}"
+
+
+def narrative_for(
+    scene: Any,
+    plants: Sequence[Trajectory],
+    comparison: Comparison | None = None,
+    narrative: str = "",
+    heading: str | None = LEGEND_HEADING,
+) -> str:
+    """The text a run's recording carries: ``narrative`` (default :func:`default_narrative`)
+    followed by :func:`legend_markdown` (arrow scales, colours, exaggeration factors, how to read
+    the plots). A document that shows the same run (the demo's ``demo.md``) can embed it."""
+    legend = legend_for(scene, plants, comparison)
+    if not narrative:
+        return default_narrative(scene, plants, comparison, legend=legend)
+    return with_legend(narrative, legend, heading)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -316,6 +350,7 @@ __all__ = [
     "difference_title",
     "legend_for",
     "legend_markdown",
+    "narrative_for",
     "overlay_title",
     "with_legend",
 ]

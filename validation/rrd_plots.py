@@ -53,7 +53,7 @@ class Tab(StrEnum):
 
     DIFFERENCES = "differences between plants"
     TRACKING = "tracking errors"
-    BALANCES = "balances"
+    BALANCES = "invariant drifts"
     CONTROL = "control forces"
 
 
