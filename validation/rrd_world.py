@@ -14,7 +14,8 @@ Entity layout under ``{p0}`` (``""`` for ``run.rrd``, ``/stepN`` in the demo)::
     {p0}/world/exaggerated/{plant}/body      every other plant's body (shape, rod, masses) with
                                              its difference from the reference plant multiplied
                                              by difference_factors()[plant] (inertial, m)
-    {p0}/world/exaggerated/{plant}/offset    Arrows3D from the reference C to the exaggerated C
+    {p0}/world/exaggerated/{plant}/offset    Arrows3D from the reference C to the exaggerated C,
+                                             labelled with the plant and the factor
 
 The blueprint (:mod:`validation.rrd_layout`) shows ``{p0}/world`` without ``exaggerated`` in the
 view with every plant, and each exaggerated plant with the reference body (its entities, not a
@@ -53,6 +54,7 @@ from validation.rrd_style import (
     TIMELINE,
     TORQUE_RGBA,
     plant_color,
+    power_of_ten,
     toward,
 )
 
@@ -447,7 +449,10 @@ def log_world(
             rec.log(
                 f"{root}/offset",
                 rr.Arrows3D.from_fields(
-                    colors=[look.color], radii=[TRAIL_RADIUS * body_size(scene)]
+                    colors=[look.color],
+                    radii=[TRAIL_RADIUS * body_size(scene)],
+                    labels=[f"{name} ×{power_of_ten(k)}"],
+                    show_labels=True,
                 ),
                 static=True,
             )
