@@ -63,6 +63,7 @@ PLANT_STYLE: Mapping[Subject, Mapping[str, Any]] = {
 """Colour, line style and marker of each plant and each pair of plants."""
 
 THRESHOLD_STYLE = {"color": "k", "linestyle": ":", "linewidth": 1.2}
+_SUBSCRIPT = str.maketrans("0123456789", "₀₁₂₃₄₅₆₇₈₉")
 
 RELATIVE_TO: Mapping[str, str] = {
     "control_torque": "max‖τ_ref‖₂",
@@ -225,7 +226,7 @@ def _line(ax, t: np.ndarray, v: np.ndarray, subject: Subject, k: int, label: str
         t,
         v,
         label=label,
-        linewidth=1.2,
+        linewidth=1.0,
         markersize=4,
         markerfacecolor="none",
         markevery=_markevery(len(t), k),
@@ -560,7 +561,7 @@ def figure_control(
             )
             for i in range(n):
                 curves.append(np.abs(other.rod_forces[:k, i] - ref.rod_forces[:k, i]) / f_scale)
-                labels.append(f"|ΔF_{i + 1}| / max|F|")
+                labels.append(f"|ΔF{str(i + 1).translate(_SUBSCRIPT)}| / max|F|")
         limits = sorted(
             {th["control_torque"].value, th["rod_forces"].value}
             if n
