@@ -138,7 +138,7 @@ def cmd_validate(args: argparse.Namespace) -> int:
 
     for c in res.checks:
         if not c.passed:
-            print(f"  failed: {check_sentence(c)}")
+            print(f"  failed: {check_sentence(c, reason=False)}")
     from validation.referee import VerdictKind
 
     for v in res.verdicts:

@@ -35,9 +35,11 @@ def max_abs(values: np.ndarray) -> tuple[float, int]:
     return float(mag[i]), i
 
 
-def check_sentence(check: Check) -> str:
-    """One failed (or passed) check in words: ``analytic: stopped at 9.37 s of 20 s (…)`` for the
-    run's completion, ``position_C = 5.000e-05 m, threshold 1.000e-06 m (…)`` otherwise."""
+def check_sentence(check: Check, reason: bool = True) -> str:
+    """One check in words: ``analytic: stopped at 9.37 s of 20 s (why)`` for a run that did not
+    reach its horizon, ``position_C = 5.000e-05 m > threshold 1.000e-06 m (why)`` otherwise;
+    ``reason=False`` leaves out a threshold's reason (a long sentence) but never why a run
+    stopped."""
     if check.name == COMPLETED:
         who = check.subject.value
         if check.passed:
@@ -46,9 +48,9 @@ def check_sentence(check: Check) -> str:
         return f"{who}: stopped at {reached} of {check.threshold:g} s ({check.reason})"
     unit = "" if check.unit in ("", "1") else f" {check.unit}"
     op = "≤" if check.passed else ">"
+    why = f" ({check.reason})" if reason else ""
     return (
-        f"{check.label} = {check.value:.3e}{unit} {op} threshold {check.threshold:.3e}{unit}"
-        f" ({check.reason})"
+        f"{check.label} = {check.value:.3e}{unit} {op} threshold {check.threshold:.3e}{unit}{why}"
     )
 
 
