@@ -12,10 +12,11 @@ import pytest
 
 from analytic.scene import load_scene
 from analytic.simulate import simulate
-from analytic.trajectory import Engine
+from analytic.trajectory import Engine, RunStatus
 from validation import atomic as atomic_mod
-from validation.compare import compare
-from validation.report import versions, write_atomic, write_report
+from validation.compare import Check, Group, Series, Subject, compare
+from validation.report import SeriesSummary, versions, write_atomic, write_report
+from validation.summary import check_sentence, max_abs, summary_table
 
 SCENES = Path(__file__).resolve().parents[1] / "analytic" / "scenes"
 T_END = 0.3
@@ -58,7 +59,7 @@ def test_planted_offset_fails_with_its_exact_value(planted):
     # every other comparison check passes (the copy is otherwise identical)
     others = [v for k, v in by.items() if k != ("analytic vs mujoco", "position_C")]
     assert all(v["passed"] for v in others)
-    assert doc["summaries"]["diff.position_C"]["max"] == pytest.approx(5e-5, rel=1e-9)
+    assert doc["summaries"]["diff.position_C"]["max_abs"] == pytest.approx(5e-5, rel=1e-9)
     assert doc["run"]["versions"]["numpy"] == np.__version__
 
 
@@ -96,6 +97,79 @@ def test_a_failed_run_writes_what_it_has_marked_failed(scene, traj, tmp_path):
     md = (tmp_path / "report.md").read_text()
     assert "FAILED" in md.splitlines()[0] and "MuJoCo exploded" in md
     assert (tmp_path / "control.png").read_bytes().startswith(PNG)
+
+
+# ----------------------------------------------------------------------------------------------
+# Numbers that do not mislead
+# ----------------------------------------------------------------------------------------------
+
+
+def test_max_of_a_signed_quantity_is_its_largest_magnitude():
+    """A series that is mostly negative: its largest value (2) is not its largest magnitude (7)."""
+    t = np.array([0.0, 0.1, 0.2, 0.3])
+    s = Series(
+        "analytic.rod_force_2",
+        "rod force",
+        "N",
+        Group.CONTROL,
+        Subject.ANALYTIC,
+        t,
+        np.array([2.0, -7.0, -3.0, -1.0]),
+    )
+    m = SeriesSummary.of(s)
+    assert m.max_abs == 7.0 and m.t_max_abs == 0.1
+    assert m.final == -1.0  # the last value keeps its sign
+    assert max_abs(np.array([[3.0, 4.0], [0.0, -4.5]])) == (5.0, 0)  # vectors: Euclidean norm
+
+
+def test_report_states_the_largest_rod_force_magnitude(scene, traj, tmp_path):
+    """The rod force on mass 2 made negative throughout: report.json and report.md give its
+    largest |F_2|, not its largest (negative) value."""
+    F = traj.rod_forces.copy()
+    F[:, 1] = -np.abs(F[:, 1]) - 1.0
+    tr = dataclasses.replace(traj, rod_forces=F)
+    cmp = compare(tr, None, scene, t_end=T_END)
+    write_report(tmp_path, cmp, [tr], {"scene": {"name": scene.name}})
+    doc = json.loads((tmp_path / "report.json").read_text())
+    s = doc["summaries"]["analytic.rod_force_2"]
+    peak = float(np.max(np.abs(F[:, 1])))
+    assert s["max_abs"] == pytest.approx(peak, rel=1e-12) and s["max_abs"] > 0 > np.max(F[:, 1])
+    assert s["t_max_abs"] == pytest.approx(traj.t[np.argmax(np.abs(F[:, 1]))])
+    assert "max" not in s  # one definition, named
+    md = (tmp_path / "report.md").read_text()
+    row = next(r for r in md.splitlines() if r.startswith("| rod force on mass 2 |"))
+    assert float(row.split("|")[3]) == pytest.approx(peak, rel=1e-3)
+
+
+def test_simulate_summary_names_the_torque_norm(traj):
+    """``tumble simulate`` prints max ‖τ‖₂ (the norm the report uses), not the largest component."""
+    line = next(x for x in summary_table(traj).splitlines() if "control:" in x)
+    norm = float(np.max(np.linalg.norm(traj.torque, axis=1)))
+    component = float(np.max(np.abs(traj.torque)))
+    assert norm > component * (1 + 1e-3)  # they differ here, so the test can tell them apart
+    printed = float(line.split("max ‖τ‖₂")[1].split()[0])
+    assert printed == pytest.approx(norm, rel=1e-3)
+
+
+def test_an_interrupted_run_says_where_it_stopped(scene, tmp_path):
+    """Ctrl-C at 0.15 s of a 0.3 s run: 'stopped at 0.15 s of 0.3 s', not '1.500e-01 > 3.000e-01'."""
+
+    def ctrl_c(t):
+        if t >= 0.15:
+            raise KeyboardInterrupt
+
+    short = simulate(scene, t_end=T_END, rtol=1e-8, progress=ctrl_c)
+    assert short.status is RunStatus.INTERRUPTED
+    reached = float(short.t[-1])
+    cmp = compare(short, None, scene, t_end=T_END)
+    c = cmp.check("analytic.completed")
+    assert not c.passed
+    text = check_sentence(c)
+    assert text.startswith(f"analytic: stopped at {reached:.3g} s of {T_END:g} s (")
+    write_report(tmp_path, cmp, [short], {"scene": {"name": scene.name}})
+    assert f"stopped at {reached:.3g} s of {T_END:g} s" in (tmp_path / "report.md").read_text()
+    planted = Check("completed", Subject.ANALYTIC, 9.37, 20.0, "s", False, "interrupted")
+    assert check_sentence(planted) == "analytic: stopped at 9.37 s of 20 s (interrupted)"
 
 
 def test_writes_are_atomic(tmp_path, monkeypatch):

@@ -125,6 +125,7 @@ def cmd_validate(args: argparse.Namespace) -> int:
             t_end=args.t_end,
             progress=progress,
             plants=args.plants,
+            figure_formats=args.figure_format,
         )
     finally:
         prog.close()
@@ -133,9 +134,11 @@ def cmd_validate(args: argparse.Namespace) -> int:
     print(f"{verdict}: {len(res.checks) - n_fail}/{len(res.checks)} checks passed for {scene.name}")
     if res.failure:
         print(f"  run failed: {res.failure}")
+    from validation.summary import check_sentence
+
     for c in res.checks:
         if not c.passed:
-            print(f"  failed: {c.label}: {c.value:.3e} > {c.threshold:.3e} {c.unit}")
+            print(f"  failed: {check_sentence(c, reason=False)}")
     from validation.referee import VerdictKind
 
     for v in res.verdicts:
@@ -161,7 +164,7 @@ def cmd_export_mjcf(args: argparse.Namespace) -> int:
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
-    from validation.validate import write_demo
+    from validation.demo import write_demo
 
     out = Path(args.out) if args.out else Path("out") / "demo"
     res = write_demo(out)
@@ -322,6 +325,11 @@ def build_parser() -> argparse.ArgumentParser:
         "--plants",
         help="comma-separated plants to run (default: every installed one of "
         "analytic,mujoco,pinocchio; with all three the referee names an outlier)",
+    )
+    p.add_argument(
+        "--figure-format",
+        default="png",
+        help="comma-separated figure formats: png, svg, pdf (default: png; e.g. png,svg for a paper)",
     )
     p.set_defaults(func=cmd_validate)
 

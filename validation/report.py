@@ -1,27 +1,24 @@
-"""Reports of a validation run: ``report.md`` for people, ``report.json`` for machines, PNG figures.
+"""Reports of a validation run: ``report.md`` for people, ``report.json`` for machines, figures.
 
 Every file is written atomically (a temporary file in the same directory, then :func:`os.replace`),
 so an interrupted run never leaves a half-written report. A failed run still writes what it has;
 its verdict is ``FAILED`` and the reason is stated first.
 
-Figures (matplotlib, Agg, no pyplot state):
+The figures are drawn by :mod:`validation.figures` (``errors``, ``tracking``, ``invariants``,
+``control``), written in each format asked for (PNG by default; SVG or PDF for papers) and
+embedded in ``report.md`` each with its caption; a figure that was not drawn (an uncontrolled scene
+has no control figure) is named there with the reason.
 
-* ``errors.png``: the differences between the plants against time, log axes;
-* ``tracking.png``: each plant's tracking errors and their deviation from the closed-form error
-  dynamics, log axes;
-* ``invariants.png``: each plant's quaternion norm error and balances of linear momentum, angular
-  momentum and energy, log axes;
-* ``control.png``: control torque (body axes) and rod forces of both plants, linear axes.
+"max" of a quantity over time is always its largest magnitude (:func:`validation.summary.max_abs`):
+the summaries' ``max_abs`` of a signed rod force is its largest ``|F_i|``, not its largest value.
 """
 
 from __future__ import annotations
 
-import io
 import json
 import math
 import platform
 import sys
-import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from importlib import metadata
@@ -32,20 +29,20 @@ import numpy as np
 
 from analytic.trajectory import Trajectory
 from validation.atomic import write_bytes
-from validation.compare import Comparison, Group, Series, Subject
-from validation.referee import LABELS, Verdict, summary_lines
-
-PLANT_STYLE = {
-    Subject.ANALYTIC: {"color": "tab:blue", "linestyle": "-"},
-    Subject.MUJOCO: {"color": "tab:orange", "linestyle": "--"},
-    Subject.PINOCCHIO: {"color": "tab:green", "linestyle": ":"},
-    Subject.BOTH: {"color": "tab:red", "linestyle": "-"},
-    Subject.ANALYTIC_PINOCCHIO: {"color": "tab:purple", "linestyle": "-"},
-    Subject.MUJOCO_PINOCCHIO: {"color": "tab:brown", "linestyle": "--"},
-}
-FIGURES = ("errors", "tracking", "invariants", "control")
-_LINESTYLE_NAME = {"-": "solid", "--": "dashed", ":": "dotted"}
-
+from validation.compare import Comparison, Series
+from validation.figures import (
+    DEFAULT_FORMATS,
+    FIGURES,
+    Drawing,
+    FigureContext,
+    FigureFormat,
+    figure_control,
+    figure_errors,
+    figure_invariants,
+    figure_tracking,
+)
+from validation.referee import Verdict, summary_lines
+from validation.summary import check_sentence, max_abs
 
 # ----------------------------------------------------------------------------------------------
 # Atomic writes
@@ -101,172 +98,6 @@ def _short(info: Mapping[str, Any], longest: int = 20) -> dict[str, Any]:
 
 
 # ----------------------------------------------------------------------------------------------
-# Figures
-# ----------------------------------------------------------------------------------------------
-
-
-def _figure(nrows: int, title: str):
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=(10, 2.2 * nrows + 0.8))
-    fig.subplots_adjust(
-        left=0.09,
-        right=0.98,
-        top=1 - 0.75 / (2.2 * nrows + 0.8),
-        bottom=0.45 / (2.2 * nrows + 0.8),
-        hspace=0.45,
-    )
-    axes = fig.subplots(nrows, 1, sharex=True, squeeze=False)[:, 0]
-    fig.suptitle(title)
-    return fig, axes
-
-
-def _png(fig) -> bytes:
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=100)
-    return buf.getvalue()
-
-
-def _log_plot(ax, series: Sequence[Series], threshold: float | None = None) -> None:
-    """Plot positive values on a log axis; zeros (exact agreement) are stated, not drawn."""
-    ax.set_yscale("log")
-    drawn = False
-    for s in series:
-        v = np.where(s.values > 0, s.values, np.nan)
-        style = PLANT_STYLE[s.subject]
-        label = s.subject.value
-        if np.any(np.isfinite(v)):
-            ax.plot(s.t, v, label=label, linewidth=1.2, **style)
-            drawn = True
-        else:
-            ax.plot([], [], label=f"{label}: identically zero", **style)
-    if threshold is not None and threshold > 0:
-        ax.axhline(
-            threshold, color="k", linestyle=":", linewidth=1.0, label=f"threshold {threshold:.3g}"
-        )
-        drawn = True
-    pos = [s.values[s.values > 0] for s in series]
-    pos = np.concatenate(pos) if pos else np.zeros(0)
-    if threshold is not None and threshold > 0:
-        pos = np.append(pos, threshold)
-    pos = pos[np.isfinite(pos)]
-    if not drawn or pos.size == 0:
-        ax.set_ylim(1e-16, 1.0)
-    else:  # explicit limits: matplotlib's autoscale warns on a constant series
-        ax.set_ylim(pos.min() / 5, pos.max() * 5)
-    ax.grid(True, which="major", alpha=0.3)
-    ax.legend(fontsize=7, loc="best")
-
-
-def _abs_threshold(cmp: Comparison, name: str, scale: float = 1.0) -> float | None:
-    th = cmp.thresholds.get(name)
-    if th is None:
-        return None
-    return th.value * max(scale, th.floor) if th.relative else th.value
-
-
-def figure_errors(cmp: Comparison) -> bytes | None:
-    """Differences between the plants against time (one panel per quantity, one line per pair),
-    log axes; None without a second plant."""
-    diffs = [s for s in cmp.series if s.group is Group.DIFFERENCE]
-    if not diffs:
-        return None
-    rows: dict[str, list[Series]] = {}
-    for s in diffs:
-        rows.setdefault(s.name, []).append(s)
-    first = {c.name: c.scale for c in reversed(cmp.checks) if c.subject.is_pair}
-    pairs = list(dict.fromkeys(s.subject.value for s in diffs))
-    fig, axes = _figure(len(rows), f"{cmp.scene}: {', '.join(pairs)}")
-    for ax, (name, ss) in zip(axes, rows.items(), strict=True):
-        _log_plot(ax, ss, _abs_threshold(cmp, name, first.get(name, 1.0)))
-        ax.set_ylabel(ss[0].unit)
-        title = ss[0].label if len(ss) == 1 else f"{LABELS.get(name, name)} ({ss[0].unit})"
-        ax.set_title(title, fontsize=9)
-    axes[-1].set_xlabel("t (s)")
-    return _png(fig)
-
-
-def _plant_rows(cmp: Comparison, names: Sequence[str]) -> list[tuple[str, list[Series]]]:
-    rows = []
-    for name in names:
-        ss = [s for s in cmp.series if not s.subject.is_pair and s.name == name]
-        if ss:
-            rows.append((name, ss))
-    return rows
-
-
-def figure_tracking(cmp: Comparison) -> bytes | None:
-    """Tracking errors of each plant and their deviation from the closed-form law; log axes."""
-    rows = _plant_rows(cmp, ("e_omega", "e_omega_law", "e_p", "e_p_law"))
-    if not rows:
-        return None
-    limits = {"e_omega_law": "tracking_omega", "e_p_law": "tracking_p"}
-    fig, axes = _figure(len(rows), f"{cmp.scene}: tracking errors of each plant")
-    for ax, (name, ss) in zip(axes, rows, strict=True):
-        _log_plot(ax, ss, _abs_threshold(cmp, limits[name]) if name in limits else None)
-        ax.set_ylabel(ss[0].unit)
-        ax.set_title(ss[0].label, fontsize=9)
-    axes[-1].set_xlabel("t (s)")
-    return _png(fig)
-
-
-def figure_invariants(cmp: Comparison) -> bytes | None:
-    """Quaternion norm error, momentum and energy balances of each plant; log axes."""
-    rows = _plant_rows(cmp, ("quat_norm", "linear_momentum", "angular_momentum", "energy"))
-    if not rows:
-        return None
-    fig, axes = _figure(len(rows), f"{cmp.scene}: invariants (drift of each balance)")
-    for ax, (_name, ss) in zip(axes, rows, strict=True):
-        _log_plot(ax, ss)
-        ax.set_ylabel(ss[0].unit)
-        ax.set_title(ss[0].label, fontsize=9)
-    axes[-1].set_xlabel("t (s)")
-    return _png(fig)
-
-
-def figure_control(plants: Sequence[Trajectory]) -> bytes | None:
-    """Control torque components (body axes, N·m) and rod forces (N) of every plant."""
-    if not plants:
-        return None
-    n = plants[0].n
-    fig, axes = _figure(2 if n else 1, f"{plants[0].scene}: control forces of every plant")
-    for tr in plants:
-        style = PLANT_STYLE[Subject(tr.engine.value)]
-        for j in range(3):
-            axes[0].plot(
-                tr.t,
-                tr.torque[:, j],
-                linestyle=style["linestyle"],
-                linewidth=1.1,
-                label=f"{tr.engine.value} τ_{'xyz'[j]}",
-                color=f"C{j}",
-            )
-        for i in range(n):
-            axes[1].plot(
-                tr.t,
-                tr.rod_forces[:, i],
-                linestyle=style["linestyle"],
-                linewidth=1.1,
-                label=f"{tr.engine.value} F_{i + 1}",
-                color=f"C{i + 3}",
-            )
-    axes[0].set_ylabel("N·m")
-    styles = ", ".join(
-        f"{_LINESTYLE_NAME[PLANT_STYLE[Subject(tr.engine.value)]['linestyle']]}: {tr.engine.value}"
-        for tr in plants
-    )
-    axes[0].set_title(f"control torque, body axes ({styles})", fontsize=9)
-    if n:
-        axes[1].set_ylabel("N")
-        axes[1].set_title("rod forces on the masses", fontsize=9)
-    for ax in axes:
-        ax.grid(True, alpha=0.3)
-        ax.legend(fontsize=7, ncol=2, loc="best")
-    axes[-1].set_xlabel("t (s)")
-    return _png(fig)
-
-
-# ----------------------------------------------------------------------------------------------
 # report.md / report.json
 # ----------------------------------------------------------------------------------------------
 
@@ -314,16 +145,98 @@ def _referee_lines(verdicts: Sequence[Verdict], meta: Mapping[str, Any]) -> list
     return lines
 
 
+@dataclass(frozen=True)
+class SeriesSummary:
+    """A series over time, summarised as the report states it.
+
+    Attributes:
+        max_abs: the largest magnitude ``max_t |x(t)|`` (for a signed rod force its largest
+            ``|F_i|``; the series of vectors are already norms); ``inf`` with a non-finite sample.
+        t_max_abs: the time of ``max_abs``, s.
+        rms: root mean square over the samples.
+        final: the last value (signed).
+    """
+
+    max_abs: float
+    t_max_abs: float
+    rms: float
+    final: float
+
+    @classmethod
+    def of(cls, s: Series) -> SeriesSummary:
+        v = np.asarray(s.values, float)
+        peak, i = max_abs(v)
+        if i < 0:
+            return cls(math.nan, math.nan, math.nan, math.nan)
+        rms = float(np.sqrt(np.mean(v * v))) if np.all(np.isfinite(v)) else math.inf
+        return cls(peak, float(s.t[i]), rms, float(v[-1]))
+
+    def to_dict(self) -> dict[str, float]:
+        return {
+            "max_abs": self.max_abs,
+            "t_max_abs": self.t_max_abs,
+            "rms": self.rms,
+            "final": self.final,
+        }
+
+
+def summaries(cmp: Comparison | None) -> dict[str, dict[str, Any]]:
+    """Series key -> label, unit and :class:`SeriesSummary` fields (report.json's ``summaries``)."""
+    if cmp is None:
+        return {}
+    return {
+        s.key: {"label": s.label, "unit": s.unit, **SeriesSummary.of(s).to_dict()}
+        for s in cmp.series
+    }
+
+
+@dataclass(frozen=True)
+class FigureEntry:
+    """A figure as the report lists it: its name, caption, and the files written (none when it
+    was not drawn; the caption then says why)."""
+
+    name: str
+    caption: str
+    files: tuple[str, ...] = ()
+
+
+def _figure_lines(figures: Sequence[FigureEntry]) -> list[str]:
+    """The Figures section: each drawn figure embedded (PNG if written, else its first file) with
+    its numbered caption below; each figure not drawn named with its reason."""
+    if not figures:
+        return []
+    lines = ["## Figures", ""]
+    number = 0
+    for f in figures:
+        if not f.files:
+            lines += [
+                f"*No {f.name} figure.* {f.caption}",
+                "",
+            ]
+            continue
+        number += 1
+        shown = next((x for x in f.files if x.endswith(f".{FigureFormat.PNG.value}")), f.files[0])
+        also = [x for x in f.files if x != shown]
+        lines += [
+            f"![Figure {number}: {f.name}]({shown})",
+            "",
+            f"*Figure {number} (`{shown}`).* {f.caption}"
+            + (f" Also as {', '.join(f'[{x}]({x})' for x in also)}." if also else ""),
+            "",
+        ]
+    return lines
+
+
 def render_markdown(
     cmp: Comparison | None,
     verdict: str,
     failure: str,
-    figures: Sequence[str],
+    figures: Sequence[FigureEntry],
     meta: Mapping[str, Any],
     verdicts: Sequence[Verdict] = (),
 ) -> str:
     """The text of ``report.md``: the verdict first, then the referee, checks, summaries,
-    figures, thresholds and the run's metadata."""
+    figures with their captions, thresholds and the run's metadata."""
     scene = meta.get("scene", {}).get("name", cmp.scene if cmp else "?")
     lines = [f"# {scene}: {verdict}", ""]
     if failure:
@@ -333,9 +246,7 @@ def render_markdown(
         total = len(cmp.checks)
         lines.append(f"{total - len(bad)} of {total} checks pass." + (" Failed:" if bad else ""))
         for c in bad:
-            lines.append(
-                f"- **{c.label}** = {_fmt(c.value)} {c.unit} > {_fmt(c.threshold)} ({c.reason})"
-            )
+            lines.append(f"- {_cell(check_sentence(c))}")
         lines.append("")
         for n in cmp.notes:
             lines.append(f"> {n}")
@@ -355,26 +266,30 @@ def render_markdown(
             )
         lines += [
             "",
-            "Relative checks are divided by the scale of the signal (see report.json).",
+            "Relative checks are divided by the scale of the signal (see report.json). A "
+            "`completed` check's value is the time the plant reached, its threshold the horizon.",
             "",
         ]
         lines += [
             "## Summaries over time",
             "",
-            "| quantity | of | max | RMS | final | t of max (s) | unit |",
+            "| quantity | of | max \\|x\\| | t of max \\|x\\| (s) | RMS | final | unit |",
             "|---|---|---|---|---|---|---|",
         ]
         for s in cmp.series:
-            m = s.summary
+            m = SeriesSummary.of(s)
             lines.append(
-                f"| {_cell(s.label)} | {s.subject.value} | {_fmt(m.max)} | {_fmt(m.rms)} | {_fmt(m.final)} | "
-                f"{_fmt(m.t_max)} | {s.unit} |"
+                f"| {_cell(s.label)} | {s.subject.value} | {_fmt(m.max_abs)} | "
+                f"{_fmt(m.t_max_abs)} | {_fmt(m.rms)} | {_fmt(m.final)} | {s.unit} |"
             )
-        lines.append("")
-    if figures:
-        lines += ["## Figures", ""]
-        for f in figures:
-            lines += [f"![{Path(f).stem}]({f})", ""]
+        lines += [
+            "",
+            "max |x| is the largest magnitude over time: of a signed quantity (a rod force) its "
+            "largest absolute value; the vector quantities (|R_a − R_m|, |τ|, ...) are Euclidean "
+            "norms ‖·‖₂, so max |τ| is max ‖τ‖₂. final is the last value, with its sign.",
+            "",
+        ]
+    lines += _figure_lines(figures)
     lines += ["## Thresholds", ""]
     if cmp is not None:
         lines += ["| name | value | unit | source | reason |", "|---|---|---|---|---|"]
@@ -399,11 +314,47 @@ def _pairwise(cmp: Comparison | None) -> dict[str, dict[str, float]]:
 
 @dataclass(frozen=True)
 class ReportFiles:
-    """Paths written by :func:`write_report` (figures only those that were drawn)."""
+    """Paths written by :func:`write_report` (figures only those that were drawn, in every format
+    asked for) and every figure's entry (captions, including the figures not drawn)."""
 
     markdown: Path
     json: Path
     figures: tuple[Path, ...]
+    entries: tuple[FigureEntry, ...] = ()
+
+
+def _draw_figures(
+    out: Path,
+    cmp: Comparison | None,
+    plants: Sequence[Trajectory],
+    ctx: FigureContext,
+    formats: Sequence[FigureFormat],
+) -> tuple[list[Path], list[FigureEntry], list[str]]:
+    """Draw every figure and write each drawn one in every format; a figure that fails to draw
+    is named in the returned errors, it does not cost the report."""
+    makers = {
+        "errors": (lambda: figure_errors(cmp, ctx)) if cmp else None,
+        "tracking": (lambda: figure_tracking(cmp, ctx)) if cmp else None,
+        "invariants": (lambda: figure_invariants(cmp, ctx)) if cmp else None,
+        "control": lambda: figure_control(plants, ctx, cmp.thresholds if cmp else None),
+    }
+    paths: list[Path] = []
+    entries: list[FigureEntry] = []
+    errors: list[str] = []
+    for name in FIGURES:
+        make = makers[name]
+        if make is None:
+            continue
+        try:
+            drawing: Drawing = make()
+            blobs = {f: drawing.render(f) for f in formats} if drawing.drawn else {}
+        except Exception as exc:  # a figure must not cost the report
+            errors.append(f"{name}: {type(exc).__name__}: {exc}")
+            continue
+        written = [write_atomic(out / f"{name}.{f.value}", b) for f, b in blobs.items()]
+        paths += written
+        entries.append(FigureEntry(name, drawing.caption, tuple(p.name for p in written)))
+    return paths, entries, errors
 
 
 def write_report(
@@ -413,6 +364,7 @@ def write_report(
     meta: Mapping[str, Any],
     failure: str = "",
     verdicts: Sequence[Verdict] = (),
+    formats: Sequence[FigureFormat | str] = DEFAULT_FORMATS,
 ) -> ReportFiles:
     """Write ``report.md``, ``report.json`` and the figures into ``out_dir`` (atomically).
 
@@ -422,41 +374,58 @@ def write_report(
         plants: the trajectories that exist (analytic first).
         meta: run metadata (scene, versions, solver settings, wall times ...), JSON-able.
         failure: why the run failed ("" when it did not); a failure makes the verdict FAILED.
+        verdicts: the referee's rulings (three plants).
+        formats: the figures' file formats (:class:`validation.figures.FigureFormat`), PNG by
+            default; ValueError naming ``figure_format`` for an unknown one.
     """
+    fmts = tuple(dict.fromkeys(_format(f) for f in formats))
+    if not fmts:
+        raise ValueError("figure_format: at least one format is needed (got none)")
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     passed = cmp is not None and cmp.passed and not failure
     verdict = "PASSED" if passed else "FAILED"
-    figs: list[Path] = []
-    makers = {
-        "errors": (lambda: figure_errors(cmp)) if cmp else None,
-        "tracking": (lambda: figure_tracking(cmp)) if cmp else None,
-        "invariants": (lambda: figure_invariants(cmp)) if cmp else None,
-        "control": lambda: figure_control(plants),
-    }
-    fig_errors: list[str] = []
-    for name in FIGURES:
-        make = makers[name]
-        if make is None:
-            continue
-        try:
-            with warnings.catch_warnings():
-                # matplotlib's autoscale of a constant series on a log axis: harmless
-                warnings.filterwarnings("ignore", message="Attempting to set identical")
-                png = make()
-        except Exception as exc:  # a figure must not cost the report
-            fig_errors.append(f"{name}.png: {type(exc).__name__}: {exc}")
-            continue
-        if png is not None:
-            figs.append(write_atomic(out / f"{name}.png", png))
+    ctx = FigureContext.from_meta(meta, cmp.scene if cmp is not None else "")
+    figs, entries, fig_errors = _draw_figures(out, cmp, plants, ctx, fmts)
     meta = dict(meta)
     if fig_errors:
         meta["figure_errors"] = fig_errors
-    doc = {
-        "verdict": verdict,
-        "passed": passed,
+    js = write_atomic(
+        out / "report.json",
+        json.dumps(_jsonable(_report_doc(cmp, plants, meta, failure, verdicts, entries)), indent=2)
+        + "\n",
+    )
+    md = write_atomic(
+        out / "report.md", render_markdown(cmp, verdict, failure, entries, meta, verdicts)
+    )
+    return ReportFiles(md, js, tuple(figs), tuple(entries))
+
+
+def _format(f: FigureFormat | str) -> FigureFormat:
+    try:
+        return FigureFormat(str(getattr(f, "value", f)).strip().lower())
+    except ValueError:
+        known = ", ".join(x.value for x in FigureFormat)
+        raise ValueError(f"figure_format: unknown format {f!r} (known: {known})") from None
+
+
+def _report_doc(
+    cmp: Comparison | None,
+    plants: Sequence[Trajectory],
+    meta: Mapping[str, Any],
+    failure: str,
+    verdicts: Sequence[Verdict],
+    figures: Sequence[FigureEntry],
+) -> dict[str, Any]:
+    """The content of ``report.json`` (every field is built here, in one place)."""
+    passed = cmp is not None and cmp.passed and not failure
+    comparison = cmp.to_dict() if cmp is not None else {"checks": [], "notes": []}
+    comparison["summaries"] = summaries(cmp)  # largest magnitudes (max_abs), not signed maxima
+    return {
+        "verdict": "PASSED" if passed else "FAILED",
+        **comparison,
+        "passed": passed,  # cmp.to_dict() has its own; the failure overrides
         "failure": failure,
-        **(cmp.to_dict() if cmp is not None else {"checks": [], "summaries": {}, "notes": []}),
         "thresholds": {
             k: {
                 "value": t.value,
@@ -481,26 +450,23 @@ def write_report(
         ],
         "referee": [v.to_dict() for v in verdicts],
         "pairwise": _pairwise(cmp),
-        "figures": [f.name for f in figs],
+        "figures": [name for f in figures for name in f.files],
+        "captions": {f.name: f.caption for f in figures},
         "run": meta,
     }
-    doc["passed"] = passed  # cmp.to_dict() has its own; the failure overrides
-    js = write_atomic(out / "report.json", json.dumps(_jsonable(doc), indent=2) + "\n")
-    md = write_atomic(
-        out / "report.md",
-        render_markdown(cmp, verdict, failure, [f.name for f in figs], meta, verdicts),
-    )
-    return ReportFiles(md, js, tuple(figs))
 
 
 __all__ = [
     "FIGURES",
+    "FigureEntry",
     "ReportFiles",
+    "SeriesSummary",
     "figure_control",
     "figure_errors",
     "figure_invariants",
     "figure_tracking",
     "render_markdown",
+    "summaries",
     "versions",
     "write_atomic",
     "write_report",

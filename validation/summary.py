@@ -1,10 +1,57 @@
-"""Plain-text summary of one trajectory: tracking errors at the end and invariant drifts."""
+"""Plain-text summaries: one trajectory (tracking errors at the end, invariant drifts, the
+largest control forces) and one failed check, in the words every output uses.
+
+The largest value of a quantity over a run is always the largest *magnitude*: for a vector the
+Euclidean norm, ``max ‖τ‖₂`` (the control torque, body axes) and ``max ‖F_C‖₂``; for a signed
+scalar its absolute value, ``max |F_i|`` (a rod force). :func:`max_abs` is that definition.
+"""
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
 from analytic.trajectory import Trajectory
+from validation.compare import Check
+
+COMPLETED = "completed"
+"""The name of the check that a run reached its horizon (value: time reached, threshold: the
+horizon; :func:`validation.compare.compare`)."""
+
+
+def max_abs(values: np.ndarray) -> tuple[float, int]:
+    """The largest magnitude over time and its sample index: rows of a (N, k) array by their
+    Euclidean norm, a (N,) array by its absolute value. ``(nan, -1)`` when empty; a non-finite
+    sample is the largest (``inf``, at its index)."""
+    v = np.asarray(values, float)
+    if v.size == 0 or v.shape[0] == 0:
+        return math.nan, -1
+    mag = np.linalg.norm(v, axis=1) if v.ndim == 2 else np.abs(v)
+    bad = ~np.isfinite(mag)
+    if bad.any():
+        return math.inf, int(np.argmax(bad))
+    i = int(np.argmax(mag))
+    return float(mag[i]), i
+
+
+def check_sentence(check: Check, reason: bool = True) -> str:
+    """One check in words: ``analytic: stopped at 9.37 s of 20 s (why)`` for a run that did not
+    reach its horizon, ``position_C = 5.000e-05 m > threshold 1.000e-06 m (why)`` otherwise;
+    ``reason=False`` leaves out a threshold's reason (a long sentence) but never why a run
+    stopped."""
+    if check.name == COMPLETED:
+        who = check.subject.value
+        if check.passed:
+            return f"{who}: reached {check.threshold:g} s"
+        reached = "no sample" if math.isnan(check.value) else f"{check.value:.3g} s"
+        return f"{who}: stopped at {reached} of {check.threshold:g} s ({check.reason})"
+    unit = "" if check.unit in ("", "1") else f" {check.unit}"
+    op = "≤" if check.passed else ">"
+    why = f" ({check.reason})" if reason else ""
+    return (
+        f"{check.label} = {check.value:.3e}{unit} {op} threshold {check.threshold:.3e}{unit}{why}"
+    )
 
 
 def _rel(x: np.ndarray, scale: float) -> float:
@@ -63,9 +110,9 @@ def summary_table(tr: Trajectory) -> str:
             + " ".join(f"{x:.2e}" for x in e)
         )
     if tr.torque.size and np.any(tr.torque):
+        rod = f", max |F_i| {max_abs(np.ravel(tr.rod_forces))[0]:.3e} N" if tr.n else ""
         lines.append(
-            f"  control: max |tau| {np.max(np.abs(tr.torque)):.3e} N m, "
-            f"max |F_rod| {np.max(np.abs(tr.rod_forces)) if tr.rod_forces.size else 0:.3e} N, "
-            f"max |F_C| {np.max(np.abs(tr.force_at_C)):.3e} N"
+            f"  control: max ‖τ‖₂ {max_abs(tr.torque)[0]:.3e} N·m{rod}, "
+            f"max ‖F_C‖₂ {max_abs(tr.force_at_C)[0]:.3e} N"
         )
     return "\n".join(lines)

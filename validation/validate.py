@@ -1,11 +1,11 @@
-"""Run a scene on both plants under one controller, compare, and write the evidence.
+"""Run a scene on every plant under one controller, compare, and write the evidence.
 
-* :func:`run_validation`: the analytic plant (scipy, the scene's solver settings) and the MuJoCo twin
-  (the scene's integrator and time step, overridable), both driven by the analytic controller;
-  :func:`validation.compare.compare`; then ``report.md``, ``report.json``, the PNG figures and
-  ``run.rrd`` in ``out_dir``. A run that fails (an engine error, a plant stopping early, MuJoCo's
-  bridge missing) still writes what it has, marked FAILED.
-* :func:`write_demo`: the teaching demo, one ``demo.rrd`` and a short ``demo.md``.
+:func:`run_validation`: the analytic plant (scipy, the scene's solver settings), the MuJoCo twin
+(the scene's integrator and time step, overridable) and, when installed, the Pinocchio referee, all
+driven by the analytic controller; :func:`validation.compare.compare_plants`; then ``report.md``,
+``report.json``, the figures (PNG, and SVG or PDF on request) and ``run.rrd`` in ``out_dir``. A run
+that fails (an engine error, a plant stopping early, MuJoCo's bridge missing) still writes what it
+has, marked FAILED. The teaching demo is :mod:`validation.demo`.
 """
 
 from __future__ import annotations
@@ -19,21 +19,17 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from analytic.effects import Effect
 from analytic.scene import Scene, load_scene
 from analytic.trajectory import Engine, RunStatus, Trajectory
 from validation.atomic import OutputError
-from validation.compare import Check, Comparison, compare, compare_plants
+from validation.compare import Check, Comparison, compare_plants
+from validation.demo import DemoResult, DemoStep, write_demo  # noqa: F401  (moved; old imports)
+from validation.figures import DEFAULT_FORMATS, FigureFormat, parse_formats
 from validation.outputs import OutputRun, output_run
 from validation.preflight import check_validation_inputs
-from validation.recording import (
-    atomic_stream,
-    blueprint_for,
-    log_run,
-    write_recording,
-)
+from validation.recording import write_recording
 from validation.referee import Verdict, referee
-from validation.report import versions, write_atomic, write_report
+from validation.report import versions, write_report
 
 SCENES = Path(__file__).resolve().parent / "scenes"
 DEFAULT_SCENE = "paper_example1_controlled"
@@ -99,6 +95,16 @@ def _scene(scene: Scene | str | Path) -> Scene:
     return load_scene(p)
 
 
+def _figure_formats(formats: Sequence[FigureFormat | str] | str) -> tuple[FigureFormat, ...]:
+    """The formats as enums, once each; ValueError naming ``figure_format`` (before any work)."""
+    if isinstance(formats, str):
+        return parse_formats(formats)
+    out = parse_formats(",".join(str(getattr(f, "value", f)) for f in formats)) if formats else ()
+    if not out:
+        raise ValueError("figure_format: at least one format is needed (got none)")
+    return out
+
+
 def _one_line(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {exc}".splitlines()[0]
 
@@ -123,6 +129,7 @@ def run_validation(
     t_end: float | None = None,
     progress: Progress | None = None,
     plants: Sequence[Engine | str] | str | None = None,
+    figure_formats: Sequence[FigureFormat | str] = DEFAULT_FORMATS,
 ) -> ValidationResult:
     """Run ``scene`` on every chosen plant under one controller, compare every pair, rule on
     disagreements, and write the report and ``run.rrd``.
@@ -141,6 +148,8 @@ def run_validation(
         plants: which plants (engine names, or ``"analytic,mujoco"``); default every installed
             plant (:func:`mj_bridge.plants.installed_plants`). With three, the referee names the
             plant that disagrees with the two that agree (:mod:`validation.referee`).
+        figure_formats: the figures' file formats, PNG by default (``("png", "svg")`` adds SVG
+            files for papers; :class:`validation.figures.FigureFormat`).
 
     Returns:
         a frozen :class:`ValidationResult`; ``passed`` is False when any check fails or a plant
@@ -164,6 +173,7 @@ def run_validation(
     check_validation_inputs(  # before any plant runs
         sc, integrator=integrator, dt=dt, t_end=t_end, mujoco=Engine.MUJOCO in chosen
     )
+    formats = _figure_formats(figure_formats)
     if t_end is not None and not (t_end > 0):
         raise ValueError(f"t_end: must be a positive time in s (got {t_end!r})")
     horizon = float(t_end) if t_end is not None else sc.output.t_end
@@ -173,7 +183,7 @@ def run_validation(
         pl.check_scene(sc)
         runs.append((pl, _plant_settings(e, sc, integrator, dt)))
     with output_run(out_dir, "validate") as run:
-        res = _validate_into(run, sc, runs, horizon, progress)
+        res = _validate_into(run, sc, runs, horizon, progress, formats)
     files = {name: run.final(name) for name in res.files}
     files["manifest.json"] = run.final("manifest.json")
     return dataclasses.replace(res, out_dir=run.target, files=files)
@@ -185,6 +195,7 @@ def _validate_into(
     runs: Sequence[tuple[Any, Any]],
     horizon: float,
     progress: Progress | None,
+    formats: Sequence[FigureFormat] = DEFAULT_FORMATS,
 ) -> ValidationResult:
     """:func:`run_validation`'s work, writing into the staging directory ``run.path``."""
     from mj_bridge.plants import PinocchioPlant
@@ -303,7 +314,9 @@ def _validate_into(
         "wall_times_s": dict(walls),
     }
     t0 = time.perf_counter()
-    rep = write_report(out, cmp, trajectories, meta, failure=failure, verdicts=verdicts)
+    rep = write_report(
+        out, cmp, trajectories, meta, failure=failure, verdicts=verdicts, formats=formats
+    )
     walls["report"] = time.perf_counter() - t0
     files.update({"report.md": rep.markdown, "report.json": rep.json})
     files.update({f.name: f for f in rep.figures})
@@ -324,250 +337,8 @@ def _validate_into(
     )
 
 
-# ----------------------------------------------------------------------------------------------
-# The teaching demo
-# ----------------------------------------------------------------------------------------------
-
-
-@dataclass(frozen=True)
-class DemoStep:
-    """One step of the demo: an entity prefix, a title, the scene run, and its narrative."""
-
-    prefix: str
-    title: str
-    scene: str
-    narrative: str
-
-
-@dataclass(frozen=True)
-class DemoResult:
-    """What :func:`write_demo` wrote: ``rrd`` and ``markdown`` paths, the steps, wall times (s).
-
-    ``os.fspath(result)`` is the output directory, so ``Path(result) / "demo.rrd"`` works.
-    """
-
-    out_dir: Path
-    rrd: Path
-    markdown: Path
-    steps: tuple[DemoStep, ...]
-    wall_times: dict[str, float]
-    comparisons: tuple[Comparison, ...] = ()
-    """Per step, the analytic plant against the MuJoCo ghost (empty without MuJoCo)."""
-
-    def __fspath__(self) -> str:
-        return str(self.out_dir)
-
-
-DEMO_RTOL = 1e-12  # as `tumble validate` (the scenes' rtol): the ghost is checked against it
-DEMO_T_END = 10.0  # s
-
-_STEPS = (
-    DemoStep(
-        "step1_uncontrolled",
-        "1. Example 1 tumbling freely",
-        "paper_example1",
-        """# 1. Example 1 tumbling freely
-
-A 10 × 6 × 2 m aluminium block with a 16 m rod at a corner; two masses slide on the rod between
-linear + cubic springs. No control: the motion follows Lagrange's equations in the quaternion
-coordinates `q = [R, u, p]` (Eq. 44), with the norm constraint `uᵀu = 1` stabilised (Eq. 58),
-
-    M(q) q̈ = Q(q, q̇)        (Eqs. 50–53, solved with Udwadia–Kalaba)
-
-Watch: C follows a parabola (only gravity acts on the whole system: `Ṗ = m_T g`), the body tumbles
-about its centre of mass, and the angular momentum about the system's centre of mass stays
-constant (Fig. 8) — see the invariant-drift plot, at the level of the integration tolerance.""",
-    ),
-    DemoStep(
-        "step2_controlled",
-        "2. Example 1 under control",
-        "paper_example1_controlled",
-        """# 2. The same body under control
-
-The controller is the explicit Udwadia–Kalaba force (Eq. 89)
-
-    Q^C = M^{1/2} (A M^{-1/2})⁺ (b − A M⁻¹ Q)
-
-that makes the motion satisfy the requirements exactly, with the least Gauss cost (Eq. 74):
-
-* angular velocity `ω̄ = b cos(σ t)` (Eq. 76) with `b_x = −10 rad/s, σ_x = 0`: ω_x, which starts at
-  +1 rad/s, **reverses** and settles at −10 rad/s (watch the green arrow), the tracking error decaying
-  as `e_ω(t) = e_ω(0) exp(−γ t)` (Eq. 84, γ = 0.6 1/s);
-* masses `p̄ = p_e + l cos(λ t)` (Eq. 75): they **oscillate**, the error obeying
-  `ë + α ė + β e = 0` (Eq. 78).
-
-The purple arrow is the control torque τ (body axes); the rod forces are in the control plot.
-Angular momentum now changes exactly by the impulse of `S(u) τ`; energy by the control's work.""",
-    ),
-    DemoStep(
-        "step3_example2_subset",
-        "3. Example 2: only masses 1, 2, 4 controlled",
-        "paper_example2_controlled",
-        """# 3. Example 2: a hollow cylinder, five masses, three of them controlled
-
-Remark 4: the requirements can be any subset. Here only masses 1, 2 and 4 are asked to follow
-`p̄_i = p_e,i + l_i cos(λ_i t)` (Eq. 75 with the rows of A in Eq. 80 kept for i = 1, 2, 4 only), and
-the angular velocity tracks `ω̄` (Eq. 76). Masses 3 and 5 are left to the springs: their motion is
-whatever the dynamics give, and the control leaves them no force of their own (their rod-force
-plot stays at zero). Linear stiffnesses are this project's assumption (Eq. 64 is missing from the paper; docs/errata.md,
-item 10).""",
-    ),
-    DemoStep(
-        "step4_no_cubic_springs",
-        "4. Example 1 without the cubic springs",
-        "paper_example1",
-        """# 4. An effect switched off: the cubic springs
-
-The spring potential of Eq. (38) is
-
-    U_s = Σ ½ k_l,i Δ_i² + ¼ k_n,i Δ_i⁴,   Δ_i = extension of spring i
-
-This step runs step 1's scene with `springs.cubic` switched off (`scene.with_effects(...)`): the
-masses' oscillation about `p_e` changes (plot *mass positions*: blue with, orange without the
-cubic term), and with it the body's tumble. Energy is still conserved — the switched-off term is
-removed from the model and from the energy alike.""",
-    ),
-)
-
-
-def write_demo(
-    out_dir: str | Path,
-    *,
-    t_end: float = DEMO_T_END,
-    rtol: float = DEMO_RTOL,
-    mujoco: bool = True,
-) -> DemoResult:
-    """Write the teaching demo into ``out_dir``: ``demo.rrd`` (one tab per step) and ``demo.md``.
-
-    Each step runs on the analytic plant for ``t_end`` seconds at ``rtol`` (DOP853) and, with
-    ``mujoco`` (and the MuJoCo twin importable), on the MuJoCo twin under the same controller (the
-    scene's integrator and timestep), drawn as a translucent ghost over the analytic body with its
-    curves in the same plots.
-    """
-    with output_run(out_dir, "demo") as run:
-        res = _demo_into(run, t_end, rtol, mujoco)
-    return dataclasses.replace(
-        res, out_dir=run.target, rrd=run.final(res.rrd.name), markdown=run.final(res.markdown.name)
-    )
-
-
-def _demo_into(run: OutputRun, t_end: float, rtol: float, mujoco: bool) -> DemoResult:
-    """:func:`write_demo`'s work, writing into the staging directory ``run.path``."""
-    import numpy as np
-    import rerun as rr
-    import rerun.blueprint as rrb
-
-    from analytic.simulate import simulate
-
-    out = run.path
-    mj_simulate = None
-    if mujoco:
-        try:
-            from mj_bridge import simulate as mj_simulate
-        except ImportError:  # pragma: no cover - the twin is part of the package
-            mj_simulate = None
-    walls: dict[str, float] = {}
-    runs = []
-    ghosts = []
-    for step in _STEPS:
-        sc = _scene(step.scene)
-        if step.prefix == "step4_no_cubic_springs":
-            sc = sc.with_effects(set(sc.effects) - {Effect.SPRINGS_CUBIC})
-        t0 = time.perf_counter()
-        tr = simulate(sc, t_end=t_end, rtol=rtol).raise_if_interrupted()
-        walls[step.prefix] = time.perf_counter() - t0
-        if tr.status is not RunStatus.OK:
-            raise RuntimeError(f"demo step {step.title!r} failed: {tr.message}")
-        runs.append((step, sc, tr))
-        if mj_simulate is not None:
-            t0 = time.perf_counter()
-            tm = mj_simulate(sc, t_end=t_end).raise_if_interrupted()
-            walls[f"{step.prefix}_mujoco"] = time.perf_counter() - t0
-            if tm.status is not RunStatus.OK:
-                raise RuntimeError(f"demo step {step.title!r} failed on MuJoCo: {tm.message}")
-            ghosts.append(tm)
-    two = len(ghosts) == len(runs)
-    cmps = [
-        compare(tr, ghosts[i] if two else None, sc, t_end=t_end)
-        for i, (_, sc, tr) in enumerate(runs)
-    ]
-
-    path = out / "demo.rrd"
-    t0 = time.perf_counter()
-    tabs = [
-        blueprint_for(s.prefix, sc, cmps[i], two, name=s.title) for i, (s, sc, _) in enumerate(runs)
-    ]
-    tabs[3] = _with_masses_plot(tabs[3], runs[3])
-    bp = rrb.Blueprint(rrb.Tabs(*tabs), rrb.TimePanel(state="expanded"))
-    with atomic_stream(path, "tumble_demo", blueprint=bp, recording_id=run.run_id) as rec:
-        for i, (step, sc, tr) in enumerate(runs):
-            plants = [tr, ghosts[i]] if two else [tr]
-            log_run(rec, sc, plants, cmps[i], narrative=step.narrative, prefix=step.prefix)
-        # step 4: the masses' positions with and without the cubic term, in one plot
-        full = runs[0][2]
-        off = runs[3][2]
-        for label, tr, style in (
-            ("with cubic springs", full, 0),
-            ("without cubic springs", off, 1),
-        ):
-            ent = f"/step4_no_cubic_springs/plots/mass_positions/{'with' if style == 0 else 'without'}"
-            rec.log(
-                ent,
-                rr.SeriesLines(
-                    names=[f"p_{i + 1} {label}" for i in range(tr.n)],
-                    colors=[(31, 119, 180, 255) if style == 0 else (255, 127, 14, 255)] * tr.n,
-                ),
-                static=True,
-            )
-            rec.send_columns(
-                ent,
-                indexes=[rr.TimeColumn("sim_time", duration=tr.t)],
-                columns=rr.Scalars.columns(scalars=np.ravel(tr.p)).partition(
-                    [tr.n] * tr.t.shape[0]
-                ),
-            )
-    walls["recording"] = time.perf_counter() - t0
-    md = [
-        "# tumble demo",
-        "",
-        f"Open with `rerun {path.name}`; one tab per step, {t_end:g} s each "
-        f"(analytic plant, DOP853 at rtol {rtol:g}"
-        + (
-            "; the MuJoCo twin under the same controller as a translucent ghost, RK4 at the "
-            "scene's timestep, its curves in the same plots)."
-            if two
-            else ")."
-        ),
-        "",
-    ]
-    for step, _, _ in runs:
-        body = step.narrative.split("\n\n", 1)[1]  # the narrative without its own heading
-        md += [f"## {step.title}", "", body, ""]
-    mdp = write_atomic(out / "demo.md", "\n".join(md))
-    return DemoResult(
-        out, path, mdp, tuple(s for s, _, _ in runs), walls, tuple(cmps) if two else ()
-    )
-
-
-def _with_masses_plot(tab, run):
-    import rerun.blueprint as rrb
-
-    step = run[0]
-    return rrb.Horizontal(
-        tab,
-        rrb.TimeSeriesView(
-            origin=f"/{step.prefix}/plots/mass_positions", name="mass positions (m)"
-        ),
-        column_shares=[4, 1],
-        name=step.title,
-    )
-
-
 __all__ = [
     "DEFAULT_SCENE",
-    "DemoResult",
-    "DemoStep",
     "ValidationResult",
     "run_validation",
-    "write_demo",
 ]

@@ -1,0 +1,191 @@
+"""Figures and their captions: drawn without warnings, as checked, nothing empty, every one captioned.
+
+The plants here are the analytic run and a copy labelled MuJoCo with planted differences (C moved
+by 5e-9 m, the control torque scaled by 1 + 1e-9), so what each figure draws is known exactly.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import re
+import warnings
+
+import numpy as np
+import pytest
+
+from analytic.simulate import simulate
+from analytic.trajectory import Engine
+from validation.compare import compare
+from validation.figures import (
+    FigureContext,
+    FigureFormat,
+    figure_control,
+    figure_errors,
+    figure_invariants,
+    parse_formats,
+)
+from validation.report import write_report
+from validation.scenes import resolve_scene
+
+T_END = 0.3
+C_OFFSET = 5e-9  # m, planted in the copy's position of C
+TORQUE_SCALE = 1e-9  # planted relative error of the copy's control torque
+PNG = b"\x89PNG\r\n\x1a\n"
+
+
+def _copy(tr):
+    q = tr.q.copy()
+    q[:, 0] += C_OFFSET
+    return dataclasses.replace(
+        tr, engine=Engine.MUJOCO, q=q, torque=tr.torque * (1.0 + TORQUE_SCALE)
+    )
+
+
+@pytest.fixture(scope="module", params=["paper_example1_controlled", "paper_example1"])
+def run(request):
+    """(scene, plants, comparison, meta) of a controlled and of an uncontrolled scene."""
+    sc = resolve_scene(request.param)
+    tr = simulate(sc, t_end=T_END, rtol=1e-10)
+    plants = [tr, _copy(tr)]
+    meta = {
+        "scene": {"name": sc.name, "effects": sorted(e.value for e in sc.effects)},
+        "horizon_s": T_END,
+        "output_rate_hz": sc.output.rate,
+        "plants": [
+            {"engine": "analytic", "settings": "analytic DOP853 rtol 1e-10"},
+            {"engine": "mujoco", "settings": "a planted copy"},
+        ],
+    }
+    return sc, plants, compare(plants[0], plants[1], sc, t_end=T_END), meta
+
+
+def _controlled(sc) -> bool:
+    return any(e.value.startswith("control.") for e in sc.effects)
+
+
+def test_figures_are_drawn_without_warnings(run, tmp_path):
+    """Every figure, in every format, for a controlled and an uncontrolled scene: no warning
+    (a constant series on a log axis, a missing glyph, a layout that does not fit)."""
+    sc, plants, cmp, meta = run
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        files = write_report(tmp_path, cmp, plants, meta, formats=("png", "svg", "pdf"))
+    doc = json.loads((tmp_path / "report.json").read_text())
+    assert "figure_errors" not in doc["run"]
+    names = {f.name for f in files.figures}
+    expected = {"errors", "invariants"} | ({"tracking", "control"} if _controlled(sc) else set())
+    assert names == {f"{n}.{x}" for n in expected for x in ("png", "svg", "pdf")}
+    assert (tmp_path / "errors.png").read_bytes().startswith(PNG)
+    assert b"<svg" in (tmp_path / "errors.svg").read_bytes()[:400]
+    assert (tmp_path / "errors.pdf").read_bytes().startswith(b"%PDF")
+
+
+def test_every_referenced_figure_has_a_caption(run, tmp_path):
+    """report.md: each embedded figure is followed by its numbered caption naming the file,
+    the solver settings and the horizon; every other format is linked from the caption."""
+    _, plants, cmp, meta = run
+    write_report(tmp_path, cmp, plants, meta, formats=("png", "svg"))
+    md = (tmp_path / "report.md").read_text()
+    lines = md.splitlines()
+    embedded = [
+        (i, m.group(1)) for i, x in enumerate(lines) if (m := re.match(r"!\[.*\]\((.+)\)$", x))
+    ]
+    assert embedded
+    for number, (i, name) in enumerate(embedded, 1):
+        caption = next(x for x in lines[i + 1 :] if x.strip())
+        assert caption.startswith(f"*Figure {number} (`{name}`).*"), caption
+        assert "DOP853 rtol 1e-10" in caption and f"Horizon {T_END:g} s" in caption
+        assert f"[{name.replace('.png', '.svg')}]" in caption
+        assert (tmp_path / name).exists()
+    doc = json.loads((tmp_path / "report.json").read_text())
+    assert set(doc["captions"]) == {"errors", "tracking", "invariants", "control"}
+
+
+def test_uncontrolled_scene_has_no_control_figure_and_says_why(run, tmp_path):
+    sc, plants, cmp, meta = run
+    if _controlled(sc):
+        pytest.skip("the controlled scene has a control figure")
+    files = write_report(tmp_path, cmp, plants, meta)
+    assert not (tmp_path / "control.png").exists() and not (tmp_path / "tracking.png").exists()
+    md = (tmp_path / "report.md").read_text()
+    assert "*No control figure.* The scene has no control requirement" in md
+    assert "*No tracking figure.* The scene has no control requirement" in md
+    errors = next(e for e in files.entries if e.name == "errors")
+    assert "Left out: control torque, rod forces (the scene has no control requirement" in (
+        errors.caption
+    )
+    # no empty panel: the errors figure has one panel per quantity that is not identically zero
+    drawing = figure_errors(cmp, FigureContext.from_meta(meta))
+    titles = [ax.get_title(loc="left") for ax in drawing.figure.axes]
+    assert not any(t.startswith(("control torque", "rod forces")) for t in titles)
+
+
+def test_errors_are_drawn_as_checked_with_their_thresholds(run):
+    """The planted offset of C is the position panel's curve; the torque panel draws the relative
+    difference (the planted 1e-9), at the level its check reports, under its threshold line."""
+    sc, _, cmp, meta = run
+    fig = figure_errors(cmp, FigureContext.from_meta(meta)).figure
+    by_title = {ax.get_title(loc="left").split(":")[0]: ax for ax in fig.axes}
+    pos = by_title["position of C"]
+    curve, threshold = pos.lines[0].get_ydata(), pos.lines[-1].get_ydata()
+    assert np.nanmax(curve) == pytest.approx(C_OFFSET, rel=1e-6)
+    assert threshold[0] == cmp.thresholds["position_C"].value
+    if _controlled(sc):
+        tq = by_title["control torque"]
+        drawn = np.nanmax(tq.lines[0].get_ydata())
+        assert drawn == pytest.approx(cmp.check("control_torque").value, rel=1e-12)
+        assert drawn == pytest.approx(TORQUE_SCALE, rel=1e-3)
+        assert tq.lines[-1].get_ydata()[0] == cmp.thresholds["control_torque"].value
+
+
+def test_invariants_are_drawn_relative_with_their_thresholds(run):
+    """Each relative balance is drawn divided by its scale: the curve's maximum is the check's
+    value, and the threshold line is the relative threshold of validation/thresholds.py."""
+    _, _, cmp, meta = run
+    fig = figure_invariants(cmp, FigureContext.from_meta(meta)).figure
+    names = ("quat_norm", "linear_momentum", "angular_momentum", "energy")
+    assert len(fig.axes) == len(names)
+    for ax, name in zip(fig.axes, names, strict=True):
+        check = cmp.check(f"analytic.{name}")
+        th = cmp.thresholds[name]
+        assert th.relative == (name != "quat_norm")
+        assert np.nanmax(ax.lines[0].get_ydata()) == pytest.approx(check.value, rel=1e-12)
+        assert ax.lines[-1].get_ydata()[0] == th.value
+        assert ("relative" in ax.get_ylabel()) == th.relative
+
+
+def test_control_figure_shows_the_other_plant_as_its_distance(run):
+    """A reference panel per force and one panel for the other plant, whose torque curve is the
+    planted relative difference: the copy is visible, not hidden under the reference's line."""
+    sc, plants, _, meta = run
+    drawing = figure_control(plants, FigureContext.from_meta(meta))
+    if not _controlled(sc):
+        assert not drawing.drawn and "no control requirement" in drawing.caption
+        return
+    axes = drawing.figure.axes
+    assert len(axes) == 3  # torque, rod forces, mujoco − analytic
+    assert "GN·m" in axes[0].get_ylabel() and "MN" in axes[1].get_ylabel()
+    diff = axes[2]
+    assert diff.get_yscale() == "log" and "mujoco − analytic" in diff.get_title(loc="left")
+    assert np.nanmax(diff.lines[0].get_ydata()) == pytest.approx(TORQUE_SCALE, rel=1e-3)
+    for ax in axes:  # legends stand outside the data, to the right of the panel
+        legend = ax.get_legend()
+        right_edge = ax.transAxes.transform((1.0, 1.0))[0]
+        assert legend is not None and legend.get_bbox_to_anchor().x0 > right_edge
+
+
+def test_figure_formats_are_parsed_and_bad_ones_named():
+    assert parse_formats("png, SVG,png") == (FigureFormat.PNG, FigureFormat.SVG)
+    with pytest.raises(ValueError, match="figure_format: unknown format 'bmp'"):
+        parse_formats("png,bmp")
+
+
+def test_cli_refuses_a_bad_figure_format_before_any_work(tmp_path, capsys):
+    from validation.cli import EXIT_USAGE, main
+
+    out = tmp_path / "v"
+    assert main(["validate", "--figure-format", "gif", "--out", str(out)]) == EXIT_USAGE
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "figure_format" in err[0] and "gif" in err[0]
+    assert not out.exists()

@@ -1,0 +1,626 @@
+"""The figures of a validation run, each with its caption (matplotlib, Agg, no pyplot state).
+
+* ``errors``: the differences between each pair of plants over time, one panel per compared
+  quantity, log axes, drawn as they are checked: absolute for the state, and for the control torque
+  and rod forces divided by the reference plant's largest magnitude (relative); the thresholds of
+  :mod:`validation.thresholds` as dotted lines;
+* ``tracking``: each plant's tracking errors and their deviations from the closed-form error
+  dynamics (Eq. 84 with ``docs/errata.md`` item 3, and Eq. 78), log axes, with thresholds;
+* ``invariants``: each plant's quaternion norm error (absolute) and its balances of linear
+  momentum, angular momentum and energy divided by their scales (relative, as checked), log axes,
+  with thresholds;
+* ``control``: the reference plant's control torque (body axes) and rod forces in engineering
+  units, and below, for each other plant, its relative distance from the reference (log axes): the
+  plants agree to ~1e-12, so their curves drawn on one linear axis would hide under each other.
+
+A panel whose every curve is identically zero is left out (a log axis has no place for zero) and
+the caption says which and why; a figure with nothing to show is not drawn, and its caption says
+why (an uncontrolled scene has no control and no tracking figure). Curves that coincide are told
+apart by their markers, staggered along the time axis. Legends stand outside the data.
+
+Every drawing renders to PNG, SVG or PDF (:class:`FigureFormat`) without a time stamp in the file.
+"""
+
+from __future__ import annotations
+
+import io
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from enum import StrEnum
+from typing import Any
+
+import numpy as np
+
+from analytic.trajectory import Trajectory
+from validation.compare import Check, Comparison, Group, Series, Subject
+from validation.thresholds import Threshold, thresholds_for
+
+
+class FigureFormat(StrEnum):
+    """A file format a figure is written in (the file's extension)."""
+
+    PNG = "png"
+    SVG = "svg"
+    PDF = "pdf"
+
+
+DEFAULT_FORMATS = (FigureFormat.PNG,)
+FIGURES = ("errors", "tracking", "invariants", "control")
+PNG_DPI = 150  # pixels per inch of the PNG files (10 in wide: 1500 px)
+WIDTH_IN = 10.0  # figure width, in
+ROW_IN = 2.3  # height of one panel, in
+MARKERS_PER_CURVE = 12  # markers on each curve, staggered between curves so coinciding ones show
+
+PLANT_STYLE: Mapping[Subject, Mapping[str, Any]] = {
+    Subject.ANALYTIC: {"color": "tab:blue", "linestyle": "-", "marker": "o"},
+    Subject.MUJOCO: {"color": "tab:orange", "linestyle": "--", "marker": "s"},
+    Subject.PINOCCHIO: {"color": "tab:green", "linestyle": ":", "marker": "^"},
+    Subject.BOTH: {"color": "tab:red", "linestyle": "-", "marker": "o"},
+    Subject.ANALYTIC_PINOCCHIO: {"color": "tab:purple", "linestyle": "--", "marker": "s"},
+    Subject.MUJOCO_PINOCCHIO: {"color": "tab:cyan", "linestyle": "-.", "marker": "^"},
+}
+"""Colour, line style and marker of each plant and each pair of plants."""
+
+THRESHOLD_STYLE = {"color": "k", "linestyle": ":", "linewidth": 1.2}
+_SUBSCRIPT = str.maketrans("0123456789", "₀₁₂₃₄₅₆₇₈₉")
+
+RELATIVE_TO: Mapping[str, str] = {
+    "control_torque": "max‖τ_ref‖₂",
+    "rod_forces": "max_i |F_ref,i|",
+    "linear_momentum": "max‖P‖₂",
+    "angular_momentum": "max(‖L‖₂, ‖∫Sτ dt‖₂)",
+    "energy": "max(|E|, |W|)",
+}
+"""What each relative check divides by (the scales of :func:`validation.compare.compare`)."""
+
+PANEL_TITLES: Mapping[str, str] = {
+    "position_C": "position of C: ‖R_a − R_b‖₂",
+    "attitude": "attitude: angle of conj(u_a) ⊗ u_b",
+    "rod_positions": "rod positions: max_i |p_a,i − p_b,i|",
+    "velocity_C": "velocity of C: ‖Ṙ_a − Ṙ_b‖₂",
+    "rod_velocities": "rod velocities: max_i |ṗ_a,i − ṗ_b,i|",
+    "angular_velocity": "body angular velocity: ‖ω_a − ω_b‖₂",
+    "control_torque": "control torque: ‖τ_a − τ_b‖₂ / max‖τ_a‖₂",
+    "rod_forces": "rod forces: max_i |F_a,i − F_b,i| / max_i |F_a,i|",
+    "e_omega": "tracking error ‖ω − ω̄‖₂",
+    "e_omega_law": "deviation from Eq. 84: ‖e_ω − exp(−γt) e_ω(0)‖₂",
+    "e_p": "tracking error max_i |p_i − p̄_i| (controlled masses)",
+    "e_p_law": "deviation from Eq. 78: max_i |e_p,i − e_ref,i|, ë + αė + βe = 0",
+    "quat_norm": "quaternion norm error |uᵀu − 1|",
+    "linear_momentum": "linear momentum balance ‖P − P_expected‖₂ / max‖P‖₂",
+    "angular_momentum": "angular momentum balance ‖L − L(0) − ∫Sτ dt‖₂ / max(‖L‖₂, ‖∫Sτ dt‖₂)",
+    "energy": "energy balance |E − E(0) − W| / max(|E|, |W|)",
+}
+"""Panel titles: the quantity drawn, as it is checked (``a`` the pair's reference plant)."""
+
+
+@dataclass(frozen=True)
+class FigureContext:
+    """What every caption states about the run.
+
+    Attributes:
+        scene: scene name.
+        horizon_s: the horizon asked for, s (None when unknown).
+        rate_hz: output samples per second (None when unknown).
+        settings: one sentence per plant naming its solver settings.
+        controlled: whether the scene has a control requirement (None when unknown).
+    """
+
+    scene: str
+    horizon_s: float | None = None
+    rate_hz: float | None = None
+    settings: tuple[str, ...] = ()
+    controlled: bool | None = None
+
+    @classmethod
+    def from_meta(cls, meta: Mapping[str, Any], scene: str = "") -> FigureContext:
+        """The context from a run's metadata (``validation.validate``'s ``meta``)."""
+        sc = meta.get("scene", {}) or {}
+        effects = sc.get("effects")
+        return cls(
+            scene=str(sc.get("name") or scene or "?"),
+            horizon_s=_float_or_none(meta.get("horizon_s")),
+            rate_hz=_float_or_none(meta.get("output_rate_hz")),
+            settings=tuple(str(p["settings"]) for p in meta.get("plants", ()) if "settings" in p),
+            controlled=(
+                None if effects is None else any(str(e).startswith("control.") for e in effects)
+            ),
+        )
+
+    def run_sentence(self) -> str:
+        """``Plants: analytic DOP853 rtol 1e-12; MuJoCo RK4 dt 0.00025 s. Horizon 20 s, 100
+        samples/s.`` (what is known)."""
+        parts = []
+        if self.settings:
+            parts.append("Plants: " + "; ".join(self.settings) + ".")
+        when = []
+        if self.horizon_s is not None:
+            when.append(f"Horizon {self.horizon_s:g} s")
+        if self.rate_hz is not None:
+            when.append(f"{self.rate_hz:g} samples/s")
+        if when:
+            parts.append(", ".join(when) + ".")
+        return " ".join(parts)
+
+
+def _float_or_none(x: Any) -> float | None:
+    try:
+        v = float(x)
+    except (TypeError, ValueError):
+        return None
+    return v if math.isfinite(v) else None
+
+
+@dataclass(frozen=True)
+class Drawing:
+    """One figure and its caption; ``figure`` is None when there was nothing to draw, and the
+    caption then says why (a sentence, ``The scene has no control requirement, ...``)."""
+
+    name: str
+    caption: str
+    figure: Any = None
+
+    @property
+    def drawn(self) -> bool:
+        return self.figure is not None
+
+    def render(self, fmt: FigureFormat | str = FigureFormat.PNG) -> bytes:
+        """The figure's file content in ``fmt`` (no time stamp, so equal figures give equal
+        SVG text)."""
+        if self.figure is None:
+            raise ValueError(f"figure {self.name!r}: not drawn ({self.caption})")
+        fmt = FigureFormat(fmt)
+        buf = io.BytesIO()
+        metadata = {
+            FigureFormat.PNG: {"Software": None},
+            FigureFormat.SVG: {"Date": None},
+            FigureFormat.PDF: {"CreationDate": None},
+        }[fmt]
+        self.figure.savefig(buf, format=fmt.value, dpi=PNG_DPI, metadata=metadata)
+        return buf.getvalue()
+
+
+def parse_formats(text: str) -> tuple[FigureFormat, ...]:
+    """``"png,svg"`` -> the formats, in order, once each; ValueError naming ``figure_format``."""
+    out: list[FigureFormat] = []
+    for part in str(text).split(","):
+        name = part.strip().lower()
+        try:
+            fmt = FigureFormat(name)
+        except ValueError:
+            known = ", ".join(f.value for f in FigureFormat)
+            raise ValueError(
+                f"figure_format: unknown format {part.strip()!r} (known: {known})"
+            ) from None
+        if fmt not in out:
+            out.append(fmt)
+    return tuple(out)
+
+
+# ----------------------------------------------------------------------------------------------
+# Drawing helpers
+# ----------------------------------------------------------------------------------------------
+
+
+def _figure(nrows: int, title: str, height_rows: Sequence[float] | None = None):
+    from matplotlib.figure import Figure
+
+    ratios = list(height_rows) if height_rows is not None else [1.0] * nrows
+    fig = Figure(figsize=(WIDTH_IN, ROW_IN * sum(ratios) + 1.0), layout="constrained")
+    axes = fig.subplots(nrows, 1, sharex=True, squeeze=False, height_ratios=ratios)[:, 0]
+    fig.suptitle(title, fontsize=12)
+    return fig, axes
+
+
+def _markevery(n: int, k: int) -> tuple[int, int]:
+    """Every ``n // MARKERS_PER_CURVE``-th sample, the k-th curve offset by a third of that."""
+    step = max(n // MARKERS_PER_CURVE, 1)
+    return ((k * step) // 3 % step, step)
+
+
+def _line(ax, t: np.ndarray, v: np.ndarray, subject: Subject, k: int, label: str, **kw):
+    style = dict(PLANT_STYLE[subject])
+    style.update(kw)
+    return ax.plot(
+        t,
+        v,
+        label=label,
+        linewidth=1.0,
+        markersize=4,
+        markerfacecolor="none",
+        markevery=_markevery(len(t), k),
+        **style,
+    )[0]
+
+
+def _log_axis(ax, values: Sequence[np.ndarray]) -> None:
+    """A log y axis with limits a factor 5 beyond the positive finite ``values``, set before any
+    line is drawn (autoscale would warn on a constant series, such as a threshold alone)."""
+    pos = [np.asarray(v, float).ravel() for v in values]
+    allpos = np.concatenate(pos) if pos else np.zeros(0)
+    allpos = allpos[(allpos > 0) & np.isfinite(allpos)]
+    ax.set_yscale("log")
+    if allpos.size:
+        ax.set_ylim(allpos.min() / 5, allpos.max() * 5)
+    else:
+        ax.set_ylim(1e-16, 1.0)
+    ax.grid(True, which="major", alpha=0.3)
+
+
+def _log_panel(
+    ax, curves: Sequence[tuple[Subject, np.ndarray, np.ndarray]], threshold: float | None
+) -> list[Subject]:
+    """Positive values on a log axis; returns the subjects whose curve is identically zero (not
+    drawn: a log axis has no place for zero, the caption says so)."""
+    limit = [np.array([threshold])] if threshold is not None and threshold > 0 else []
+    _log_axis(ax, [np.asarray(v, float) for _, _, v in curves] + limit)
+    zero: list[Subject] = []
+    for k, (subject, t, values) in enumerate(curves):
+        v = np.asarray(values, float)
+        if not np.any(v):
+            zero.append(subject)
+            continue
+        _line(ax, t, np.where(v > 0, v, np.nan), subject, k, subject.value)
+    if limit:
+        ax.axhline(threshold, label="threshold", **THRESHOLD_STYLE)
+    return zero
+
+
+def _figure_legend(fig, axes) -> None:
+    """One legend for the whole figure, below the panels (every panel shows the same curves)."""
+    handles: dict[str, Any] = {}
+    for ax in axes:
+        for h, lab in zip(*ax.get_legend_handles_labels(), strict=True):
+            handles.setdefault(lab, h)
+    if handles:
+        fig.legend(
+            list(handles.values()),
+            list(handles),
+            loc="outside lower center",
+            ncols=min(len(handles), 4),
+            fontsize=9,
+            frameon=False,
+        )
+
+
+def _side_legend(ax) -> None:
+    """A legend to the right of the panel, outside the data."""
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, fontsize=8)
+
+
+def _checks_by_series(cmp: Comparison) -> dict[str, Check]:
+    return {c.series: c for c in cmp.checks if c.series}
+
+
+def _as_checked(s: Series, checks: Mapping[str, Check]) -> np.ndarray:
+    """The series as its check sees it: divided by the check's scale for a relative check."""
+    c = checks.get(s.key)
+    return s.values / c.scale if c is not None and c.scale > 0 else s.values
+
+
+def _threshold(cmp: Comparison, name: str) -> Threshold | None:
+    return cmp.thresholds.get(name)
+
+
+def _names(subjects: Sequence[Subject]) -> str:
+    vals = [s.value for s in subjects]
+    return vals[0] if len(vals) == 1 else ", ".join(vals[:-1]) + " and " + vals[-1]
+
+
+def _caption(*sentences: str) -> str:
+    return " ".join(s.strip() for s in sentences if s and s.strip())
+
+
+def _zero_sentence(zeros: Sequence[tuple[str, Sequence[Subject]]]) -> str:
+    """``Not drawn, identically zero: attitude of analytic vs mujoco; ...`` (empty if none)."""
+    if not zeros:
+        return ""
+    items = "; ".join(f"{PANEL_TITLES.get(n, n).split(':')[0]} of {_names(ss)}" for n, ss in zeros)
+    return f"Not drawn, identically zero (a log axis has no place for zero): {items}."
+
+
+def _no_control_reason(ctx: FigureContext) -> str:
+    if ctx.controlled is False:
+        return "the scene has no control requirement, so every plant's control torque and rod forces are identically zero"
+    return "every plant's control torque and rod forces are identically zero"
+
+
+# ----------------------------------------------------------------------------------------------
+# The figures
+# ----------------------------------------------------------------------------------------------
+
+
+def figure_errors(cmp: Comparison, ctx: FigureContext | None = None) -> Drawing:
+    """Differences between each pair of plants over time, as checked, with their thresholds."""
+    ctx = ctx or FigureContext(cmp.scene)
+    diffs = [s for s in cmp.series if s.group is Group.DIFFERENCE]
+    if not diffs:
+        return Drawing("errors", "Only one plant ran, so there is no pair to compare.")
+    rows: dict[str, list[Series]] = {}
+    for s in diffs:
+        rows.setdefault(s.name, []).append(s)
+    checks = _checks_by_series(cmp)
+    kept = {n: ss for n, ss in rows.items() if any(np.any(s.values) for s in ss)}
+    left_out = [n for n in rows if n not in kept]
+    control_out = [n for n in left_out if n in ("control_torque", "rod_forces")]
+    if ctx.controlled is not False:
+        control_out = []  # zero without a reason the scene gives: said as plain zeros below
+    other_out = [n for n in left_out if n not in control_out]
+
+    def names(ns: Sequence[str]) -> str:
+        return ", ".join(PANEL_TITLES.get(n, n).split(":")[0] for n in ns)
+
+    why_out = _caption(
+        f"Left out: {names(control_out)} ({_no_control_reason(ctx)})." if control_out else "",
+        f"Left out, identically zero for every pair: {names(other_out)}." if other_out else "",
+    )
+    pairs = list(dict.fromkeys(s.subject for s in diffs))
+    intro = (
+        f"Differences between {'the plants' if len(pairs) == 1 else 'each pair of plants'} "
+        f"({_names(pairs)}; a = the first-named plant of a pair, b = the second) over time, log "
+        "axes, one panel per compared quantity, drawn as it is checked: the absolute distance "
+        "for the state, and for the control torque and rod forces the distance divided by the "
+        "first plant's largest magnitude (relative, dimensionless). Dotted black: the threshold "
+        "(validation/thresholds.py, or the scene's [thresholds])."
+    )
+    if not kept:
+        return Drawing("errors", _caption(why_out, ctx.run_sentence()))
+    fig, axes = _figure(len(kept), f"{ctx.scene}: differences between the plants")
+    zeros: list[tuple[str, list[Subject]]] = []
+    for ax, (name, ss) in zip(axes, kept.items(), strict=True):
+        th = _threshold(cmp, name)
+        z = _log_panel(
+            ax, [(s.subject, s.t, _as_checked(s, checks)) for s in ss], th.value if th else None
+        )
+        if z:
+            zeros.append((name, z))
+        unit = "1 (relative)" if th is not None and th.relative else ss[0].unit
+        ax.set_ylabel(unit)
+        limit = f"; threshold {th.value:g}" if th is not None else ""
+        ax.set_title(f"{PANEL_TITLES.get(name, ss[0].label)}{limit}", fontsize=10, loc="left")
+    axes[-1].set_xlabel("t (s)")
+    _figure_legend(fig, axes)
+    return Drawing(
+        "errors", _caption(intro, why_out, _zero_sentence(zeros), ctx.run_sentence()), fig
+    )
+
+
+def _plant_rows(cmp: Comparison, names: Sequence[str]) -> list[tuple[str, list[Series]]]:
+    rows = []
+    for name in names:
+        ss = [s for s in cmp.series if not s.subject.is_pair and s.name == name]
+        if ss:
+            rows.append((name, ss))
+    return rows
+
+
+def figure_tracking(cmp: Comparison, ctx: FigureContext | None = None) -> Drawing:
+    """Each plant's tracking errors and their deviation from the closed-form laws; log axes."""
+    ctx = ctx or FigureContext(cmp.scene)
+    rows = _plant_rows(cmp, ("e_omega", "e_omega_law", "e_p", "e_p_law"))
+    if not rows:
+        why = (
+            "the scene has no control requirement"
+            if ctx.controlled is False
+            else "no plant tracks a requirement"
+        )
+        return Drawing(
+            "tracking", f"{why[0].upper()}{why[1:]}, so there is no tracking error to draw."
+        )
+    limits = {"e_omega_law": "tracking_omega", "e_p_law": "tracking_p"}
+    fig, axes = _figure(len(rows), f"{ctx.scene}: tracking errors of each plant")
+    zeros: list[tuple[str, list[Subject]]] = []
+    for ax, (name, ss) in zip(axes, rows, strict=True):
+        th = _threshold(cmp, limits[name]) if name in limits else None
+        z = _log_panel(ax, [(s.subject, s.t, s.values) for s in ss], th.value if th else None)
+        if z:
+            zeros.append((name, z))
+        ax.set_ylabel(ss[0].unit)
+        limit = f"; threshold {th.value:g} {th.unit}" if th is not None else ""
+        ax.set_title(f"{PANEL_TITLES.get(name, ss[0].label)}{limit}", fontsize=10, loc="left")
+    axes[-1].set_xlabel("t (s)")
+    _figure_legend(fig, axes)
+    caption = _caption(
+        "Tracking errors of each plant over time (log axes): the angular-velocity error "
+        "e_ω = ω − ω̄ (rad/s, body axes) and the largest position error of the controlled masses "
+        "(m), each followed by its deviation from the closed-form error dynamics the controller "
+        "imposes, e_ω(t) = exp(−γt) e_ω(0) (Eq. 84; docs/errata.md, item 3) and ë + αė + βe = 0 "
+        "(Eq. 78). Dotted black: the threshold. Where the plants' curves coincide, the markers "
+        "(staggered in time) tell them apart.",
+        _zero_sentence(zeros),
+        ctx.run_sentence(),
+    )
+    return Drawing("tracking", caption, fig)
+
+
+def figure_invariants(cmp: Comparison, ctx: FigureContext | None = None) -> Drawing:
+    """Quaternion norm error and the relative balances of each plant, with their thresholds."""
+    ctx = ctx or FigureContext(cmp.scene)
+    rows = _plant_rows(cmp, ("quat_norm", "linear_momentum", "angular_momentum", "energy"))
+    if not rows:
+        return Drawing("invariants", "No plant's trajectory was compared.")
+    checks = _checks_by_series(cmp)
+    fig, axes = _figure(len(rows), f"{ctx.scene}: invariants of each plant, as checked")
+    zeros: list[tuple[str, list[Subject]]] = []
+    for ax, (name, ss) in zip(axes, rows, strict=True):
+        th = _threshold(cmp, name)
+        z = _log_panel(
+            ax, [(s.subject, s.t, _as_checked(s, checks)) for s in ss], th.value if th else None
+        )
+        if z:
+            zeros.append((name, z))
+        ax.set_ylabel("1 (relative)" if th is not None and th.relative else ss[0].unit)
+        limit = f"; threshold {th.value:g}" if th is not None else ""
+        ax.set_title(f"{PANEL_TITLES.get(name, ss[0].label)}{limit}", fontsize=10, loc="left")
+    axes[-1].set_xlabel("t (s)")
+    _figure_legend(fig, axes)
+    caption = _caption(
+        "Invariants of each plant over time (log axes), drawn as they are checked: the "
+        "quaternion norm error |uᵀu − 1| (absolute), and the balances of linear momentum "
+        "(against gravity), angular momentum about the system's centre of mass (against the "
+        "impulse of the control torque) and energy (against the work of the control), each "
+        "divided by the largest magnitude of what it balances (relative; the divisor is named "
+        "in each panel). Dotted black: the threshold.",
+        _zero_sentence(zeros),
+        ctx.run_sentence(),
+    )
+    return Drawing("invariants", caption, fig)
+
+
+def _eng(maxabs: float) -> tuple[float, str]:
+    """(divisor, SI prefix) that bring ``maxabs`` into [1, 1000): 9.9e9 -> (1e9, "G")."""
+    from matplotlib.ticker import EngFormatter
+
+    if not (maxabs > 0 and math.isfinite(maxabs)):
+        return 1.0, ""
+    exp = int(np.clip(3 * math.floor(math.log10(maxabs) / 3), -24, 24))
+    return 10.0**exp, EngFormatter.ENG_PREFIXES[exp]
+
+
+def _common_samples(a: Trajectory, b: Trajectory) -> int:
+    """Leading samples at the same times (0 when the grids differ from the start)."""
+    k = min(a.t.shape[0], b.t.shape[0])
+    same = np.isclose(a.t[:k], b.t[:k], rtol=1e-9, atol=1e-12)
+    return int(np.argmin(same)) if not same.all() else k
+
+
+def figure_control(
+    plants: Sequence[Trajectory],
+    ctx: FigureContext | None = None,
+    thresholds: Mapping[str, Threshold] | None = None,
+) -> Drawing:
+    """The reference plant's control torque and rod forces, and every other plant's relative
+    distance from them (log axes) with the thresholds; not drawn without control."""
+    plants = [p for p in plants if p.t.size]
+    if not plants:
+        return Drawing("control", "No plant produced a sample.")
+    ctx = ctx or FigureContext(plants[0].scene)
+    if not any(np.any(p.torque) or np.any(p.rod_forces) for p in plants):
+        why = _no_control_reason(ctx)
+        return Drawing("control", f"{why[0].upper()}{why[1:]}.")
+    th = dict(thresholds) if thresholds is not None else thresholds_for(None)
+    ref, others = plants[0], plants[1:]
+    n = ref.n
+    nrows = 1 + (1 if n else 0) + len(others)
+    fig, axes = _figure(nrows, f"{ctx.scene}: control forces")
+    refname = ref.engine.value
+    colors = [f"C{j}" for j in range(10)]
+
+    ax = axes[0]
+    div, prefix = _eng(float(np.max(np.abs(ref.torque), initial=0.0)))
+    for j in range(3):
+        ax.plot(
+            ref.t,
+            ref.torque[:, j] / div,
+            color=colors[j],
+            linewidth=1.2,
+            label=f"$\\tau_{'xyz'[j]}$",
+        )
+    ax.set_ylabel(f"τ ({prefix}N·m)")
+    ax.set_title(f"{refname} plant: control torque τ, body axes", fontsize=10, loc="left")
+    ax.axhline(0.0, color="0.6", linewidth=0.6)
+    ax.grid(True, alpha=0.3)
+    _side_legend(ax)
+    row = 1
+    units = [f"{prefix}N·m"]
+    if n:
+        ax = axes[row]
+        div, fprefix = _eng(float(np.max(np.abs(ref.rod_forces), initial=0.0)))
+        for i in range(n):
+            ax.plot(
+                ref.t,
+                ref.rod_forces[:, i] / div,
+                color=colors[(3 + i) % 10],
+                linewidth=1.2,
+                label=f"$F_{{{i + 1}}}$",
+            )
+        ax.set_ylabel(f"F ({fprefix}N)")
+        ax.set_title(f"{refname} plant: rod force on each mass", fontsize=10, loc="left")
+        ax.axhline(0.0, color="0.6", linewidth=0.6)
+        ax.grid(True, alpha=0.3)
+        _side_legend(ax)
+        units.append(f"{fprefix}N")
+        row += 1
+    zero_rows: list[str] = []
+    for other in others:
+        ax = axes[row]
+        row += 1
+        k = _common_samples(ref, other)
+        t = ref.t[:k]
+        tau_scale = max(
+            float(np.max(np.linalg.norm(ref.torque[:k], axis=1), initial=0.0)),
+            th["control_torque"].floor,
+        )
+        curves = [np.linalg.norm(other.torque[:k] - ref.torque[:k], axis=1) / tau_scale]
+        labels = ["‖Δτ‖₂ / max‖τ‖₂"]
+        if n:
+            f_scale = max(
+                float(np.max(np.abs(ref.rod_forces[:k]), initial=0.0)), th["rod_forces"].floor
+            )
+            for i in range(n):
+                curves.append(np.abs(other.rod_forces[:k, i] - ref.rod_forces[:k, i]) / f_scale)
+                labels.append(f"|ΔF{str(i + 1).translate(_SUBSCRIPT)}| / max|F|")
+        limits = sorted(
+            {th["control_torque"].value, th["rod_forces"].value}
+            if n
+            else {th["control_torque"].value}
+        )
+        _log_axis(ax, [*curves, np.asarray(limits, float)])
+        for j, (v, lab) in enumerate(zip(curves, labels, strict=True)):
+            if not np.any(v):
+                zero_rows.append(f"{lab} of {other.engine.value}")
+                continue
+            ax.plot(
+                t,
+                np.where(v > 0, v, np.nan),
+                color="tab:brown" if j == 0 else colors[(2 + j) % 10],
+                linewidth=1.0,
+                label=lab,
+            )
+        for m, lim in enumerate(limits):
+            ax.axhline(lim, label="threshold" if m == 0 else None, **THRESHOLD_STYLE)
+        ax.set_ylabel("1 (relative)")
+        ax.set_title(
+            f"{other.engine.value} − {refname}: distance relative to the {refname} plant's largest force",
+            fontsize=10,
+            loc="left",
+        )
+        ax.grid(True, which="major", alpha=0.3)
+        _side_legend(ax)
+    axes[-1].set_xlabel("t (s)")
+    what = "control torque τ (body axes)" + (" and the rod force F_i on each mass" if n else "")
+    sentences = [
+        f"Control forces. Top: the {refname} plant's {what}, in {' and '.join(units)}; this plant "
+        "is the reference."
+    ]
+    if others:
+        sentences.append(
+            "Below, one panel per other plant: its distance from the reference, relative to the "
+            "reference's largest magnitude, ‖τ − τ_ref‖₂ / max‖τ_ref‖₂"
+            + (" and |F_i − F_ref,i| / max_i |F_ref,i|" if n else "")
+            + " (log axes; dotted black: the thresholds control_torque"
+            + (" and rod_forces" if n else "")
+            + "). Drawn on the reference's axes, the other plants' forces would hide under its "
+            "curves: they agree to these relative distances."
+        )
+    if zero_rows:
+        sentences.append(f"Not drawn, identically zero: {'; '.join(zero_rows)}.")
+    sentences.append(ctx.run_sentence())
+    return Drawing("control", _caption(*sentences), fig)
+
+
+__all__ = [
+    "DEFAULT_FORMATS",
+    "FIGURES",
+    "PLANT_STYLE",
+    "Drawing",
+    "FigureContext",
+    "FigureFormat",
+    "figure_control",
+    "figure_errors",
+    "figure_invariants",
+    "figure_tracking",
+    "parse_formats",
+]
