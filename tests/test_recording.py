@@ -445,7 +445,7 @@ def test_demo_has_four_narrated_steps(tmp_path):
         assert f"/{step.prefix}/world/exaggerated/mujoco/body" in ents
         assert cmp.passed, [c.label for c in cmp.failed_checks]
     assert rows(store, "/step1_uncontrolled/world/mujoco/body") == 21
-    assert "ghost" in md
+    assert "wireframe" in md and "difference ×" in md  # the MuJoCo twin, and how to see it
     names = [v["name"] for v in blueprint_views(res.rrd).values()]
     assert sum(n.startswith("mujoco − analytic, difference ×") for n in names) == 4
 

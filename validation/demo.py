@@ -25,7 +25,7 @@ from analytic.trajectory import RunStatus, Trajectory
 from validation.atomic import write_text
 from validation.compare import Comparison, compare
 from validation.outputs import OutputRun, output_run
-from validation.recording import atomic_stream, log_run
+from validation.recording import atomic_stream, log_run, narrative_for
 from validation.scenes import resolve_scene
 
 PAPER = (
@@ -469,7 +469,18 @@ def _demo_into(run: OutputRun, t_end: float, rtol: float, mujoco: bool) -> DemoR
             _log_step_plots(rec, step, tr, _baseline(step, runs))
     walls["recording"] = time.perf_counter() - t0
     mdp = write_text(
-        out / "demo.md", demo_markdown(runs, t_end, rtol, two, shown=run.final(path.name))
+        out / "demo.md",
+        demo_markdown(
+            runs,
+            t_end,
+            rtol,
+            two,
+            shown=run.final(path.name),
+            bodies=[
+                narrative_for(sc, [tr, ghosts[i]] if two else [tr], cmps[i], step.narrative, None)
+                for i, (step, sc, tr) in enumerate(runs)
+            ],
+        ),
     )
     return DemoResult(
         out, path, mdp, tuple(s for s, _, _ in runs), walls, tuple(cmps) if two else ()
@@ -489,12 +500,16 @@ def demo_markdown(
     rtol: float,
     two_plants: bool,
     shown: Path | str = "demo.rrd",
+    bodies: list[str] | None = None,
 ) -> str:
     """The text of ``demo.md``: goals, how to open the recording, the steps with what to look
-    at, exercises, and the paper."""
+    at, exercises, and the paper. ``bodies[i]``, when given, is step i's text as its recording
+    shows it (:func:`validation.recording.narrative_for`: the narrative with the arrow scales,
+    colours and exaggeration factors)."""
     ghost = (
-        "; the MuJoCo twin under the same controller as a translucent ghost, RK4 at the scene's "
-        "timestep, its curves in the same plots"
+        "; the MuJoCo twin under the same controller as an orange wireframe over the analytic "
+        "body, and beside it with its difference exaggerated, RK4 at the scene's timestep, its "
+        "curves in the same plots"
         if two_plants
         else ""
     )
@@ -519,13 +534,14 @@ def demo_markdown(
         "(green arrow: ω; purple: the control torque τ; the line: the path of C) above the "
         "step's text; on the right the step's key plot on top, with two thirds of the height, and "
         "the others below. Errors and drifts are plotted as log10 (Rerun has no log axis; an "
-        "exact zero shows as −20).",
+        "exact zero is not plotted).",
         "",
         "# The four steps",
         "",
     ]
-    for step, sc, _ in runs:
-        body = step.narrative.split("\n\n", 1)[1]  # the narrative without its own heading
+    for i, (step, sc, _) in enumerate(runs):
+        # the narrative without its own heading (with the recording's legend when given)
+        body = (bodies[i] if bodies else step.narrative).split("\n\n", 1)[1]
         plots = step_plots(step, sc, two_plants)
         md += [f"## {step.title}", "", body, ""]
         md += [f"**Key plot:** {PLOT_NAMES[plots[0]]}.", ""] if plots else []

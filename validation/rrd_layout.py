@@ -34,6 +34,7 @@ from validation.rrd_world import (
     largest_differences,
     plant_order,
 )
+from validation.summary import check_sentence
 
 
 def _and(names: Sequence[str]) -> str:
@@ -202,7 +203,7 @@ def default_narrative(
         verdict = "PASSED" if comparison.passed else "FAILED"
         lines += ["", f"**Verdict: {verdict}** ({len(comparison.checks)} checks)."]
         for c in comparison.failed_checks:
-            lines.append(f"- {c.label} = {c.value:.3e} {c.unit} > {c.threshold:.3e}")
+            lines.append(f"- {check_sentence(c, reason=False)}")
     return "\n".join(lines)
 
 
