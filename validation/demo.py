@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import dataclasses
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass
 from enum import StrEnum
 from pathlib import Path
@@ -327,23 +328,31 @@ def step_plots(step: DemoStep, scene: Scene, two_plants: bool) -> tuple[Plot, ..
     return tuple(out)
 
 
-def step_layout(step: DemoStep, scene: Scene, two_plants: bool):
-    """The tab of one step: the 3D view over the narrative on the left; on the right the key plot
-    with two thirds of the height (the whole column when alone), the other plots below it."""
+def step_layout(
+    step: DemoStep,
+    scene: Scene,
+    two_plants: bool,
+    comparison: Comparison | None = None,
+    trajectories: Sequence[Trajectory] = (),
+):
+    """The tab of one step: the 3D views (the plants overlaid and, with MuJoCo, its difference
+    from the analytic body exaggerated by the factor the recording logs, from ``comparison`` and
+    ``trajectories``) over the narrative on the left; on the right the key plot with two thirds
+    of the height (the whole column when alone), the other plots below it."""
     import rerun.blueprint as rrb
+
+    from validation.rrd_layout import views_3d
+    from validation.rrd_world import difference_factors
 
     p0 = f"/{step.prefix}"
     plots = step_plots(step, scene, two_plants)
     views = [rrb.TimeSeriesView(origin=f"{p0}/plots/{p.value}", name=PLOT_NAMES[p]) for p in plots]
     rest = len(views) - 1
     right = rrb.Vertical(*views, row_shares=[2 * rest] + [1] * rest) if rest else views[0]
-    view3d = rrb.Spatial3DView(
-        origin=f"{p0}/world",
-        name="analytic (solid) and MuJoCo (ghost)" if two_plants else "analytic plant",
-        eye_controls=rrb.EyeControls3D(tracking_entity=f"{p0}/world/analytic/body"),
-    )
+    names = ("analytic", "mujoco") if two_plants else ("analytic",)
+    factors = difference_factors(scene, comparison, names, trajectories)
     left = rrb.Vertical(
-        view3d,
+        views_3d(p0, names, factors),
         rrb.TextDocumentView(origin=f"{p0}/narrative", name="what to look at"),
         row_shares=[3, 2],
     )
@@ -460,7 +469,10 @@ def _demo_into(run: OutputRun, t_end: float, rtol: float, mujoco: bool) -> DemoR
 
     path = out / "demo.rrd"
     t0 = time.perf_counter()
-    tabs = [step_layout(s, sc, two) for s, sc, _ in runs]
+    tabs = [
+        step_layout(s, sc, two, cmps[i], [tr, ghosts[i]] if two else [tr])
+        for i, (s, sc, tr) in enumerate(runs)
+    ]
     bp = rrb.Blueprint(rrb.Tabs(*tabs), rrb.TimePanel(state="expanded"))
     with atomic_stream(path, "tumble_demo", blueprint=bp, recording_id=run.run_id) as rec:
         for i, (step, sc, tr) in enumerate(runs):

@@ -250,7 +250,10 @@ def _trail_range():
     )
 
 
-def _views_3d(p0: str, names: Sequence[str], factors: Mapping[str, float]):
+def views_3d(p0: str, names: Sequence[str], factors: Mapping[str, float]):
+    """The 3D views of one run under entity root ``p0``: every plant overlaid (each with its
+    toggle, the trail from the start to the cursor) and, beside it, one view per other plant
+    with its difference from ``names[0]`` multiplied by ``factors[plant]``."""
     import rerun.blueprint as rrb
 
     ref = names[0] if names else "analytic"
@@ -332,7 +335,7 @@ def blueprint_for(
     if factors is None:
         factors = difference_factors(scene, comparison, names) if comparison is not None else {}
     left = rrb.Vertical(
-        _views_3d(p0, names, factors),
+        views_3d(p0, names, factors),
         rrb.TextDocumentView(origin=f"{p0}/narrative", name="what this is"),
         row_shares=[3, 1],
     )
