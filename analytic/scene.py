@@ -754,6 +754,11 @@ def scene_from_dict(data: Mapping[str, Any], source: str = "") -> Scene:
     th = top.table("thresholds")
     if th is not None:
         extra["thresholds"] = _parse_thresholds(th)
+    # [hard_case] belongs to the hard-case suite, which validates it (validation/hard_cases/
+    # criterion.py); here only that it is a table, kept verbatim.
+    hc = top.table("hard_case")
+    if hc is not None:
+        extra["hard_case"] = dict(hc.data)
     top.finish()
 
     scene = Scene(

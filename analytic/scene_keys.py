@@ -795,6 +795,17 @@ KEYS: tuple[Key, ...] = (
         default=SpringModel.TENDON.value,
         choices=SpringModel,
     ),
+    # ---- [hard_case] ---------------------------------------------------------------------------
+    Key(
+        "",
+        "hard_case",
+        Kind.TABLE,
+        "",
+        "The criterion of a hard case (`validation/scenes/hard/*.toml`): the checks, their "
+        "references, bounds and reasons. The loader keeps the table verbatim; the hard-case suite "
+        "validates it (format: `docs/hard_cases.md`).",
+        default_text="none (not a hard case)",
+    ),
     # ---- [thresholds] --------------------------------------------------------------------------
     Key(
         "",

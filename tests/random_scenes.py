@@ -1,31 +1,29 @@
-"""Random scenes and states for the model tests (built through the public scene schema)."""
+"""Random scenes for the tests, all from the one generator :mod:`analytic.random_scenes`.
+
+* hypothesis strategies (:func:`scene_and_state`): hypothesis draws the discrete choices (n, the
+  mass exponents, control on or off) and a seed; the generator draws the rest from a numpy
+  ``Generator`` seeded by it (the examples stay small and shrink well);
+* the model tests' draws (:func:`random_scene_dict`, :func:`random_scene`): the generator's
+  unit-sized scenes (:func:`analytic.random_scenes.unit_scene_dict`) with every force table present
+  (so a test can switch any effect on), no control, and each mass's inertia a random body-axis
+  matrix or a ring; :func:`random_state` gives states off the unit sphere (which no engine plant
+  accepts, and the model must handle).
+"""
 
 from __future__ import annotations
 
 import numpy as np
 
+from analytic import random_scenes
+from analytic.random_scenes import unit as _unit
 from analytic.scene import Scene, scene_from_dict
 
 FORCE_EFFECTS = ("gravity", "springs.linear", "springs.cubic", "mass_inertia", "external_torque")
 
 
 def unit(rng: np.random.Generator, k: int = 3) -> np.ndarray:
-    v = rng.normal(size=k)
-    return v / np.linalg.norm(v)
-
-
-def random_spd(rng: np.random.Generator, scale: float = 1.0) -> np.ndarray:
-    """A random rigid-body inertia: symmetric positive definite with principal moments that
-    satisfy A + B >= C (as every mass distribution's do, and as the scene loader and MuJoCo
-    require), in a random orientation; a matrix that satisfies it is the plain ``B Bᵀ + 0.1 I``."""
-    B = rng.normal(size=(3, 3))
-    J = B @ B.T + 0.1 * np.eye(3)
-    e, V = np.linalg.eigh(J)
-    if e[2] > e[0] + e[1]:  # the largest moment brought down to the sum of the others
-        e[2] = e[0] + e[1]
-        J = V @ np.diag(e) @ V.T
-        J = (J + J.T) / 2
-    return scale * J
+    """A random unit vector of length k."""
+    return _unit(rng.normal(size=k))
 
 
 def random_scene_dict(
@@ -37,44 +35,12 @@ def random_scene_dict(
     a=None,
     d=None,
 ) -> dict:
-    """A scene dict with random physical data (same schema as the TOML files).
-
-    ``inertia_kind``: ``"body"`` (a random SPD inertia per mass, body axes) or ``"ring"``.
-    """
-    a = unit(rng) if a is None else np.asarray(a, float)
-    d = rng.normal(size=3) if d is None else np.asarray(d, float)
-    data: dict = {
-        "scene": {"name": "random", "effects": list(effects)},
-        "body": {
-            "mass": float(rng.uniform(1.0, 5.0)),
-            "inertia": rng.uniform(1.5, 3.0, 3).tolist(),
-        },
-        "rod": {"axis": a.tolist(), "offset": d.tolist()},
-        "gravity": {"vector": (rng.normal(size=3) * 3.0).tolist()},
-        # (an empty ``initial.p`` for n = 0 is refused by the loader as an unknown key)
-        "initial": {"attitude": {"quaternion": [1.0, 0.0, 0.0, 0.0]}},
-        "external_torque": {
-            "constant": rng.normal(size=3).tolist(),
-            "amplitude": rng.normal(size=3).tolist(),
-            "frequency": float(rng.uniform(0.5, 2.0)),
-        },
-    }
-    if n:
-        masses: dict = {
-            "mass": rng.uniform(0.5, 3.0, n).tolist(),
-            "p_e": rng.normal(size=n).tolist(),
-        }
-        if inertia_kind == "ring":
-            masses["ring_radius"] = rng.uniform(0.1, 1.0, n).tolist()
-        else:
-            masses["inertia_body"] = [random_spd(rng, 0.2).tolist() for _ in range(n)]
-        data["masses"] = masses
-        data["initial"]["p"] = rng.normal(size=n).tolist()
-        data["springs"] = {
-            "k_linear": rng.uniform(1.0, 10.0, n + 1).tolist(),
-            "k_cubic": rng.uniform(0.5, 5.0, n + 1).tolist(),
-        }
-    return data
+    """The generator's unit-sized model scene (:func:`analytic.random_scenes.unit_scene_dict`)
+    listing ``effects``, every force table present; ``inertia_kind``: ``"body"`` (a random SPD
+    inertia per mass, body axes) or ``"ring"``; ``a``, ``d``: the rod's axis and offset."""
+    return random_scenes.unit_scene_dict(
+        rng, n, effects, mass_inertia=inertia_kind, axis=a, offset=d
+    )
 
 
 def random_scene(rng: np.random.Generator, n: int, effects=FORCE_EFFECTS, **kw) -> Scene:
@@ -98,3 +64,26 @@ def random_state(
 def rel_err(x, ref) -> float:
     """``|x - ref| / |ref|`` (Frobenius / Euclidean norms)."""
     return float(np.linalg.norm(np.asarray(x) - np.asarray(ref)) / np.linalg.norm(ref))
+
+
+try:
+    from hypothesis import strategies as st
+except ImportError:  # the property tests skip themselves without hypothesis
+    st = None
+
+if st is not None:
+
+    @st.composite
+    def scene_and_state(draw, max_masses: int = 8, mass_decades: float = 6.0):
+        """A random valid scene (n ≤ ``max_masses``, masses over ``mass_decades`` decades, with or
+        without control) and a random time and on-manifold state of it: ``(scene, t, q, q̇)``."""
+        n = draw(st.integers(0, max_masses))
+        half = mass_decades / 2
+        expo = draw(st.lists(st.floats(-half, half), min_size=n, max_size=n))
+        controlled = draw(st.booleans())
+        rng = np.random.default_rng(draw(st.integers(0, 2**32 - 1)))
+        scene = random_scenes.random_scene(
+            rng, n, controlled=controlled, mass_exponents=np.array(expo)
+        )
+        t, q, qd = random_scenes.random_state(rng, scene)
+        return scene, t, q, qd

@@ -68,10 +68,10 @@ def test_crash_during_write_keeps_previous_file(tmp_path, monkeypatch):
 
 
 def test_case_that_raises_is_an_error_row(monkeypatch):
-    def broken(scene, th, plants):
+    def broken(*args, **kwargs):
         raise RuntimeError("boom")
 
-    monkeypatch.setitem(hc.CASES, "rod_through_C", (broken, True))
+    monkeypatch.setattr(hc.references.euler, "torque_free", broken)  # the case's reference
     row = hc.run_case("rod_through_C")
     assert row.verdict == hc.ERROR and row.error == "RuntimeError: boom"
     assert all(row.plant_verdict(e) == hc.ERROR for e in row.plants)

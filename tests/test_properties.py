@@ -17,7 +17,7 @@ from hypothesis import strategies as st
 
 import mj_bridge
 from analytic import TumblingModel, scene_from_dict
-from tests.mj_scenes import random_scene, random_state
+from tests.random_scenes import scene_and_state
 
 SCENES = Path(__file__).resolve().parents[1] / "analytic" / "scenes"
 PAPER = [
@@ -27,22 +27,6 @@ PAPER = [
     "paper_example2_controlled",
 ]
 REL = 1e-8
-
-
-@st.composite
-def scene_and_state(draw):
-    """A random valid scene (n <= 8, masses over 6 decades) and an on-manifold state, from the
-    tests' one random-scene generator (``tests/mj_scenes.py``).
-
-    Hypothesis draws n, the mass exponents, whether it is controlled and a seed; the remaining
-    continuous data come from a numpy generator seeded by it (keeps the examples small)."""
-    n = draw(st.integers(0, 8))
-    expo = draw(st.lists(st.floats(-3, 3), min_size=n, max_size=n))
-    controlled = draw(st.booleans())
-    rng = np.random.default_rng(draw(st.integers(0, 2**32 - 1)))
-    scene = random_scene(rng, n, controlled=controlled, mass_exponents=np.array(expo))
-    t, q, qd = random_state(rng, scene)
-    return scene, t, q, qd
 
 
 def _rel(x, ref) -> float:

@@ -357,8 +357,9 @@ def build_parser() -> argparse.ArgumentParser:
         help="run the hard-case stability suite and write its table",
         description="Run the hard cases (validation/scenes/hard/*.toml: a rigid body alone, stiff "
         "springs, extreme mass ratios, fast spin, long horizons, many masses, off-manifold and "
-        "conflicting requirements ...) on both engines against their stated criteria; write "
-        "OUT/hard_cases.md and OUT/hard_cases.json. Exits 1 when a case fails.",
+        "conflicting requirements ...) on every installed plant against the criterion each file "
+        "states in its [hard_case] table (docs/hard_cases.md); write OUT/hard_cases.md and "
+        "OUT/hard_cases.json. Exits 1 when a case fails.",
     )
     p.add_argument("--out", help="output directory (default: out/hard_cases)")
     p.add_argument("--fast", action="store_true", help="only the fast subset")

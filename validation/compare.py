@@ -184,6 +184,8 @@ class Check:
         series: key of the series the value summarises ("" when none).
         scale: the divisor of a relative check, in the signal's unit (1.0 for absolute checks).
         t_max: time of the worst value, s.
+        bound: the name of the threshold when ``name`` is not it ("" when it is): a hard case's
+            ``hard_*`` bound (:mod:`validation.hard_cases`), which several checks share.
     """
 
     name: str
@@ -196,6 +198,7 @@ class Check:
     series: str = ""
     scale: float = 1.0
     t_max: float = math.nan
+    bound: str = ""
 
     @property
     def label(self) -> str:
@@ -206,7 +209,7 @@ class Check:
         return f"{self.subject.slug}.{self.name}"
 
     def to_dict(self) -> dict[str, Any]:
-        return {
+        out = {
             "name": self.name,
             "subject": self.subject.value,
             "value": self.value,
@@ -219,6 +222,9 @@ class Check:
             "scale": self.scale,
             "t_max": self.t_max,
         }
+        if self.bound:
+            out["bound"] = self.bound
+        return out
 
 
 @dataclass(frozen=True)
@@ -494,6 +500,33 @@ def _bound_check(th: Threshold, subject: Subject, series: Series, scale: float =
     )
 
 
+def judge(
+    name: str,
+    subject: Subject,
+    value: float,
+    threshold: float,
+    unit: str,
+    reason: str,
+    *,
+    bound: str = "",
+    t_max: float = math.nan,
+) -> Check:
+    """A check of one value already summarised: passes when ``value`` is finite and at most
+    ``threshold`` (a NaN or an infinity fails); ``bound`` names the threshold when ``name`` is not
+    it. For values that are not a series' summary (a closed form met at sampled states, a count)."""
+    value = float(value)
+    passed = bool(math.isfinite(value) and value <= threshold)
+    return Check(
+        name, subject, value, float(threshold), unit, passed, reason, t_max=t_max, bound=bound
+    )
+
+
+def completed_check(traj: Trajectory, t_end: float | None = None) -> Check:
+    """The ``completed`` check of one run: status ``ok`` and its last sample at ``t_end`` (s;
+    default the run's own last sample)."""
+    return _completed_check(traj, t_end)
+
+
 def _completed_check(traj: Trajectory, t_end: float | None) -> Check:
     reached = float(traj.t[-1]) if traj.t.size else math.nan
     horizon = float(t_end) if t_end is not None else reached
@@ -672,8 +705,10 @@ __all__ = [
     "attitude_angle",
     "compare",
     "compare_plants",
+    "completed_check",
     "diff_key",
     "difference_series",
+    "judge",
     "mass_error_reference",
     "omega_error_reference",
     "pair_subject",
