@@ -18,11 +18,11 @@ from random_scenes import random_scene
 
 from analytic import fast_kernel as fk
 from analytic.kinematics import S, omega_of
-from mj_bridge import thresholds as th
 from mj_bridge.twin import Twin
 from model_xml import BodyFrame
 from model_xml import coordinates as co
 from model_xml.rotations import quat_to_mat
+from tests import tolerances as th
 
 MAP_ABS = 1e-13
 """Round trips of O(1..10) states through a few rotations and cross products, per component."""
@@ -114,8 +114,8 @@ def test_mujoco_maps_against_a_compiled_twin():
     for q, qd in zip(Q, QD, strict=True):
         tw.set_state(0.0, q, qd)
         mujoco.mj_forward(tw.m, tw.d)
-        _close(tw.d.xipos[tw.body_id], q[:3], th.KINEMATICS_REL)
-        _close(tw.d.ximat[tw.body_id].reshape(3, 3), S(q[3:7]), th.KINEMATICS_REL)
+        _close(tw.d.xipos[tw.body_id], q[:3], th.KINEMATICS_REL.value)
+        _close(tw.d.ximat[tw.body_id].reshape(3, 3), S(q[3:7]), th.KINEMATICS_REL.value)
 
 
 def test_paper_to_mujoco_normalises_u_and_keeps_omega():

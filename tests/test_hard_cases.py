@@ -19,6 +19,7 @@ import pytest
 from analytic import load_scene, scene_from_dict, simulate
 from mj_bridge.plants import PinocchioPlant, installed_plants
 from model_xml.rotations import quat_to_mat
+from tests import tolerances as tol
 from validation import hard_cases as hc
 from validation.compare import Subject, judge
 from validation.hard_cases.criterion import parse_criterion
@@ -334,11 +335,15 @@ def test_euler_reference_against_closed_form():
     Om = (3.5 - 2.0) / 2.0 * w0[2]
     c, s = np.cos(Om * t), np.sin(Om * t)
     ref = np.stack([w0[0] * c - w0[1] * s, w0[0] * s + w0[1] * c, np.full_like(t, w0[2])], 1)
-    np.testing.assert_allclose(w, ref, rtol=0, atol=1e-11)
-    np.testing.assert_allclose(np.linalg.norm(u, axis=1), 1.0, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(w, ref, rtol=0, atol=tol.EULER_REFERENCE_OMEGA_ABS.value)
+    np.testing.assert_allclose(
+        np.linalg.norm(u, axis=1), 1.0, rtol=0, atol=tol.EULER_REFERENCE_QUAT_NORM_ABS.value
+    )
     # angular momentum in the inertial frame is constant
     L = np.stack([quat_to_mat(u[k]) @ (J @ w[k]) for k in range(len(t))])
-    np.testing.assert_allclose(L, np.repeat(L[:1], len(t), 0), rtol=0, atol=1e-11)
+    np.testing.assert_allclose(
+        L, np.repeat(L[:1], len(t), 0), rtol=0, atol=tol.EULER_REFERENCE_MOMENTUM_ABS.value
+    )
 
 
 def test_euler_reference_needs_the_masses_at_rest_at_c():
@@ -362,9 +367,9 @@ def test_energy_split_adds_up_to_the_total():
     # and the centre of mass follows its parabola (uniform gravity, no external force); the
     # independent one (rotation matrices, not S(u)) is the same point
     par = c[0] + np.outer(tr.t, cd[0]) + 0.5 * np.outer(tr.t**2, m.g)
-    assert np.max(np.abs(c - par)) < 1e-9
-    assert np.max(np.abs(centre_of_mass.system_com(scene, tr.q) - c)) < 1e-9
-    assert np.max(np.abs(centre_of_mass.com_path(scene, tr.t) - par)) < 1e-9
+    assert np.max(np.abs(c - par)) < tol.COM_PARABOLA_ABS_M.value
+    assert np.max(np.abs(centre_of_mass.system_com(scene, tr.q) - c)) < tol.COM_PARABOLA_ABS_M.value
+    assert np.max(np.abs(centre_of_mass.com_path(scene, tr.t) - par)) < tol.COM_PARABOLA_ABS_M.value
 
 
 # ----------------------------------------------------------------------------------------------

@@ -18,7 +18,6 @@ from scipy.spatial.transform import Rotation
 from analytic.effects import Effect, SpringModel
 from analytic.scene import MujocoSettings
 from mj_bridge import Twin, installed
-from mj_bridge import thresholds as th
 from mj_bridge.callbacks import spring_user_bias
 from model_xml import (
     TORQUE_ACTUATORS,
@@ -39,8 +38,9 @@ from model_xml.primitives import (
     rod_in_principal,
 )
 from model_xml.regenerate import PAPER_SCENES, generate, xml_path
+from tests import tolerances as th
 
-# Test-only tolerances of the checked-in MJCF comparison (product ones: mj_bridge/thresholds.py).
+# Test-only tolerances of the checked-in MJCF comparison (the shared ones: tests/tolerances.py).
 MJCF_NUM_REL = 1e-12
 """A number of the checked-in MJCF vs the regenerated one, relative to the attribute's largest
 magnitude: the numbers come from an SVD (box rotation), eigh (principal frames) and a few rotations,
@@ -91,7 +91,7 @@ def test_xml_text_and_spec_give_same_qacc(label, scene):
         ctrl = rng.normal(size=m_spec.nu) * 1e3
         a1 = _qacc(m_spec, qpos, qvel, ctrl)
         a2 = _qacc(m_xml, qpos, qvel, ctrl)
-        assert np.max(np.abs(a1 - a2)) <= th.XML_VS_SPEC_QACC_REL * np.max(np.abs(a1))
+        assert np.max(np.abs(a1 - a2)) <= th.XML_VS_SPEC_QACC_REL.value * np.max(np.abs(a1))
     # Bit-identity is legitimate here: one process writes the text (repr: the shortest decimal
     # that parses back to the same double, on any machine) and compiles both with the same code.
     for field in ("body_mass", "body_inertia", "body_ipos", "body_iquat", "body_pos", "jnt_axis"):
@@ -280,7 +280,7 @@ def test_names_and_layout_example2_controlled():
         j = m.joint(joint_name(i)).id
         assert m.jnt_type[j] == mujoco.mjtJoint.mjJNT_SLIDE
         assert m.jnt_bodyid[j] == m.body(mass_name(i)).id
-        np.testing.assert_allclose(m.jnt_axis[j], scene.rod.axis, rtol=0, atol=th.ULP_REL)
+        np.testing.assert_allclose(m.jnt_axis[j], scene.rod.axis, rtol=0, atol=th.ULP_REL.value)
         # exact: the identity frame multiplies by 1 and adds 0; MuJoCo stores pos and mass as given
         np.testing.assert_allclose(m.body_pos[m.body(mass_name(i)).id], scene.rod.offset, atol=0)
         assert m.body_mass[m.body(mass_name(i)).id] == scene.masses.mass[i]
@@ -293,7 +293,7 @@ def test_names_and_layout_example2_controlled():
     assert m.body_mass[b] == scene.body.mass
     np.testing.assert_array_equal(m.body_ipos[b], np.zeros(3))
     assert m.body_subtreemass[b] == pytest.approx(
-        scene.body.mass + scene.masses.mass.sum(), rel=th.ULP_REL
+        scene.body.mass + scene.masses.mass.sum(), rel=th.ULP_REL.value
     )
     # visual geoms are massless and never collide
     assert np.all(m.geom_contype == 0) and np.all(m.geom_conaffinity == 0)
@@ -316,7 +316,7 @@ def test_rotational_inertia_total_matches_paper_J():
     dv = np.asarray(scene.rod.offset)
     J = np.diag(scene.body.inertia) + scene.masses.inertia.sum(axis=0)
     ref = J + scene.masses.mass.sum() * (dv @ dv * np.eye(3) - np.outer(dv, dv))
-    np.testing.assert_allclose(I_tot, ref, rtol=0, atol=th.INERTIA_SUM_REL * np.max(ref))
+    np.testing.assert_allclose(I_tot, ref, rtol=0, atol=th.INERTIA_SUM_REL.value * np.max(ref))
 
 
 def test_effects_map_onto_the_model():
@@ -337,7 +337,9 @@ def test_effects_map_onto_the_model():
     pad = off.body_inertia[off.body("mass1").id]
     assert np.all(pad < 1e-8 * scene.body.inertia.min())
     np.testing.assert_allclose(
-        off.body_inertia[off.body("BR").id] + scene.n * pad[0], scene.body.inertia, rtol=th.ULP_REL
+        off.body_inertia[off.body("BR").id] + scene.n * pad[0],
+        scene.body.inertia,
+        rtol=th.ULP_REL.value,
     )
 
     bare = build_spec(scene.with_effects(set())).compile()
@@ -364,7 +366,7 @@ def test_tendon_springs_follow_eq38():
     kl, kn = scene.springs.k_linear, scene.springs.k_cubic
     f = kl * ext + kn * ext**3
     F_ref = f[1:] - f[:-1]  # -∂U/∂p
-    tol = th.SPRING_CLOSED_FORM_REL
+    tol = th.SPRING_CLOSED_FORM_REL.value
     np.testing.assert_allclose(d.qfrc_passive[6:], F_ref, rtol=0, atol=tol * np.abs(f).max())
     U_ref = np.sum(0.5 * kl * ext**2 + 0.25 * kn * ext**4)
     assert d.energy[0] == pytest.approx(U_ref, rel=tol)
@@ -400,7 +402,9 @@ def test_spring_actuators_agree_with_tendon_springs():
             t, q, qd = random_state(rng, scene)
             a1 = tw_t.acceleration(t, q, qd)
             a2 = tw_a.acceleration(t, q, qd)
-            assert np.max(np.abs(a1 - a2)) <= th.SPRING_ACTUATOR_VS_TENDON_REL * np.max(np.abs(a1))
+            assert np.max(np.abs(a1 - a2)) <= th.SPRING_ACTUATOR_VS_TENDON_REL.value * np.max(
+                np.abs(a1)
+            )
 
 
 def test_body_frame_option_moves_only_the_frame():
@@ -409,7 +413,9 @@ def test_body_frame_option_moves_only_the_frame():
     bf = BodyFrame(pos=np.array([1.0, -2.0, 0.5]), quat=np.array([0.5, 0.5, 0.5, 0.5]))
     m = build_spec(scene, bf).compile()
     b = m.body("BR").id
-    assert np.linalg.norm(m.body_ipos[b]) == pytest.approx(np.linalg.norm(bf.pos), rel=th.ULP_REL)
+    assert np.linalg.norm(m.body_ipos[b]) == pytest.approx(
+        np.linalg.norm(bf.pos), rel=th.ULP_REL.value
+    )
     assert m.body_mass[b] == scene.body.mass
 
 
@@ -418,16 +424,18 @@ def test_primitives_reproduce_example1_mass_properties():
     the rod line in principal axes gives the paper's a and d (to 1e-3)."""
     prims, rod = paper_example1_primitives()
     props = mass_properties(prims)
-    assert props.mass == pytest.approx(4.597e5, rel=th.PRIMITIVE_SIG_DIGITS_REL)
+    assert props.mass == pytest.approx(4.597e5, rel=th.PRIMITIVE_SIG_DIGITS_REL.value)
     paper_J = np.array([1.3626e7, 1.5333e7, 0.3848e7])
     A = match_axes(props, paper_J, reference_axis=np.array([-0.3985, -0.1481, 0.9051]))
     moments = np.array([A[:, k] @ _inertia_in_design(props) @ A[:, k] for k in range(3)])
-    np.testing.assert_allclose(moments, paper_J, rtol=th.PRIMITIVE_SIG_DIGITS_REL)
+    np.testing.assert_allclose(moments, paper_J, rtol=th.PRIMITIVE_SIG_DIGITS_REL.value)
     a, d = rod_in_principal(props, rod["point"], rod["direction"], A)
-    np.testing.assert_allclose(a, [-0.3985, -0.1481, 0.9051], atol=th.PRIMITIVE_ROD_ABS)
-    np.testing.assert_allclose(d, [3.2616, 1.4196, -0.1623], atol=th.PRIMITIVE_ROD_ABS)
+    np.testing.assert_allclose(a, [-0.3985, -0.1481, 0.9051], atol=th.PRIMITIVE_ROD_ABS.value)
+    np.testing.assert_allclose(d, [3.2616, 1.4196, -0.1623], atol=th.PRIMITIVE_ROD_ABS.value)
     # independent closed form for the mass: ρ (box volume + rod volume)
-    assert props.mass == pytest.approx(2700 * (10 * 6 * 2 + np.pi * 16), rel=th.MASS_FORMULA_REL)
+    assert props.mass == pytest.approx(
+        2700 * (10 * 6 * 2 + np.pi * 16), rel=th.MASS_FORMULA_REL.value
+    )
 
 
 def _inertia_in_design(props):
@@ -441,17 +449,17 @@ def test_closed_shell_cylinder_is_thin_wall_limit():
         [Primitive(PrimitiveKind.CLOSED_SHELL, (r, h / 2), density=rho, thickness=t)]
     )
     assert props.mass == pytest.approx(
-        rho * t * (2 * np.pi * r * h + 2 * np.pi * r * r), rel=th.MASS_FORMULA_REL
+        rho * t * (2 * np.pi * r * h + 2 * np.pi * r * r), rel=th.MASS_FORMULA_REL.value
     )
     # axial moment of the lateral surface (m r²) and the two caps (m r²/2 each)
     m_lat, m_cap = rho * t * 2 * np.pi * r * h, rho * t * np.pi * r * r
     I = _inertia_in_design(props)
     assert I[2, 2] == pytest.approx(
-        m_lat * r * r + 2 * m_cap * r * r / 2, rel=th.SHELL_CLOSED_FORM_REL
+        m_lat * r * r + 2 * m_cap * r * r / 2, rel=th.SHELL_CLOSED_FORM_REL.value
     )
     # transverse: lateral surface m (r²/2 + h²/12), each cap m (r²/4 + (h/2)²)
     I_t = m_lat * (r * r / 2 + h * h / 12) + 2 * m_cap * (r * r / 4 + h * h / 4)
-    assert I[0, 0] == pytest.approx(I_t, rel=th.SHELL_CLOSED_FORM_REL)
+    assert I[0, 0] == pytest.approx(I_t, rel=th.SHELL_CLOSED_FORM_REL.value)
 
 
 def test_thick_tube_matches_closed_form():
@@ -461,11 +469,13 @@ def test_thick_tube_matches_closed_form():
     tube = Primitive(PrimitiveKind.TUBE, (R, h / 2), density=rho, thickness=t)
     props = mass_properties([tube])
     m = rho * np.pi * (R * R - r * r) * h
-    assert props.mass == pytest.approx(m, rel=th.TUBE_MESH_REL)
+    assert props.mass == pytest.approx(m, rel=th.TUBE_MESH_REL.value)
     I = _inertia_in_design(props)
-    assert I[2, 2] == pytest.approx(m * (R * R + r * r) / 2, rel=th.TUBE_MESH_REL)
-    assert I[0, 0] == pytest.approx(m * (3 * (R * R + r * r) + h * h) / 12, rel=th.TUBE_MESH_REL)
-    np.testing.assert_allclose(props.com, 0.0, atol=th.KINEMATICS_REL * R)
+    assert I[2, 2] == pytest.approx(m * (R * R + r * r) / 2, rel=th.TUBE_MESH_REL.value)
+    assert I[0, 0] == pytest.approx(
+        m * (3 * (R * R + r * r) + h * h) / 12, rel=th.TUBE_MESH_REL.value
+    )
+    np.testing.assert_allclose(props.com, 0.0, atol=th.KINEMATICS_REL.value * R)
     # with end caps (discs of radius r inside the ends): parallel-axis closed form
     caps = [
         Primitive(PrimitiveKind.CYLINDER, (r, t / 2), np.array([0, 0, z]), density=rho)
@@ -473,10 +483,10 @@ def test_thick_tube_matches_closed_form():
     ]
     props2 = mass_properties([tube, *caps])
     mc = rho * np.pi * r * r * t
-    assert props2.mass == pytest.approx(m + 2 * mc, rel=th.TUBE_MESH_REL)
+    assert props2.mass == pytest.approx(m + 2 * mc, rel=th.TUBE_MESH_REL.value)
     I2 = _inertia_in_design(props2)
     Ic_t = mc * (3 * r * r + t * t) / 12 + mc * (h / 2 - t / 2) ** 2
-    assert I2[0, 0] == pytest.approx(I[0, 0] + 2 * Ic_t, rel=th.TUBE_MESH_REL)
+    assert I2[0, 0] == pytest.approx(I[0, 0] + 2 * Ic_t, rel=th.TUBE_MESH_REL.value)
 
 
 def test_bad_primitive_raises_naming_field():

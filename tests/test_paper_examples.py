@@ -11,9 +11,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from analytic import thresholds as th
 from analytic.scene import load_scene
 from analytic.simulate import simulate
+from tests import tolerances as th
 from validation.scenes import scene_path
 from validation.summary import drift_figures
 
@@ -36,7 +36,7 @@ def test_uncontrolled_quaternion_norm(uncontrolled):
     tr = uncontrolled
     assert tr.status.value == "ok"
     # At the integrator's steps: the paper's measure (its O(1e-15) claim).
-    assert tr.info["max_quat_norm_error_at_steps"] <= th.QUAT_NORM_UNCONTROLLED
+    assert tr.info["max_quat_norm_error_at_steps"] <= th.QUAT_NORM_UNCONTROLLED.value
 
 
 def test_uncontrolled_momentum_and_energy_conserved(uncontrolled):
@@ -46,12 +46,12 @@ def test_uncontrolled_momentum_and_energy_conserved(uncontrolled):
     rel_L = np.max(np.linalg.norm(L - L[0], axis=1)) / np.linalg.norm(L[0])
     E = iv.energy
     rel_E = np.max(np.abs(E - E[0])) / np.max(np.abs(E))
-    assert rel_L <= th.DRIFT_UNCONTROLLED
-    assert rel_E <= th.DRIFT_UNCONTROLLED
+    assert rel_L <= th.DRIFT_UNCONTROLLED.value
+    assert rel_E <= th.DRIFT_UNCONTROLLED.value
     # Linear momentum changes only by gravity: P(t) = P(0) + m_T g t (independent closed form).
     assert (
         np.max(np.abs(iv.linear_momentum_balance())) / np.max(np.abs(iv.linear_momentum))
-        <= th.DRIFT_UNCONTROLLED
+        <= th.DRIFT_UNCONTROLLED.value
     )
     # No control acts: the control outputs are exactly zero.
     assert not np.any(tr.torque) and not np.any(tr.rod_forces) and not np.any(tr.force_at_C)
@@ -78,14 +78,14 @@ def test_controlled_error_dynamics_closed_form(controlled):
     sc = load_scene(scene_path(tr.scene))
     gamma = sc.control.omega.gain[0, 0]
     e_w_ref = _omega_closed_form(tr, gamma)
-    assert np.max(np.abs(tr.tracking.e_omega - e_w_ref)) <= th.ERROR_DYNAMICS_ABS_OMEGA
+    assert np.max(np.abs(tr.tracking.e_omega - e_w_ref)) <= th.ERROR_DYNAMICS_ABS_OMEGA.value
     mt = sc.control.masses
     idx = np.array(mt.indices)
     e0 = tr.tracking.e_p[0]
     pdot0 = sc.initial.pdot[idx]
     pbar_dot0 = 0.0  # -l λ sin(0)
     e_p_ref = _p_closed_form(tr.t, e0, pdot0 - pbar_dot0, mt.alpha, mt.beta)
-    assert np.max(np.abs(tr.tracking.e_p - e_p_ref)) <= th.ERROR_DYNAMICS_ABS_P
+    assert np.max(np.abs(tr.tracking.e_p - e_p_ref)) <= th.ERROR_DYNAMICS_ABS_P.value
 
 
 # The paper's claims (docs/errata.md, "What reproduced means"): (e_p order, e_ω order).
@@ -102,17 +102,17 @@ PAPER_ORDERS_60S = {
 def test_controlled_paper_orders_at_20s(controlled):
     tr = controlled
     ep, ew = PAPER_ORDERS_20S[tr.scene]
-    assert np.max(np.abs(tr.tracking.e_p[-1])) < ep * th.ORDER_FACTOR
-    assert np.max(np.abs(tr.tracking.e_omega[-1])) < ew * th.ORDER_FACTOR
+    assert np.max(np.abs(tr.tracking.e_p[-1])) < ep * th.ORDER_FACTOR.value
+    assert np.max(np.abs(tr.tracking.e_omega[-1])) < ew * th.ORDER_FACTOR.value
 
 
 def test_controlled_force_at_C_zero_and_balances_close(controlled):
     tr = controlled
-    assert np.max(np.abs(tr.force_at_C)) == th.FORCE_AT_C
+    assert np.max(np.abs(tr.force_at_C)) == th.FORCE_AT_C.value
     d = drift_figures(tr)
-    assert d["angular_momentum_balance_rel"] <= th.BALANCE_CONTROLLED
-    assert d["energy_balance_rel"] <= th.BALANCE_CONTROLLED
-    assert d["linear_momentum_balance_rel"] <= th.BALANCE_CONTROLLED
+    assert d["angular_momentum_balance_rel"] <= th.BALANCE_CONTROLLED.value
+    assert d["energy_balance_rel"] <= th.BALANCE_CONTROLLED.value
+    assert d["linear_momentum_balance_rel"] <= th.BALANCE_CONTROLLED.value
     # The control really acts: the balances are not trivially closed by a zero control.
     assert np.max(np.abs(tr.invariants.work)) > 1e-3 * np.max(np.abs(tr.invariants.energy))
 
@@ -132,5 +132,5 @@ def test_subset_control_leaves_other_masses_free(controlled):
 def test_controlled_paper_orders_at_60s(name):
     tr = _run(name, t_end=60.0)
     ep, ew = PAPER_ORDERS_60S[name]
-    assert np.max(np.abs(tr.tracking.e_p[-1])) < ep * th.ORDER_FACTOR
-    assert np.max(np.abs(tr.tracking.e_omega[-1])) < ew * th.ORDER_FACTOR
+    assert np.max(np.abs(tr.tracking.e_p[-1])) < ep * th.ORDER_FACTOR.value
+    assert np.max(np.abs(tr.tracking.e_omega[-1])) < ew * th.ORDER_FACTOR.value

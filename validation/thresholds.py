@@ -24,6 +24,10 @@ At those settings both integrators' global errors are far below these bounds ove
 decades covers the growth of the errors over a tumbling 20 s run (the free motion is sensitive to
 initial conditions) without hiding a modelling difference, which shows at 1e-3 or larger (a missing
 inertia term, a wrong spring force, a sign).
+
+Each bound is an :class:`analytic.threshold.Threshold` (value, unit, reason), the one record type
+of the project; the tolerances only the tests use are records of the same type in
+``tests/tolerances.py``.
 """
 
 from __future__ import annotations
@@ -31,42 +35,10 @@ from __future__ import annotations
 import difflib
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from typing import Any
 
-
-@dataclass(frozen=True)
-class Threshold:
-    """One named bound.
-
-    Attributes:
-        name: the key used in reports and in a scene's ``[thresholds]`` table.
-        value: the bound (inclusive: a check passes when ``checked value <= value``).
-        unit: unit of ``value`` ("1" for relative or dimensionless bounds).
-        reason: why this number.
-        relative: whether the checked value is divided by a scale (see the module docstring).
-        floor: for relative thresholds, the smallest scale used, in the signal's unit.
-        source: ``default`` or ``scene``.
-    """
-
-    name: str
-    value: float
-    unit: str
-    reason: str
-    relative: bool = False
-    floor: float = 0.0
-    source: str = "default"
-
-    def __post_init__(self) -> None:
-        if not (
-            isinstance(self.value, int | float) and math.isfinite(self.value) and self.value >= 0
-        ):
-            raise ValueError(
-                f"thresholds.{self.name}: must be a finite non-negative number (got {self.value!r})"
-            )
-        if self.relative and not self.floor > 0:
-            raise ValueError(f"thresholds.{self.name}.floor: must be positive (got {self.floor!r})")
-
+from analytic.threshold import Threshold, ThresholdSource
 
 _RK4_DOP = (
     "both integrators' global errors are ~1e-9 or smaller at the scene settings (DOP853 rtol "
@@ -252,7 +224,7 @@ def _override(base: Threshold, spec: Any) -> Threshold:
         base,
         value=float(spec),
         reason=f"{reason} (default {base.value:g}: {base.reason})",
-        source="scene",
+        source=ThresholdSource.SCENE,
     )
 
 
@@ -261,5 +233,6 @@ __all__ = [
     "REFEREE_NOISE_FRACTION",
     "REFEREE_SEPARATION",
     "Threshold",
+    "ThresholdSource",
     "thresholds_for",
 ]
