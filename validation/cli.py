@@ -226,19 +226,15 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
-    from validation.bench import run
+    from validation.bench import run, write_bench
 
     def say(s: str) -> None:
         print(s, flush=True)
 
-    if not args.out:
+    if args.out:
+        write_bench(args.out, args.skip_long, out=say)
+    else:
         run(args.skip_long, None, out=say)
-        return 0
-    from validation.outputs import output_run
-
-    with output_run(Path(args.out), "bench") as orun:
-        run(args.skip_long, str(orun.path / "bench.json"), out=lambda s: None)
-    say(f"written: {orun.final('bench.json')}")
     return 0
 
 
@@ -372,8 +368,9 @@ def build_parser() -> argparse.ArgumentParser:
         "bare step, n = 1000 vs n = 10, and the 60 s controlled Example 1 vs MuJoCo RK4 at the "
         "same accuracy. Numbers only: exits 0 whether or not a goal holds.",
     )
-    p.add_argument("--out", help="also write OUT/bench.json")
-    p.add_argument("--skip-long", action="store_true", help="skip the 60 s Example 1 goal")
+    from validation.bench import add_arguments as add_bench_arguments
+
+    add_bench_arguments(p)  # the options of python -m validation.bench, one definition
     p.set_defaults(func=cmd_bench)
     return parser
 
