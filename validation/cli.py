@@ -103,19 +103,15 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
 def cmd_validate(args: argparse.Namespace) -> int:
     from validation.outputs import default_out_dir
-    from validation.progress import Progress
+    from validation.progress import StageProgress, Status
     from validation.scenes import DEFAULT_VALIDATE_SCENE, resolve_scene
     from validation.validate import run_validation
 
     scene = resolve_scene(args.scene, DEFAULT_VALIDATE_SCENE)
     out = Path(args.out) if args.out else default_out_dir("validate_", scene.name)
     t_end = args.t_end or scene.output.t_end
-    prog = Progress(f"validate {scene.name}", t_end)
-
-    def progress(stage: str, t: float) -> None:
-        prog.label = f"validate {scene.name} [{stage}]"
-        prog(t)
-
+    _warm_up_checked(scene, args, Status())
+    progress = StageProgress(f"validate {scene.name}", t_end)
     try:
         res = run_validation(
             scene,
@@ -127,7 +123,7 @@ def cmd_validate(args: argparse.Namespace) -> int:
             plants=args.plants,
         )
     finally:
-        prog.close()
+        progress.close()
     n_fail = sum(1 for c in res.checks if not c.passed)
     verdict = "PASS" if res.passed else "FAIL"
     print(f"{verdict}: {len(res.checks) - n_fail}/{len(res.checks)} checks passed for {scene.name}")
@@ -143,6 +139,24 @@ def cmd_validate(args: argparse.Namespace) -> int:
             print(f"  referee: {v.text}")
     print(f"report: {res.out_dir / 'report.md'}  recording: {res.out_dir / 'run.rrd'}")
     return 0 if res.passed else EXIT_FAILED
+
+
+def _warm_up_checked(scene, args: argparse.Namespace, status) -> None:
+    """The input checks of :func:`validation.validate.run_validation` (bad input is refused before
+    anything is compiled), then :func:`validation.warmup.warm_up` for the chosen plants."""
+    from analytic.trajectory import Engine
+    from mj_bridge.plants import installed_plants, parse_plants, plant
+    from validation.preflight import check_validation_inputs
+    from validation.warmup import warm_up
+
+    chosen = parse_plants(args.plants) if args.plants is not None else installed_plants()
+    mujoco = Engine.MUJOCO in chosen
+    check_validation_inputs(
+        scene, integrator=args.integrator, dt=args.dt, t_end=args.t_end, mujoco=mujoco
+    )
+    for e in chosen:
+        plant(e).check_scene(scene)
+    warm_up(scene, chosen, status)
 
 
 def cmd_export_mjcf(args: argparse.Namespace) -> int:
