@@ -354,7 +354,8 @@ def warm_up(
         return WarmupResult()
     say = progress or (lambda _line: None)
     cached = cache_writable(cold)
-    kernel_cold = ANALYTIC in cold
+    # every plant embeds the analytic kernel: compiled first, whichever plants run
+    kernel_cold = ANALYTIC in cold or bool(cold_engines([ANALYTIC]))
     rest = list(cold)
     if concurrent is None:
         concurrent = free_cpus() >= 2
