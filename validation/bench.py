@@ -1,7 +1,8 @@
 """Benchmarks: what the analytic engine costs, and the fast engine's speed goals as ratios
 measured in this one process (numbers printed, never asserted; tests cover correctness).
 
-``python -m validation.bench [--skip-long] [--json FILE]`` (also ``tumble bench``) prints
+``python -m validation.bench [--skip-long] [--out DIR]`` is ``tumble bench``: the same options, the
+same output. It prints
 
 * the cost of one evaluation of the controlled dynamics (``M``, ``Q``, Udwadia-Kalaba with control)
   for n = 2, 5, 50 on the numpy reference path and on the compiled path, next to MuJoCo's
@@ -9,7 +10,13 @@ measured in this one process (numbers printed, never asserted; tests cover corre
 * every goal of :mod:`validation.goals` with its ratio and whether it holds (the 60 s Example 1
   goal takes about a minute; ``--skip-long`` leaves it out); the Pinocchio plant's goal is skipped,
   with the reason printed, when ``pin`` is not installed;
-* with ``--json``, the same numbers written atomically to FILE.
+* with ``--out DIR``, the same numbers in ``DIR/bench.json`` (with ``DIR/manifest.json``, one run
+  of :func:`validation.outputs.output_run`, like every other command's ``--out``); the file carries
+  the provenance block of :mod:`validation.provenance` and follows
+  ``validation/schemas/bench.schema.json`` (``docs/json-output.md``).
+
+``--json FILE`` (this module's former option, a file rather than a directory) still writes FILE,
+with a deprecation warning: use ``--out DIR``.
 """
 
 from __future__ import annotations
@@ -20,16 +27,21 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")  # small matrices: one BLAS thread (tests/conftest.py)
 
 import argparse  # noqa: E402
+import sys  # noqa: E402
+from pathlib import Path  # noqa: E402
+from typing import TYPE_CHECKING, Any  # noqa: E402
 
-import numpy as np  # noqa: E402
-
-from analytic.model import TumblingModel  # noqa: E402
-from analytic.scene import Scene  # noqa: E402
-from validation.timing import chain_scene, time_call  # noqa: E402
+if TYPE_CHECKING:  # the engines are imported when measuring, so `tumble --help` stays quick
+    from analytic.scene import Scene
 
 
 def analytic_eval_cost(scene: Scene, compiled: bool = False) -> float:
     """Seconds per evaluation of the controlled dynamics on the numpy path or the compiled one."""
+    import numpy as np
+
+    from analytic.model import TumblingModel
+    from validation.timing import time_call
+
     q, qd = scene.initial.q0(), scene.initial.qdot0()
     if compiled:
         from analytic.fast import FastModel
@@ -50,6 +62,8 @@ def mujoco_forward_cost(scene: Scene) -> float | None:
         from model_xml import build_spec
     except ImportError:
         return None
+    from validation.timing import time_call
+
     m = build_spec(scene).compile()
     d = mujoco.MjData(m)
     mujoco.mj_forward(m, d)
@@ -58,6 +72,8 @@ def mujoco_forward_cost(scene: Scene) -> float | None:
 
 def evaluation_table(ns: tuple[int, ...] = (2, 5, 50)) -> list[dict[str, float]]:
     """µs per evaluation for chain scenes of n masses: numpy path, compiled path, mj_forward."""
+    from validation.timing import chain_scene
+
     rows = []
     for n in ns:
         sc = chain_scene(n)
@@ -74,8 +90,22 @@ def evaluation_table(ns: tuple[int, ...] = (2, 5, 50)) -> list[dict[str, float]]
 
 
 def run(skip_long: bool = False, json_path: str | None = None, out=print) -> bool:
-    """Print the table and the goals; returns whether every goal measured holds."""
+    """Print the table and the goals, and write them to ``json_path`` when given; returns whether
+    every goal measured holds."""
+    holds, doc = measure_and_print(skip_long, out)
+    if json_path:
+        from validation.atomic import write_text
+        from validation.provenance import dumps
+
+        write_text(json_path, dumps(doc))
+        out(f"written: {json_path}")
+    return holds
+
+
+def measure_and_print(skip_long: bool = False, out=print) -> tuple[bool, dict[str, Any]]:
+    """Measure, print as it goes; returns (every goal measured holds, the ``bench.json`` document)."""
     from validation import goals
+    from validation.provenance import FileKind, provenance
 
     out("one evaluation of the controlled dynamics (median, µs)")
     out(f"  {'n':>4} {'numpy':>10} {'compiled':>10} {'mj_forward':>11}")
@@ -93,41 +123,84 @@ def run(skip_long: bool = False, json_path: str | None = None, out=print) -> boo
             out(f"  SKIPPED  {g.name}: {g.skipped}")
         else:
             out(f"  {g.verdict}  {g.name}: {g.value:.3g} (≤ {g.limit:g})")
-    if json_path:
-        import json
+    holds = all(g.holds for g in measured if not g.skipped)
+    return holds, bench_document(rows, measured, provenance(FileKind.BENCH))
 
-        from validation.atomic import write_text
 
-        doc = {
-            "evaluation_us": rows,
-            "goals": [
-                {
-                    "name": g.name,
-                    "ratio": None if g.skipped else g.value,
-                    "limit": g.limit,
-                    "holds": g.holds,
-                    "verdict": g.verdict,
-                    "skipped": g.skipped or None,
-                    "extrapolated": g.extrapolated,
-                    "detail": g.detail,
-                    "data": g.data,
-                }
-                for g in measured
-            ],
-        }
-        write_text(json_path, json.dumps(doc, indent=2, allow_nan=True) + "\n")
-        out(f"written: {json_path}")
-    return all(g.holds for g in measured if not g.skipped)
+def bench_document(
+    rows: list[dict[str, float]], measured: list, block: dict[str, Any]
+) -> dict[str, Any]:
+    """The content of ``bench.json``: the provenance block, the evaluation table and the goals
+    (schema ``validation/schemas/bench.schema.json``; a NaN, e.g. no MuJoCo, is written as null)."""
+    return {
+        "provenance": block,
+        "evaluation_us": rows,
+        "goals": [
+            {
+                "name": g.name,
+                "ratio": None if g.skipped else g.value,
+                "limit": g.limit,
+                "holds": g.holds,
+                "verdict": g.verdict,
+                "skipped": g.skipped or None,
+                "extrapolated": g.extrapolated,
+                "detail": g.detail,
+                "data": g.data,
+            }
+            for g in measured
+        ],
+    }
+
+
+def write_bench(out_dir: str | Path, skip_long: bool = False, out=print) -> Path:
+    """Measure, print, and write ``out_dir/bench.json`` as one output run (with
+    ``manifest.json``); returns the final path of ``bench.json``."""
+    from validation.atomic import write_text
+    from validation.outputs import output_run
+    from validation.provenance import dumps
+
+    with output_run(Path(out_dir), "bench") as orun:
+        _, doc = measure_and_print(skip_long, out)
+        write_text(orun.path / "bench.json", dumps(doc))
+    final = orun.final("bench.json")
+    out(f"written: {final}")
+    return final
+
+
+def add_arguments(ap: argparse.ArgumentParser) -> None:
+    """The options of ``tumble bench`` and ``python -m validation.bench`` (one definition)."""
+    ap.add_argument(
+        "--out", metavar="DIR", help="also write DIR/bench.json (with DIR/manifest.json)"
+    )
+    ap.add_argument("--skip-long", action="store_true", help="skip the 60 s Example 1 goal")
 
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(
         prog="python -m validation.bench", description=__doc__.split("\n")[0]
     )
-    ap.add_argument("--skip-long", action="store_true", help="skip the 60 s Example 1 goal")
-    ap.add_argument("--json", help="also write the numbers to this JSON file")
+    add_arguments(ap)
+    ap.add_argument(
+        "--json", metavar="FILE", help="deprecated: use --out DIR (writes DIR/bench.json)"
+    )
     args = ap.parse_args(argv)
-    run(args.skip_long, args.json, out=lambda s: print(s, flush=True))
+
+    def say(s: str) -> None:
+        print(s, flush=True)
+
+    if args.json and args.out:
+        ap.error("--json is the deprecated form of --out: give one of them")
+    if args.json:
+        print(
+            "python -m validation.bench: warning: --json FILE is deprecated; use --out DIR "
+            "(writes DIR/bench.json with a manifest, as `tumble bench --out DIR`)",
+            file=sys.stderr,
+        )
+        run(args.skip_long, args.json, out=say)
+    elif args.out:
+        write_bench(args.out, args.skip_long, out=say)
+    else:
+        run(args.skip_long, None, out=say)
     return 0
 
 

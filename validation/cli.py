@@ -103,19 +103,15 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
 def cmd_validate(args: argparse.Namespace) -> int:
     from validation.outputs import default_out_dir
-    from validation.progress import Progress
+    from validation.progress import StageProgress, Status
     from validation.scenes import DEFAULT_VALIDATE_SCENE, resolve_scene
     from validation.validate import run_validation
 
     scene = resolve_scene(args.scene, DEFAULT_VALIDATE_SCENE)
     out = Path(args.out) if args.out else default_out_dir("validate_", scene.name)
     t_end = args.t_end or scene.output.t_end
-    prog = Progress(f"validate {scene.name}", t_end)
-
-    def progress(stage: str, t: float) -> None:
-        prog.label = f"validate {scene.name} [{stage}]"
-        prog(t)
-
+    _warm_up_checked(scene, args, Status())
+    progress = StageProgress(f"validate {scene.name}", t_end)
     try:
         res = run_validation(
             scene,
@@ -128,7 +124,7 @@ def cmd_validate(args: argparse.Namespace) -> int:
             figure_formats=args.figure_format,
         )
     finally:
-        prog.close()
+        progress.close()
     n_fail = sum(1 for c in res.checks if not c.passed)
     verdict = "PASS" if res.passed else "FAIL"
     print(f"{verdict}: {len(res.checks) - n_fail}/{len(res.checks)} checks passed for {scene.name}")
@@ -146,6 +142,24 @@ def cmd_validate(args: argparse.Namespace) -> int:
             print(f"  referee: {v.text}")
     print(f"report: {res.out_dir / 'report.md'}  recording: {res.out_dir / 'run.rrd'}")
     return 0 if res.passed else EXIT_FAILED
+
+
+def _warm_up_checked(scene, args: argparse.Namespace, status) -> None:
+    """The input checks of :func:`validation.validate.run_validation` (bad input is refused before
+    anything is compiled), then :func:`validation.warmup.warm_up` for the chosen plants."""
+    from analytic.trajectory import Engine
+    from mj_bridge.plants import installed_plants, parse_plants, plant
+    from validation.preflight import check_validation_inputs
+    from validation.warmup import warm_up
+
+    chosen = parse_plants(args.plants) if args.plants is not None else installed_plants()
+    mujoco = Engine.MUJOCO in chosen
+    check_validation_inputs(
+        scene, integrator=args.integrator, dt=args.dt, t_end=args.t_end, mujoco=mujoco
+    )
+    for e in chosen:
+        plant(e).check_scene(scene)
+    warm_up(scene, chosen, status)
 
 
 def cmd_export_mjcf(args: argparse.Namespace) -> int:
@@ -229,19 +243,15 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
-    from validation.bench import run
+    from validation.bench import run, write_bench
 
     def say(s: str) -> None:
         print(s, flush=True)
 
-    if not args.out:
+    if args.out:
+        write_bench(args.out, args.skip_long, out=say)
+    else:
         run(args.skip_long, None, out=say)
-        return 0
-    from validation.outputs import output_run
-
-    with output_run(Path(args.out), "bench") as orun:
-        run(args.skip_long, str(orun.path / "bench.json"), out=lambda s: None)
-    say(f"written: {orun.final('bench.json')}")
     return 0
 
 
@@ -393,8 +403,9 @@ def build_parser() -> argparse.ArgumentParser:
         "bare step, n = 1000 vs n = 10, and the 60 s controlled Example 1 vs MuJoCo RK4 at the "
         "same accuracy. Numbers only: exits 0 whether or not a goal holds.",
     )
-    p.add_argument("--out", help="also write OUT/bench.json")
-    p.add_argument("--skip-long", action="store_true", help="skip the 60 s Example 1 goal")
+    from validation.bench import add_arguments as add_bench_arguments
+
+    add_bench_arguments(p)  # the options of python -m validation.bench, one definition
     p.set_defaults(func=cmd_bench)
 
     p = sub.add_parser(

@@ -1,9 +1,28 @@
-"""Progress on stderr for runs that take more than a few seconds; silent when not a terminal."""
+"""Progress on stderr for runs that take more than a few seconds.
+
+* :class:`Progress`: ``progress(t)`` of one run; on a terminal a single updating line
+  (``label: t / t_end s (%)``), silent when stderr is not a terminal (``tumble simulate``).
+* :class:`StageProgress`: ``progress(stage, t)`` of a run in stages (``tumble validate``'s plants);
+  on a terminal the same single updating line, naming the stage; elsewhere (a pipe, a log file,
+  CI) one plain line when each stage starts and one when the last one ends, without carriage
+  returns.
+* :class:`Status`: free-text events (the kernels' compilation, :mod:`validation.warmup`), one line
+  each.
+
+Lines written when stderr is not a terminal start with ``tumble: `` so they read apart from the
+results on stdout and from warnings (``tumble: warning: ...``).
+"""
 
 from __future__ import annotations
 
 import sys
 import time
+
+PREFIX = "tumble: "
+
+
+def _is_tty(stream) -> bool:
+    return bool(getattr(stream, "isatty", lambda: False)())
 
 
 class Progress:
@@ -17,7 +36,7 @@ class Progress:
         self.t_end = t_end
         self.delay = delay
         self.stream = stream or sys.stderr
-        self.enabled = bool(getattr(self.stream, "isatty", lambda: False)())
+        self.enabled = _is_tty(self.stream)
         self.start = time.monotonic()
         self.last = 0.0
         self.shown = False
@@ -38,3 +57,68 @@ class Progress:
         if self.shown:
             self.stream.write("\n")
             self.stream.flush()
+
+
+class StageProgress:
+    """Callable ``progress(stage, t)`` for a run made of stages (each plant of ``tumble validate``).
+
+    Args:
+        label: what runs (``validate paper_example1``).
+        t_end: the horizon every plant simulates, s.
+        stream: default stderr.
+        delay: on a terminal, nothing is drawn before this many seconds (short runs stay quiet).
+
+    Not a terminal: one line when a stage starts (``tumble: <label>: analytic plant, 0 -> 20 s``)
+    and, at :meth:`close`, one line with each stage's wall time (from its first to its last
+    report). On a terminal: one updating line.
+    """
+
+    PLANTS = frozenset({"analytic", "mujoco", "pinocchio"})
+
+    def __init__(self, label: str, t_end: float, stream=None, delay: float = 2.0):
+        self.label = label
+        self.t_end = t_end
+        self.stream = stream or sys.stderr
+        self.tty = _is_tty(self.stream)
+        self.bar = Progress(label, t_end, delay=delay, stream=self.stream)
+        self.stage: str | None = None
+        self.walls: dict[str, float] = {}
+        self._t0 = 0.0
+
+    def __call__(self, stage: str, t: float) -> None:
+        now = time.monotonic()
+        if stage != self.stage:
+            self.stage, self._t0 = stage, now
+            if not self.tty:
+                what = f"{stage} plant, 0 -> {self.t_end:g} s" if stage in self.PLANTS else stage
+                self.stream.write(f"{PREFIX}{self.label}: {what}\n")
+                self.stream.flush()
+        self.walls[stage] = now - self._t0
+        self.bar.label = f"{self.label} [{stage}]"
+        self.bar(t)
+
+    def close(self) -> None:
+        self.bar.close()
+        if self.walls and not self.tty:
+            times = ", ".join(f"{s} {w:.1f} s" for s, w in self.walls.items())
+            self.stream.write(f"{PREFIX}{self.label}: stages done ({times})\n")
+            self.stream.flush()
+        self.walls = {}
+        self.stage = None
+
+
+class Status:
+    """Free-text progress events, ``status(text)``, one line each (the kernels' compilation is a
+    few events, each worth keeping on screen); prefixed ``tumble: `` when the stream is not a
+    terminal."""
+
+    def __init__(self, stream=None):
+        self.stream = stream or sys.stderr
+        self.tty = _is_tty(self.stream)
+
+    def __call__(self, text: str) -> None:
+        self.stream.write(f"{'' if self.tty else PREFIX}{text.rstrip()}\n")
+        self.stream.flush()
+
+    def close(self) -> None:
+        """Nothing to finish (kept for symmetry with the other reporters)."""

@@ -1,0 +1,344 @@
+"""The machine-read files (``report.json``, ``sweep.json``, ``hard_cases.json``, ``bench.json``):
+each, as the commands write it, validates against its JSON Schema (``validation/schemas``), carries
+the provenance block, and holds strict JSON (no NaN tokens, no placeholder strings).
+
+The schemas are checked with ``jsonschema`` (a test dependency, see pyproject.toml).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import subprocess
+import sys
+from datetime import UTC, datetime
+from pathlib import Path
+
+import numpy as np
+import pytest
+from jsonschema import Draft202012Validator
+from jsonschema.exceptions import ValidationError
+from referencing import Registry, Resource
+
+from analytic.effects import SolverMethod
+from analytic.scene import load_scene
+from analytic.scene_dump import scene_to_dict
+from validation import provenance as pv
+from validation.provenance import FileKind, PlaceholderError, dumps, provenance, to_json_value
+from validation.scenes import SCENES_DIR, resolve_scene
+
+ROOT = Path(__file__).resolve().parents[1]
+SCHEMAS = sorted(pv.SCHEMA_DIR.glob("*.schema.json"))
+
+
+def _registry() -> Registry:
+    resources = []
+    for p in SCHEMAS:
+        doc = json.loads(p.read_text(encoding="utf-8"))
+        resources.append((doc["$id"], Resource.from_contents(doc)))
+    return Registry().with_resources(resources)
+
+
+def validator(kind: FileKind | str) -> Draft202012Validator:
+    schema = json.loads(pv.schema_path(kind).read_text(encoding="utf-8"))
+    return Draft202012Validator(schema, registry=_registry())
+
+
+def strict_load(path: Path):
+    """JSON as the standard defines it: a NaN or Infinity token is an error here."""
+
+    def refuse(token: str):
+        raise AssertionError(f"{path.name}: non-standard JSON token {token}")
+
+    return json.loads(path.read_text(encoding="utf-8"), parse_constant=refuse)
+
+
+def check_file(path: Path, kind: FileKind) -> dict:
+    doc = strict_load(path)
+    validator(kind).validate(doc)
+    return doc
+
+
+def needs_block(path: Path, writer: str) -> None:
+    """Skip (naming the writer) while a file's writer does not include the provenance block yet."""
+    doc = json.loads(path.read_text(encoding="utf-8"))
+    if "provenance" not in doc:
+        pytest.skip(
+            f"{path.name} has no provenance block yet: {writer} does not write it through "
+            "validation.provenance (see docs/json-output.md, 'Writing a file')"
+        )
+
+
+# ------------------------------------------------------------------------------------------------
+# The schemas themselves
+# ------------------------------------------------------------------------------------------------
+
+
+def test_every_file_kind_has_a_valid_schema():
+    assert {p.name for p in SCHEMAS} == {f"{k.value}.schema.json" for k in FileKind} | {
+        "provenance.schema.json"
+    }
+    for p in SCHEMAS:
+        doc = json.loads(p.read_text(encoding="utf-8"))
+        Draft202012Validator.check_schema(doc)
+        assert doc["$schema"] == "https://json-schema.org/draft/2020-12/schema"
+
+
+@pytest.mark.parametrize("kind", list(FileKind))
+def test_schema_pins_the_kind_and_its_version(kind):
+    schema = json.loads(pv.schema_path(kind).read_text(encoding="utf-8"))
+    block = schema["properties"]["provenance"]
+    assert block["$ref"] == "urn:tumbling-testbed:schema:provenance"
+    assert block["properties"]["kind"] == {"const": kind.value}
+    assert block["properties"]["schema_version"] == {"const": pv.SCHEMA_VERSIONS[kind]}
+    assert "provenance" in schema["required"]
+
+
+def test_every_field_of_every_schema_is_documented():
+    """docs/json-output.md names every top-level field of every file and every provenance field."""
+    doc = (ROOT / "docs" / "json-output.md").read_text(encoding="utf-8")
+    for p in SCHEMAS:
+        schema = json.loads(p.read_text(encoding="utf-8"))
+        for name in schema.get("properties", {}):
+            assert f"`{name}`" in doc, (p.name, name)
+
+
+# ------------------------------------------------------------------------------------------------
+# The provenance block
+# ------------------------------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def scene():
+    return resolve_scene("paper_example1_controlled")
+
+
+def test_block_fields(scene):
+    before = datetime.now(UTC)
+    block = provenance(FileKind.SWEEP, scene, argv=["tumble", "sweep", "--quick"])
+    after = datetime.now(UTC)
+    reg = _registry()
+    schema = reg.contents("urn:tumbling-testbed:schema:provenance")
+    Draft202012Validator(schema, registry=reg).validate(json.loads(dumps(block)))
+    assert block["kind"] == "sweep" and block["schema_version"] == pv.SCHEMA_VERSIONS["sweep"]
+    assert block["command"] == ["tumble", "sweep", "--quick"]
+    made = datetime.fromisoformat(block["created_utc"])
+    assert made.utcoffset().total_seconds() == 0 and before <= made <= after
+    assert set(block["versions"]) == {"numba", "mujoco", "numpy", "scipy", "rerun-sdk", "pin"}
+    assert block["versions"]["numpy"] == np.__version__  # read from metadata, not imported
+    assert provenance("bench")["command"] == sys.argv
+    with pytest.raises(ValueError, match="kind: unknown file kind 'nope'"):
+        provenance("nope")
+
+
+def test_git_commit_is_the_checkout_or_none(tmp_path):
+    """The commit of this checkout when it is one; None anywhere else (never raises)."""
+    inside = subprocess.run(
+        ["git", "-C", str(ROOT), "rev-parse", "--show-toplevel", "HEAD"],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    lines = inside.stdout.split()
+    if inside.returncode == 0 and Path(lines[0]).resolve() == ROOT:
+        assert pv.git_commit() == lines[1]
+    else:
+        assert pv.git_commit() is None
+    assert pv.git_commit(tmp_path) is None  # not a repository
+    assert pv.git_commit(ROOT / "validation") is None  # inside one, but not its top level
+    assert pv.git_commit(tmp_path / "missing") is None
+
+
+def test_library_versions_none_when_not_installed():
+    assert pv.library_versions(("numpy", "no-such-distribution-xyz")) == {
+        "numpy": np.__version__,
+        "no-such-distribution-xyz": None,
+    }
+
+
+def test_scene_dump_fills_every_default(tmp_path):
+    """A scene file without [solver], [output] or [mujoco] tables: the dump has the defaults the
+    loader used, the attitude as a unit quaternion, and every array as plain lists."""
+    text = (SCENES_DIR / "paper_example1.toml").read_text(encoding="utf-8")
+    kept, skip = [], False
+    for line in text.splitlines():
+        if line.startswith("["):
+            skip = line.strip() in ("[solver]", "[output]", "[mujoco]")
+        if not skip:
+            kept.append(line)
+    path = tmp_path / "bare.toml"
+    path.write_text("\n".join(kept) + "\n", encoding="utf-8")
+    sc = load_scene(path)
+    d = scene_to_dict(sc)
+    assert d["solver"]["method"] == SolverMethod.DOP853.value == sc.solver.method.value
+    assert d["solver"]["max_step"] == math.inf  # kept; the encoder writes it as null
+    assert d["output"] == {"t_end": sc.output.t_end, "rate": sc.output.rate}
+    assert d["mujoco"]["integrator"] == sc.mujoco.integrator.value
+    assert math.isclose(float(np.linalg.norm(d["initial"]["u"])), 1.0, rel_tol=1e-12)
+    np.testing.assert_array_equal(d["masses"]["inertia"], sc.masses.inertia)
+    assert d["effects"] == sorted(e.value for e in sc.effects)
+    assert d["source"] == str(path) or Path(d["source"]) == path
+    written = json.loads(dumps(d))
+    assert written["solver"]["max_step"] is None
+    with pytest.raises(TypeError, match="scene: expected"):
+        scene_to_dict({"name": "x"})
+
+
+# ------------------------------------------------------------------------------------------------
+# The encoder
+# ------------------------------------------------------------------------------------------------
+
+
+def test_encoder_turns_non_finite_and_numpy_into_json():
+    doc = {
+        "nan": math.nan,
+        "inf": -math.inf,
+        "np": np.float64(2.5),
+        "npnan": np.float32("nan"),
+        "i": np.int64(3),
+        "b": np.bool_(True),
+        "arr": np.array([[1.0, np.inf], [0.5, 2.0]]),
+        "t": (1, 2),
+        "enum": SolverMethod.RK45,
+        "path": Path("a/b"),
+        "verdict": "N/A",
+    }
+    text = dumps(doc)
+    back = json.loads(text, parse_constant=lambda c: pytest.fail(f"token {c}"))
+    assert back == {
+        "nan": None,
+        "inf": None,
+        "np": 2.5,
+        "npnan": None,
+        "i": 3,
+        "b": True,
+        "arr": [[1.0, None], [0.5, 2.0]],
+        "t": [1, 2],
+        "enum": "RK45",
+        "path": "a/b",
+        "verdict": "N/A",
+    }
+    assert type(back["i"]) is int and type(back["b"]) is bool
+
+
+@pytest.mark.parametrize("placeholder", ["nan", "inf", "-inf", "NaN", "None", "<2001 values>"])
+def test_encoder_refuses_placeholder_strings(placeholder):
+    with pytest.raises(PlaceholderError, match=r"\$\.run\.t_max"):
+        to_json_value({"run": {"t_max": placeholder}})
+
+
+def test_encoder_refuses_unknown_objects():
+    @dataclasses.dataclass
+    class Thing:
+        x: float = 1.0
+
+    with pytest.raises(PlaceholderError, match=r"\$\.rows\[1\]: a value of type Thing"):
+        dumps({"rows": [1, Thing()]})
+
+
+def test_schema_refuses_a_placeholder_and_a_missing_block():
+    doc = {
+        "provenance": json.loads(dumps(provenance(FileKind.BENCH))),
+        "evaluation_us": [{"n": 2, "numpy_us": 10.0, "compiled_us": 1.0, "mj_forward_us": None}],
+        "goals": [],
+    }
+    v = validator(FileKind.BENCH)
+    v.validate(doc)
+    bad = json.loads(json.dumps(doc))
+    bad["evaluation_us"][0]["mj_forward_us"] = "nan"
+    with pytest.raises(ValidationError):
+        v.validate(bad)
+    with pytest.raises(ValidationError):
+        v.validate({k: v for k, v in doc.items() if k != "provenance"})
+    wrong = json.loads(json.dumps(doc))
+    wrong["provenance"]["kind"] = "report"
+    with pytest.raises(ValidationError):
+        v.validate(wrong)
+
+
+# ------------------------------------------------------------------------------------------------
+# The files the commands write
+# ------------------------------------------------------------------------------------------------
+
+
+@pytest.fixture
+def quick_bench(monkeypatch):
+    """bench's measurements replaced by fixed numbers (the file's form is under test, not the
+    speeds; tumble bench itself takes minutes)."""
+    from validation import bench, goals
+
+    done = goals.Goal("a measured goal", 0.5, 1.0, "detail", data={"runs_s": [0.1, 0.2]})
+    skipped = goals.Goal("a skipped goal", math.nan, 3.0, "", skipped="pin is not installed")
+    monkeypatch.setattr(goals, "measure", lambda skip_long, progress: [done, skipped])
+    rows = [{"n": 2, "numpy_us": 20.0, "compiled_us": 0.6, "mj_forward_us": math.nan}]
+    monkeypatch.setattr(bench, "evaluation_table", lambda: rows)
+
+
+def test_tumble_bench_out_writes_a_valid_bench_json(tmp_path, quick_bench, capsys):
+    from validation.cli import main
+
+    assert main(["bench", "--skip-long", "--out", str(tmp_path / "b")]) == 0
+    doc = check_file(tmp_path / "b" / "bench.json", FileKind.BENCH)
+    assert doc["provenance"]["command"] == sys.argv
+    assert doc["evaluation_us"][0]["mj_forward_us"] is None  # NaN written as null
+    assert [g["verdict"] for g in doc["goals"]] == ["HOLDS", "SKIPPED"]
+    assert (tmp_path / "b" / "manifest.json").exists()
+    out = capsys.readouterr().out
+    assert "HOLDS  a measured goal" in out and f"written: {tmp_path / 'b' / 'bench.json'}" in out
+
+
+def test_bench_module_out_is_the_same_option(tmp_path, quick_bench, capsys):
+    """``python -m validation.bench --out DIR`` writes what ``tumble bench --out DIR`` writes; the
+    old ``--json FILE`` still writes FILE, with a one-line deprecation warning."""
+    from validation import bench
+
+    assert bench.main(["--skip-long", "--out", str(tmp_path / "m")]) == 0
+    check_file(tmp_path / "m" / "bench.json", FileKind.BENCH)
+    capsys.readouterr()
+    assert bench.main(["--skip-long", "--json", str(tmp_path / "old.json")]) == 0
+    check_file(tmp_path / "old.json", FileKind.BENCH)
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--json FILE is deprecated; use --out DIR" in err[0]
+
+
+def test_report_json_validates(tmp_path):
+    from validation.validate import run_validation
+
+    res = run_validation("paper_example1_controlled", tmp_path / "v", t_end=0.2)
+    path = res.out_dir / "report.json"
+    needs_block(path, "validation/report.py (write_report)")
+    doc = check_file(path, FileKind.REPORT)
+    assert doc["provenance"]["scene"]["name"] == "paper_example1_controlled"
+
+
+def test_sweep_json_validates(tmp_path):
+    from concurrent.futures import ThreadPoolExecutor
+
+    from validation import sweep
+
+    cfg = dataclasses.replace(
+        sweep.SweepConfig.quick(),
+        t_end=0.2,
+        solvers=("DOP853",),
+        rtols=(1e-5, 1e-8),
+        integrators=("RK4",),
+        dts=(1e-2, 5e-3),
+        deltas=((0.5, 8.0),),
+        effects_repeats=1,
+    )
+    with ThreadPoolExecutor(max_workers=1) as ex:
+        res = sweep.run_sweep("paper_example1_controlled", tmp_path / "s", executor=ex, config=cfg)
+    path = res.files["json"]
+    needs_block(path, "validation/sweep.py (run_sweep)")
+    doc = check_file(path, FileKind.SWEEP)
+    assert doc["provenance"]["scene"]["name"] == "paper_example1_controlled"
+
+
+def test_hard_cases_json_validates(tmp_path):
+    from validation.hard_cases import run_hard_cases
+
+    run_hard_cases(tmp_path / "h", names=["pass_through"])
+    path = tmp_path / "h" / "hard_cases.json"
+    needs_block(path, "validation/hard_cases.py (write_table)")
+    check_file(path, FileKind.HARD_CASES)

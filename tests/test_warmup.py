@@ -1,0 +1,182 @@
+"""The first run says what it does: numba's cache state read without compiling
+(validation.warmup.cache_state), the warm-up silent when every kernel is cached, and progress on
+stderr that reads in a log (one line per event, no carriage returns) as well as on a terminal."""
+
+from __future__ import annotations
+
+import importlib
+import io
+import os
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+
+from validation import warmup
+from validation.progress import Progress, StageProgress, Status
+from validation.scenes import resolve_scene
+from validation.warmup import CacheState, cache_state, engine_is_cold
+
+ROOT = Path(__file__).resolve().parents[1]
+S = CacheState
+
+
+def test_cache_state_follows_numbas_disk_cache(tmp_path, monkeypatch):
+    """No index before the first call; cached after it; stale once the source changes; a function
+    compiled without a disk cache is reported so."""
+    src = """
+        import numba
+
+        @numba.njit(cache=True)
+        def f(x):
+            return x + 1.0
+
+        @numba.njit(cache=False)
+        def g(x):
+            return x - 1.0
+    """
+    (tmp_path / "warmup_probe_mod.py").write_text(textwrap.dedent(src), encoding="utf-8")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    mod = importlib.import_module("warmup_probe_mod")
+    try:
+        assert cache_state(mod.f) is S.ABSENT
+        assert mod.f(1.0) == 2.0
+        assert cache_state(mod.f) is S.CACHED
+        assert cache_state(mod.g) is S.NO_CACHE
+        # another source (numba's stamp is the file's mtime and size): the index no longer applies
+        path = tmp_path / "warmup_probe_mod.py"
+        path.write_text(path.read_text() + "\n# edited\n", encoding="utf-8")
+        mod = importlib.reload(mod)
+        assert cache_state(mod.f) is S.STALE
+        assert mod.f(1.0) == 2.0
+        assert cache_state(mod.f) is S.CACHED
+    finally:
+        sys.modules.pop("warmup_probe_mod", None)
+
+
+def test_cache_state_unknown_for_what_it_cannot_read():
+    assert cache_state(object()) is S.UNKNOWN
+
+
+@pytest.mark.parametrize(
+    ("states", "cold"),
+    [
+        ([S.CACHED, S.CACHED], False),
+        ([S.CACHED, S.ABSENT], False),  # a function no run calls
+        ([S.ABSENT, S.ABSENT], True),  # a fresh install
+        ([S.CACHED, S.STALE], True),  # an edited source, another numba or CPU
+        ([S.CACHED, S.NO_CACHE], True),  # no writable cache: compiled in every process
+        ([S.CACHED, S.UNKNOWN], True),
+        ([], False),  # nothing compiled at all (numba missing)
+    ],
+)
+def test_engine_is_cold(states, cold):
+    assert engine_is_cold(states) is cold
+
+
+def test_warm_up_is_silent_when_every_kernel_is_cached():
+    """After one warm-up (which compiles whatever is cold), a second finds nothing to do, says
+    nothing and compiles nothing; every plant's kernels are then on disk."""
+    from mj_bridge.plants import installed_plants
+
+    sc = resolve_scene("paper_example1_controlled")
+    plants = installed_plants()
+    warmup.warm_up(sc, plants)
+    heard: list[str] = []
+    res = warmup.warm_up(sc, plants, heard.append)
+    assert heard == [] and res.stages == () and res.cold == ()
+    assert warmup.cold_engines([p.value for p in plants]) == ()
+
+
+def test_stage_progress_in_a_log_is_one_plain_line_per_stage():
+    buf = io.StringIO()  # not a terminal
+    p = StageProgress("validate x", 2.0, stream=buf)
+    for stage in ("analytic", "mujoco"):
+        for t in (0.0, 1.0, 2.0):
+            p(stage, t)
+    p.close()
+    lines = buf.getvalue().splitlines()
+    assert "\r" not in buf.getvalue() and "\x1b" not in buf.getvalue()
+    assert lines[:2] == [
+        "tumble: validate x: analytic plant, 0 -> 2 s",
+        "tumble: validate x: mujoco plant, 0 -> 2 s",
+    ]
+    assert len(lines) == 3 and lines[2].startswith("tumble: validate x: stages done (analytic ")
+
+
+class _Tty(io.StringIO):
+    def isatty(self):
+        return True
+
+
+def test_stage_progress_on_a_terminal_is_one_updating_line():
+    buf = _Tty()
+    p = StageProgress("validate x", 2.0, stream=buf, delay=0.0)
+    p("analytic", 1.0)
+    p.close()
+    text = buf.getvalue()
+    assert text.startswith("\rvalidate x [analytic]: t =") and text.endswith("%)\n")
+    assert text.count("\n") == 1
+
+
+def test_status_lines():
+    log, tty = io.StringIO(), _Tty()
+    Status(log)("compiling")
+    Status(tty)("compiling")
+    assert log.getvalue() == "tumble: compiling\n" and tty.getvalue() == "compiling\n"
+
+
+def test_progress_stays_silent_in_a_log():
+    buf = io.StringIO()
+    p = Progress("simulate x", 1.0, delay=0.0, stream=buf)
+    p(0.5)
+    p.close()
+    assert buf.getvalue() == ""
+
+
+def _validate(tmp_path: Path, env: dict[str, str], timeout: float):
+    return subprocess.run(
+        [sys.executable, "-m", "validation", "validate", "--t-end", "0.05", "--out", "out"],
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        env=env,
+        cwd=tmp_path,
+    )
+
+
+def _env(**extra: str) -> dict[str, str]:
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (str(ROOT), env.get("PYTHONPATH")) if p)
+    env.update(extra)
+    return env
+
+
+def test_validate_in_a_log_says_what_it_does(tmp_path):
+    """stderr a pipe: one plain line per stage, each starting with ``tumble: ``."""
+    proc = _validate(tmp_path, _env(), timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    err = proc.stderr
+    assert "\r" not in err and "\x1b" not in err
+    lines = err.splitlines()
+    assert all(line.startswith("tumble: ") for line in lines), err
+    for plant in ("analytic", "mujoco"):
+        assert f"tumble: validate paper_example1_controlled: {plant} plant, 0 -> 0.05 s" in lines
+
+
+@pytest.mark.slow
+def test_first_run_compiles_once_and_says_so(tmp_path):
+    """A fresh numba cache: the first run names what it compiles and how long each stage took;
+    the second run in the same cache compiles nothing and says nothing about it."""
+    env = _env(NUMBA_CACHE_DIR=str(tmp_path / "numba_cache"))
+    first = _validate(tmp_path, env, timeout=1800)
+    assert first.returncode == 0, first.stderr
+    lines = first.stderr.splitlines()
+    assert lines[0].startswith("tumble: compiling the fast kernels (once per machine"), lines
+    assert any(line.startswith("tumble:   the analytic kernel (analytic.fast): ") for line in lines)
+    assert any(line.startswith("tumble:   kernels ready in ") for line in lines)
+    second = _validate(tmp_path, env, timeout=600)
+    assert second.returncode == 0, second.stderr
+    assert "compiling" not in second.stderr and "kernels ready" not in second.stderr

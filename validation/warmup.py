@@ -1,0 +1,416 @@
+"""Compile the plants' numba kernels before a run, and say so: the first run on a machine.
+
+numba compiles the compiled kernels on their first call and keeps the machine code in its on-disk
+cache (``*.nbi`` / ``*.nbc`` files in ``__pycache__`` beside the sources, or ``$NUMBA_CACHE_DIR``);
+later processes load it in well under a second. On a fresh install the first ``tumble validate``
+would otherwise print nothing while it compiles and then sit at its first percent.
+
+:func:`warm_up` (called by ``tumble validate`` before the plants run):
+
+1. finds the kernels whose cache is cold (:func:`cold_engines`): numba's own index of each compiled
+   function of the plants' modules is read (:func:`cache_state`), nothing is compiled; when every
+   one is cached it returns at once, silently;
+2. otherwise says what it compiles and that it happens once per machine, then compiles each cold
+   stage by calling the plants' public entry points (:class:`analytic.fast.FastModel`, each plant's
+   ``simulate`` for one output interval), reporting each stage with its wall time:
+
+   * the analytic kernel (:mod:`analytic.fast`), which the other stages embed, first;
+   * then the MuJoCo native stage in a *helper process* while this process compiles the analytic
+     plant's right-hand side and the Pinocchio stage. numba holds the GIL while it compiles, so
+     threads would not overlap; a second process does, and it leaves its result in the on-disk
+     cache, where this process's plant loads it. Used when two CPUs are free to this process and
+     the cache is writable (otherwise everything is compiled here, in order).
+
+A failure while warming up is never fatal: the plant's own run compiles what is missing and
+reports its own error.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import enum
+import os
+import sys
+import time
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from analytic.scene import Scene
+
+ANALYTIC, MUJOCO, PINOCCHIO = "analytic", "mujoco", "pinocchio"
+
+EXPECTED_COLD_S = 20
+"""What the message announces: the compile time of every kernel on an idle 2-core machine, s."""
+
+ENGINE_MODULES: dict[str, tuple[str, ...]] = {
+    ANALYTIC: ("analytic.",),
+    MUJOCO: ("mj_bridge.",),
+    PINOCCHIO: ("mj_bridge.pinocchio",),
+}
+"""Module-name prefixes of each engine's compiled functions (the longest matching prefix wins:
+``mj_bridge.pinocchio_plant`` belongs to Pinocchio, the rest of ``mj_bridge`` to MuJoCo)."""
+
+ENTRY_MODULES: dict[str, tuple[str, ...]] = {
+    ANALYTIC: ("analytic.fast", "analytic.simulate", "analytic.fast_rhs"),
+    MUJOCO: ("mj_bridge.simulate", "mj_bridge.native"),
+    PINOCCHIO: ("mj_bridge.pinocchio_plant",),
+}
+"""Imported before the caches are inspected, so that every compiled function of a plant exists
+(some are imported lazily by the plants). A module that no longer exists is skipped."""
+
+TITLES = {
+    "kernel": "the analytic kernel (analytic.fast)",
+    ANALYTIC: "the analytic plant's right-hand side",
+    MUJOCO: "the MuJoCo native controller stage (mj_bridge.native, fast_stage)",
+    PINOCCHIO: "the Pinocchio stage (mj_bridge.pinocchio_plant)",
+}
+
+
+@dataclass(frozen=True)
+class StageTime:
+    """One compiled stage: its title, wall time (s), and where it ran ("here" or "helper")."""
+
+    title: str
+    seconds: float
+    where: str = "here"
+    error: str = ""
+
+
+@dataclass(frozen=True)
+class WarmupResult:
+    """What :func:`warm_up` did.
+
+    Attributes:
+        cold: the engines whose kernels were not cached (empty: nothing was compiled).
+        stages: each stage compiled, in the order it finished.
+        seconds: wall time of the whole warm-up, s.
+        concurrent: whether a helper process compiled a stage alongside this one.
+        cached: whether numba can keep the result on disk (False: every process compiles).
+    """
+
+    cold: tuple[str, ...] = ()
+    stages: tuple[StageTime, ...] = ()
+    seconds: float = 0.0
+    concurrent: bool = False
+    cached: bool = True
+
+
+# ----------------------------------------------------------------------------------------------
+# Is the cache cold?
+# ----------------------------------------------------------------------------------------------
+
+
+def _dispatchers(prefixes: Iterable[str], exclude: Iterable[str] = ()) -> list[Any]:
+    """numba dispatchers defined at module level in the loaded modules named by ``prefixes``."""
+    try:
+        from numba.core.dispatcher import Dispatcher
+    except ImportError:  # pragma: no cover - numba is a dependency
+        return []
+    prefixes, exclude = tuple(prefixes), tuple(exclude)
+    found, seen = [], set()
+    for name, mod in list(sys.modules.items()):
+        if not name.startswith(prefixes) or (exclude and name.startswith(exclude)):
+            continue
+        for value in list(vars(mod).values()):
+            if isinstance(value, Dispatcher) and id(value) not in seen:
+                seen.add(id(value))
+                found.append(value)
+    return found
+
+
+class CacheState(enum.Enum):
+    """What numba's disk cache holds for one compiled function."""
+
+    CACHED = "cached"  # compiled code for this machine, this numba and this source
+    STALE = "stale"  # an index, but no entry for them: the source, numba or the CPU changed
+    ABSENT = "absent"  # no index: never compiled here (or a function no run calls)
+    NO_CACHE = "no cache"  # no writable cache directory: compiled in every process
+    UNKNOWN = "unknown"  # numba's cache layout is not the one read here
+
+
+def cache_state(dispatcher: Any) -> CacheState:
+    """What numba's on-disk cache holds for ``dispatcher`` (any signature).
+
+    Reads the cache index the way numba does (its index key: the target machine, the bytecode and
+    closure hashes; numba treats an index written for another source file or numba version as
+    empty), without compiling or loading code."""
+    try:
+        from numba.core.caching import Cache
+
+        cache = dispatcher._cache
+        if not isinstance(cache, Cache):
+            return CacheState.NO_CACHE
+        index_file = cache._cache_file
+        if not os.path.exists(index_file._index_path):
+            return CacheState.ABSENT
+        want = cache._index_key(None, dispatcher.targetctx.codegen())[1:]
+        found = any(key[1:] == want for key in index_file._load_index())
+        return CacheState.CACHED if found else CacheState.STALE
+    except Exception:
+        return CacheState.UNKNOWN
+
+
+def engine_is_cold(states: Sequence[CacheState]) -> bool:
+    """An engine's kernels must be compiled when any of its functions is stale, uncached or of
+    unknown state, or when none of them was ever compiled here. A function without an index among
+    cached ones is one no run calls (a public helper the plants do not use): it does not count."""
+    if not states:
+        return False
+    if any(s in (CacheState.STALE, CacheState.NO_CACHE, CacheState.UNKNOWN) for s in states):
+        return True
+    return all(s is CacheState.ABSENT for s in states)
+
+
+def _import_entries(engines: Iterable[str]) -> None:
+    import importlib
+
+    for e in engines:
+        for name in ENTRY_MODULES.get(e, ()):
+            try:
+                importlib.import_module(name)
+            except ModuleNotFoundError as exc:  # renamed or removed: its functions are elsewhere
+                if exc.name != name:
+                    raise
+
+
+def _engine_dispatchers(engine: str) -> list[Any]:
+    longer = [p for e, ps in ENGINE_MODULES.items() if e != engine for p in ps]
+    own = ENGINE_MODULES[engine]
+    exclude = [p for p in longer if any(p.startswith(o) and p != o for o in own)]
+    return _dispatchers(own, exclude)
+
+
+def cold_engines(engines: Sequence[str]) -> tuple[str, ...]:
+    """The engines among ``engines`` with at least one compiled function not in numba's disk cache
+    (or whose state cannot be told), in the order given. Imports the plants' modules."""
+    try:
+        import numba  # noqa: F401
+    except ImportError:  # pragma: no cover - without numba nothing is compiled
+        return ()
+    _import_entries(engines)
+    return tuple(
+        e for e in engines if engine_is_cold([cache_state(d) for d in _engine_dispatchers(e)])
+    )
+
+
+def cache_writable(engines: Sequence[str]) -> bool:
+    """Whether numba keeps these engines' compiled code on disk (a writable cache directory)."""
+    from numba.core.caching import Cache
+
+    return all(isinstance(d._cache, Cache) for e in engines for d in _engine_dispatchers(e))
+
+
+# ----------------------------------------------------------------------------------------------
+# Compiling
+# ----------------------------------------------------------------------------------------------
+
+
+def compile_kernel(scene: Scene) -> None:
+    """The analytic kernel through its public entry point (one evaluation of the dynamics)."""
+    import numpy as np
+
+    from analytic import fast
+
+    if fast.available():
+        q = np.ascontiguousarray(scene.initial.q0(), dtype=float)
+        qd = np.ascontiguousarray(scene.initial.qdot0(), dtype=float)
+        fast.FastModel(scene).acceleration(0.0, q, qd)
+
+
+def compile_plant(scene: Scene, engine: str) -> None:
+    """One output interval of ``engine``'s plant (its default settings): what the run calls first,
+    with the argument types the run uses, so every kernel it needs is compiled and cached."""
+    from mj_bridge.plants import plant
+
+    pl = plant(engine)
+    pl.simulate(scene, pl.default_settings(scene), t_end=1.0 / scene.output.rate)
+
+
+def _timed(title: str, fn: Callable[[], None], where: str = "here") -> StageTime:
+    t0 = time.perf_counter()
+    try:
+        fn()
+        error = ""
+    except KeyboardInterrupt:
+        raise
+    except Exception as exc:  # the plant's own run will compile and report
+        error = f"{type(exc).__name__}: {exc}".splitlines()[0]
+    return StageTime(title, time.perf_counter() - t0, where, error)
+
+
+def _helper_main() -> None:  # pragma: no cover - runs in the helper process
+    """The helper process: read ``(scene, engine)`` (pickled) from stdin, import the engine's
+    modules, wait for the ``go`` line (the kernel is on disk), compile, print the stage's time as
+    one JSON line on stdout."""
+    import json
+    import pickle
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent stops it; no second traceback
+    for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ.setdefault(var, "1")
+    size = int(sys.stdin.buffer.readline())
+    scene, engine = pickle.loads(sys.stdin.buffer.read(size))
+    _import_entries([engine])  # the imports overlap the parent's compiling
+    if sys.stdin.buffer.readline().strip() != b"go":
+        return
+    st = _timed(TITLES[engine], lambda: compile_plant(scene, engine), where="helper process")
+    print(json.dumps(dataclasses.asdict(st)), flush=True)
+
+
+class _Helper:
+    """A helper process (``python -c``, so no ``__main__`` of the caller is re-imported) that
+    compiles one engine's stage into numba's disk cache."""
+
+    def __init__(self, scene: Scene, engine: str):
+        import pickle
+        import subprocess
+
+        self.engine = engine
+        code = "from validation.warmup import _helper_main; _helper_main()"
+        env = dict(os.environ)  # this copy of the project first, wherever it was imported from
+        root = str(Path(__file__).resolve().parents[1])
+        env["PYTHONPATH"] = os.pathsep.join(p for p in (root, env.get("PYTHONPATH")) if p)
+        self.proc = subprocess.Popen(
+            [sys.executable, "-c", code],
+            env=env,
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+        )
+        data = pickle.dumps((scene, engine))
+        try:
+            self.proc.stdin.write(b"%d\n" % len(data) + data)
+            self.proc.stdin.flush()
+        except OSError:
+            pass
+
+    def go(self) -> None:
+        try:
+            self.proc.stdin.write(b"go\n")
+            self.proc.stdin.close()
+        except OSError:
+            pass
+
+    def result(self) -> StageTime:
+        import json
+
+        self.proc.stdin = None  # closed by go(); communicate() would flush it
+        out, err = self.proc.communicate()
+        try:
+            return StageTime(**json.loads(out.decode().strip().splitlines()[-1]))
+        except (ValueError, IndexError, TypeError):
+            why = (err.decode(errors="replace").strip().splitlines() or ["no output"])[-1]
+            return StageTime(TITLES[self.engine], 0.0, "helper process", f"helper failed: {why}")
+
+    def stop(self) -> None:
+        if self.proc.poll() is None:
+            self.proc.kill()
+            self.proc.wait(timeout=5)
+        for f in (self.proc.stdin, self.proc.stdout, self.proc.stderr):
+            if f is not None:
+                try:
+                    f.close()
+                except OSError:
+                    pass
+
+
+def free_cpus() -> int:
+    """CPUs this process may run on."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - not Linux
+        return os.cpu_count() or 1
+
+
+def warm_up(
+    scene: Scene,
+    plants: Sequence[Any],
+    progress: Callable[[str], None] | None = None,
+    concurrent: bool | None = None,
+) -> WarmupResult:
+    """Compile what ``plants`` need for ``scene`` when numba's cache is cold; silent when warm.
+
+    Args:
+        scene: the resolved scene the run will use (its constants do not change the machine
+            code; its types do not either, but it is what the plants are called with).
+        plants: engine names or :class:`~analytic.trajectory.Engine` members.
+        progress: receives one line of text per event: what will be compiled (once), each stage
+            done with its wall time, the total. Nothing is sent when the cache is warm.
+        concurrent: compile the MuJoCo stage in a helper process alongside this one (default:
+            when at least two CPUs are free to this process and the cache is writable).
+
+    Returns:
+        a :class:`WarmupResult`.
+    """
+    engines = [str(getattr(p, "value", p)) for p in plants]
+    engines = [e for e in (ANALYTIC, MUJOCO, PINOCCHIO) if e in engines]
+    t0 = time.perf_counter()
+    cold = cold_engines(engines)
+    if not cold:
+        return WarmupResult()
+    say = progress or (lambda _line: None)
+    cached = cache_writable(cold)
+    # every plant embeds the analytic kernel: compiled first, whichever plants run
+    kernel_cold = ANALYTIC in cold or bool(cold_engines([ANALYTIC]))
+    rest = list(cold)
+    if concurrent is None:
+        concurrent = free_cpus() >= 2
+    concurrent = bool(concurrent and cached and MUJOCO in rest and len(rest) >= 2)
+    names = [TITLES["kernel"]] if kernel_cold else []
+    names += [TITLES[e] for e in rest]
+    how = (
+        "once per machine; later runs load them from numba's cache"
+        if cached
+        else "numba has no writable cache directory here (set NUMBA_CACHE_DIR), so every run "
+        "compiles them"
+    )
+    say(
+        f"compiling the fast kernels ({how}; ~{EXPECTED_COLD_S} s): "
+        + ", ".join(names)
+        + (" (the MuJoCo stage in a helper process)" if concurrent else "")
+    )
+    stages: list[StageTime] = []
+
+    def report(st: StageTime) -> None:
+        stages.append(st)
+        where = "" if st.where == "here" else f" ({st.where})"
+        tail = f"; it will compile in the run instead ({st.error})" if st.error else ""
+        say(f"  {st.title}: {st.seconds:.1f} s{where}{tail}")
+
+    helper = None
+    try:
+        if concurrent:
+            helper = _Helper(scene, MUJOCO)  # starts now: its imports overlap the kernel
+            rest.remove(MUJOCO)
+        if kernel_cold:
+            report(_timed(TITLES["kernel"], lambda: compile_kernel(scene)))
+        if helper is not None:
+            helper.go()  # the kernel is on disk: the helper loads it instead of compiling it
+        for e in rest:
+            report(_timed(TITLES[e], lambda e=e: compile_plant(scene, e)))
+        if helper is not None:
+            report(helper.result())
+    finally:
+        if helper is not None:
+            helper.stop()
+    total = time.perf_counter() - t0
+    say(f"  kernels ready in {total:.1f} s")
+    return WarmupResult(tuple(cold), tuple(stages), total, concurrent, cached)
+
+
+__all__ = [
+    "CacheState",
+    "StageTime",
+    "WarmupResult",
+    "cache_state",
+    "cache_writable",
+    "cold_engines",
+    "compile_kernel",
+    "compile_plant",
+    "engine_is_cold",
+    "warm_up",
+]
