@@ -41,6 +41,7 @@ from validation.figures import (
     figure_invariants,
     figure_tracking,
 )
+from validation.provenance import FileKind, dumps, provenance
 from validation.referee import Verdict, summary_lines
 from validation.summary import check_sentence, max_abs
 
@@ -59,14 +60,14 @@ def write_atomic(path: str | Path, data: bytes | str) -> Path:
 # ----------------------------------------------------------------------------------------------
 
 
-def versions() -> dict[str, str]:
+def versions() -> dict[str, str | None]:
     """Versions of Python, the platform and the packages that produce the numbers."""
     out = {"python": sys.version.split()[0], "platform": platform.platform()}
     for pkg in ("tumbling-testbed", "numpy", "scipy", "mujoco", "rerun-sdk", "matplotlib"):
         try:
             out[pkg] = metadata.version(pkg)
         except metadata.PackageNotFoundError:
-            out[pkg] = "not installed"
+            out[pkg] = None  # not installed
     return out
 
 
@@ -87,11 +88,12 @@ def _jsonable(x: Any) -> Any:
 
 
 def _short(info: Mapping[str, Any], longest: int = 20) -> dict[str, Any]:
-    """Engine info without long per-sample lists (those belong in the trajectory files)."""
+    """Engine info without long per-sample lists: those belong in the trajectory files, so a
+    list longer than ``longest`` is left out and its length given as ``<key>_length``."""
     out = {}
     for k, v in info.items():
         if isinstance(v, list | tuple | np.ndarray) and len(v) > longest:
-            out[k] = f"<{len(v)} values>"
+            out[f"{k}_length"] = len(v)
         else:
             out[k] = v
     return out
@@ -365,6 +367,7 @@ def write_report(
     failure: str = "",
     verdicts: Sequence[Verdict] = (),
     formats: Sequence[FigureFormat | str] = DEFAULT_FORMATS,
+    scene: Any = None,
 ) -> ReportFiles:
     """Write ``report.md``, ``report.json`` and the figures into ``out_dir`` (atomically).
 
@@ -377,6 +380,8 @@ def write_report(
         verdicts: the referee's rulings (three plants).
         formats: the figures' file formats (:class:`validation.figures.FigureFormat`), PNG by
             default; ValueError naming ``figure_format`` for an unknown one.
+        scene: the resolved scene, dumped whole into ``report.json``'s provenance block
+            (:mod:`validation.provenance`; None when the run has none).
     """
     fmts = tuple(dict.fromkeys(_format(f) for f in formats))
     if not fmts:
@@ -390,10 +395,9 @@ def write_report(
     meta = dict(meta)
     if fig_errors:
         meta["figure_errors"] = fig_errors
+    doc = _report_doc(cmp, plants, meta, failure, verdicts, entries)
     js = write_atomic(
-        out / "report.json",
-        json.dumps(_jsonable(_report_doc(cmp, plants, meta, failure, verdicts, entries)), indent=2)
-        + "\n",
+        out / "report.json", dumps({"provenance": provenance(FileKind.REPORT, scene), **doc})
     )
     md = write_atomic(
         out / "report.md", render_markdown(cmp, verdict, failure, entries, meta, verdicts)

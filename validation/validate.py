@@ -315,7 +315,7 @@ def _validate_into(
     }
     t0 = time.perf_counter()
     rep = write_report(
-        out, cmp, trajectories, meta, failure=failure, verdicts=verdicts, formats=formats
+        out, cmp, trajectories, meta, failure=failure, verdicts=verdicts, formats=formats, scene=sc
     )
     walls["report"] = time.perf_counter() - t0
     files.update({"report.md": rep.markdown, "report.json": rep.json})

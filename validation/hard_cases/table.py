@@ -9,7 +9,6 @@ finite (a NaN, an infinity: an event that did not happen, a run that blew up) is
 
 from __future__ import annotations
 
-import json
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -23,6 +22,7 @@ from analytic.trajectory import Engine
 from validation.atomic import write_text
 from validation.compare import Check
 from validation.hard_cases.measures import ANALYTIC, label
+from validation.provenance import FileKind, dumps, provenance
 
 JSON_NAME = "hard_cases.json"
 MARKDOWN_NAME = "hard_cases.md"
@@ -277,8 +277,9 @@ def jsonable(o: Any) -> Any:
 
 def write_json(table: HardCaseTable, out_dir: str | Path) -> Path:
     """``hard_cases.json`` in ``out_dir``, atomically: the one place the table's JSON is made."""
-    text = json.dumps(jsonable(table.to_dict()), indent=2, ensure_ascii=False, allow_nan=False)
-    return write_text(Path(out_dir) / JSON_NAME, text + "\n")
+    doc = {"provenance": provenance(FileKind.HARD_CASES), **jsonable(table.to_dict())}
+    text = dumps(doc)
+    return write_text(Path(out_dir) / JSON_NAME, text)
 
 
 def write_table(table: HardCaseTable, out_dir: str | Path) -> None:
