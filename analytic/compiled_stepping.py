@@ -367,8 +367,10 @@ def _call(
         size = int(rt.size(ptr))
         t_now = float(rt.t_now(ptr))
         y_now = np.ctypeslib.as_array(rt.y_now(ptr), (ny,)).copy()
-        samples = np.ctypeslib.as_array(rt.y_ptr(ptr), (size * ny,)).reshape(size, ny).copy()
-        times = np.ctypeslib.as_array(rt.t_ptr(ptr), (size,)).copy() if size else np.empty(0)
+        samples, times = np.empty((0, ny)), np.empty(0)  # a call that passed no sample
+        if size:
+            samples = np.ctypeslib.as_array(rt.y_ptr(ptr), (size * ny,)).reshape(size, ny).copy()
+            times = np.ctypeslib.as_array(rt.t_ptr(ptr), (size,)).copy()
     finally:
         if ptr:
             rt.free(ptr)

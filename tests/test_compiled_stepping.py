@@ -238,6 +238,21 @@ def test_progress_reaches_t_end():
     assert {1.0, 2.0, 3.0, 4.0, 5.0} <= set(seen)  # at least once per second simulated
 
 
+def test_calls_that_pass_no_sample():
+    """An output grid sparser than the calls (a sample every 2.5 s, calls ending each second):
+    calls that reach no sample carry the state on, and the samples still agree with scipy's."""
+    from analytic.scene import OutputSettings
+
+    sc = resolve_scene("paper_example1_controlled").replace(output=OutputSettings(5.0, 0.4))
+    seen = []
+    c = simulate(sc, stepper="compiled", progress=seen.append)
+    s = simulate(sc, stepper="scipy")
+    assert c.status is RunStatus.OK and "scipy_from_t_s" not in c.info
+    np.testing.assert_array_equal(c.t, [0.0, 2.5, 5.0])
+    assert seen == [1.0, 2.0, 3.0, 4.0, 5.0]
+    assert errors_against(c, ref_samples(s))["error"] <= AGREE_2S * RTOL
+
+
 # ------------------------------------------------------------------------------------------------
 # Choosing the loop, and bad settings
 # ------------------------------------------------------------------------------------------------
