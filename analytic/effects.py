@@ -53,6 +53,19 @@ class SolverMethod(StrEnum):
     LSODA = "LSODA"
 
 
+class Stepper(StrEnum):
+    """Which loop steps the analytic plant's integrator (its right-hand side is :class:`Backend`'s)."""
+
+    AUTO = "auto"
+    """The compiled loop where it applies (DOP853, RK45 or RK23 on the compiled right-hand side, with
+    CyRK installed), else scipy's."""
+    COMPILED = "compiled"
+    """CyRK's C++ Runge-Kutta loop over the compiled right-hand side
+    (:mod:`analytic.compiled_stepping`); an error where it does not apply."""
+    SCIPY = "scipy"
+    """scipy's ``OdeSolver`` stepped from Python (:mod:`analytic.stepping`): the reference."""
+
+
 class Backend(StrEnum):
     """How the analytic engine evaluates its right-hand side."""
 

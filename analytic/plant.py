@@ -25,7 +25,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
-from analytic.effects import Backend, Effect, SolverMethod
+from analytic.effects import Backend, Effect, SolverMethod, Stepper
 from analytic.scene import Scene
 from analytic.trajectory import Engine, Trajectory
 
@@ -158,16 +158,22 @@ class AnalyticSettings:
         method: the scipy method.
         rtol, atol: tolerances on the motion (dimensionless; atol in the state's SI units).
         backend: the right-hand side, compiled or the numpy reference (:class:`Backend`).
+        stepper: the loop that steps the method: ``auto`` (CyRK's compiled loop for DOP853, RK45
+            and RK23 on the compiled right-hand side, else scipy's), ``compiled`` (an error where
+            it cannot apply) or ``scipy``, the reference (:class:`Stepper`,
+            :mod:`analytic.compiled_stepping`).
     """
 
     method: SolverMethod = SolverMethod.DOP853
     rtol: float = 1e-12
     atol: float = 1e-13
     backend: Backend = Backend.AUTO
+    stepper: Stepper = Stepper.AUTO
 
     def __post_init__(self) -> None:
         coerce_enum(self, "method", SolverMethod)
         coerce_enum(self, "backend", Backend)
+        coerce_enum(self, "stepper", Stepper)
         check_positive(self, "rtol")
         check_positive(self, "atol")
 
@@ -196,6 +202,7 @@ class AnalyticPlant(Plant):
             t_end=t_end,
             progress=progress,
             backend=settings.backend,
+            stepper=settings.stepper,
         )
 
 

@@ -20,10 +20,11 @@ import numpy as np
 
 from analytic.assemble import N_AUX, assemble
 from analytic.aux_rates import aux_rates
-from analytic.effects import Backend, Effect, SolverMethod
+from analytic.compiled_stepping import integrate
+from analytic.effects import Backend, Effect, SolverMethod, Stepper
 from analytic.model import TumblingModel
 from analytic.scene import Scene
-from analytic.stepping import NonFinite, step_and_sample
+from analytic.stepping import NonFinite
 from analytic.trajectory import Engine, RunStatus, Trajectory
 
 
@@ -116,6 +117,7 @@ def simulate(
     t_end: float | None = None,
     progress: Callable[[float], None] | None = None,
     backend: Backend | str = Backend.AUTO,
+    stepper: Stepper | str = Stepper.AUTO,
 ) -> Trajectory:
     """Integrate ``scene`` with the analytic model; returns the samples at the scene's output rate.
 
@@ -126,8 +128,11 @@ def simulate(
     ``backend``: ``auto`` (the compiled kernel of :mod:`analytic.fast` when numba is installed,
     else numpy), ``numpy`` (the reference :class:`TumblingModel`) or ``numba``.
 
+    ``stepper``: ``auto`` (CyRK's compiled loop for DOP853, RK45 and RK23 on the compiled right-hand
+    side, else scipy's), ``compiled`` or ``scipy`` (:mod:`analytic.compiled_stepping`).
+
     Samples: ``0, 1/rate, 2/rate, ...`` and ``t_end`` exactly (:meth:`analytic.scene.OutputSettings.times`).
-    A bad ``t_end``, ``method``, ``rtol``, ``atol`` or ``backend`` raises ``ValueError`` naming it,
+    A bad ``t_end``, ``method``, ``rtol``, ``atol``, ``backend`` or ``stepper`` raises ``ValueError`` naming it,
     before any work.
     """
     # Bad arguments are refused, naming them, before any work.
@@ -141,7 +146,7 @@ def simulate(
     nq = model.nq
     y0 = np.concatenate([scene.initial.q0(), scene.initial.qdot0(), np.zeros(N_AUX)])
     f = _rhs(model, accel)
-    run = step_and_sample(
+    run = integrate(
         f,
         t_eval,
         y0,
@@ -152,6 +157,8 @@ def simulate(
         max_step=scene.solver.max_step,
         progress=progress,
         linalg_failure="mass matrix not positive definite",
+        stepper=stepper,
+        fast=getattr(accel, "__self__", None),
     )
     return _assemble(
         model,
@@ -167,10 +174,11 @@ def simulate(
             else "numpy",
             "rtol": rtol,
             "atol": atol,
-            "nfev": f.counter["nfev"],
+            "nfev": f.counter["nfev"] + run.nfev_compiled,
             "nsteps": run.nsteps,
             "wall_time_s": run.wall_time_s,
             "max_quat_norm_error_at_steps": run.max_quat_norm_error_at_steps,
+            **run.stepper_info(),
         },
     )
 

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import integrate
 
-from analytic.effects import SolverMethod
+from analytic.effects import SolverMethod, Stepper
 from analytic.trajectory import RunStatus
 
 SOLVERS: dict[SolverMethod, type[integrate.OdeSolver]] = {
@@ -56,6 +56,12 @@ class Stepped:
         max_quat_norm_error_at_steps: ``max | |y[3:7]|² - 1 |`` at the solver's own steps (the
             samples between steps come from the dense output, one order lower for DOP853).
         wall_time_s: wall time of the loop, s.
+        stepper: the loop that ran (:data:`Stepper.SCIPY` here; :mod:`analytic.compiled_stepping`
+            sets :data:`Stepper.COMPILED`).
+        nfev_compiled: right-hand side evaluations the compiled loop made itself (0 here);
+            evaluations through ``f`` are counted by the caller's ``f``.
+        scipy_from_t: when a compiled run handed over to this loop part way, the time it did, s
+            (None otherwise).
     """
 
     t: np.ndarray
@@ -65,6 +71,17 @@ class Stepped:
     nsteps: int
     max_quat_norm_error_at_steps: float
     wall_time_s: float
+    stepper: Stepper = Stepper.SCIPY
+    nfev_compiled: int = 0
+    scipy_from_t: float | None = None
+
+    def stepper_info(self) -> dict[str, object]:
+        """What a plant's ``info`` records about the loop: ``stepper``, and ``scipy_from_t_s`` when
+        a compiled run handed over to scipy's loop part way."""
+        info: dict[str, object] = {"stepper": self.stepper.value}
+        if self.scipy_from_t is not None:
+            info["scipy_from_t_s"] = self.scipy_from_t
+        return info
 
 
 def step_and_sample(

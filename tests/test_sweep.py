@@ -113,7 +113,9 @@ def test_errors_match_an_independent_computation(result, scene):
         if r["engine"] == "analytic" and r["method"] == "DOP853" and r["rtol"] == 1e-5
     )
     ref = sweep.reference_run(scene, cfg.t_end, result.reference["max_step"])
-    tr = analytic.simulate(scene, method="DOP853", rtol=1e-5, atol=1e-6, t_end=cfg.t_end)
+    # the row's own atol (rtol x atol_ratio, 1.0000000000000002e-06): an ulp of atol moves a run
+    # at round-off, which the energy balance's cancellation turns into ~1e-9 of its value
+    tr = analytic.simulate(scene, method="DOP853", rtol=1e-5, atol=row["atol"], t_end=cfg.t_end)
     Ra = Rotation.from_quat(tr.u, scalar_first=True).as_matrix()
     Rb = Rotation.from_quat(ref.u, scalar_first=True).as_matrix()
     cosang = (np.einsum("nij,nij->n", Ra, Rb) - 1) / 2

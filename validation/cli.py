@@ -74,6 +74,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
                 t_end=args.t_end,
                 progress=prog,
                 backend=args.backend,
+                stepper=args.stepper,
             )
         finally:
             prog.close()
@@ -278,7 +279,7 @@ def _version() -> str:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from analytic.effects import Backend, MjIntegrator, SolverMethod
+    from analytic.effects import Backend, MjIntegrator, SolverMethod, Stepper
     from validation.scenes import DEFAULT_SIMULATE_SCENE, builtin_names
     from validation.sweep import DEFAULT_SCENE as DEFAULT_SWEEP_SCENE
 
@@ -309,6 +310,13 @@ def build_parser() -> argparse.ArgumentParser:
         choices=[b.value for b in Backend],
         default=Backend.AUTO.value,
         help="right-hand side: the compiled kernel (auto/numba) or the numpy reference",
+    )
+    p.add_argument(
+        "--stepper",
+        choices=[s.value for s in Stepper],
+        default=Stepper.AUTO.value,
+        help="integration loop: compiled (CyRK; DOP853, RK45, RK23; auto where it applies) or the "
+        "scipy reference",
     )
     p.set_defaults(func=cmd_simulate)
 

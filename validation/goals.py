@@ -25,9 +25,19 @@ holds. Numbers are printed, never asserted (tests cover correctness, not speed).
    the Pinocchio plant / on the analytic plant, both through the plant protocol
    (``plant(name).simulate``). Each plant runs once first (compilation, cache loads), then the two
    alternate for ``rounds`` repeats; the ratio is of the median walls (the integration, as each
-   plant measures it in ``info["wall_time_s"]``; the whole ``simulate`` call is printed too). Holds
-   when ≤ 3. Skipped, with the reason printed, when Pinocchio (``pin``) is not installed; it takes a
-   few seconds, so ``--skip-long`` keeps it.
+   plant measures it in ``info["wall_time_s"]``; the whole ``simulate`` call is printed too). Both
+   plants step on scipy's loop (the analytic plant with ``stepper="scipy"``), so the ratio compares
+   the plants, not the loops; one run of the analytic plant on its default (compiled) loop is
+   printed beside it. Holds when ≤ 3. Skipped, with the reason printed, when Pinocchio (``pin``) is
+   not installed; it takes a few seconds, so ``--skip-long`` keeps it.
+6. **compiled stepping**: the controlled Example 1 over 60 s, DOP853 at rtol 1e-12 (atol 1e-13), on
+   the analytic plant's compiled loop (:mod:`analytic.compiled_stepping`): its wall
+   (``info["wall_time_s"]``) / (its evaluations ``nfev`` x the cost of one evaluation of the compiled
+   right-hand side, :func:`analytic.fast_rhs.rhs_into` called from a compiled loop, ``nfev`` times,
+   on 64 states of the run in turn). Runs and timing loops alternate for ``rounds`` repeats
+   (medians). The same ratio for scipy's loop (the before) is printed beside it. Holds when ≤ 1.5
+   (:data:`COMPILED_STEPPING_LIMIT`). Skipped, with the reason, when the compiled loop is
+   unavailable (CyRK or numba missing). About 10 to 20 s.
 
 Timings are medians over interleaved rounds (both sides of a ratio measured alternately), with one
 BLAS thread.
@@ -311,8 +321,8 @@ def goal_pinocchio(
             PINOCCHIO_GOAL, math.nan, PINOCCHIO_LIMIT, skipped=f"pin is not installed: {why}"
         )
     sc = resolve_scene(scene_name)
-    runs = {
-        "analytic": (plant("analytic"), AnalyticSettings("DOP853", 1e-12, 1e-13)),
+    runs = {  # the same (scipy's) loop on both sides: the ratio compares the plants
+        "analytic": (plant("analytic"), AnalyticSettings("DOP853", 1e-12, 1e-13, stepper="scipy")),
         "pinocchio": (plant("pinocchio"), PinocchioSettings("DOP853", 1e-12, 1e-13)),
     }
 
@@ -327,6 +337,9 @@ def goal_pinocchio(
 
     try:
         first = {name: once(name) for name in runs}  # warm: compilation and cache loads
+        default_loop = plant("analytic").simulate(
+            sc, AnalyticSettings("DOP853", 1e-12, 1e-13), t_end=t_end
+        )
         walls: dict[str, list[float]] = {name: [] for name in runs}
         calls: dict[str, list[float]] = {name: [] for name in runs}
         order = []
@@ -355,7 +368,9 @@ def goal_pinocchio(
         f"analytic {med['analytic']:.3f} s, Pinocchio {med['pinocchio']:.3f} s (integration, "
         f"median of {rounds}); whole simulate call {med_call['analytic']:.3f} s / "
         f"{med_call['pinocchio']:.3f} s ({med_call['pinocchio'] / med_call['analytic']:.2f}x); "
-        f"nfev {tr_a.info['nfev']} / {tr_p.info['nfev']}; the two plants' C within {dR:.2g} m",
+        f"nfev {tr_a.info['nfev']} / {tr_p.info['nfev']}; the two plants' C within {dR:.2g} m; "
+        f"the analytic plant on its default ({default_loop.info.get('stepper', '?')}) loop "
+        f"{default_loop.info['wall_time_s']:.3f} s (one run)",
         data={
             "t_end_s": t_end,
             "rounds": rounds,
@@ -369,6 +384,145 @@ def goal_pinocchio(
             "order": order,
             "nfev": {"analytic": tr_a.info["nfev"], "pinocchio": tr_p.info["nfev"]},
             "max_distance_C_m": dR,
+            "analytic_default_loop_s": float(default_loop.info["wall_time_s"]),
+        },
+    )
+
+
+COMPILED_STEPPING_GOAL = (
+    "compiled stepping: 60 s controlled Example 1 at rtol 1e-12, wall / (nfev x one compiled "
+    "right-hand side evaluation)"
+)
+COMPILED_STEPPING_LIMIT = 1.5
+"""The loop may add at most half the cost of the evaluations it makes. The evaluations are the
+work (~2 µs each); a DOP853 step adds a few hundred flops of stage combinations, error norms and
+interpolation to its 12-16 evaluations (~30 µs), a few percent. scipy's loop, stepping from Python,
+costs ~6 (quiet machine) to ~16 (loaded) times its evaluations; 1.5 leaves room for the calls into
+the C++ loop (one per second simulated), the copies of the samples and timing noise on a shared
+machine."""
+
+
+def _rhs_timer():
+    """``loop(n, t, Y, fp, ip, work, out)``: ``n`` calls of :func:`analytic.fast_rhs.rhs_into` from
+    compiled code (no dispatch from Python per call), at the states ``(t[i], Y[i])`` in turn: what
+    the compiled loop pays per evaluation."""
+    import numba
+
+    from analytic.fast_rhs import rhs_into
+
+    @numba.njit(cache=False)
+    def loop(n, t, Y, fp, ip, work, out):  # pragma: no cover - compiled
+        s = 0.0
+        m = t.size
+        for i in range(n):
+            rhs_into(t[i % m], Y[i % m], fp, ip, work, out)
+            s += out[0]
+        return s
+
+    return loop
+
+
+def goal_compiled_stepping(
+    t_end: float = 60.0,
+    rounds: int = 5,
+    scipy_rounds: int = 3,
+    scene_name: str = "paper_example1_controlled",
+    progress: Callable[[str], None] = print,
+) -> Goal:
+    """Goal 6 (see the module docstring): the compiled loop's wall over the cost of the evaluations
+    it makes.
+
+    ``data``: every wall of the compiled loop and of scipy's (``compiled_s``, ``scipy_s``), the
+    per-evaluation cost of each timing round (``rhs_us``), their medians, ``nfev`` and ``nsteps`` of
+    both loops, scipy's ratio (``ratio_scipy``) and the two loops' largest difference in the sweep's
+    error measure (``loops_differ``, :func:`validation.sweep.errors_against`), a check that both
+    ran the same motion.
+    """
+    from analytic import compiled_stepping, fast
+    from analytic.simulate import simulate
+    from validation.scenes import resolve_scene
+    from validation.sweep import errors_against, ref_samples
+
+    why = compiled_stepping.unavailable()
+    if why:
+        return Goal(
+            COMPILED_STEPPING_GOAL,
+            math.nan,
+            COMPILED_STEPPING_LIMIT,
+            skipped=f"the compiled loop is unavailable: {why}",
+        )
+    sc = resolve_scene(scene_name)
+
+    def run(stepper: str):
+        tr = simulate(
+            sc, method="DOP853", rtol=1e-12, atol=1e-13, t_end=t_end, stepper=stepper
+        ).raise_if_interrupted()
+        if tr.status.value != "ok":
+            raise RuntimeError(f"{stepper} loop: {tr.message}")
+        return tr
+
+    try:
+        simulate(sc, t_end=1.0, stepper="compiled")  # warm: cfunc and kernel cache loads
+        first = run("compiled")
+        nfev = int(first.info["nfev"])
+        fm = fast.FastModel(sc)
+        # the states of the run: 64 of its samples, evaluated in turn
+        pick = np.linspace(0, len(first.t) - 1, 64).round().astype(int)
+        ts = np.ascontiguousarray(first.t[pick])
+        Y = np.ascontiguousarray(
+            np.hstack([first.q[pick], first.qdot[pick], np.zeros((pick.size, 7))])
+        )
+        work = np.empty(2 * fm.nq + 3 + fm.k)
+        out = np.empty(Y.shape[1])
+        loop = _rhs_timer()
+        loop(10, ts, Y, fm.fp, fm.ip, work, out)  # compile
+        walls: dict[str, list[float]] = {"compiled": [], "scipy": []}
+        rhs: list[float] = []
+        tr_s = None
+        for r in range(rounds):
+            walls["compiled"].append(float(run("compiled").info["wall_time_s"]))
+            t0 = time.perf_counter()
+            loop(nfev, ts, Y, fm.fp, fm.ip, work, out)
+            rhs.append((time.perf_counter() - t0) / nfev)
+            if r < scipy_rounds:
+                tr_s = run("scipy")
+                walls["scipy"].append(float(tr_s.info["wall_time_s"]))
+    except (RuntimeError, ValueError) as exc:
+        return Goal(
+            COMPILED_STEPPING_GOAL, math.inf, COMPILED_STEPPING_LIMIT, f"a run failed: {exc}"
+        )
+    med = {name: statistics.median(v) for name, v in walls.items()}
+    c = statistics.median(rhs)
+    nfev_s = int(tr_s.info["nfev"])
+    ratio = med["compiled"] / (nfev * c)
+    ratio_s = med["scipy"] / (nfev_s * c)
+    differ = errors_against(first, ref_samples(tr_s))["error"]
+    progress(
+        f"  {t_end:g} s, DOP853 rtol 1e-12: compiled loop {med['compiled']:.3f} s (nfev {nfev}, "
+        f"{first.info['nsteps']} steps), scipy's loop {med['scipy']:.3f} s (nfev {nfev_s}, "
+        f"{tr_s.info['nsteps']} steps); one compiled evaluation {c * 1e6:.2f} µs"
+    )
+    return Goal(
+        COMPILED_STEPPING_GOAL,
+        ratio,
+        COMPILED_STEPPING_LIMIT,
+        f"compiled loop {med['compiled']:.3f} s against {nfev} x {c * 1e6:.2f} µs = "
+        f"{nfev * c:.3f} s of evaluations (medians of {rounds}); scipy's loop {med['scipy']:.3f} s "
+        f"against {nfev_s * c:.3f} s: ratio {ratio_s:.2f} (median of {scipy_rounds}), "
+        f"{med['scipy'] / med['compiled']:.1f}x the compiled loop's wall; the two loops' samples "
+        f"differ by {differ:.1e} (the sweep's error measure)",
+        data={
+            "t_end_s": t_end,
+            "compiled_s": walls["compiled"],
+            "scipy_s": walls["scipy"],
+            "rhs_us": [v * 1e6 for v in rhs],
+            "compiled_median_s": med["compiled"],
+            "scipy_median_s": med["scipy"],
+            "rhs_median_us": c * 1e6,
+            "nfev": {"compiled": nfev, "scipy": nfev_s},
+            "nsteps": {"compiled": int(first.info["nsteps"]), "scipy": int(tr_s.info["nsteps"])},
+            "ratio_scipy": ratio_s,
+            "loops_differ": differ,
         },
     )
 
@@ -385,6 +539,8 @@ def measure(skip_long: bool = False, progress: Callable[[str], None] = print) ->
         goals.append(goal_controller_in_rk4(name))
         progress(goals[-1].line())
     goals.append(goal_scaling())
+    progress(goals[-1].line())
+    goals.append(goal_compiled_stepping(progress=progress))
     progress(goals[-1].line())
     goals.append(goal_pinocchio(progress=progress))
     progress(goals[-1].line())
