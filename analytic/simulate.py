@@ -73,9 +73,10 @@ def _rhs(model: TumblingModel, accel: Callable) -> Callable[[float, np.ndarray],
 
     # The compiled path: the same lines in one numba call (analytic.fast_rhs); f answers where the
     # kernel declines (the numpy model then, as in FastModel).
-    from analytic.fast_rhs import STATUS_NONFINITE, rhs_into
+    from analytic.fast_rhs import STATUS_NONFINITE, rhs_for
 
     fp, ip = fm.fp, fm.ip
+    rhs_into = rhs_for(ip)  # embeds only the solve this scene needs
     work = np.empty(2 * nq + 3 + model.k)
     ny = 2 * nq + N_AUX
 

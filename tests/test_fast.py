@@ -26,6 +26,7 @@ import pytest
 
 from analytic import fast
 from analytic.effects import Weighting
+from analytic.kernel.layout import STATUS_NOT_PD
 from analytic.model import TumblingModel
 from tests.random_scenes import FORCE_EFFECTS, random_scene_dict, random_state, unit
 
@@ -223,7 +224,7 @@ def compare(scene, rng, n_states=3, stats=None):
         if stats is not None:
             stats["direct"] += 1
         # the drop-in API gives the same numbers (bit-identity is legitimate: both wrap the same
-        # kernel call, fk.evaluate, on the same inputs in this process)
+        # kernel call, the scene's evaluate, on the same inputs in this process)
         qdd2, c2 = fm.acceleration_output(t, q, qd)
         np.testing.assert_array_equal(qdd2, got[0])
         assert c2.rank == model.k
@@ -380,7 +381,7 @@ def test_qddot_matches_acceleration():
     sc = make_scene(rng, 5, FORCE_EFFECTS, omega=True, masses=True, weighting="M^-1")
     fm = fast.FastModel(sc)
     q, qd = random_state(rng, 5)
-    # bit-identical: qddot_into and evaluate run the same compiled body (_core) on the same inputs
+    # bit-identical: q̈ alone and the full output run the same compiled body on the same inputs
     np.testing.assert_array_equal(fm.qddot(0.4, q, qd), fm.acceleration(0.4, q, qd)[0])
 
 
@@ -432,7 +433,7 @@ def test_compiled_rhs_falls_back_and_flags_non_finite(monkeypatch):
     bad[model.nq] = np.nan  # Ṙ_x: enters ẏ as it is (a NaN in u would make the kernel decline)
     with pytest.raises(sim.NonFinite):
         g(0.5, bad)
-    monkeypatch.setattr(fr, "rhs_into", lambda *a: fast.fk.STATUS_NOT_PD)
+    monkeypatch.setattr(fr, "rhs_for", lambda ip: lambda *a: STATUS_NOT_PD)
     _, _, g2, _ = _rhs_pair(sc)
     np.testing.assert_array_equal(g2(0.5, y), f(0.5, y))  # g2 hands the call to f itself
     assert g2.counter["nfev"] == 1

@@ -43,11 +43,12 @@ def _mujoco(scene):
 
 
 def main(argv: list[str] | None = None) -> int:
-    from analytic import fast, fast_kernel
+    from analytic import fast
+    from analytic.kernel import jit
     from analytic.model import TumblingModel
     from validation.timing import chain_scene, time_call
 
-    print(f"numba available: {fast.available()}; cache: {fast_kernel.cache_dir_note()}")
+    print(f"numba available: {fast.available()}; cache: {jit.cache_dir_note()}")
     sc2 = chain_scene(2)
     fm2 = fast.FastModel(sc2)
     q, qd = sc2.initial.q0(), sc2.initial.qdot0()
