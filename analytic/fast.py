@@ -5,9 +5,9 @@ in one compiled O(n) kernel (:mod:`analytic.kernel`, numba ``njit(cache=True)``)
 Usage::
 
     fm = FastModel(scene)                      # packs the scene's constants once
-    qdd, torque, rod_forces, force_at_C, QC = fm.acceleration(t, q, qdot)
+    qdd, ctrl = fm.acceleration(t, q, qdot)    # q̈ and the control, as TumblingModel.acceleration
     qdd = fm.qddot(t, q, qdot)                 # the same q̈ only (the integrator's right-hand side)
-    qdd, ctrl = fm.acceleration_output(t, q, qdot)  # drop-in for TumblingModel.acceleration
+    qdd, torque, rod_forces, force_at_C, QC = fm.qddot_and_forces(t, q, qdot)  # views, no record
 
 The numpy model stays the reference; ``tests/test_fast.py`` checks that both agree to 1e-12
 (relative, Euclidean norm) on q̈, ``τ``, the rod forces and ``Q^C``.
@@ -197,10 +197,11 @@ class FastModel:
                 return qdd
         return self._numpy(t, np.asarray(q, float), np.asarray(qdot, float))[0]
 
-    def acceleration(
+    def qddot_and_forces(
         self, t: float, q: np.ndarray, qdot: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """``(q̈, τ, rod_forces, force_at_C, Q^C)`` at one state.
+        """``(q̈, τ, rod_forces, force_at_C, Q^C)`` at one state, as arrays (views of the kernel's
+        output on the compiled path; :meth:`acceleration` wraps the same in a ControlOutput).
 
         Args:
             t: time, s.
@@ -221,11 +222,11 @@ class FastModel:
         QC = out[nq : 2 * nq]
         return out[:nq], out[2 * nq : 2 * nq + 3], QC[7:], QC[:3], QC
 
-    def acceleration_output(
+    def acceleration(
         self, t: float, q: np.ndarray, qdot: np.ndarray
     ) -> tuple[np.ndarray, ControlOutput]:
-        """Same signature and result as :meth:`TumblingModel.acceleration` (``rank = k`` on the
-        compiled path, see the module docstring)."""
+        """``(q̈, control)``: same signature and result as :meth:`TumblingModel.acceleration`
+        (``rank = k`` on the compiled path, see the module docstring)."""
         q = np.ascontiguousarray(q, dtype=float)
         qdot = np.ascontiguousarray(qdot, dtype=float)
         out = self._raw(t, q, qdot)

@@ -1,6 +1,6 @@
 """The integrator's whole right-hand side in one compiled call: ``ẏ`` for ``y = [q, q̇, W, I_L, I_P]``.
 
-:func:`analytic.simulate._rhs` builds ``ẏ`` in Python from :meth:`FastModel.acceleration_output`
+:func:`analytic.simulate._rhs` builds ``ẏ`` in Python from :meth:`FastModel.acceleration`
 (q̈ and the control outputs) and :func:`analytic.aux_rates.aux_rates` (work and impulse rates): about
 20 µs per evaluation, of which the kernel is under 1 µs. This module does the same lines in one
 numba function (same kernel, same arithmetic, same order of operations, so the same numbers), so a

@@ -42,7 +42,7 @@ def evaluator(model: TumblingModel, backend: Backend) -> Callable:
         if backend is Backend.NUMBA:
             raise ValueError("backend: 'numba' needs the numba package (got backend='numba')")
         return model.acceleration
-    return fast.FastModel(model.scene, model).acceleration_output
+    return fast.FastModel(model.scene, model).acceleration
 
 
 def _rhs(model: TumblingModel, accel: Callable) -> Callable[[float, np.ndarray], np.ndarray]:

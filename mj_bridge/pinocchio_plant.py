@@ -504,7 +504,7 @@ class PinocchioDynamics:
         q, qd = self._q.copy(), self._qd.copy()
         if self.controller is ControllerSource.ANALYTIC:
             return self.analytic.acceleration(t, q, qd)[1]
-        return self.fast.acceleration_output(t, q, qd)[1]
+        return self.fast.acceleration(t, q, qd)[1]
 
 
 # ----------------------------------------------------------------------------------------------

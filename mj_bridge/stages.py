@@ -59,7 +59,7 @@ class Stages:
 
     Attributes:
         controller_fn: ``(t, q, q̇) -> (q̈, ControlOutput)`` of the Python path: the numpy model or
-            the compiled kernel's wrapper (``analytic.fast.FastModel.acceleration_output``).
+            the compiled kernel's wrapper (``analytic.fast.FastModel.acceleration``).
         fast: the ``FastModel`` (None for the numpy controller).
         compiled: whether the compiled stage is the callback.
         last_control: the control at the last stage recorded (:attr:`record`), or None.
@@ -88,7 +88,7 @@ class Stages:
             from analytic.fast import FastModel
 
             self.fast = FastModel(scene, model)
-            self.controller_fn = self.fast.acceleration_output
+            self.controller_fn = self.fast.acceleration
         if controller is ControllerSource.MUJOCO and self.controlled:
             check_weighting(model)
         self.last_control: ControlOutput | None = None

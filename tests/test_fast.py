@@ -186,7 +186,7 @@ def compare(scene, rng, n_states=3, stats=None):
     for _ in range(n_states):
         q, qd = random_state(rng, scene.n)
         t = float(rng.uniform(0, 10))
-        got = fm.acceleration(t, q, qd)
+        got = fm.qddot_and_forces(t, q, qd)
         qdd, c = model.acceleration(t, q, qd)
         ref = (qdd, c.torque, c.rod_forces, c.force_at_C, c.QC)
         errs = {nm: rel(g, r) for nm, g, r in zip(NAMES, got, ref, strict=True)}
@@ -225,7 +225,7 @@ def compare(scene, rng, n_states=3, stats=None):
             stats["direct"] += 1
         # the drop-in API gives the same numbers (bit-identity is legitimate: both wrap the same
         # kernel call, the scene's evaluate, on the same inputs in this process)
-        qdd2, c2 = fm.acceleration_output(t, q, qd)
+        qdd2, c2 = fm.acceleration(t, q, qd)
         np.testing.assert_array_equal(qdd2, got[0])
         assert c2.rank == model.k
         # the requirements hold to round-off on both paths (residuals are round-off, not compared)
@@ -276,7 +276,7 @@ def test_large_n(weighting):
         fm = fast.FastModel(sc, model)
         for _ in range(2):
             q, qd = random_state(rng, 200)
-            got = fm.acceleration(0.7, q, qd)
+            got = fm.qddot_and_forces(0.7, q, qd)
             qdd, c = model.acceleration(0.7, q, qd)
             errs = [
                 rel(g, r)
@@ -323,7 +323,7 @@ def test_singular_M_rigid_body_and_masses_at_C():
                 e_u = np.zeros(n + 7)
                 e_u[3:7] = q[3:7]
                 assert np.linalg.norm(M @ e_u) < 1e-12 * np.linalg.norm(M)
-                got = fm.acceleration(1.1, q, qd)
+                got = fm.qddot_and_forces(1.1, q, qd)
                 qdd, cc = model.acceleration(1.1, q, qd)
                 ref = (qdd, cc.torque, cc.rod_forces, cc.force_at_C, cc.QC)
                 for nm, g, r in zip(NAMES, got, ref, strict=True):
@@ -346,7 +346,7 @@ def test_uncontrolled_and_paper_scenes():
         fm = fast.FastModel(sc, model)
         q, qd = sc.initial.q0(), sc.initial.qdot0()
         for t in (0.0, 1.3):
-            got = fm.acceleration(t, q, qd)
+            got = fm.qddot_and_forces(t, q, qd)
             qdd, c = model.acceleration(t, q, qd)
             for nm, g, r in zip(
                 NAMES, got, (qdd, c.torque, c.rod_forces, c.force_at_C, c.QC), strict=True
@@ -361,7 +361,7 @@ def test_identity_weighting_falls_back_and_counts():
     fm = fast.FastModel(sc)
     assert not fm.compiled
     q, qd = random_state(rng, 3)
-    got = fm.acceleration(0.0, q, qd)
+    got = fm.qddot_and_forces(0.0, q, qd)
     assert fm.fallbacks == 1
     # the fallback answers the W = I problem (an independent KKT solve of it), which is not the
     # Gauss (W = M) one: a weighting dropped on the way would fail here
@@ -382,7 +382,7 @@ def test_qddot_matches_acceleration():
     fm = fast.FastModel(sc)
     q, qd = random_state(rng, 5)
     # bit-identical: q̈ alone and the full output run the same compiled body on the same inputs
-    np.testing.assert_array_equal(fm.qddot(0.4, q, qd), fm.acceleration(0.4, q, qd)[0])
+    np.testing.assert_array_equal(fm.qddot(0.4, q, qd), fm.qddot_and_forces(0.4, q, qd)[0])
 
 
 def _rhs_pair(sc):

@@ -53,7 +53,7 @@ from analytic.scene import Scene, load_scene
 from analytic.trajectory import Engine, RunStatus, Trajectory
 from mj_bridge import plants as _plants
 from mj_bridge.pinocchio_plant import PinocchioSettings
-from model_xml.state import mujoco_to_paper_acc
+from model_xml.coordinates import mujoco_to_paper_acc
 from validation.atomic import write_text
 from validation.compare import attitude_angle, mass_error_reference, omega_error_reference
 from validation.outputs import output_run
