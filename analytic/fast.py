@@ -51,6 +51,7 @@ from __future__ import annotations
 import numpy as np
 
 from analytic.effects import Effect, Weighting
+from analytic.kernel import gauss, minv2
 from analytic.kernel import layout as L
 from analytic.kernel.entry import Solver, solver_of
 from analytic.kernel.jit import HAVE_NUMBA
@@ -164,12 +165,8 @@ class FastModel:
         if not available():
             self._evaluate = self._qddot_into = None
         elif self.solver is Solver.MINV2:
-            from analytic.kernel import minv2
-
             self._evaluate, self._qddot_into = minv2.evaluate, minv2.qddot_into
         else:  # the Gauss kernel writes q̈ alone when given an array of length nq
-            from analytic.kernel import gauss
-
             self._evaluate = self._qddot_into = gauss.evaluate
 
     def _raw(self, t: float, q: np.ndarray, qdot: np.ndarray) -> np.ndarray | None:

@@ -23,8 +23,7 @@ import math
 import numpy as np
 
 from analytic import aux_rates as _aux
-from analytic.kernel import entry, gauss, minv2
-from analytic.kernel.entry import Solver, solver_of
+from analytic.kernel.entry import Solver, evaluate_as, solver_of
 from analytic.kernel.jit import HAVE_NUMBA, KERNEL_SOURCES, jit, source_fingerprint
 from analytic.kernel.layout import (
     F_MBR,
@@ -41,8 +40,6 @@ from analytic.kernel.layout import (
 from analytic.kernel.system import tail
 
 STATUS_NONFINITE = 3
-
-_GAUSS, _MINV2 = int(Solver.GAUSS), int(Solver.MINV2)
 
 
 def _make(deps: int, solver: int):
@@ -64,12 +61,7 @@ def _make(deps: int, solver: int):
         nq = n + 7
         q = y[:nq]
         qd = y[nq : 2 * nq]
-        if solver == _GAUSS:
-            status = gauss.evaluate(t, q, qd, fp, ip, work)
-        elif solver == _MINV2:
-            status = minv2.evaluate(t, q, qd, fp, ip, work)
-        else:
-            status = entry.evaluate(t, q, qd, fp, ip, work)
+        status = evaluate_as(solver, t, q, qd, fp, ip, work)  # only this solve is compiled in
         if status != STATUS_OK:
             return status
         for i in range(nq):

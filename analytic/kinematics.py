@@ -66,9 +66,9 @@ def S(u: np.ndarray) -> np.ndarray:
     rotation only for unit u; docs/errata.md C2). Works for any u, and for a batch: u shape (..., 4)
     -> (..., 3, 3). The one numpy ``S(u)`` of the project (the compiled one is
     :func:`analytic.kernel.kinematics.rotation`, the same formulas)."""
-    u = np.asarray(u, dtype=float)
+    u = np.asarray(u)
     u0, u1, u2, u3 = u[..., 0], u[..., 1], u[..., 2], u[..., 3]
-    out = np.empty((*u.shape[:-1], 3, 3))
+    out = np.empty((*u.shape[:-1], 3, 3), dtype=np.result_type(u, 1.0))  # complex u: complex S
     out[..., 0, 0] = 2 * u0 * u0 - 1 + 2 * u1 * u1
     out[..., 0, 1] = 2 * u1 * u2 - 2 * u0 * u3
     out[..., 0, 2] = 2 * u1 * u3 + 2 * u0 * u2

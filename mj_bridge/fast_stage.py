@@ -20,13 +20,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from analytic.kernel import entry, gauss, minv2
-from analytic.kernel.entry import Solver, solver_of
+from analytic.kernel.entry import Solver, evaluate_as, solver_of
 from analytic.kernel.jit import HAVE_NUMBA, KERNEL_SOURCES, jit, source_fingerprint
 from analytic.kernel.kinematics import rotation
 from analytic.kernel.layout import STATUS_OK, STATUS_UNSUPPORTED
-
-_GAUSS, _MINV2 = int(Solver.GAUSS), int(Solver.MINV2)
 
 
 def make_stage(deps: int, solver: int):
@@ -53,12 +50,7 @@ def make_stage(deps: int, solver: int):
         qd[6] = s * (-u2 * w0 + u1 * w1 + u0 * w2)
         for i in range(n):
             qd[7 + i] = qvel[6 + i]
-        if solver == _GAUSS:
-            status = gauss.evaluate(t, q, qd, fp, ip, out)
-        elif solver == _MINV2:
-            status = minv2.evaluate(t, q, qd, fp, ip, out)
-        else:
-            status = entry.evaluate(t, q, qd, fp, ip, out)
+        status = evaluate_as(solver, t, q, qd, fp, ip, out)  # only this solve is compiled in
         if status != STATUS_OK:
             return status
         tau0 = out[2 * nq] + tau_g[0]

@@ -14,7 +14,7 @@ from enum import IntEnum
 import numpy as np
 
 from analytic.kernel import gauss, minv2
-from analytic.kernel.jit import jit_entry
+from analytic.kernel.jit import inline, jit_entry
 from analytic.kernel.layout import I_KP, I_KW, I_WEIGHT, STATUS_UNSUPPORTED, W_GAUSS, W_MINV2
 
 
@@ -51,3 +51,17 @@ def _make_evaluate(deps: int):
 evaluate = jit_entry(_make_evaluate)
 """The kernel for any packed scene: ``[q̈, Q^C, τ, residual]`` into ``out`` (see
 :func:`analytic.kernel.gauss.evaluate`), status returned."""
+
+_GAUSS, _MINV2 = int(Solver.GAUSS), int(Solver.MINV2)
+
+
+@inline
+def evaluate_as(solver, t, q, qd, fp, ip, out):
+    """The kernel a compiled caller embeds, by ``solver`` (a :class:`Solver` value). Pass a
+    constant of the caller (a closure variable of its factory): numba then drops the other branches
+    before compiling, so only that solve is compiled into the caller."""
+    if solver == _GAUSS:
+        return gauss.evaluate(t, q, qd, fp, ip, out)
+    if solver == _MINV2:
+        return minv2.evaluate(t, q, qd, fp, ip, out)
+    return evaluate(t, q, qd, fp, ip, out)
