@@ -57,7 +57,7 @@ from analytic import aux_rates as _aux
 from analytic.assemble import N_AUX, assemble
 from analytic.effects import Effect, SolverMethod
 from analytic.fast import FastModel
-from analytic.kernel import entry
+from analytic.kernel.entry import Solver, evaluate_as, solver_of
 from analytic.kernel.jit import KERNEL_SOURCES, jit, source_fingerprint
 from analytic.kernel.kinematics import rotation
 from analytic.kernel.layout import (
@@ -175,9 +175,10 @@ def work_layout(n: int, k: int) -> dict[str, tuple[int, int]]:
     return out
 
 
-def _make_stage(deps: int):
+def _make_stage(deps: int, solver: int):
     """The stage closing over ``deps`` (the source fingerprint of the kernel and of
-    :mod:`analytic.aux_rates`, which it calls; see :func:`analytic.kernel.jit.jit_entry`)."""
+    :mod:`analytic.aux_rates`, which it calls; see :func:`analytic.kernel.jit.jit_entry`) and the
+    solve it embeds (``solver``, a :class:`Solver`; numba drops the other branches)."""
 
     def stage(t, y, fp, ip, work, ydot, mode):  # pragma: no cover - compiled
         """Everything of ``ẏ`` but ``v̇``, and ``aba``'s arguments (see the module docstring).
@@ -243,7 +244,8 @@ def _make_stage(deps: int):
         # the control at this state
         if mode == MODE_KERNEL and k > 0:
             kout = work[o_k : o_k + 2 * nq + 3 + k]
-            status = entry.evaluate(t, work[o_q : o_q + nq], work[o_qd : o_qd + nq], fp, ip, kout)
+            qk, qdk = work[o_q : o_q + nq], work[o_qd : o_qd + nq]
+            status = evaluate_as(solver, t, qk, qdk, fp, ip, kout)  # only this solve compiled in
             if status != STATUS_OK:
                 return status
             for r in range(3):
@@ -349,7 +351,16 @@ def _finish(acc, work, ydot):  # pragma: no cover - compiled
 
 
 DEPS = source_fingerprint(*KERNEL_SOURCES, _aux)
-stage = jit(_make_stage(DEPS))
+stage_gauss = jit(_make_stage(DEPS, int(Solver.GAUSS)))
+stage_minv2 = jit(_make_stage(DEPS, int(Solver.MINV2)))
+stage = jit(_make_stage(DEPS, int(Solver.ANY)))  # any scene: both solves compiled in
+
+
+def stage_for(ip: np.ndarray):
+    """The compiled stage embedding only the solve the packed scene ``ip`` needs."""
+    return stage_minv2 if solver_of(ip) is Solver.MINV2 else stage_gauss
+
+
 finish = jit(_finish)
 
 
@@ -390,6 +401,7 @@ class PinocchioDynamics:
         self.k = self.analytic.k
         self.controlled = self.k > 0
         self.fp, self.ip = self.fast.fp, self.fast.ip
+        self._kernel_stage = stage_for(self.ip)
         self.layout = work_layout(n, self.k)
         self.work = np.zeros(max(stop for _, stop in self.layout.values()))
         w = self.work
@@ -429,6 +441,7 @@ class PinocchioDynamics:
     def _stage(self, t: float, y: np.ndarray, ydot: np.ndarray) -> None:
         """Fill ``ydot`` except ``v̇`` and aba's arguments in the work array (any controller path)."""
         fp, ip, work = self.fp, self.ip, self.work
+        stage = self._kernel_stage
         if self._numpy_each_stage:
             stage(t, y, fp, ip, work, ydot, MODE_MAP)
             self._numpy_control(t)
@@ -452,6 +465,7 @@ class PinocchioDynamics:
         mode = self._mode
         slow = self._stage
         fast_ok = not self._numpy_each_stage
+        stage = self._kernel_stage
 
         def f(t: float, y: np.ndarray) -> np.ndarray:
             self.nfev += 1

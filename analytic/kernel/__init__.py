@@ -19,8 +19,9 @@ Everything the kernel needs is packed by :func:`analytic.fast.pack` into one flo
 one int array ``ip``, so a call unboxes six arguments. ``evaluate(t, q, q̇, fp, ip, out)`` writes
 ``[q̈ (nq), Q^C (nq), τ (3), A_c q̈ - b_c (k)]`` into ``out`` and returns a status (0 = done).
 
-Cost notes (one evaluation is ~0.5 µs at small n, so constant factors matter): the stages are
-compiled inline into one function; no heap allocation on the Gauss path (one stack workspace carved
+Cost notes (one evaluation is ~0.5 µs at small n, so constant factors matter): the Gauss stages
+are compiled inline into two functions (``system.build_system``, ``gauss.evaluate``); no heap
+allocation on the Gauss path (one stack workspace carved
 by ``layout.WS_*``; the rod rows of ``Q`` and ``b_c`` live in ``out``); closed forms for ``L_a(u)``,
 ``L̇_a u̇`` and ``H(u)ᵀx`` instead of the (3, 4, 4) tensor contractions; no square roots on the Gauss
 path (LDLᵀ); cos and sin of one argument in one block (one ``sincos`` call) and reused while the

@@ -1,12 +1,18 @@
 """numba plumbing of the compiled kernel: where its cache lives, how functions are compiled, and
 what a cached function's key covers.
 
-**Two kinds of compiled function.** The kernel's stages and helpers are compiled with
-:func:`inline` (``njit(inline="always")``, no disk cache): numba pastes their code into whoever calls
-them, so they exist compiled only inside an entry point. Entry points (what Python or another
-package calls: ``gauss.evaluate``, ``minv2.evaluate``, ``fast_rhs.rhs_into`` ...) are compiled with
-:func:`jit` (``njit(cache=True)``) through :func:`jit_entry`, which ties their cache key to the
-sources they embed.
+**Three kinds of compiled function.**
+
+* :func:`inline` (``njit(inline="always")``, no disk cache): the Gauss stages and the small
+  kinematic helpers; numba pastes their code into the caller, so the Gauss kernel compiles into one
+  function, as fast as the monolithic kernel it replaced.
+* :func:`jit_entry` (``njit(cache=True)``, key tied to the sources, see below): entry points (what
+  Python or another package calls: ``gauss.evaluate``, ``minv2.evaluate``, ``fast_rhs.rhs_into``
+  ...) and the two large blocks both weightings share or only one needs
+  (``system.build_system``, ``minv2.solve_minv2``), compiled once and cached on their own: pasting
+  them into every caller made the first run compile them again for each.
+* :func:`jit` (``njit(cache=True)``, keyed on its own file by numba): only for functions that call
+  nothing from another file (the M⁻² dense helpers).
 
 **Why the tie.** numba's disk cache checks only the source file of the function being cached
 (numba's caching notes: "Cache invalidation fails to recognize changes in symbols defined in another

@@ -68,7 +68,8 @@ STATUS_UNSUPPORTED = 2  # a weighting this kernel does not compile (identity)
 def tail_offsets(n: int, kp: int) -> tuple[int, int, int, int, int, int, int, int, int, int, int]:
     """Offsets in ``fp`` of ``m, p_e, k_l, k_n, l, λ, α, β, a, d`` and the total length of ``fp``.
 
-    Plain arithmetic, also compiled inline into the kernel (:data:`tail_offsets_jit`).
+    Plain arithmetic; compiled code calls it as :data:`analytic.kernel.system.tail` (the same
+    function, compiled inline).
     """
     o_m = F_ARR
     o_pe = o_m + n

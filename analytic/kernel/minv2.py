@@ -19,7 +19,7 @@ import math
 
 import numpy as np
 
-from analytic.kernel.jit import inline, jit_entry, workspace
+from analytic.kernel.jit import jit, jit_entry, workspace
 from analytic.kernel.layout import (
     F_ARR,
     F_MU0,
@@ -50,7 +50,7 @@ from analytic.kernel.layout import (
 from analytic.kernel.system import build_system
 
 
-@inline
+@jit
 def chol(A, k):
     """In-place lower Cholesky of the leading k x k block of A. Returns False if not PD."""
     for j in range(k):
@@ -69,7 +69,7 @@ def chol(A, k):
     return True
 
 
-@inline
+@jit
 def chol_solve(L, k, b):
     """Solve (L Lᵀ) x = b in place (b of length >= k)."""
     for i in range(k):
@@ -84,164 +84,177 @@ def chol_solve(L, k, b):
         b[i] = v / L[i, i]
 
 
-@inline
-def solve_minv2(q, fp, ip, out, w, n, kw, kp):
-    """Stage 7 (M⁻²): ``q̈``, ``Q^C``, ``τ`` and the residual into ``out`` (Eq. B13, with the
-    closed forms of the module docstring), mirroring :func:`analytic.fundamental.solve`. ``w`` and
-    the rod rows of ``out`` hold what :func:`analytic.kernel.system.build_system` wrote.
+def _make_solve_minv2(deps: int):
+    """:func:`solve_minv2` closing over the kernel's source fingerprint (see
+    :func:`analytic.kernel.jit.jit_entry`)."""
 
-    Returns:
-        ``STATUS_NOT_PD`` when the Schur complement of ``M_α`` is not numerically positive
-        definite, else ``STATUS_OK``.
-    """
-    s = w[WS_S]
-    mu0 = fp[F_MU0]
-    mu1 = w[WS_MU1]
-    mu2 = w[WS_MU2]
-    alpha = w[WS_ALPHA]
-    b_m = w[WS_BM]
-    uu = w[WS_UU]
-    nq = n + 7
-    k = kw + kp
-    om = F_ARR
-    iidx = I_TRACK + n
-    itr = I_TRACK
-    p = q[7:]
-    u = q[3:7]
-    Mbb = np.empty((7, 7))
-    for i in range(7):
-        for j in range(7):
-            Mbb[i, j] = w[WS_MB + 7 * i + j]
-    c1 = w[WS_C1 : WS_C1 + 7].copy()
-    c2 = w[WS_C2 : WS_C2 + 7].copy()
-    Qa = np.empty(nq)  # Q_α: body rows in w, rod rows in out (see forces.rod_pass)
-    for i in range(7):
-        Qa[i] = w[WS_QB + i]
-    for i in range(n):
-        Qa[7 + i] = out[nq + 7 + i] if ip[itr + i] else out[7 + i]
-    bc = np.empty(k)
-    for j in range(kw):
-        bc[j] = w[WS_BW + j]
-    for j in range(kp):
-        bc[kw + j] = out[7 + ip[iidx + j]]
-    Hm = np.empty((3, 4))  # H(u), Eq. (13), as kinematics.kinematic_terms wrote it
-    for r in range(3):
-        for c in range(4):
-            Hm[r, c] = w[WS_H + 4 * r + c]
-    Hw = np.empty((kw, 4))
-    for j in range(kw):
-        for c in range(4):
-            Hw[j, c] = Hm[ip[I_COMP + j], c]
-    qdd = out[:nq]
-    QC = out[nq : 2 * nq]
-    tau = out[2 * nq : 2 * nq + 3]
-    res = out[2 * nq + 3 : 2 * nq + 3 + k]
+    def solve_minv2(q, fp, ip, out, w, n, kw, kp):
+        """Stage 7 (M⁻²): ``q̈``, ``Q^C``, ``τ`` and the residual into ``out`` (Eq. B13, with the
+        closed forms of the module docstring), mirroring :func:`analytic.fundamental.solve`. ``w`` and
+        the rod rows of ``out`` hold what :func:`analytic.kernel.system.build_system` wrote.
 
-    SB = Mbb.copy()  # body block of M_α, then its Schur complement over all rods
-    for i in range(4):
-        for j in range(4):
-            SB[3 + i, 3 + j] += alpha * u[i] * u[j]
-    if s > 0.0:
+        Returns:
+            ``STATUS_NOT_PD`` when the Schur complement of ``M_α`` is not numerically positive
+            definite, else ``STATUS_OK``.
+
+        Compiled and cached on its own (heap arrays and dense helpers: far cheaper to compile once
+        than to paste into each caller).
+        """
+        if deps < 0:  # never true: ties numba's cache key to the kernel's sources
+            return STATUS_UNSUPPORTED
+        s = w[WS_S]
+        mu0 = fp[F_MU0]
+        mu1 = w[WS_MU1]
+        mu2 = w[WS_MU2]
+        alpha = w[WS_ALPHA]
+        b_m = w[WS_BM]
+        uu = w[WS_UU]
+        nq = n + 7
+        k = kw + kp
+        om = F_ARR
+        iidx = I_TRACK + n
+        itr = I_TRACK
+        p = q[7:]
+        u = q[3:7]
+        Mbb = np.empty((7, 7))
         for i in range(7):
             for j in range(7):
-                SB[i, j] -= (
-                    mu0 * c1[i] * c1[j]
-                    + mu1 * (c1[i] * c2[j] + c2[i] * c1[j])
-                    + mu2 * c2[i] * c2[j]
-                ) / s
-    if not chol(SB, 7):
-        return STATUS_NOT_PD
-    a0 = Qa.copy()
-    ma_solve(SB, c1, c2, s, fp, om, p, n, a0)
-    y = np.zeros(nq)
-    for c in range(4):
-        y[3 + c] = u[c]
-    ma_solve(SB, c1, c2, s, fp, om, p, n, y)
-    sm = 0.0
-    am_a0 = 0.0
-    for c in range(4):
-        sm += u[c] * y[3 + c]
-        am_a0 += u[c] * a0[3 + c]
-    lam_m = (b_m - am_a0) / sm
-    acc = a0 + lam_m * y
-    # r = b_c - A acc; w = A y / s_m; G = diag(4|u|², 1) + |u|² w wᵀ
-    r = np.empty(k)
-    wv = np.empty(k)
-    dg = np.empty(k)
-    for j in range(kw):
-        va = 0.0
-        vy = 0.0
+                Mbb[i, j] = w[WS_MB + 7 * i + j]
+        c1 = w[WS_C1 : WS_C1 + 7].copy()
+        c2 = w[WS_C2 : WS_C2 + 7].copy()
+        Qa = np.empty(nq)  # Q_α: body rows in w, rod rows in out (see forces.rod_pass)
+        for i in range(7):
+            Qa[i] = w[WS_QB + i]
+        for i in range(n):
+            Qa[7 + i] = out[nq + 7 + i] if ip[itr + i] else out[7 + i]
+        bc = np.empty(k)
+        for j in range(kw):
+            bc[j] = w[WS_BW + j]
+        for j in range(kp):
+            bc[kw + j] = out[7 + ip[iidx + j]]
+        Hm = np.empty((3, 4))  # H(u), Eq. (13), as kinematics.kinematic_terms wrote it
+        for r in range(3):
+            for c in range(4):
+                Hm[r, c] = w[WS_H + 4 * r + c]
+        Hw = np.empty((kw, 4))
+        for j in range(kw):
+            for c in range(4):
+                Hw[j, c] = Hm[ip[I_COMP + j], c]
+        qdd = out[:nq]
+        QC = out[nq : 2 * nq]
+        tau = out[2 * nq : 2 * nq + 3]
+        res = out[2 * nq + 3 : 2 * nq + 3 + k]
+
+        SB = Mbb.copy()  # body block of M_α, then its Schur complement over all rods
+        for i in range(4):
+            for j in range(4):
+                SB[3 + i, 3 + j] += alpha * u[i] * u[j]
+        if s > 0.0:
+            for i in range(7):
+                for j in range(7):
+                    SB[i, j] -= (
+                        mu0 * c1[i] * c1[j]
+                        + mu1 * (c1[i] * c2[j] + c2[i] * c1[j])
+                        + mu2 * c2[i] * c2[j]
+                    ) / s
+        if not chol(SB, 7):
+            return STATUS_NOT_PD
+        a0 = Qa.copy()
+        ma_solve(SB, c1, c2, s, fp, om, p, n, a0)
+        y = np.zeros(nq)
         for c in range(4):
-            va += Hw[j, c] * acc[3 + c]
-            vy += Hw[j, c] * y[3 + c]
-        r[j] = bc[j] - va
-        wv[j] = vy / sm
-        dg[j] = 4.0 * uu
-    for j in range(kp):
-        i = ip[iidx + j]
-        r[kw + j] = bc[kw + j] - acc[7 + i]
-        wv[kw + j] = y[7 + i] / sm
-        dg[kw + j] = 1.0
-    wDr = 0.0
-    wDw = 0.0
-    for j in range(k):
-        wDr += wv[j] * r[j] / dg[j]
-        wDw += wv[j] * wv[j] / dg[j]
-    f = uu * wDr / (1.0 + uu * wDw)
-    mu = np.empty(k)
-    wmu = 0.0
-    for j in range(k):
-        mu[j] = (r[j] - wv[j] * f) / dg[j]
-        wmu += wv[j] * mu[j]
-    # v = A_cᵀ μ - a_m (w·μ) (= M Z μ); Q_c = M v
-    v = np.zeros(nq)
-    for j in range(kw):
+            y[3 + c] = u[c]
+        ma_solve(SB, c1, c2, s, fp, om, p, n, y)
+        sm = 0.0
+        am_a0 = 0.0
         for c in range(4):
-            v[3 + c] += Hw[j, c] * mu[j]
-    for c in range(4):
-        v[3 + c] -= u[c] * wmu
-    for j in range(kp):
-        v[7 + ip[iidx + j]] = mu[kw + j]
-    Qc = np.zeros(nq)
-    m_mul(Mbb, c1, c2, s, fp, om, p, n, v, Qc)
-    # v2 = M_α⁻¹ Q_c = M_α⁻¹ M v = v - α y (a_mᵀ v) exactly (M = M_α - α a_m a_mᵀ, y = M_α⁻¹ a_m):
-    # no product with M followed by a solve, which would cost about cond(M) in accuracy
-    am_v = 0.0
-    for c in range(4):
-        am_v += u[c] * v[3 + c]
-    v2 = np.empty(nq)
-    for i in range(nq):
-        v2[i] = v[i] - alpha * am_v * y[i]
-    am_v2 = 0.0
-    yQc = 0.0
-    for c in range(4):
-        am_v2 += u[c] * v2[3 + c]
-    for i in range(nq):
-        yQc += y[i] * Qc[i]
-    for i in range(nq):
-        qdd[i] = acc[i] + v2[i] - y[i] * (am_v2 / sm)
-    corr = lam_m - yQc / sm
-    for i in range(nq):
-        QC[i] = Qc[i]
-    for c in range(4):
-        QC[3 + c] += u[c] * corr
-    # torque τ = ¼ H Q^C_u of the applied control force (docs/errata.md C4), residual A_c q̈ - b_c
-    for rr in range(3):
-        vv = 0.0
+            sm += u[c] * y[3 + c]
+            am_a0 += u[c] * a0[3 + c]
+        lam_m = (b_m - am_a0) / sm
+        acc = a0 + lam_m * y
+        # r = b_c - A acc; w = A y / s_m; G = diag(4|u|², 1) + |u|² w wᵀ
+        r = np.empty(k)
+        wv = np.empty(k)
+        dg = np.empty(k)
+        for j in range(kw):
+            va = 0.0
+            vy = 0.0
+            for c in range(4):
+                va += Hw[j, c] * acc[3 + c]
+                vy += Hw[j, c] * y[3 + c]
+            r[j] = bc[j] - va
+            wv[j] = vy / sm
+            dg[j] = 4.0 * uu
+        for j in range(kp):
+            i = ip[iidx + j]
+            r[kw + j] = bc[kw + j] - acc[7 + i]
+            wv[kw + j] = y[7 + i] / sm
+            dg[kw + j] = 1.0
+        wDr = 0.0
+        wDw = 0.0
+        for j in range(k):
+            wDr += wv[j] * r[j] / dg[j]
+            wDw += wv[j] * wv[j] / dg[j]
+        f = uu * wDr / (1.0 + uu * wDw)
+        mu = np.empty(k)
+        wmu = 0.0
+        for j in range(k):
+            mu[j] = (r[j] - wv[j] * f) / dg[j]
+            wmu += wv[j] * mu[j]
+        # v = A_cᵀ μ - a_m (w·μ) (= M Z μ); Q_c = M v
+        v = np.zeros(nq)
+        for j in range(kw):
+            for c in range(4):
+                v[3 + c] += Hw[j, c] * mu[j]
         for c in range(4):
-            vv += Hm[rr, c] * Qc[3 + c]
-        tau[rr] = 0.25 * vv
-    for j in range(kw):
-        vv = 0.0
+            v[3 + c] -= u[c] * wmu
+        for j in range(kp):
+            v[7 + ip[iidx + j]] = mu[kw + j]
+        Qc = np.zeros(nq)
+        m_mul(Mbb, c1, c2, s, fp, om, p, n, v, Qc)
+        # v2 = M_α⁻¹ Q_c = M_α⁻¹ M v = v - α y (a_mᵀ v) exactly (M = M_α - α a_m a_mᵀ, y = M_α⁻¹ a_m):
+        # no product with M followed by a solve, which would cost about cond(M) in accuracy
+        am_v = 0.0
         for c in range(4):
-            vv += Hw[j, c] * qdd[3 + c]
-        res[j] = vv - bc[j]
-    for j in range(kp):
-        res[kw + j] = qdd[7 + ip[iidx + j]] - bc[kw + j]
-    return STATUS_OK
+            am_v += u[c] * v[3 + c]
+        v2 = np.empty(nq)
+        for i in range(nq):
+            v2[i] = v[i] - alpha * am_v * y[i]
+        am_v2 = 0.0
+        yQc = 0.0
+        for c in range(4):
+            am_v2 += u[c] * v2[3 + c]
+        for i in range(nq):
+            yQc += y[i] * Qc[i]
+        for i in range(nq):
+            qdd[i] = acc[i] + v2[i] - y[i] * (am_v2 / sm)
+        corr = lam_m - yQc / sm
+        for i in range(nq):
+            QC[i] = Qc[i]
+        for c in range(4):
+            QC[3 + c] += u[c] * corr
+        # torque τ = ¼ H Q^C_u of the applied control force (docs/errata.md C4), residual A_c q̈ - b_c
+        for rr in range(3):
+            vv = 0.0
+            for c in range(4):
+                vv += Hm[rr, c] * Qc[3 + c]
+            tau[rr] = 0.25 * vv
+        for j in range(kw):
+            vv = 0.0
+            for c in range(4):
+                vv += Hw[j, c] * qdd[3 + c]
+            res[j] = vv - bc[j]
+        for j in range(kp):
+            res[kw + j] = qdd[7 + ip[iidx + j]] - bc[kw + j]
+        return STATUS_OK
+
+    return solve_minv2
 
 
-@inline
+solve_minv2 = jit_entry(_make_solve_minv2)
+
+
+@jit
 def ma_solve(SB, c1, c2, s, fp, om, p, n, x):
     """In place x <- M_α⁻¹ x by the Schur complement SB (Cholesky factor) on the body block."""
     s0 = 0.0
@@ -262,7 +275,7 @@ def ma_solve(SB, c1, c2, s, fp, om, p, n, x):
         x[7 + i] = (x[7 + i] / fp[om + i] - v) / s
 
 
-@inline
+@jit
 def m_mul(Mbb, c1, c2, s, fp, om, p, n, v, out):
     """out = M v (M without the α term) using M_bp columns m_i (c1 + p_i c2), M_pp = s diag(m)."""
     t0 = 0.0
