@@ -4,45 +4,47 @@ right-hand side: ``Ẇ = (τ + τ_g)·ω + F·ṗ + F_C·Ṙ``, ``İ_L = S(u)(τ
 arm of a force at C about the system centre of mass c).
 
 Scalar code, compiled with numba when it is installed (the numpy version of the same lines runs
-otherwise): on small vectors ``np.cross`` and friends cost far more than the arithmetic.
+otherwise): on small vectors ``np.cross`` and friends cost far more than the arithmetic. ``S`` and
+``ω`` are the kernel's (:mod:`analytic.kernel.kinematics`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from analytic.fast_kernel import _jit
+from analytic.kernel.jit import inline, jit_entry
+from analytic.kernel.kinematics import omega, rotation
 
 
-@_jit
-def aux_rates(q, qd, tau, rod, fC, a, d, m, mu0, m_T, out):  # pragma: no cover - compiled
-    """Fill ``out[0] = Ẇ``, ``out[1:4] = İ_L``, ``out[4:7] = İ_P`` (see the module docstring).
+def _make(deps: int):
+    """:func:`aux_rates` closing over the kernel's source fingerprint (it embeds
+    :func:`analytic.kernel.kinematics.rotation`; see :func:`analytic.kernel.jit.jit_entry`)."""
 
-    Args: q, qd (n+7,); tau = τ + τ_g (3,), body axes, N·m; rod (n,), N; fC (3,), inertial, N;
-    a, d (3,), body axes; m (n,), kg; mu0 = Σm, m_T = m_BR + Σm, kg; out (7,).
-    """
+    def aux_rates(q, qd, tau, rod, fC, a, d, m, mu0, m_T, out):  # pragma: no cover - compiled
+        """Fill ``out[0] = Ẇ``, ``out[1:4] = İ_L``, ``out[4:7] = İ_P`` (see the module docstring).
+
+        Args: q, qd (n+7,); tau = τ + τ_g (3,), body axes, N·m; rod (n,), N; fC (3,), inertial,
+        N; a, d (3,), body axes; m (n,), kg; mu0 = Σm, m_T = m_BR + Σm, kg; out (7,).
+        """
+        if deps < 0:  # never true: ties numba's cache key to the kernel's sources
+            return
+        _rates(q, qd, tau, rod, fC, a, d, m, mu0, m_T, out)
+
+    return aux_rates
+
+
+@inline
+def _rates(q, qd, tau, rod, fC, a, d, m, mu0, m_T, out):  # pragma: no cover - compiled
     u0, u1, u2, u3 = q[3], q[4], q[5], q[6]
     v0, v1, v2, v3 = qd[3], qd[4], qd[5], qd[6]
-    # ω = H(u) u̇, Eqs. (12)-(13)
-    w0 = 2.0 * (-u1 * v0 + u0 * v1 + u3 * v2 - u2 * v3)
-    w1 = 2.0 * (-u2 * v0 - u3 * v1 + u0 * v2 + u1 * v3)
-    w2 = 2.0 * (-u3 * v0 + u2 * v1 - u1 * v2 + u0 * v3)
+    w0, w1, w2 = omega(u0, u1, u2, u3, v0, v1, v2, v3)  # ω = H(u) u̇, Eqs. (12)-(13)
     power = tau[0] * w0 + tau[1] * w1 + tau[2] * w2
     power += fC[0] * qd[0] + fC[1] * qd[1] + fC[2] * qd[2]
     mu1 = 0.0
     for i in range(m.shape[0]):
         power += rod[i] * qd[7 + i]
         mu1 += m[i] * q[7 + i]
-    # S(u), Eq. (11)
-    s00 = 2 * u0 * u0 - 1 + 2 * u1 * u1
-    s01 = 2 * u1 * u2 - 2 * u0 * u3
-    s02 = 2 * u1 * u3 + 2 * u0 * u2
-    s10 = 2 * u1 * u2 + 2 * u0 * u3
-    s11 = 2 * u0 * u0 - 1 + 2 * u2 * u2
-    s12 = 2 * u2 * u3 - 2 * u0 * u1
-    s20 = 2 * u1 * u3 - 2 * u0 * u2
-    s21 = 2 * u2 * u3 + 2 * u0 * u1
-    s22 = 2 * u0 * u0 - 1 + 2 * u3 * u3
+    s00, s01, s02, s10, s11, s12, s20, s21, s22 = rotation(u0, u1, u2, u3)  # S(u), Eq. (11)
     # arm R - c = -(μ1 a + μ0 d) rotated by S, over m_T
     e0 = mu1 * a[0] + mu0 * d[0]
     e1 = mu1 * a[1] + mu0 * d[1]
@@ -57,6 +59,9 @@ def aux_rates(q, qd, tau, rod, fC, a, d, m, mu0, m_T, out):  # pragma: no cover 
     out[4] = fC[0]
     out[5] = fC[1]
     out[6] = fC[2]
+
+
+aux_rates = jit_entry(_make)
 
 
 def aux_rates_reference(q, qd, tau, rod, fC, a, d, m, mu0, m_T) -> np.ndarray:

@@ -28,6 +28,7 @@ from numba import carray, types
 from numba.extending import intrinsic
 
 from analytic import fast_rhs
+from analytic.kernel.entry import Solver
 
 A_NY, A_NFP, A_NIP, A_NWORK, A_FP, A_IP, A_WORK, A_CTX = range(8)
 N_ARGS = 8
@@ -66,8 +67,14 @@ def _i64_at(typingctx, address):
     return sig, codegen
 
 
-def _make(deps: int):
-    """The ``cfunc`` body, closing over ``deps`` (see :func:`make`)."""
+_RHS_GAUSS = fast_rhs.rhs_as(Solver.GAUSS)
+_RHS_MINV2 = fast_rhs.rhs_as(Solver.MINV2)
+_RHS_ANY = fast_rhs.rhs_as(Solver.ANY)
+_GAUSS, _MINV2 = int(Solver.GAUSS), int(Solver.MINV2)
+
+
+def _make(deps: int, solver: int):
+    """The ``cfunc`` body, closing over ``deps`` and ``solver`` (see :func:`make`)."""
 
     def diffeq(dy_ptr, t, y_ptr, args_ptr):  # pragma: no cover - compiled
         """``dy = ẏ(t, y)``, or NaN once a nonzero status was seen; and the watch of the steps."""
@@ -93,7 +100,13 @@ def _make(deps: int):
             fp = carray(_f64_at(np.int64(a[A_FP])), (np.int64(a[A_NFP]),))
             ip = carray(_i64_at(np.int64(a[A_IP])), (np.int64(a[A_NIP]),))
             work = carray(_f64_at(np.int64(a[A_WORK])), (np.int64(a[A_NWORK]),))
-            status = fast_rhs.rhs_into(t, y, fp, ip, work, dy)
+            # `solver` is a constant of the closure: numba drops the other two branches
+            if solver == _GAUSS:
+                status = _RHS_GAUSS(t, y, fp, ip, work, dy)
+            elif solver == _MINV2:
+                status = _RHS_MINV2(t, y, fp, ip, work, dy)
+            else:
+                status = _RHS_ANY(t, y, fp, ip, work, dy)
             if status == 0:  # the kernel's STATUS_OK
                 return
             ctx[C_STATUS] = status
@@ -104,18 +117,22 @@ def _make(deps: int):
     return diffeq
 
 
-def make(deps: int):
+def make(deps: int, solver: Solver = Solver.ANY):
     """The compiled ``cfunc`` (its ``address`` is what CyRK calls).
 
     Args:
-        deps: the fingerprint of the sources it embeds (:func:`analytic.fast_kernel.
+        deps: the fingerprint of the sources it embeds (:func:`analytic.kernel.jit.
             source_fingerprint`): numba's cache checks only this file, and hashes closure variables
             into its key, so editing the kernel recompiles this instead of loading a stale copy.
+        solver: the solve it embeds (:func:`analytic.kernel.entry.solver_of` of the scene), so a
+            Gauss scene compiles no M⁻² code.
     """
-    body = _make(deps)
+    body = _make(deps, int(solver))
     try:
         return numba.cfunc(SIGNATURE, cache=True)(body)
-    except RuntimeError:  # no usable cache directory: compiled in memory (as fast_kernel._jit)
+    except (
+        RuntimeError
+    ):  # no usable cache directory: compiled in memory (as analytic.kernel.jit.jit)
         return numba.cfunc(SIGNATURE)(body)
 
 

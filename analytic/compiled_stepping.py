@@ -64,7 +64,7 @@ wraps, ``CyRK.nb.numba_solver.c_numba_cysolve_ivp`` (a ctypes function; the same
 result getters it uses, from Python: nothing of CyRK is compiled at run time. The rename does not
 touch these names; ``pyproject.toml`` pins ``cyrk <0.21``, and when the names or the version differ
 :func:`unavailable` says so and ``auto`` runs scipy's loop. The right-hand side ``cfunc`` is cached
-on disk by numba like the kernel (:func:`analytic.fast_kernel._jit`).
+on disk by numba like the kernel (:func:`analytic.kernel.jit.jit`).
 """
 
 from __future__ import annotations
@@ -143,12 +143,11 @@ class _Unavailable(RuntimeError):
 
 
 @functools.cache
-def _runtime() -> SimpleNamespace:
-    """CyRK's entry points and the compiled right-hand side's address (compiled, or loaded from
-    numba's cache, on the first call); :class:`_Unavailable` when something is missing."""
-    from analytic import fast_kernel as fk
+def _cyrk() -> SimpleNamespace:
+    """CyRK's entry points (nothing compiled); :class:`_Unavailable` when something is missing."""
+    from analytic.kernel.jit import HAVE_NUMBA
 
-    if not fk.HAVE_NUMBA:
+    if not HAVE_NUMBA:
         raise _Unavailable("numba is not installed")
     try:
         import CyRK
@@ -175,14 +174,8 @@ def _runtime() -> SimpleNamespace:
     missing = [n for n in names if not hasattr(ns, n)]
     if missing:
         raise _Unavailable(f"CyRK {version} lacks {', '.join(missing)}")
-    from analytic import compiled_rhs
-
-    cfunc = compiled_rhs.make(fk.source_fingerprint(*_rhs_modules()))
     codes = CyRK.CyrkErrorCodes
     return SimpleNamespace(
-        address=cfunc.address,
-        cfunc=cfunc,
-        layout=compiled_rhs,
         solve=ns.c_numba_cysolve_ivp,
         status=ns.c_get_status,
         size=ns.c_get_size,
@@ -198,11 +191,24 @@ def _runtime() -> SimpleNamespace:
     )
 
 
+@functools.cache
+def _runtime(solver: int = -1) -> SimpleNamespace:
+    """:func:`_cyrk`'s entry points with the compiled right-hand side's address, the ``cfunc``
+    embedding the solve ``solver`` (an :class:`analytic.kernel.entry.Solver` value; the default
+    ``ANY`` embeds both) (compiled, or loaded from numba's cache, on the first call)."""
+    from analytic import compiled_rhs
+    from analytic.kernel.entry import Solver
+    from analytic.kernel.jit import source_fingerprint
+
+    cfunc = compiled_rhs.make(source_fingerprint(*_rhs_modules()), Solver(solver))
+    return SimpleNamespace(**vars(_cyrk()), address=cfunc.address, cfunc=cfunc, layout=compiled_rhs)
+
+
 def unavailable() -> str:
     """Why the compiled loop cannot run on this installation ("" when it can). The first call
-    imports CyRK and compiles the right-hand side ``cfunc`` (or loads it from numba's cache)."""
+    imports CyRK (the right-hand side ``cfunc`` is compiled when a run first needs it)."""
     try:
-        _runtime()
+        _cyrk()
     except _Unavailable as exc:
         return str(exc)
     return ""
@@ -440,7 +446,9 @@ def integrate(
 def _compiled(f: Callable, t_eval: np.ndarray, y0: np.ndarray, fast: Any, kw: dict) -> Stepped:
     """The compiled loop (module docstring): calls of :data:`CHUNK_STEPS` steps, hand-over to
     scipy's loop from the start of a call that does not end cleanly."""
-    rt = _runtime()
+    from analytic.kernel.entry import solver_of
+
+    rt = _runtime(int(solver_of(np.asarray(fast.ip))))
     ny = y0.size
     kernel = _Kernel(rt.layout, fast, ny)
     method_int = rt.methods[SolverMethod(kw["method"])]

@@ -1,13 +1,13 @@
 """The fast engine: the controlled dynamics of :class:`~analytic.model.TumblingModel` (``M``, ``Q``,
 modeling constraint, control constraints and the fundamental equation, Eqs. 51-53, 59, 80-89, B10)
-in one compiled O(n) kernel (:mod:`analytic.fast_kernel`, numba ``njit(cache=True)``).
+in one compiled O(n) kernel (:mod:`analytic.kernel`, numba ``njit(cache=True)``).
 
 Usage::
 
     fm = FastModel(scene)                      # packs the scene's constants once
-    qdd, torque, rod_forces, force_at_C, QC = fm.acceleration(t, q, qdot)
+    qdd, ctrl = fm.acceleration(t, q, qdot)    # q̈ and the control, as TumblingModel.acceleration
     qdd = fm.qddot(t, q, qdot)                 # the same q̈ only (the integrator's right-hand side)
-    qdd, ctrl = fm.acceleration_output(t, q, qdot)  # drop-in for TumblingModel.acceleration
+    qdd, torque, rod_forces, force_at_C, QC = fm.qddot_and_forces(t, q, qdot)  # views, no record
 
 The numpy model stays the reference; ``tests/test_fast.py`` checks that both agree to 1e-12
 (relative, Euclidean norm) on q̈, ``τ``, the rod forces and ``Q^C``.
@@ -20,11 +20,11 @@ What runs where:
   complement built from three mass moments, its R block is inverted in closed form, and a 4x4 LDLᵀ
   on u bordered by ``1 + k_ω`` constraint rows finishes the solve.
 * **N = M⁻² (Eq. B13)**: the kernel, O(n), with the closed form
-  ``Zᵀ M² Z = diag(4|u|² I, I) + |u|² w wᵀ`` (see :mod:`analytic.fast_kernel`) and
+  ``Zᵀ M² Z = diag(4|u|² I, I) + |u|² w wᵀ`` (see :mod:`analytic.kernel.minv2`) and
   ``M_α⁻¹ M v = v - α y (a_mᵀ v)`` in place of a product with ``M`` followed by a solve (that
   product-then-solve cost about cond(M) in accuracy and kept this path switched off until it was
   replaced). Against a 40-digit solve over 1728 random states the kernel's worst error was 5.9e-10
-  where the dense numpy reference's was 7.4e-8.
+  where the dense numpy reference's was 7.4e-8. Compiled only when a scene asks for this weighting.
 * **Identity weighting**: not structured here; falls back to the numpy path (the dense
   ``(n+7)²`` solve of :func:`analytic.fundamental.solve`). Counted in ``FastModel.fallbacks``.
 * **A Schur complement or the bordered constraint matrix not numerically positive definite** (the
@@ -41,84 +41,94 @@ path's Moore-Penrose cut-off (``fundamental.PINV_RCOND`` = 1e-10 relative eigenv
 a direction when the Gram matrix's condition number exceeds 1e10, i.e. when the reference solution is
 itself accurate to no better than ~1e-6; in that case the two paths legitimately differ.
 
-numba's on-disk cache: see :func:`analytic.fast_kernel._jit`. In short, ``NUMBA_CACHE_DIR`` if set,
-else ``__pycache__`` beside the source, else the user-wide cache dir (read-only installs); with none
-writable the kernel is compiled in memory each process (about a second or two, first call only).
+numba's on-disk cache: see :mod:`analytic.kernel.jit`. In short, ``NUMBA_CACHE_DIR`` if set,
+else ``__pycache__`` beside the source, else (a read-only install) ``tumbling-testbed/numba`` in the
+user's cache directory, said once; with none writable the kernel is compiled in memory each process.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from analytic import fast_kernel as fk
 from analytic.effects import Effect, Weighting
+from analytic.kernel import gauss, minv2
+from analytic.kernel import layout as L
+from analytic.kernel.entry import Solver, solver_of
+from analytic.kernel.jit import HAVE_NUMBA
 from analytic.model import ControlOutput, TumblingModel
 from analytic.scene import Scene
 
 # bound once: FastModel.qddot runs once per right-hand side; a global + attribute lookup per name
 # costs ~20 ns of its ~1.5 µs
 _empty = np.empty
-_qddot_into = fk.qddot_into
 
 
 def available() -> bool:
     """True when numba is importable, i.e. the compiled kernel can run."""
-    return fk.HAVE_NUMBA
+    return HAVE_NUMBA
 
 
 def pack(model: TumblingModel) -> tuple[np.ndarray, np.ndarray]:
-    """Pack a model's constants for :func:`analytic.fast_kernel.evaluate`.
+    """Pack a model's constants for the kernel (:mod:`analytic.kernel`).
 
     Returns:
-        ``(fp, ip)``: float64 array (layout ``fast_kernel.F_*``, then ``m, p_e, k_l, k_n`` and the
-        mass-track ``l, λ, α, β``, then ``a``, ``d``) and int64 array (layout ``fast_kernel.I_*``,
-        then the per-mass tracked flag (n) and the tracked indices (k_p)).
+        ``(fp, ip)``: float64 array (the ``F_*`` head of :mod:`analytic.kernel.layout`, then the
+        tail of ``layout.tail_offsets``: ``m, p_e, k_l, k_n``, the mass-track ``l, λ, α, β``,
+        ``a``, ``d``) and int64 array (the ``I_*`` head, then the per-mass tracked flag (n) and
+        the tracked indices (k_p)).
     """
     sc = model.scene
     n = model.n
     kw = len(model.omega_track.components) if model.omega_track else 0
     kp = len(model.mass_track.indices) if model.mass_track else 0
-    head = np.zeros(fk.F_ARR)
-    head[fk.F_MBR] = model.m_BR
-    head[fk.F_MU0] = model.mu0
-    head[fk.F_D1] = model.delta1
-    head[fk.F_D2] = model.delta2
-    head[fk.F_J : fk.F_J + 9] = model.J.ravel()
-    head[fk.F_G : fk.F_G + 3] = model.g
+    o_m, o_pe, o_kl, o_kn, o_l, o_lam, o_alpha, o_beta, o_a, o_d, end = L.tail_offsets(n, kp)
+    fp = np.zeros(end)
+    fp[L.F_MBR] = model.m_BR
+    fp[L.F_MU0] = model.mu0
+    fp[L.F_D1] = model.delta1
+    fp[L.F_D2] = model.delta2
+    fp[L.F_J : L.F_J + 9] = model.J.ravel()
+    fp[L.F_G : L.F_G + 3] = model.g
     if sc.has(Effect.EXTERNAL_TORQUE):
         et = sc.external_torque
-        head[fk.F_TFREQ] = et.frequency
-        head[fk.F_TC : fk.F_TC + 3] = et.constant
-        head[fk.F_TA : fk.F_TA + 3] = et.amplitude
+        fp[L.F_TFREQ] = et.frequency
+        fp[L.F_TC : L.F_TC + 3] = et.constant
+        fp[L.F_TA : L.F_TA + 3] = et.amplitude
     if model.omega_track:
         w = model.omega_track
-        head[fk.F_WB : fk.F_WB + 3] = w.b
-        head[fk.F_WS : fk.F_WS + 3] = w.sigma
-        head[fk.F_GAIN : fk.F_GAIN + kw * kw] = np.asarray(w.gain, float).ravel()
-    head[fk.F_TAT : fk.F_TAT + 48] = model.T_a.ravel()
-    head[fk.F_TDT : fk.F_TDT + 48] = model.T_d.ravel()
-    parts = [head, model.m, model.p_e, model.k_l, model.k_n]
+        fp[L.F_WB : L.F_WB + 3] = w.b
+        fp[L.F_WS : L.F_WS + 3] = w.sigma
+        fp[L.F_GAIN : L.F_GAIN + kw * kw] = np.asarray(w.gain, float).ravel()
+    fp[L.F_TAT : L.F_TAT + 48] = model.T_a.ravel()
+    fp[L.F_TDT : L.F_TDT + 48] = model.T_d.ravel()
+    fp[o_m:o_pe] = model.m
+    fp[o_pe:o_kl] = model.p_e
+    fp[o_kl:o_kn] = model.k_l
+    fp[o_kn:o_l] = model.k_n
     if model.mass_track:
         mt = model.mass_track
-        parts += [mt.l, mt.lam, mt.alpha, mt.beta]
-    parts += [model.a, model.d]
-    fp = np.ascontiguousarray(np.concatenate([np.asarray(x, float).ravel() for x in parts]))
+        fp[o_l:o_lam] = mt.l
+        fp[o_lam:o_alpha] = mt.lam
+        fp[o_alpha:o_beta] = mt.alpha
+        fp[o_beta:o_a] = mt.beta
+    fp[o_a:o_d] = model.a
+    fp[o_d:end] = model.d
 
-    ip = np.zeros(fk.I_TRACK + n + kp, dtype=np.int64)
-    ip[fk.I_N], ip[fk.I_KW], ip[fk.I_KP] = n, kw, kp
-    ip[fk.I_GRAV] = sc.has(Effect.GRAVITY)
-    ip[fk.I_SLIN] = sc.has(Effect.SPRINGS_LINEAR)
-    ip[fk.I_SCUB] = sc.has(Effect.SPRINGS_CUBIC)
-    ip[fk.I_TORQ] = sc.has(Effect.EXTERNAL_TORQUE)
-    ip[fk.I_WEIGHT] = {Weighting.M_INV: fk.W_GAUSS, Weighting.M_INV2: fk.W_MINV2}.get(
+    ip = np.zeros(L.ip_length(n, kp), dtype=np.int64)
+    ip[L.I_N], ip[L.I_KW], ip[L.I_KP] = n, kw, kp
+    ip[L.I_GRAV] = sc.has(Effect.GRAVITY)
+    ip[L.I_SLIN] = sc.has(Effect.SPRINGS_LINEAR)
+    ip[L.I_SCUB] = sc.has(Effect.SPRINGS_CUBIC)
+    ip[L.I_TORQ] = sc.has(Effect.EXTERNAL_TORQUE)
+    ip[L.I_WEIGHT] = {Weighting.M_INV: L.W_GAUSS, Weighting.M_INV2: L.W_MINV2}.get(
         model.weighting, -1
     )
     if model.omega_track:
-        ip[fk.I_COMP : fk.I_COMP + kw] = model.omega_track.components
+        ip[L.I_COMP : L.I_COMP + kw] = model.omega_track.components
     if model.mass_track:
         idx = np.asarray(model.mass_track.indices, dtype=np.int64)
-        ip[fk.I_TRACK + idx] = 1
-        ip[fk.I_TRACK + n :] = idx
+        ip[L.I_TRACK + idx] = 1
+        ip[L.I_TRACK + n :] = idx
     return fp, ip
 
 
@@ -134,6 +144,8 @@ class FastModel:
         n, nq, k: masses, coordinates (n + 7) and control rows (k_ω + k_p).
         compiled: True when calls go to the kernel (numba present and the weighting is structured:
             ``M^-1``, ``M^-2``, or no control at all).
+        solver: the compiled solve this scene uses (:class:`analytic.kernel.entry.Solver`; only
+            that one is compiled).
         fallbacks: number of calls answered by the numpy path so far.
     """
 
@@ -148,15 +160,22 @@ class FastModel:
             self.k == 0 or self.model.weighting in (Weighting.M_INV, Weighting.M_INV2)
         )
         self.fallbacks = 0
-        self._nout = 2 * self.nq + 3 + self.k
+        self._nout = L.output_length(self.n, self.k)
+        self.solver = solver_of(self.ip)
+        if not available():
+            self._evaluate = self._qddot_into = None
+        elif self.solver is Solver.MINV2:
+            self._evaluate, self._qddot_into = minv2.evaluate, minv2.qddot_into
+        else:  # the Gauss kernel writes q̈ alone when given an array of length nq
+            self._evaluate = self._qddot_into = gauss.evaluate
 
     def _raw(self, t: float, q: np.ndarray, qdot: np.ndarray) -> np.ndarray | None:
         """The kernel's output ``[q̈, Q^C, τ, residual]`` or None when the numpy path must answer."""
         if not self.compiled:
             return None
         out = np.empty(self._nout)
-        status = fk.evaluate(float(t), q, qdot, self.fp, self.ip, out)
-        return out if status == fk.STATUS_OK else None
+        status = self._evaluate(float(t), q, qdot, self.fp, self.ip, out)
+        return out if status == L.STATUS_OK else None
 
     def _numpy(self, t, q, qdot) -> tuple[np.ndarray, ControlOutput]:
         self.fallbacks += 1
@@ -167,18 +186,19 @@ class FastModel:
 
         q and qdot must be contiguous float64 arrays of shape (nq,) (no conversion is made here, to
         keep the call cheap; :meth:`acceleration` converts). The result is a new array on every
-        call (integrators keep it), written by :func:`analytic.fast_kernel.qddot_into`.
+        call (integrators keep it), written by the kernel's q̈-only path.
         """
         if self.compiled:
             qdd = _empty(self.nq)  # a fresh array each call: callers (solve_ivp) keep it
-            if _qddot_into(float(t), q, qdot, self.fp, self.ip, qdd) == 0:  # fk.STATUS_OK
+            if self._qddot_into(float(t), q, qdot, self.fp, self.ip, qdd) == 0:  # STATUS_OK
                 return qdd
         return self._numpy(t, np.asarray(q, float), np.asarray(qdot, float))[0]
 
-    def acceleration(
+    def qddot_and_forces(
         self, t: float, q: np.ndarray, qdot: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """``(q̈, τ, rod_forces, force_at_C, Q^C)`` at one state.
+        """``(q̈, τ, rod_forces, force_at_C, Q^C)`` at one state, as arrays (views of the kernel's
+        output on the compiled path; :meth:`acceleration` wraps the same in a ControlOutput).
 
         Args:
             t: time, s.
@@ -199,11 +219,11 @@ class FastModel:
         QC = out[nq : 2 * nq]
         return out[:nq], out[2 * nq : 2 * nq + 3], QC[7:], QC[:3], QC
 
-    def acceleration_output(
+    def acceleration(
         self, t: float, q: np.ndarray, qdot: np.ndarray
     ) -> tuple[np.ndarray, ControlOutput]:
-        """Same signature and result as :meth:`TumblingModel.acceleration` (``rank = k`` on the
-        compiled path, see the module docstring)."""
+        """``(q̈, control)``: same signature and result as :meth:`TumblingModel.acceleration`
+        (``rank = k`` on the compiled path, see the module docstring)."""
         q = np.ascontiguousarray(q, dtype=float)
         qdot = np.ascontiguousarray(qdot, dtype=float)
         out = self._raw(t, q, qdot)

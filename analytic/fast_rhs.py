@@ -1,29 +1,51 @@
 """The integrator's whole right-hand side in one compiled call: ``ẏ`` for ``y = [q, q̇, W, I_L, I_P]``.
 
-:func:`analytic.simulate._rhs` builds ``ẏ`` in Python from :meth:`FastModel.acceleration_output`
+:func:`analytic.simulate._rhs` builds ``ẏ`` in Python from :meth:`FastModel.acceleration`
 (q̈ and the control outputs) and :func:`analytic.aux_rates.aux_rates` (work and impulse rates): about
 20 µs per evaluation, of which the kernel is under 1 µs. This module does the same lines in one
 numba function (same kernel, same arithmetic, same order of operations, so the same numbers), so a
 right-hand side costs about one kernel call plus numba's dispatch.
 
-``rhs_into(t, y, fp, ip, work, out)`` returns a status: ``fast_kernel.STATUS_OK``; the kernel's
-nonzero status (the caller answers that evaluation with the numpy model); or :data:`STATUS_NONFINITE`
-when ``ẏ`` has a NaN or an infinity.
+``rhs_into(t, y, fp, ip, work, out)`` returns a status: ``layout.STATUS_OK``; the kernel's nonzero
+status (the caller answers that evaluation with the numpy model); or :data:`STATUS_NONFINITE` when
+``ẏ`` has a NaN or an infinity.
+
+One compiled function per solve (:class:`analytic.kernel.entry.Solver`): :func:`rhs_for` gives the
+one a scene needs, so a Gauss scene never compiles the M⁻² solve; :data:`rhs_into` serves any scene
+(both solves compiled in).
 """
 
 from __future__ import annotations
 
+import functools
 import math
 
+import numpy as np
+
 from analytic import aux_rates as _aux
-from analytic import fast_kernel as fk
+from analytic.kernel.entry import Solver, evaluate_as, solver_of
+from analytic.kernel.jit import HAVE_NUMBA, KERNEL_SOURCES, jit, source_fingerprint
+from analytic.kernel.layout import (
+    F_MBR,
+    F_MU0,
+    F_TA,
+    F_TC,
+    F_TFREQ,
+    I_KP,
+    I_N,
+    I_TORQ,
+    STATUS_OK,
+    STATUS_UNSUPPORTED,
+)
+from analytic.kernel.system import tail
 
 STATUS_NONFINITE = 3
 
 
-def _make(deps: int):
+def _make(deps: int, solver: int):
     """``rhs_into`` closing over ``deps`` (the source fingerprint of the kernel and of
-    :mod:`analytic.aux_rates`, which it embeds; see :func:`analytic.fast_kernel.source_fingerprint`)."""
+    :mod:`analytic.aux_rates`, which it embeds; see :func:`analytic.kernel.jit.jit_entry`) and the
+    solve it embeds (``solver``, a :class:`Solver`: numba drops the other branches)."""
 
     def rhs_into(t, y, fp, ip, work, out):  # pragma: no cover - compiled
         """Fill ``out`` (2 nq + 7) with ``ẏ``; ``work`` (2 nq + 3 + k) receives the kernel's output.
@@ -33,45 +55,62 @@ def _make(deps: int):
             fp, ip: packed parameters (:func:`analytic.fast.pack`).
         """
         if deps < 0:  # never true: ties numba's cache key to the sources this embeds
-            return fk.STATUS_UNSUPPORTED
-        n = ip[fk.I_N]
-        kp = ip[fk.I_KP]
+            return STATUS_UNSUPPORTED
+        n = ip[I_N]
+        kp = ip[I_KP]
         nq = n + 7
         q = y[:nq]
         qd = y[nq : 2 * nq]
-        status = fk.evaluate(t, q, qd, fp, ip, work)
-        if status != fk.STATUS_OK:
+        status = evaluate_as(solver, t, q, qd, fp, ip, work)  # only this solve is compiled in
+        if status != STATUS_OK:
             return status
         for i in range(nq):
             out[i] = qd[i]
             out[nq + i] = work[i]
         tau = work[2 * nq : 2 * nq + 3]  # control torque, then + the given torque (Remark 2)
-        if ip[fk.I_TORQ]:
-            ct = math.cos(fp[fk.F_TFREQ] * t)
+        if ip[I_TORQ]:
+            ct = math.cos(fp[F_TFREQ] * t)
             for r in range(3):
-                tau[r] = tau[r] + (fp[fk.F_TC + r] + fp[fk.F_TA + r] * ct)
-        # a, d follow m, p_e, k_l, k_n (n + 1 each) and the four mass-track arrays (analytic.fast.pack)
-        oa = fk.F_ARR + 4 * n + 2 + 4 * kp
+                tau[r] = tau[r] + (fp[F_TC + r] + fp[F_TA + r] * ct)
+        o_m, _pe, _kl, _kn, _l, _lam, _al, _be, o_a, o_d, end = tail(n, kp)
         _aux.aux_rates(
             q,
             qd,
             tau,
             work[nq + 7 : 2 * nq],  # rod forces Q^C_p
             work[nq : nq + 3],  # force at C Q^C_R
-            fp[oa : oa + 3],
-            fp[oa + 3 : oa + 6],
-            fp[fk.F_ARR : fk.F_ARR + n],
-            fp[fk.F_MU0],
-            fp[fk.F_MBR] + fp[fk.F_MU0],  # m_T = m_BR + μ0, as TumblingModel.m_T
+            fp[o_a:o_d],
+            fp[o_d:end],
+            fp[o_m : o_m + n],
+            fp[F_MU0],
+            fp[F_MBR] + fp[F_MU0],  # m_T = m_BR + μ0, as TumblingModel.m_T
             out[2 * nq :],
         )
         for i in range(out.shape[0]):
             if not math.isfinite(out[i]):
                 return STATUS_NONFINITE
-        return fk.STATUS_OK
+        return STATUS_OK
 
     return rhs_into
 
 
-DEPS = fk.source_fingerprint(fk, _aux)
-rhs_into = fk._jit(_make(DEPS)) if fk.HAVE_NUMBA else None
+DEPS = source_fingerprint(*KERNEL_SOURCES, _aux)
+
+
+@functools.cache
+def rhs_as(solver: Solver):
+    """The compiled right-hand side embedding the solve ``solver`` (a :class:`Solver`; compiled,
+    or loaded from numba's cache, on its first call); None without numba."""
+    return jit(_make(DEPS, int(solver))) if HAVE_NUMBA else None
+
+
+def rhs_for(ip: np.ndarray):
+    """The compiled right-hand side for the packed scene ``ip``: the one embedding only the solve
+    it needs (same call and numbers as :data:`rhs_into`)."""
+    return rhs_as(solver_of(ip))
+
+
+rhs_into = rhs_as(Solver.ANY)
+"""The compiled right-hand side for any scene (embeds both solves; compiled on first call)."""
+
+__all__ = ["DEPS", "STATUS_NONFINITE", "rhs_as", "rhs_for", "rhs_into"]

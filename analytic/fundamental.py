@@ -46,18 +46,20 @@ class FundamentalSolution:
 
     Attributes:
         qddot: constrained acceleration, shape (nq,).
-        QC: total generalized constraint force ``M q̈ - Q`` (the paper's Q^C of Eq. 89, including the
-            part along u from the norm constraint), shape (nq,).
-        Qc: the applied control force alone (without the norm-constraint reaction), shape (nq,);
-            ``QC`` and ``Qc`` differ only along ``a_m``.
+        constraint_force: the total generalized constraint force ``M q̈ - Q``: the paper's ``Q^C``
+            of Eq. (89), the control force plus the reaction of the quaternion-norm constraint along
+            ``a_m = [0, u, 0]`` (docs/errata.md C4), shape (nq,).
+        control_force: the applied control force alone, without that reaction, shape (nq,); it
+            differs from ``constraint_force`` only along ``a_m``, which ``H(u) u = 0`` removes from
+            the torque (``τ = ¼ H Q^C_u``), so either gives the same τ, rod forces and force at C.
         lambda_m: multiplier of the modeling constraint alone (uncontrolled part), scalar.
         residual: ``A_c q̈ - b_c``, the unattainable part of the control requirements, shape (k,).
         rank: numerical rank of the control Gram matrix (k when every requirement is independent).
     """
 
     qddot: np.ndarray
-    QC: np.ndarray
-    Qc: np.ndarray
+    constraint_force: np.ndarray
+    control_force: np.ndarray
     lambda_m: float
     residual: np.ndarray
     rank: int
@@ -132,15 +134,15 @@ def solve(
         Ginv, rank = pinv_psd(0.5 * (G + G.T))
         mu = Ginv @ r
         qddot = acc + Z @ mu
-        Qc = A_c.T @ mu  # applied control force; M K Qc differs from it only along a_m
+        Q_ctl = A_c.T @ mu  # applied control force; M K Q_ctl differs from it only along a_m
     else:
         WZ = M @ (M @ Z) if weighting is Weighting.M_INV2 else Z  # W = N⁻¹: M² or I
         G = Z.T @ WZ
         Ginv, rank = pinv_psd(0.5 * (G + G.T))
-        Qc = WZ @ (Ginv @ r)
-        v = cho_solve(c, Qc, check_finite=False)
-        qddot = acc + v - y * (float(a_m @ v) / s)  # q̈ = a + K Q_c
-    # Q^C = M q̈ - Q = a_m λ_m + (I - a_m yᵀ/s) Q_c, assembled without cancellation.
-    QC = Qc + a_m * (lambda_m - float(y @ Qc) / s)
+        Q_ctl = WZ @ (Ginv @ r)
+        v = cho_solve(c, Q_ctl, check_finite=False)
+        qddot = acc + v - y * (float(a_m @ v) / s)  # q̈ = a + K Q_ctl
+    # Q^C = M q̈ - Q = a_m λ_m + (I - a_m yᵀ/s) Q_ctl, assembled without cancellation.
+    Q_C = Q_ctl + a_m * (lambda_m - float(y @ Q_ctl) / s)
     residual = A_c @ qddot - b_c
-    return FundamentalSolution(qddot, QC, Qc, lambda_m, residual, rank)
+    return FundamentalSolution(qddot, Q_C, Q_ctl, lambda_m, residual, rank)

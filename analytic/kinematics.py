@@ -62,31 +62,27 @@ T_L = np.stack([T_L1, T_L2, T_L3])  # (3, 3, 4, 4): T_L[i] gives L_{i+1}
 
 
 def S(u: np.ndarray) -> np.ndarray:
-    """Active rotation body -> inertial, Eq. (11), shape (3, 3). Works for any u (not only unit)."""
-    u0, u1, u2, u3 = u
-    return np.array(
-        [
-            [2 * u0 * u0 - 1 + 2 * u1 * u1, 2 * u1 * u2 - 2 * u0 * u3, 2 * u1 * u3 + 2 * u0 * u2],
-            [2 * u1 * u2 + 2 * u0 * u3, 2 * u0 * u0 - 1 + 2 * u2 * u2, 2 * u2 * u3 - 2 * u0 * u1],
-            [2 * u1 * u3 - 2 * u0 * u2, 2 * u2 * u3 + 2 * u0 * u1, 2 * u0 * u0 - 1 + 2 * u3 * u3],
-        ]
-    )
-
-
-def S_batch(u: np.ndarray) -> np.ndarray:
-    """Eq. (11) for a batch of quaternions, u shape (N, 4) -> (N, 3, 3)."""
-    u0, u1, u2, u3 = u.T
-    out = np.empty((u.shape[0], 3, 3))
-    out[:, 0, 0] = 2 * u0 * u0 - 1 + 2 * u1 * u1
-    out[:, 0, 1] = 2 * u1 * u2 - 2 * u0 * u3
-    out[:, 0, 2] = 2 * u1 * u3 + 2 * u0 * u2
-    out[:, 1, 0] = 2 * u1 * u2 + 2 * u0 * u3
-    out[:, 1, 1] = 2 * u0 * u0 - 1 + 2 * u2 * u2
-    out[:, 1, 2] = 2 * u2 * u3 - 2 * u0 * u1
-    out[:, 2, 0] = 2 * u1 * u3 - 2 * u0 * u2
-    out[:, 2, 1] = 2 * u2 * u3 + 2 * u0 * u1
-    out[:, 2, 2] = 2 * u0 * u0 - 1 + 2 * u3 * u3
+    """Active rotation body -> inertial, Eq. (11), in the paper's form ``2u0² - 1 + 2ui²`` (a
+    rotation only for unit u; docs/errata.md C2). Works for any u, and for a batch: u shape (..., 4)
+    -> (..., 3, 3). The one numpy ``S(u)`` of the project (the compiled one is
+    :func:`analytic.kernel.kinematics.rotation`, the same formulas)."""
+    u = np.asarray(u)
+    u0, u1, u2, u3 = u[..., 0], u[..., 1], u[..., 2], u[..., 3]
+    out = np.empty((*u.shape[:-1], 3, 3), dtype=np.result_type(u, 1.0))  # complex u: complex S
+    out[..., 0, 0] = 2 * u0 * u0 - 1 + 2 * u1 * u1
+    out[..., 0, 1] = 2 * u1 * u2 - 2 * u0 * u3
+    out[..., 0, 2] = 2 * u1 * u3 + 2 * u0 * u2
+    out[..., 1, 0] = 2 * u1 * u2 + 2 * u0 * u3
+    out[..., 1, 1] = 2 * u0 * u0 - 1 + 2 * u2 * u2
+    out[..., 1, 2] = 2 * u2 * u3 - 2 * u0 * u1
+    out[..., 2, 0] = 2 * u1 * u3 - 2 * u0 * u2
+    out[..., 2, 1] = 2 * u2 * u3 + 2 * u0 * u1
+    out[..., 2, 2] = 2 * u0 * u0 - 1 + 2 * u3 * u3
     return out
+
+
+S_batch = S
+"""Eq. (11) for a batch, u shape (N, 4) -> (N, 3, 3): the same function as :func:`S`."""
 
 
 def H(u: np.ndarray) -> np.ndarray:

@@ -335,11 +335,9 @@ class TumblingModel:
         else:
             A_c, b_c = np.zeros((0, self.nq)), np.zeros(0)
         sol = fundamental.solve(M, Q, a_m, b_m, A_c, b_c, self.weighting)
-        Qc = (
-            sol.Qc
-        )  # = QC up to the norm-constraint reaction along [0, u, 0], which H u = 0 removes
+        Qc = sol.control_force  # = Q^C up to the norm-constraint reaction along [0, u, 0] (H u = 0)
         ctrl = ControlOutput(
-            QC=sol.QC,
+            QC=sol.constraint_force,
             torque=0.25 * (k.Hm @ Qc[3:7]),  # τ = ¼ H Q^C_u (docs/errata.md C4: Q^C_u = Hᵀτ + c u)
             rod_forces=Qc[7:].copy(),
             force_at_C=Qc[:3].copy(),

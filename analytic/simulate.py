@@ -43,7 +43,7 @@ def evaluator(model: TumblingModel, backend: Backend) -> Callable:
         if backend is Backend.NUMBA:
             raise ValueError("backend: 'numba' needs the numba package (got backend='numba')")
         return model.acceleration
-    return fast.FastModel(model.scene, model).acceleration_output
+    return fast.FastModel(model.scene, model).acceleration
 
 
 def _rhs(model: TumblingModel, accel: Callable) -> Callable[[float, np.ndarray], np.ndarray]:
@@ -74,9 +74,10 @@ def _rhs(model: TumblingModel, accel: Callable) -> Callable[[float, np.ndarray],
 
     # The compiled path: the same lines in one numba call (analytic.fast_rhs); f answers where the
     # kernel declines (the numpy model then, as in FastModel).
-    from analytic.fast_rhs import STATUS_NONFINITE, rhs_into
+    from analytic.fast_rhs import STATUS_NONFINITE, rhs_for
 
     fp, ip = fm.fp, fm.ip
+    rhs_into = rhs_for(ip)  # embeds only the solve this scene needs
     work = np.empty(2 * nq + 3 + model.k)
     ny = 2 * nq + N_AUX
 

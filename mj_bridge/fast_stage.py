@@ -4,32 +4,38 @@ One call does what :meth:`mj_bridge.stages.Stages.control_callback` does in Pyth
 frame at C (the default model): map MuJoCo's ``(qpos, qvel)`` to the paper's ``(q, q̇)``
 (``u = q_b``, ``u̇ = ¼ Hᵀ ω / |u|²``: :func:`model_xml.coordinates.mujoco_to_paper_state`, written
 out for numba and tested against it), evaluate the analytic side's compiled kernel
-(:func:`analytic.fast_kernel.evaluate`, the paper's Eq. 89), write the actuators' ``ctrl``
+(:mod:`analytic.kernel`, the paper's Eq. 89), write the actuators' ``ctrl``
 (torque + given torque on ``torque_x..z``, rod forces on ``force1..N``, divided by the gear) and, with weight ``w > 0``,
 add ``w·[P, S(u)(τ+τ_g) + (R-c)×F_C, F_C]`` to the work/impulse accumulator.
 
 Its status is the kernel's: anything but ``STATUS_OK`` makes the caller fall back to the numpy model
 for that stage.
+
+One compiled stage per solve (:class:`analytic.kernel.entry.Solver`): :func:`stage_for` gives the
+one a scene needs (``stage_gauss``, ``stage_minv2``), so a Gauss scene never compiles the M⁻² solve;
+:data:`stage` serves any scene (both solves compiled in).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from analytic import fast_kernel as fk
+from analytic.kernel.entry import Solver, evaluate_as, solver_of
+from analytic.kernel.jit import HAVE_NUMBA, KERNEL_SOURCES, jit, source_fingerprint
+from analytic.kernel.kinematics import rotation
+from analytic.kernel.layout import STATUS_OK, STATUS_UNSUPPORTED
 
-HAVE_NUMBA = fk.HAVE_NUMBA
 
-
-def make_stage(deps: int):
-    """The stage function closing over ``deps`` (:func:`analytic.fast_kernel.source_fingerprint` of
-    the kernel's module), so numba's disk cache recompiles it when the kernel changes."""
+def make_stage(deps: int, solver: int):
+    """The stage function closing over ``deps`` (:data:`DEPS`, the fingerprint of the kernel's
+    sources), so numba's disk cache recompiles it when the kernel changes, and over the solve it
+    embeds (``solver``, a :class:`Solver`; numba drops the other branches)."""
 
     def _stage(
         t, qpos, qvel, ctrl, tq_ids, f_ids, fp, ip, out, q, qd, tau_g, geo, inv_gear, w, acc
     ):  # pragma: no cover - compiled
         if deps < 0:  # never true: ties numba's cache key to the kernel's source (see above)
-            return fk.STATUS_UNSUPPORTED
+            return STATUS_UNSUPPORTED
         n = q.shape[0] - 7
         nq = n + 7
         for i in range(nq):
@@ -44,8 +50,8 @@ def make_stage(deps: int):
         qd[6] = s * (-u2 * w0 + u1 * w1 + u0 * w2)
         for i in range(n):
             qd[7 + i] = qvel[6 + i]
-        status = fk.evaluate(t, q, qd, fp, ip, out)
-        if status != fk.STATUS_OK:
+        status = evaluate_as(solver, t, q, qd, fp, ip, out)  # only this solve is compiled in
+        if status != STATUS_OK:
             return status
         tau0 = out[2 * nq] + tau_g[0]
         tau1 = out[2 * nq + 1] + tau_g[1]
@@ -62,16 +68,8 @@ def make_stage(deps: int):
         if w > 0.0:
             f0, f1, f2 = out[nq], out[nq + 1], out[nq + 2]
             power += f0 * qvel[0] + f1 * qvel[1] + f2 * qvel[2]
-            # S(u) for unit u (MuJoCo keeps qpos quaternions unit)
-            S00 = 1 - 2 * (u2 * u2 + u3 * u3)
-            S01 = 2 * (u1 * u2 - u0 * u3)
-            S02 = 2 * (u1 * u3 + u0 * u2)
-            S10 = 2 * (u1 * u2 + u0 * u3)
-            S11 = 1 - 2 * (u1 * u1 + u3 * u3)
-            S12 = 2 * (u2 * u3 - u0 * u1)
-            S20 = 2 * (u1 * u3 - u0 * u2)
-            S21 = 2 * (u2 * u3 + u0 * u1)
-            S22 = 1 - 2 * (u1 * u1 + u2 * u2)
+            # S(u), Eq. (11) (MuJoCo keeps qpos quaternions unit)
+            S00, S01, S02, S10, S11, S12, S20, S21, S22 = rotation(u0, u1, u2, u3)
             L0 = S00 * tau0 + S01 * tau1 + S02 * tau2
             L1 = S10 * tau0 + S11 * tau1 + S12 * tau2
             L2 = S20 * tau0 + S21 * tau1 + S22 * tau2
@@ -101,8 +99,23 @@ def make_stage(deps: int):
     return _stage
 
 
-DEPS = fk.source_fingerprint(fk)
-stage = fk._jit(make_stage(DEPS)) if HAVE_NUMBA else None
+DEPS = source_fingerprint(*KERNEL_SOURCES)
+
+
+def _compiled(solver: Solver):
+    return jit(make_stage(DEPS, int(solver))) if HAVE_NUMBA else None
+
+
+stage_gauss = _compiled(Solver.GAUSS)
+stage_minv2 = _compiled(Solver.MINV2)
+stage = _compiled(Solver.ANY)
+"""The compiled stage for any scene (embeds both solves; compiled on first call)."""
+
+
+def stage_for(ip: np.ndarray):
+    """The compiled stage for the packed scene ``ip``, embedding only the solve it needs (same
+    call and numbers as :data:`stage`)."""
+    return stage_minv2 if solver_of(ip) is Solver.MINV2 else stage_gauss
 
 
 def geometry(model) -> np.ndarray:

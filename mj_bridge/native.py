@@ -50,10 +50,10 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from analytic import fast_kernel as fk
+from analytic.kernel.entry import Solver, solver_of
+from analytic.kernel.jit import HAVE_NUMBA, KERNEL_SOURCES, jit, source_fingerprint
+from analytic.kernel.layout import F_TA, F_TC, F_TFREQ, STATUS_OK
 from mj_bridge import fast_stage
-
-HAVE_NUMBA = fk.HAVE_NUMBA
 
 if HAVE_NUMBA:
     from llvmlite import ir
@@ -166,8 +166,12 @@ if HAVE_NUMBA:
         return sig, codegen
 
 
-def _make_native_stage(deps: int):
-    """:func:`_native_stage` closing over ``deps`` (see :data:`DEPS`)."""
+_GAUSS, _MINV2 = int(Solver.GAUSS), int(Solver.MINV2)
+
+
+def _make_native_stage(deps: int, solver: int):
+    """:func:`_native_stage` closing over ``deps`` (see :data:`DEPS`) and the solve it embeds
+    (``solver``, a :class:`Solver`: ``fast_stage.stage_gauss``, ``stage_minv2`` or ``stage``)."""
 
     def _native_stage(m_addr, d_addr, ctx_addr):  # pragma: no cover - compiled
         """One ``mjcb_control`` call: what ``Stages.stage_callback`` does, from the bound arrays."""
@@ -199,16 +203,26 @@ def _make_native_stage(deps: int):
         geo = carray(_as_ptr(ctx[C_GEO]), (ctx[C_GEO_LEN],))
         acc = carray(_as_ptr(ctx[C_ACC]), (7,))
         if ctx[C_HAS_TORQUE]:  # the given torque of Remark 2: constant + amplitude cos(freq t)
-            ct = np.cos(fp[fk.F_TFREQ] * t)
+            ct = np.cos(fp[F_TFREQ] * t)
             for r in range(3):
-                tau_g[r] = fp[fk.F_TC + r] + fp[fk.F_TA + r] * ct
+                tau_g[r] = fp[F_TC + r] + fp[F_TA + r] * ct
         w = 0.0
         if ctx[C_ACTIVE]:
             w = ctxf[F_H] * ctxf[F_WEIGHTS + ctx[C_CALLS] % ctx[C_NSTAGE]]
-        status = fast_stage.stage(
-            t, qpos, qvel, ctrl, tq, fi, fp, ip, out, q, qd, tau_g, geo, ctxf[F_INV_GEAR], w, acc
-        )
-        if status != fk.STATUS_OK:
+        inv_gear = ctxf[F_INV_GEAR]
+        if solver == _GAUSS:
+            status = fast_stage.stage_gauss(
+                t, qpos, qvel, ctrl, tq, fi, fp, ip, out, q, qd, tau_g, geo, inv_gear, w, acc
+            )
+        elif solver == _MINV2:
+            status = fast_stage.stage_minv2(
+                t, qpos, qvel, ctrl, tq, fi, fp, ip, out, q, qd, tau_g, geo, inv_gear, w, acc
+            )
+        else:
+            status = fast_stage.stage(
+                t, qpos, qvel, ctrl, tq, fi, fp, ip, out, q, qd, tau_g, geo, inv_gear, w, acc
+            )
+        if status != STATUS_OK:
             ctx[C_FAILS] += 1
             return
         b = ctx[C_FORCE_BODY]
@@ -225,8 +239,17 @@ def _make_native_stage(deps: int):
 
 # numba's disk cache checks only this file; the compiled callback also embeds the kernel and the stage
 # (other files): their fingerprint is a closure variable, which numba hashes into the cache key.
-DEPS = fk.source_fingerprint(fk, fast_stage)
-native_stage = fk._jit(_make_native_stage(DEPS)) if HAVE_NUMBA else None
+DEPS = source_fingerprint(*KERNEL_SOURCES, fast_stage)
+
+
+def _compiled_stage(solver: Solver):
+    return jit(_make_native_stage(DEPS, int(solver))) if HAVE_NUMBA else None
+
+
+# one per solve, compiled on first call (module globals: the callback refers to them by name)
+native_stage_gauss = _compiled_stage(Solver.GAUSS)
+native_stage_minv2 = _compiled_stage(Solver.MINV2)
+native_stage = _compiled_stage(Solver.ANY)
 
 
 def available() -> bool:
@@ -247,6 +270,7 @@ def data_arrays(d: mujoco.MjData) -> dict[str, np.ndarray]:
 CTX = np.zeros(CTX_LEN, dtype=np.int64)  # fixed address for the life of the process
 CTX_F = CTX.view(np.float64)
 _bind_lock = threading.Lock()
+_bound_solver = Solver.GAUSS  # the solve of the scene bound in CTX (callback() compiles that one)
 
 
 if HAVE_NUMBA:
@@ -273,30 +297,37 @@ if HAVE_NUMBA:
 
         return sig, codegen
 
-    def _make_cb(deps: int):
+    def _make_cb(deps: int, solver: int):
         def _cb(m, d):  # pragma: no cover - compiled
-            if deps >= 0:  # always: ties the cache key to the kernel's sources (see DEPS)
+            if deps < 0:  # never true: ties the cache key to the kernel's sources (see DEPS)
+                return
+            if solver == _GAUSS:
+                native_stage_gauss(_addr(m), _addr(d), _ctx_addr())
+            elif solver == _MINV2:
+                native_stage_minv2(_addr(m), _addr(d), _ctx_addr())
+            else:
                 native_stage(_addr(m), _addr(d), _ctx_addr())
 
         return _cb
 
 
 @functools.cache
-def compiled():
-    """The numba ``CFunc`` of the callback; compiled on first use, then loaded from numba's disk
-    cache (its ``cache_hits`` say which)."""
+def compiled(solver: Solver = Solver.GAUSS):
+    """The numba ``CFunc`` of the callback embedding ``solver``; compiled on first use, then loaded
+    from numba's disk cache (its ``cache_hits`` say which)."""
     if not available():
         raise RuntimeError("the native controller callback is not available here")
     sig = types.void(types.voidptr, types.voidptr)
     try:
-        return cfunc(sig, nopython=True, cache=True)(_make_cb(DEPS))
-    except RuntimeError:  # no usable cache directory (see analytic.fast_kernel._jit)
-        return cfunc(sig, nopython=True)(_make_cb(DEPS))
+        return cfunc(sig, nopython=True, cache=True)(_make_cb(DEPS, int(solver)))
+    except RuntimeError:  # no usable cache directory (see analytic.kernel.jit)
+        return cfunc(sig, nopython=True)(_make_cb(DEPS, int(solver)))
 
 
 def callback():
-    """The native ``mjcb_control``: a ctypes function object for ``mujoco.set_mjcb_control``."""
-    return compiled().ctypes
+    """The native ``mjcb_control``: a ctypes function object for ``mujoco.set_mjcb_control``,
+    embedding the solve of the scene bound by the current :class:`Context` (Gauss when none is)."""
+    return compiled(_bound_solver).ctypes
 
 
 class Context:
@@ -353,6 +384,7 @@ class Context:
         return arrays
 
     def __enter__(self) -> Context:
+        global _bound_solver
         if not available():
             raise RuntimeError("the native controller callback is not available here")
         data = self._data_arrays()
@@ -379,10 +411,13 @@ class Context:
         CTX_F[F_INV_GEAR] = self.inv_gear
         CTX_F[F_WEIGHTS : F_WEIGHTS + len(self.weights)] = self.weights
         CTX[C_ARMED] = 1
+        _bound_solver = solver_of(a["ip"])
         return self
 
     def __exit__(self, *exc) -> None:
+        global _bound_solver
         CTX[:] = 0
+        _bound_solver = Solver.GAUSS
         _bind_lock.release()
 
     # accumulator state, mirrored for mj_bridge.accumulator.Accumulator

@@ -32,7 +32,7 @@ the integrator, at that stage's state):
 
 The controller is the analytic one (Eq. 89), evaluated at the paper state mapped from Pinocchio's
 (``u`` = the normalised quaternion, ``u̇ = ¼ Hᵀ ω``): by default the compiled kernel
-(:func:`analytic.fast_kernel.evaluate`), with the numpy model answering where the kernel declines
+(:mod:`analytic.kernel`), with the numpy model answering where the kernel declines
 or does not apply (identity weighting, no numba); ``ControllerSource.ANALYTIC`` uses the numpy model
 always. The mapping, the controller, the springs, the given torque, the quaternion and position
 rates and the quadratures are one compiled call (:func:`_make_stage`); ``pin.aba`` is a second call,
@@ -54,10 +54,28 @@ from dataclasses import dataclass
 import numpy as np
 
 from analytic import aux_rates as _aux
-from analytic import fast_kernel as fk
 from analytic.assemble import N_AUX, assemble
 from analytic.effects import Effect, SolverMethod
 from analytic.fast import FastModel
+from analytic.kernel.entry import Solver, evaluate_as, solver_of
+from analytic.kernel.jit import KERNEL_SOURCES, jit, source_fingerprint
+from analytic.kernel.kinematics import rotation
+from analytic.kernel.layout import (
+    F_MBR,
+    F_MU0,
+    F_TA,
+    F_TC,
+    F_TFREQ,
+    I_KP,
+    I_KW,
+    I_N,
+    I_SCUB,
+    I_SLIN,
+    I_TORQ,
+    STATUS_OK,
+    STATUS_UNSUPPORTED,
+)
+from analytic.kernel.system import tail
 from analytic.model import ControlOutput, TumblingModel
 from analytic.plant import check_positive, coerce_enum
 from analytic.scene import OutputSettings, Scene
@@ -157,9 +175,10 @@ def work_layout(n: int, k: int) -> dict[str, tuple[int, int]]:
     return out
 
 
-def _make_stage(deps: int):
+def _make_stage(deps: int, solver: int):
     """The stage closing over ``deps`` (the source fingerprint of the kernel and of
-    :mod:`analytic.aux_rates`, which it calls; see :func:`analytic.fast_kernel.source_fingerprint`)."""
+    :mod:`analytic.aux_rates`, which it calls; see :func:`analytic.kernel.jit.jit_entry`) and the
+    solve it embeds (``solver``, a :class:`Solver`; numba drops the other branches)."""
 
     def stage(t, y, fp, ip, work, ydot, mode):  # pragma: no cover - compiled
         """Everything of ``ẏ`` but ``v̇``, and ``aba``'s arguments (see the module docstring).
@@ -174,10 +193,10 @@ def _make_stage(deps: int):
             with ``MODE_GIVEN``); :data:`STATUS_NONFINITE` for a non-finite ``ẏ`` or ``τ``.
         """
         if deps < 0:  # never true: ties numba's cache key to the sources this embeds
-            return fk.STATUS_UNSUPPORTED
-        n = ip[fk.I_N]
-        kp = ip[fk.I_KP]
-        k = ip[fk.I_KW] + kp
+            return STATUS_UNSUPPORTED
+        n = ip[I_N]
+        kp = ip[I_KP]
+        k = ip[I_KW] + kp
         nq = n + 7
         nv = n + 6
         o_v = nq
@@ -192,16 +211,7 @@ def _make_stage(deps: int):
         qx, qy, qz, qw = y[3], y[4], y[5], y[6]
         s = 1.0 / math.sqrt(qx * qx + qy * qy + qz * qz + qw * qw)
         u0, u1, u2, u3 = qw * s, qx * s, qy * s, qz * s
-        # S(u), body -> inertial (Eq. 11, unit u)
-        s00 = 2 * u0 * u0 - 1 + 2 * u1 * u1
-        s01 = 2 * u1 * u2 - 2 * u0 * u3
-        s02 = 2 * u1 * u3 + 2 * u0 * u2
-        s10 = 2 * u1 * u2 + 2 * u0 * u3
-        s11 = 2 * u0 * u0 - 1 + 2 * u2 * u2
-        s12 = 2 * u2 * u3 - 2 * u0 * u1
-        s20 = 2 * u1 * u3 - 2 * u0 * u2
-        s21 = 2 * u2 * u3 + 2 * u0 * u1
-        s22 = 2 * u0 * u0 - 1 + 2 * u3 * u3
+        s00, s01, s02, s10, s11, s12, s20, s21, s22 = rotation(u0, u1, u2, u3)  # S(u), Eq. 11
         work[o_rot], work[o_rot + 1], work[o_rot + 2] = s00, s01, s02
         work[o_rot + 3], work[o_rot + 4], work[o_rot + 5] = s10, s11, s12
         work[o_rot + 6], work[o_rot + 7], work[o_rot + 8] = s20, s21, s22
@@ -230,12 +240,13 @@ def _make_stage(deps: int):
         for i in range(n):
             work[o_qd + 7 + i] = y[nq + 6 + i]
         if mode == MODE_MAP:
-            return fk.STATUS_OK
+            return STATUS_OK
         # the control at this state
         if mode == MODE_KERNEL and k > 0:
             kout = work[o_k : o_k + 2 * nq + 3 + k]
-            status = fk.evaluate(t, work[o_q : o_q + nq], work[o_qd : o_qd + nq], fp, ip, kout)
-            if status != fk.STATUS_OK:
+            qk, qdk = work[o_q : o_q + nq], work[o_qd : o_qd + nq]
+            status = evaluate_as(solver, t, qk, qdk, fp, ip, kout)  # only this solve compiled in
+            if status != STATUS_OK:
                 return status
             for r in range(3):
                 work[o_ctl + r] = kout[2 * nq + r]  # τ_c, body axes
@@ -243,11 +254,11 @@ def _make_stage(deps: int):
             for i in range(n):
                 work[o_ctl + 6 + i] = kout[nq + 7 + i]  # F_i = Q^C_p,i
         tt0, tt1, tt2 = work[o_ctl], work[o_ctl + 1], work[o_ctl + 2]
-        if ip[fk.I_TORQ]:  # the given torque of Remark 2
-            ct = math.cos(fp[fk.F_TFREQ] * t)
-            tt0 += fp[fk.F_TC] + fp[fk.F_TA] * ct
-            tt1 += fp[fk.F_TC + 1] + fp[fk.F_TA + 1] * ct
-            tt2 += fp[fk.F_TC + 2] + fp[fk.F_TA + 2] * ct
+        if ip[I_TORQ]:  # the given torque of Remark 2
+            ct = math.cos(fp[F_TFREQ] * t)
+            tt0 += fp[F_TC] + fp[F_TA] * ct
+            tt1 += fp[F_TC + 1] + fp[F_TA + 1] * ct
+            tt2 += fp[F_TC + 2] + fp[F_TA + 2] * ct
         work[o_tt], work[o_tt + 1], work[o_tt + 2] = tt0, tt1, tt2
         f0, f1, f2 = work[o_ctl + 3], work[o_ctl + 4], work[o_ctl + 5]
         # τ: force at C in body axes (Sᵀ F_C), torque, rod forces + springs
@@ -257,14 +268,12 @@ def _make_stage(deps: int):
         work[o_tau + 3], work[o_tau + 4], work[o_tau + 5] = tt0, tt1, tt2
         for i in range(n):
             work[o_tau + 6 + i] = work[o_ctl + 6 + i]
-        lin = ip[fk.I_SLIN] != 0
-        cub = ip[fk.I_SCUB] != 0
+        lin = ip[I_SLIN] != 0
+        cub = ip[I_SCUB] != 0
         if n > 0 and (lin or cub):
             # F^S = -∂U_s/∂p, Eq. (38): spring j (0..n) has extension x_j - x_{j-1}, x = p - p_e,
             # x_{-1} = x_n = 0, force f_j = k_l e + k_n e³; mass i gets f_{i+1} - f_i
-            o_pe = fk.F_ARR + n
-            o_kl = o_pe + n
-            o_kn = o_kl + n + 1
+            _m, o_pe, o_kl, o_kn, _l, _lam, _al, _be, _a, _d, _end = tail(n, kp)
             x_prev = 0.0
             for j in range(n + 1):
                 x_j = y[7 + j] - fp[o_pe + j] if j < n else 0.0
@@ -288,18 +297,18 @@ def _make_stage(deps: int):
         for i in range(n):
             ydot[7 + i] = y[nq + 6 + i]
         # work and impulses (analytic.aux_rates; a, d follow the mass-track arrays in fp)
-        oa = fk.F_ARR + 4 * n + 2 + 4 * kp
+        o_m, _pe, _kl, _kn, _l, _lam, _al, _be, o_a, o_d, end = tail(n, kp)
         _aux.aux_rates(
             work[o_q : o_q + nq],
             work[o_qd : o_qd + nq],
             work[o_tt : o_tt + 3],
             work[o_ctl + 6 : o_ctl + 6 + n],
             work[o_ctl + 3 : o_ctl + 6],
-            fp[oa : oa + 3],
-            fp[oa + 3 : oa + 6],
-            fp[fk.F_ARR : fk.F_ARR + n],
-            fp[fk.F_MU0],
-            fp[fk.F_MBR] + fp[fk.F_MU0],
+            fp[o_a:o_d],
+            fp[o_d:end],
+            fp[o_m : o_m + n],
+            fp[F_MU0],
+            fp[F_MBR] + fp[F_MU0],
             ydot[nq + nv :],
         )
         for i in range(nq):
@@ -311,7 +320,7 @@ def _make_stage(deps: int):
         for i in range(nv):
             if not math.isfinite(work[o_tau + i]):
                 return STATUS_NONFINITE
-        return fk.STATUS_OK
+        return STATUS_OK
 
     return stage
 
@@ -341,9 +350,18 @@ def _finish(acc, work, ydot):  # pragma: no cover - compiled
     return ok
 
 
-DEPS = fk.source_fingerprint(fk, _aux)
-stage = fk._jit(_make_stage(DEPS))
-finish = fk._jit(_finish)
+DEPS = source_fingerprint(*KERNEL_SOURCES, _aux)
+stage_gauss = jit(_make_stage(DEPS, int(Solver.GAUSS)))
+stage_minv2 = jit(_make_stage(DEPS, int(Solver.MINV2)))
+stage = jit(_make_stage(DEPS, int(Solver.ANY)))  # any scene: both solves compiled in
+
+
+def stage_for(ip: np.ndarray):
+    """The compiled stage embedding only the solve the packed scene ``ip`` needs."""
+    return stage_minv2 if solver_of(ip) is Solver.MINV2 else stage_gauss
+
+
+finish = jit(_finish)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -383,6 +401,7 @@ class PinocchioDynamics:
         self.k = self.analytic.k
         self.controlled = self.k > 0
         self.fp, self.ip = self.fast.fp, self.fast.ip
+        self._kernel_stage = stage_for(self.ip)
         self.layout = work_layout(n, self.k)
         self.work = np.zeros(max(stop for _, stop in self.layout.values()))
         w = self.work
@@ -422,6 +441,7 @@ class PinocchioDynamics:
     def _stage(self, t: float, y: np.ndarray, ydot: np.ndarray) -> None:
         """Fill ``ydot`` except ``v̇`` and aba's arguments in the work array (any controller path)."""
         fp, ip, work = self.fp, self.ip, self.work
+        stage = self._kernel_stage
         if self._numpy_each_stage:
             stage(t, y, fp, ip, work, ydot, MODE_MAP)
             self._numpy_control(t)
@@ -445,6 +465,7 @@ class PinocchioDynamics:
         mode = self._mode
         slow = self._stage
         fast_ok = not self._numpy_each_stage
+        stage = self._kernel_stage
 
         def f(t: float, y: np.ndarray) -> np.ndarray:
             self.nfev += 1
@@ -497,7 +518,7 @@ class PinocchioDynamics:
         q, qd = self._q.copy(), self._qd.copy()
         if self.controller is ControllerSource.ANALYTIC:
             return self.analytic.acceleration(t, q, qd)[1]
-        return self.fast.acceleration_output(t, q, qd)[1]
+        return self.fast.acceleration(t, q, qd)[1]
 
 
 # ----------------------------------------------------------------------------------------------

@@ -59,7 +59,7 @@ class Stages:
 
     Attributes:
         controller_fn: ``(t, q, q̇) -> (q̈, ControlOutput)`` of the Python path: the numpy model or
-            the compiled kernel's wrapper (``analytic.fast.FastModel.acceleration_output``).
+            the compiled kernel's wrapper (``analytic.fast.FastModel.acceleration``).
         fast: the ``FastModel`` (None for the numpy controller).
         compiled: whether the compiled stage is the callback.
         last_control: the control at the last stage recorded (:attr:`record`), or None.
@@ -88,7 +88,7 @@ class Stages:
             from analytic.fast import FastModel
 
             self.fast = FastModel(scene, model)
-            self.controller_fn = self.fast.acceleration_output
+            self.controller_fn = self.fast.acceleration
         if controller is ControllerSource.MUJOCO and self.controlled:
             check_weighting(model)
         self.last_control: ControlOutput | None = None
@@ -111,6 +111,7 @@ class Stages:
             self._tq = np.asarray(tm.torque_ids, dtype=np.int64)
             self._f = np.asarray(tm.force_ids, dtype=np.int64)
             self.gauss = scene.control.weighting is Weighting.M_INV
+            self._stage = fast_stage.stage_for(self.fast.ip)  # embeds only this scene's solve
             self._args = (
                 self._tq, self._f, self.fast.fp, self.fast.ip, self._out,
                 self._q, self._qd, self._tau_g, self._geo,
@@ -161,7 +162,7 @@ class Stages:
         if self.has_torque:
             self._tau_g[:] = self.model.given_torque(t)
         w = acc.h * acc.weights[acc.calls % len(acc.weights)] if acc.active else 0.0
-        status = fast_stage.stage(t, d.qpos, d.qvel, d.ctrl, *self._args, INV_GEAR, w, acc.v)
+        status = self._stage(t, d.qpos, d.qvel, d.ctrl, *self._args, INV_GEAR, w, acc.v)
         if status != 0:  # the kernel declined: the numpy model answers this stage
             self.fast.fallbacks += 1
             q, qd = self.paper_state(d)

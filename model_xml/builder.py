@@ -34,6 +34,7 @@ import numpy as np
 
 from analytic.effects import Effect, MjIntegrator, ShapeKind, SpringModel
 from analytic.scene import POINT_INERTIA_MIN, POINT_INERTIA_REL, TRIANGLE_RTOL, Scene
+from model_xml.coordinates import paper_to_frame_state
 from model_xml.rotations import (
     mat_to_quat,
     principal_frame,
@@ -42,7 +43,6 @@ from model_xml.rotations import (
     quat_to_mat,
     quat_z_to,
 )
-from model_xml.state import paper_to_frame_state
 
 BODY = "BR"
 ROOT = "root"

@@ -1,13 +1,15 @@
 """Small w-first quaternion helpers shared by ``model_xml`` and ``mj_bridge``.
 
 Conventions: quaternions are ``[w, x, y, z]``; ``quat_to_mat(q)`` is the active rotation taking
-vectors from the rotated (child/body) frame to the parent (world) frame, as in MuJoCo and as the
-paper's ``S(u)`` for unit ``u``.
+vectors from the rotated (child/body) frame to the parent (world) frame, as in MuJoCo: the paper's
+``S(u)`` (:func:`analytic.kinematics.S`) of the normalised quaternion.
 """
 
 from __future__ import annotations
 
 import numpy as np
+
+from analytic.kinematics import S
 
 
 def cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -37,15 +39,9 @@ def quat_conj(q: np.ndarray) -> np.ndarray:
 
 
 def quat_to_mat(q: np.ndarray) -> np.ndarray:
-    """Rotation matrix of a quaternion (normalised first), shape (3, 3)."""
-    w, x, y, z = np.asarray(q, float) / np.linalg.norm(q)
-    return np.array(
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-        ]
-    )
+    """Rotation matrix of a quaternion (normalised first), shape (3, 3): ``S(q / |q|)``."""
+    q = np.asarray(q, float)
+    return S(q / np.linalg.norm(q))
 
 
 def mat_to_quat(R: np.ndarray) -> np.ndarray:

@@ -16,7 +16,7 @@ from mj_scenes import random_scene as mj_random_scene
 from mj_scenes import random_state as manifold_state
 from random_scenes import random_scene
 
-from analytic import fast_kernel as fk
+from analytic.kernel.jit import HAVE_NUMBA
 from analytic.kinematics import S, omega_of
 from mj_bridge.twin import Twin
 from model_xml import BodyFrame
@@ -264,7 +264,7 @@ def test_batch_gives_each_sample_what_it_gives_alone(frame):
 # The compiled stages' copies of the maps
 # ----------------------------------------------------------------------------------------------
 
-needs_numba = pytest.mark.skipif(not fk.HAVE_NUMBA, reason="the compiled stages need numba")
+needs_numba = pytest.mark.skipif(not HAVE_NUMBA, reason="the compiled stages need numba")
 
 
 def _rel(a, b) -> float:
@@ -290,7 +290,8 @@ def test_compiled_mujoco_stage_maps_as_numpy(name):
         qpos, qvel = tw.to_mujoco(q, qd)
         qpos[3:7] *= rng.uniform(0.99, 1.01)
         ctrl = np.zeros(tw.m.nu)
-        status = fast_stage.stage(0.3, qpos, qvel, ctrl, *args, INV_GEAR, 0.0, np.zeros(7))
+        stage = fast_stage.stage_for(arr["ip"])
+        status = stage(0.3, qpos, qvel, ctrl, *args, INV_GEAR, 0.0, np.zeros(7))
         assert status == 0
         q_ref, qd_ref = co.mujoco_to_paper_state(qpos, qvel)
         np.testing.assert_array_equal(arr["q"], q_ref)

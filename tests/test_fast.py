@@ -26,6 +26,7 @@ import pytest
 
 from analytic import fast
 from analytic.effects import Weighting
+from analytic.kernel.layout import STATUS_NOT_PD
 from analytic.model import TumblingModel
 from tests.random_scenes import FORCE_EFFECTS, random_scene_dict, random_state, unit
 
@@ -185,7 +186,7 @@ def compare(scene, rng, n_states=3, stats=None):
     for _ in range(n_states):
         q, qd = random_state(rng, scene.n)
         t = float(rng.uniform(0, 10))
-        got = fm.acceleration(t, q, qd)
+        got = fm.qddot_and_forces(t, q, qd)
         qdd, c = model.acceleration(t, q, qd)
         ref = (qdd, c.torque, c.rod_forces, c.force_at_C, c.QC)
         errs = {nm: rel(g, r) for nm, g, r in zip(NAMES, got, ref, strict=True)}
@@ -223,8 +224,8 @@ def compare(scene, rng, n_states=3, stats=None):
         if stats is not None:
             stats["direct"] += 1
         # the drop-in API gives the same numbers (bit-identity is legitimate: both wrap the same
-        # kernel call, fk.evaluate, on the same inputs in this process)
-        qdd2, c2 = fm.acceleration_output(t, q, qd)
+        # kernel call, the scene's evaluate, on the same inputs in this process)
+        qdd2, c2 = fm.acceleration(t, q, qd)
         np.testing.assert_array_equal(qdd2, got[0])
         assert c2.rank == model.k
         # the requirements hold to round-off on both paths (residuals are round-off, not compared)
@@ -275,7 +276,7 @@ def test_large_n(weighting):
         fm = fast.FastModel(sc, model)
         for _ in range(2):
             q, qd = random_state(rng, 200)
-            got = fm.acceleration(0.7, q, qd)
+            got = fm.qddot_and_forces(0.7, q, qd)
             qdd, c = model.acceleration(0.7, q, qd)
             errs = [
                 rel(g, r)
@@ -322,7 +323,7 @@ def test_singular_M_rigid_body_and_masses_at_C():
                 e_u = np.zeros(n + 7)
                 e_u[3:7] = q[3:7]
                 assert np.linalg.norm(M @ e_u) < 1e-12 * np.linalg.norm(M)
-                got = fm.acceleration(1.1, q, qd)
+                got = fm.qddot_and_forces(1.1, q, qd)
                 qdd, cc = model.acceleration(1.1, q, qd)
                 ref = (qdd, cc.torque, cc.rod_forces, cc.force_at_C, cc.QC)
                 for nm, g, r in zip(NAMES, got, ref, strict=True):
@@ -345,7 +346,7 @@ def test_uncontrolled_and_paper_scenes():
         fm = fast.FastModel(sc, model)
         q, qd = sc.initial.q0(), sc.initial.qdot0()
         for t in (0.0, 1.3):
-            got = fm.acceleration(t, q, qd)
+            got = fm.qddot_and_forces(t, q, qd)
             qdd, c = model.acceleration(t, q, qd)
             for nm, g, r in zip(
                 NAMES, got, (qdd, c.torque, c.rod_forces, c.force_at_C, c.QC), strict=True
@@ -360,7 +361,7 @@ def test_identity_weighting_falls_back_and_counts():
     fm = fast.FastModel(sc)
     assert not fm.compiled
     q, qd = random_state(rng, 3)
-    got = fm.acceleration(0.0, q, qd)
+    got = fm.qddot_and_forces(0.0, q, qd)
     assert fm.fallbacks == 1
     # the fallback answers the W = I problem (an independent KKT solve of it), which is not the
     # Gauss (W = M) one: a weighting dropped on the way would fail here
@@ -380,8 +381,8 @@ def test_qddot_matches_acceleration():
     sc = make_scene(rng, 5, FORCE_EFFECTS, omega=True, masses=True, weighting="M^-1")
     fm = fast.FastModel(sc)
     q, qd = random_state(rng, 5)
-    # bit-identical: qddot_into and evaluate run the same compiled body (_core) on the same inputs
-    np.testing.assert_array_equal(fm.qddot(0.4, q, qd), fm.acceleration(0.4, q, qd)[0])
+    # bit-identical: q̈ alone and the full output run the same compiled body on the same inputs
+    np.testing.assert_array_equal(fm.qddot(0.4, q, qd), fm.qddot_and_forces(0.4, q, qd)[0])
 
 
 def _rhs_pair(sc):
@@ -432,7 +433,7 @@ def test_compiled_rhs_falls_back_and_flags_non_finite(monkeypatch):
     bad[model.nq] = np.nan  # Ṙ_x: enters ẏ as it is (a NaN in u would make the kernel decline)
     with pytest.raises(sim.NonFinite):
         g(0.5, bad)
-    monkeypatch.setattr(fr, "rhs_into", lambda *a: fast.fk.STATUS_NOT_PD)
+    monkeypatch.setattr(fr, "rhs_for", lambda ip: lambda *a: STATUS_NOT_PD)
     _, _, g2, _ = _rhs_pair(sc)
     np.testing.assert_array_equal(g2(0.5, y), f(0.5, y))  # g2 hands the call to f itself
     assert g2.counter["nfev"] == 1

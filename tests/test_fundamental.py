@@ -135,7 +135,7 @@ def test_gauss_matches_printed_eq89(n, seed):
     sol = solve(M, Q, a_m, b_m, A_c, b_c, Weighting.M_INV)
     qdd_ref, QC_ref = eq89(M, Q, a_m, b_m, A_c, b_c)
     assert rel_err(sol.qddot, qdd_ref) < RTOL
-    assert rel_err(sol.QC, QC_ref) < RTOL
+    assert rel_err(sol.constraint_force, QC_ref) < RTOL
     assert rel_err(M @ sol.qddot - Q, QC_ref) < RTOL
     assert sol.rank == A_c.shape[0] and np.linalg.norm(sol.residual) < 1e-10 * np.linalg.norm(b_c)
 
@@ -151,7 +151,7 @@ def test_gauss_matches_eq89_for_random_dense_constraints(seed):
         sol = solve(M, Q, a_m, b_m, A_c, b_c, Weighting.M_INV)
         qdd_ref, QC_ref = eq89(M, Q, a_m, b_m, A_c, b_c)
         assert rel_err(sol.qddot, qdd_ref) < RTOL
-        assert rel_err(sol.QC, QC_ref) < RTOL
+        assert rel_err(sol.constraint_force, QC_ref) < RTOL
 
 
 # ------------------------------------------------------------------------------------------------
@@ -169,7 +169,7 @@ def test_control_minimises_weighted_cost_kkt(w, n, seed):
         sol = solve(M, Q, a_m, b_m, A, b, w)
         qdd_ref, QC_ref, Qc_ref = kkt(M, Q, a_m, b_m, A, b, inverse_weight(M, w))
         assert rel_err(sol.qddot, qdd_ref) < RTOL
-        assert rel_err(sol.QC, QC_ref) < RTOL
+        assert rel_err(sol.constraint_force, QC_ref) < RTOL
         # The solver's motion is feasible and no feasible control is cheaper: random feasible
         # perturbations of the optimal Q_c (keeping A_c q̈ = b_c on the norm-constrained system)
         # only raise the cost.
@@ -273,7 +273,7 @@ def test_singular_M_gauss_matches_bordered_system(seed):
         x = np.linalg.solve(Bord, np.r_[Q, b])
         sol = solve(M, Q, a_m, b_m, A_c, b_c, Weighting.M_INV)
         assert rel_err(sol.qddot, x[: n + 7]) < RTOL
-        assert rel_err(sol.QC, A.T @ x[n + 7 :]) < RTOL
+        assert rel_err(sol.constraint_force, A.T @ x[n + 7 :]) < RTOL
 
 
 # ------------------------------------------------------------------------------------------------
@@ -306,7 +306,7 @@ def test_duplicated_consistent_requirement_same_motion(w, n):
         sol = solve(M, Q, a_m, b_m, np.vstack([A_c, extra_A]), np.r_[b_c, extra_b], w)
         assert sol.rank == k
         assert rel_err(sol.qddot, ref.qddot) < RTOL
-        assert rel_err(sol.QC, ref.QC) < RTOL
+        assert rel_err(sol.constraint_force, ref.constraint_force) < RTOL
         assert np.linalg.norm(sol.residual) < 1e-10 * np.linalg.norm(b_c)
 
 

@@ -188,7 +188,25 @@ def test_the_graph_sees_every_layer(graph):
     assert ("analytic.model", "analytic.scene") in pairs
     assert ("validation.goals", "analytic.fast") in pairs  # `from analytic import fast`, in a def
     assert ("validation.cli", "validation.bench") in pairs
+    assert ("analytic.fast", "analytic.kernel.layout") in pairs  # a subpackage is seen too
     assert any(layer_of(e.imported) < layer_of(e.importer) for e in edges)
+
+
+def test_every_package_is_installed():
+    """``[tool.setuptools] packages`` in pyproject.toml is an explicit list, so a subpackage
+    missing from it (``analytic.kernel``) would be left out of an installed wheel: every directory
+    of the layers with an ``__init__.py`` must be listed."""
+    import tomllib
+
+    listed = set(
+        tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["packages"]
+    )
+    found = {
+        ".".join(init.parent.relative_to(ROOT).parts)
+        for pkg in LAYERS
+        for init in (ROOT / pkg).rglob("__init__.py")
+    }
+    assert found <= listed, f"packages missing from pyproject.toml: {sorted(found - listed)}"
 
 
 def test_no_module_imports_from_a_higher_layer(graph):

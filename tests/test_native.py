@@ -232,15 +232,155 @@ def test_disk_cached_callback_finds_the_context():
     assert digests == [want, want]
 
 
-def test_compiled_callers_are_keyed_to_the_kernel_source():
-    """numba's disk cache checks only a function's own file; the stage and the native callback
-    embed the kernel from another file, so they close over the kernel's source fingerprint (numba
-    hashes closure variables into its cache key). Editing the kernel then recompiles them."""
-    from analytic import fast_kernel as fk
-    from mj_bridge import fast_stage
+_KERNEL_CHILD = """
+import json, sys
+import numpy as np
+from analytic.aux_rates import aux_rates
+from analytic.fast import FastModel
+from analytic.fast_rhs import rhs_for
+from analytic.kernel import gauss, jit
+from analytic.scene import load_scene
 
-    want = fk.source_fingerprint(fk)
-    assert fast_stage.DEPS == want
-    assert [c.cell_contents for c in fast_stage.stage.py_func.__closure__] == [want]
-    assert native.DEPS == fk.source_fingerprint(fk, fast_stage)
-    assert native.DEPS in [c.cell_contents for c in native.native_stage.py_func.__closure__]
+sc = load_scene(sys.argv[1])
+fm = FastModel(sc)
+q, qd = sc.initial.q0(), sc.initial.qdot0()
+if sys.argv[2] == "aux":  # the smallest cached entry point: only the work and impulse rates
+    m = fm.model
+    out = np.empty(7)
+    args = (q, qd, np.ones(3), np.ones(m.n), np.ones(3), m.a, m.d, m.m, m.mu0, m.m_T, out)
+    aux_rates(*args)
+    print(json.dumps({"ydot": out.tolist(), "note": jit.cache_dir_note(),
+                      "hits": sum(aux_rates.stats.cache_hits.values())}))
+    sys.exit()
+rhs = rhs_for(fm.ip)
+y = np.concatenate([q, qd, np.zeros(7)])
+out, work = np.empty(2 * fm.nq + 7), np.empty(2 * fm.nq + 3 + fm.k)
+status = int(rhs(0.3, y, fm.fp, fm.ip, work, out))
+qdd = fm.qddot(0.3, q, qd)
+print(json.dumps({
+    "status": status, "ydot": out.tolist(), "qdd": qdd.tolist(),
+    "rhs_hits": sum(rhs.stats.cache_hits.values()),
+    "rhs_misses": sum(rhs.stats.cache_misses.values()),
+    "kernel_hits": sum(gauss.evaluate.stats.cache_hits.values()),
+}))
+"""
+
+
+def _copy_analytic(dest, *, with_numba_cache: bool):
+    """The ``analytic`` package (and a scene file) copied under ``dest``; with the numba cache files
+    of this tree when asked (a warm start), never Python's bytecode."""
+    import shutil
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    keep = ("*.nbi", "*.nbc") if with_numba_cache else ()
+
+    def ignore(folder, names):
+        if Path(folder).name == "__pycache__":
+            return [n for n in names if not any(Path(n).match(k) for k in keep)]
+        return []
+
+    shutil.copytree(root / "analytic", dest / "analytic", ignore=ignore)
+    shutil.copy(root / "validation" / "scenes" / "paper_example1.toml", dest / "scene.toml")
+    return dest
+
+
+def _run_child(tree, env_extra=None, prefix=(), mode="rhs"):
+    """Run :data:`_KERNEL_CHILD` on the copy ``tree`` (``prefix``: a command that wraps it);
+    returns its JSON line and its stderr."""
+    import json
+    import os
+    import subprocess
+    import sys
+
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+    env.update(PYTHONPATH=str(tree), **(env_extra or {}))
+    r = subprocess.run(
+        [*prefix, sys.executable, "-c", _KERNEL_CHILD, str(tree / "scene.toml"), mode],
+        env=env,
+        cwd=tree,
+        capture_output=True,
+        text=True,
+    )
+    assert r.returncode == 0, r.stderr[-3000:]
+    return json.loads(r.stdout.strip().splitlines()[-1]), r.stderr
+
+
+def test_an_edited_stage_recompiles_the_cached_callers(tmp_path):
+    """numba's disk cache checks only a function's own file, yet a cached entry point embeds the
+    kernel's stages from other files. Edit a stage (forces.rod_pass: every rod row of Q gains
+    +m_i·1 N/kg) in a copy of the package whose cache is populated: the next process must refuse
+    the cached right-hand side and kernel, recompile them and show the edit, rather than run the
+    stale copy. (An uncontrolled scene, so q̈ of the rods moves with Q_p.)"""
+    tree = _copy_analytic(tmp_path, with_numba_cache=True)
+    before, _ = _run_child(tree)  # compiles (or loads this tree's cache) and fills the copy's
+    again, _ = _run_child(tree)
+    assert before["status"] == again["status"] == 0
+    assert again["rhs_hits"] >= 1 and again["rhs_misses"] == 0, "the cache is not reused at all"
+    assert again["ydot"] == before["ydot"]
+
+    stage = tree / "analytic" / "kernel" / "forces.py"
+    src = stage.read_text()
+    line = "Qi = -mi * (sl2 * pdi + sLad * pi + sLdd)"
+    assert src.count(line) == 1
+    stage.write_text(src.replace(line, line + " + mi"))
+    after, _ = _run_child(tree)
+    assert after["status"] == 0
+    assert after["rhs_misses"] >= 1 and after["rhs_hits"] == 0, "a stale cached rhs was loaded"
+    assert after["kernel_hits"] == 0, "a stale cached kernel was loaded"
+    n = len(before["qdd"]) - 7
+    ydot0, ydot1 = np.array(before["ydot"]), np.array(after["ydot"])
+    nq = n + 7
+    assert np.all(ydot1[nq + 7 : 2 * nq] != ydot0[nq + 7 : 2 * nq]), "the edit is not in the rhs"
+    assert np.all(np.array(after["qdd"])[7:] != np.array(before["qdd"])[7:])
+
+
+def _read_only_prefix(tree) -> list[str] | None:
+    """A command prefix that runs its command with ``tree`` mounted read-only (a user and mount
+    namespace: works for root, whom file modes do not stop), or None when namespaces are not
+    available here."""
+    import shutil
+    import subprocess
+
+    if not shutil.which("unshare"):
+        return None
+    if subprocess.run(["unshare", "-rm", "true"], capture_output=True).returncode != 0:
+        return None
+    script = 'mount --bind "$0" "$0" && mount -o remount,ro,bind "$0" "$0" && exec "$@"'
+    return ["unshare", "-rm", "sh", "-c", script, str(tree)]
+
+
+def test_a_read_only_install_caches_in_the_user_cache_dir(tmp_path):
+    """With the package's ``__pycache__`` not writable (a read-only site-packages), the kernel is
+    cached under ``$XDG_CACHE_HOME/tumbling-testbed/numba``, said once on stderr, and the next
+    process loads it from there (nothing written into the package)."""
+    import os
+    import stat
+
+    tree = _copy_analytic(tmp_path / "tree", with_numba_cache=False)
+    prefix = _read_only_prefix(tree)
+    if prefix is None:
+        if os.geteuid() == 0:
+            pytest.skip("no mount namespace, and file modes do not stop root")
+        prefix = []
+        for p in [tree, *tree.rglob("*")]:
+            p.chmod(p.stat().st_mode & ~(stat.S_IWUSR | stat.S_IWGRP | stat.S_IWOTH))
+    xdg = tmp_path / "xdg"
+    xdg.mkdir()
+    env = {"XDG_CACHE_HOME": str(xdg)}
+    try:
+        first, err1 = _run_child(tree, env, prefix, mode="aux")
+        second, err2 = _run_child(tree, env, prefix, mode="aux")
+    finally:
+        for p in [tree, *tree.rglob("*")]:
+            if p.is_dir():
+                p.chmod(0o755)
+    fallback = xdg / "tumbling-testbed" / "numba"
+    for err in (err1, err2):
+        said = [ln for ln in err.splitlines() if "CacheFallbackWarning" in ln]
+        assert len(said) == 1 and str(fallback) in said[0], err[-2000:]
+    assert str(fallback) in first["note"]
+    assert list(fallback.rglob("*.nbi")), "nothing cached in the user cache directory"
+    assert not list(tree.rglob("*.nbi")), "the read-only package was written to"
+    assert first["hits"] == 0 and second["hits"] >= 1, "not loaded from the user cache directory"
+    assert second["ydot"] == first["ydot"]

@@ -3,7 +3,7 @@
 ``python -m validation.fast_bench`` prints, for ``validation.timing.chain_scene(n)`` (controlled:
 ω and every mass tracked, Gauss weighting) with n = 2, 5, 10, 50, 1000, the median cost of one
 evaluation of the controlled dynamics in µs: the numpy path (``TumblingModel.acceleration``), the fast path
-(``FastModel.qddot``, the integrator's right-hand side, and ``FastModel.acceleration``, which also
+(``FastModel.qddot``, the integrator's right-hand side, and ``FastModel.qddot_and_forces``, which also
 returns the control outputs) and MuJoCo's ``mj_forward`` on the twin built by
 ``model_xml.build_spec(scene).compile()`` (columns shown as n/a when the twin is not importable), the
 ratio fast / mj_forward, the ratio of the fast cost at n = 1000 to n = 10 (goal ≤ 150), and the JIT
@@ -43,11 +43,12 @@ def _mujoco(scene):
 
 
 def main(argv: list[str] | None = None) -> int:
-    from analytic import fast, fast_kernel
+    from analytic import fast
+    from analytic.kernel import jit
     from analytic.model import TumblingModel
     from validation.timing import chain_scene, time_call
 
-    print(f"numba available: {fast.available()}; cache: {fast_kernel.cache_dir_note()}")
+    print(f"numba available: {fast.available()}; cache: {jit.cache_dir_note()}")
     sc2 = chain_scene(2)
     fm2 = fast.FastModel(sc2)
     q, qd = sc2.initial.q0(), sc2.initial.qdot0()
@@ -68,7 +69,7 @@ def main(argv: list[str] | None = None) -> int:
         fm.qddot(0.3, q, qd)
         c_np = time_call(lambda m=model, q=q, qd=qd: m.acceleration(0.3, q, qd), repeats=5)
         c_fq = time_call(lambda f=fm, q=q, qd=qd: f.qddot(0.3, q, qd), repeats=9)
-        c_ff = time_call(lambda f=fm, q=q, qd=qd: f.acceleration(0.3, q, qd), repeats=9)
+        c_ff = time_call(lambda f=fm, q=q, qd=qd: f.qddot_and_forces(0.3, q, qd), repeats=9)
         fast_cost[n] = c_fq
         mj = _mujoco(sc)
         c_mj = time_call(mj, repeats=9) if mj else None

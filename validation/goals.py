@@ -402,13 +402,16 @@ the C++ loop (one per second simulated), the copies of the samples and timing no
 machine."""
 
 
-def _rhs_timer():
-    """``loop(n, t, Y, fp, ip, work, out)``: ``n`` calls of :func:`analytic.fast_rhs.rhs_into` from
+def _rhs_timer(ip):
+    """``loop(n, t, Y, fp, ip, work, out)``: ``n`` calls of the compiled right-hand side of the
+    packed scene ``ip`` (:func:`analytic.fast_rhs.rhs_for`: the one the compiled loop embeds) from
     compiled code (no dispatch from Python per call), at the states ``(t[i], Y[i])`` in turn: what
     the compiled loop pays per evaluation."""
     import numba
 
-    from analytic.fast_rhs import rhs_into
+    from analytic.fast_rhs import rhs_for
+
+    rhs_into = rhs_for(ip)
 
     @numba.njit(cache=False)
     def loop(n, t, Y, fp, ip, work, out):  # pragma: no cover - compiled
@@ -474,7 +477,7 @@ def goal_compiled_stepping(
         )
         work = np.empty(2 * fm.nq + 3 + fm.k)
         out = np.empty(Y.shape[1])
-        loop = _rhs_timer()
+        loop = _rhs_timer(fm.ip)
         loop(10, ts, Y, fm.fp, fm.ip, work, out)  # compile
         walls: dict[str, list[float]] = {"compiled": [], "scipy": []}
         rhs: list[float] = []

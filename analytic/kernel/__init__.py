@@ -1,0 +1,30 @@
+"""The compiled O(n) kernel of the controlled dynamics (Eqs. 51-53, 59, 80-89, B10-B13): the numba
+side of :mod:`analytic.fast`.
+
+Modules, in the order an evaluation runs through them:
+
+* :mod:`~analytic.kernel.layout`: where every number lives (packed parameters, output, workspace);
+* :mod:`~analytic.kernel.jit`: numba plumbing (compilation, disk cache, source fingerprints);
+* :mod:`~analytic.kernel.kinematics`: ``S(u)``, ``H(u)``, ``L_x(u)`` (Eqs. 11-34), stage 1;
+* :mod:`~analytic.kernel.forces`: ``Q`` (Eq. 52, springs Eq. 38), stages 2 and 4;
+* :mod:`~analytic.kernel.mass_matrix`: ``M`` (Eq. 51), stage 3;
+* :mod:`~analytic.kernel.constraints`: ``b_m`` (Eq. 59) and ``b_c`` (Eqs. 81, 86), stages 5-6;
+* :mod:`~analytic.kernel.system`: stages 1-6 together;
+* Gauss (N = M⁻¹, Eq. 89): :mod:`~analytic.kernel.schur` (stage 7),
+  :mod:`~analytic.kernel.bordered` (stage 8), :mod:`~analytic.kernel.gauss` (stage 9, ``evaluate``);
+* :mod:`~analytic.kernel.minv2`: N = M⁻² (Eq. B13), compiled only for scenes that ask for it;
+* :mod:`~analytic.kernel.entry`: which solve a scene needs; ``evaluate`` for any scene.
+
+Everything the kernel needs is packed by :func:`analytic.fast.pack` into one float array ``fp`` and
+one int array ``ip``, so a call unboxes six arguments. ``evaluate(t, q, q̇, fp, ip, out)`` writes
+``[q̈ (nq), Q^C (nq), τ (3), A_c q̈ - b_c (k)]`` into ``out`` and returns a status (0 = done).
+
+Cost notes (one evaluation is ~0.5 µs at small n, so constant factors matter): the Gauss stages
+are compiled inline into two functions (``system.build_system``, ``gauss.evaluate``); no heap
+allocation on the Gauss path (one stack workspace carved
+by ``layout.WS_*``; the rod rows of ``Q`` and ``b_c`` live in ``out``); closed forms for ``L_a(u)``,
+``L̇_a u̇`` and ``H(u)ᵀx`` instead of the (3, 4, 4) tensor contractions; no square roots on the Gauss
+path (LDLᵀ); cos and sin of one argument in one block (one ``sincos`` call) and reused while the
+mass-track λ repeats; indices read from ``ip`` masked (``layout.IX``). The identity weighting is not
+compiled (:mod:`analytic.fast` uses the numpy path for it).
+"""

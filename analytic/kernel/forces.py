@@ -1,0 +1,216 @@
+"""The generalized force ``Q(q, q̇)`` of Eq. (52), in two kernel stages: :func:`rod_pass` (the rod
+rows, one pass over the masses that also sums the mass moments) and :func:`body_forces` (the R and
+u rows, including the given torque of Remark 2, Eq. 61).
+
+Every mass term derives from ``r̈_i = J_i q̈ + κ_i`` with
+``κ_i = 2 ṗ_i L_a u̇ + p_i L̇_a u̇ + L̇_d u̇`` (Eq. 40), so the sums over masses reduce to the moments
+``μ0 = Σm``, ``μ1 = Σ m p``, ``μ2 = Σ m p²``, ``Σ m ṗ``, ``Σ m p ṗ`` (see :mod:`analytic.model`).
+"""
+
+from __future__ import annotations
+
+import math
+
+from analytic.kernel.jit import inline
+from analytic.kernel.kinematics import Ht_times
+from analytic.kernel.layout import (
+    F_G,
+    F_MBR,
+    F_MU0,
+    F_TA,
+    F_TC,
+    F_TFREQ,
+    I_GRAV,
+    I_SCUB,
+    I_SLIN,
+    I_TORQ,
+    I_TRACK,
+    WS_JW,
+    WS_LA,
+    WS_LAD,
+    WS_LAU,
+    WS_LD,
+    WS_LDD,
+    WS_MPD,
+    WS_MPPD,
+    WS_MU1,
+    WS_MU2,
+    WS_N0,
+    WS_N1,
+    WS_N2,
+    WS_NT0,
+    WS_NT1,
+    WS_QB,
+    WS_SA,
+    WS_SLAD,
+    WS_SLAU,
+    WS_SLDD,
+    WS_SPQ,
+    WS_SQ,
+)
+
+
+@inline
+def rod_pass(q, qd, fp, ip, n, o_m, o_pe, o_kl, o_kn, out, full, w):
+    """Stage 2: the rod rows of Q (Eq. 52, third block row; springs ``F^S = -∂U_s/∂p`` of Eq. 38,
+    docs/errata.md item 2) and, in the same pass, the moments the other stages need.
+
+    ``Q_i`` goes straight into ``out``: the q̈_i slot of a free mass (the Gauss solve turns it into
+    q̈_i in place), the ``Q^C_i`` slot of a tracked one (full output only; it becomes μ_i).
+    Writes to ``w``: ``μ1, μ2, Σmṗ, Σmpṗ`` (all masses), ``Σ_F m p⁰ ¹ ²`` (free), ``Σ_T m, Σ_T m p``
+    (tracked), ``Σ_F Q_i, Σ_F p_i Q_i``.
+    """
+    nq = n + 7
+    itr = I_TRACK
+    Sa0, Sa1, Sa2 = w[WS_SA], w[WS_SA + 1], w[WS_SA + 2]
+    grav = ip[I_GRAV] != 0
+    sg = Sa0 * fp[F_G] + Sa1 * fp[F_G + 1] + Sa2 * fp[F_G + 2]
+    lin = ip[I_SLIN] != 0
+    cub = ip[I_SCUB] != 0
+    springs = n > 0 and (lin or cub)
+    sLad = w[WS_SLAD]
+    sLdd = w[WS_SLDD]
+    mu1 = 0.0
+    mu2 = 0.0
+    mpd = 0.0
+    mppd = 0.0
+    n0 = 0.0
+    n1 = 0.0
+    n2 = 0.0
+    nt0 = 0.0  # Σ_T m_i, Σ_T m_i p_i (tracked)
+    nt1 = 0.0
+    sq = 0.0
+    spq = 0.0
+    sl2 = 2.0 * w[WS_SLAU]
+    # spring j joins x_{j-1} and x_j (x = p - p_e, x_{-1} = x_n = 0) with force f_j;
+    # Q_p,i += f_{i+1} - f_i
+    x = 0.0
+    f_prev = 0.0
+    if springs:
+        x = q[7] - fp[o_pe]
+        if lin:
+            f_prev += fp[o_kl] * x
+        if cub:
+            f_prev += fp[o_kn] * (x * x * x)
+    for i in range(n):
+        mi = fp[o_m + i]
+        pi = q[7 + i]
+        pdi = qd[7 + i]
+        mp = mi * pi
+        mu1 += mp
+        mu2 += mp * pi
+        mpd += mi * pdi
+        mppd += mp * pdi
+        Qi = -mi * (sl2 * pdi + sLad * pi + sLdd)
+        if grav:
+            Qi += sg * mi
+        if springs:
+            xn = q[8 + i] - fp[o_pe + i + 1] if i + 1 < n else 0.0
+            e = xn - x
+            f = 0.0
+            if lin:
+                f += fp[o_kl + i + 1] * e
+            if cub:
+                f += fp[o_kn + i + 1] * (e * e * e)
+            Qi += f - f_prev
+            f_prev = f
+            x = xn
+        if ip[itr + i] == 0:
+            out[7 + i] = Qi  # q̈_i is computed from it in place
+            n0 += mi
+            n1 += mp
+            n2 += mp * pi
+            sq += Qi
+            spq += pi * Qi
+        else:
+            if full:
+                out[nq + 7 + i] = Qi  # μ_i (Q^C_i) is computed from it in place
+            nt0 += mi
+            nt1 += mp
+    w[WS_MU1] = mu1
+    w[WS_MU2] = mu2
+    w[WS_MPD] = mpd
+    w[WS_MPPD] = mppd
+    w[WS_N0] = n0
+    w[WS_N1] = n1
+    w[WS_N2] = n2
+    w[WS_NT0] = nt0
+    w[WS_NT1] = nt1
+    w[WS_SQ] = sq
+    w[WS_SPQ] = spq
+
+
+@inline
+def body_forces(t, q, qd, fp, ip, w):
+    """Stage 4: the R and u rows of Q (Eq. 52, first two block rows, with ``B_d``) into
+    ``w[WS_QB:WS_QB+7]``, and the given torque's ``Q_τ = Hᵀτ`` (Remark 2, Eq. 61):
+
+    ``Q_R = -Σ m κ (+ m_T g)``,
+    ``Q_u = -2 H(u̇)ᵀ J ω - L_aᵀ Σ m p κ - L_dᵀ Σ m κ (+ L_aᵀ μ1 g + L_dᵀ μ0 g) (+ Hᵀ τ_e)``.
+    """
+    u0, u1, u2, u3 = q[3], q[4], q[5], q[6]
+    v0, v1, v2, v3 = qd[3], qd[4], qd[5], qd[6]
+    oq = WS_QB
+    mu0 = fp[F_MU0]
+    m_T = fp[F_MBR] + mu0
+    mu1 = w[WS_MU1]
+    mu2 = w[WS_MU2]
+    mpd = w[WS_MPD]
+    mppd = w[WS_MPPD]
+    Lau0, Lau1, Lau2 = w[WS_LAU], w[WS_LAU + 1], w[WS_LAU + 2]
+    Lad0, Lad1, Lad2 = w[WS_LAD], w[WS_LAD + 1], w[WS_LAD + 2]
+    Ldd0, Ldd1, Ldd2 = w[WS_LDD], w[WS_LDD + 1], w[WS_LDD + 2]
+    smk0 = 2.0 * mpd * Lau0 + mu1 * Lad0 + mu0 * Ldd0
+    smk1 = 2.0 * mpd * Lau1 + mu1 * Lad1 + mu0 * Ldd1
+    smk2 = 2.0 * mpd * Lau2 + mu1 * Lad2 + mu0 * Ldd2
+    xa0 = -(2.0 * mppd * Lau0 + mu2 * Lad0 + mu1 * Ldd0)
+    xa1 = -(2.0 * mppd * Lau1 + mu2 * Lad1 + mu1 * Ldd1)
+    xa2 = -(2.0 * mppd * Lau2 + mu2 * Lad2 + mu1 * Ldd2)
+    xd0 = -smk0
+    xd1 = -smk1
+    xd2 = -smk2
+    w[oq] = -smk0
+    w[oq + 1] = -smk1
+    w[oq + 2] = -smk2
+    if ip[I_GRAV] != 0:
+        g0, g1, g2 = fp[F_G], fp[F_G + 1], fp[F_G + 2]
+        w[oq] += m_T * g0
+        w[oq + 1] += m_T * g1
+        w[oq + 2] += m_T * g2
+        xa0 += mu1 * g0
+        xa1 += mu1 * g1
+        xa2 += mu1 * g2
+        xd0 += mu0 * g0
+        xd1 += mu0 * g1
+        xd2 += mu0 * g2
+    h0, h1, h2, h3 = Ht_times(
+        v0, v1, v2, v3, -2.0 * w[WS_JW], -2.0 * w[WS_JW + 1], -2.0 * w[WS_JW + 2]
+    )
+    if ip[I_TORQ]:
+        ct = math.cos(fp[F_TFREQ] * t)
+        e0, e1, e2, e3 = Ht_times(
+            u0,
+            u1,
+            u2,
+            u3,
+            fp[F_TC] + fp[F_TA] * ct,
+            fp[F_TC + 1] + fp[F_TA + 1] * ct,
+            fp[F_TC + 2] + fp[F_TA + 2] * ct,
+        )
+        h0 += e0
+        h1 += e1
+        h2 += e2
+        h3 += e3
+    w[oq + 3] = h0
+    w[oq + 4] = h1
+    w[oq + 5] = h2
+    w[oq + 6] = h3
+    for c in range(4):
+        w[oq + 3 + c] += (
+            w[WS_LA + c] * xa0
+            + w[WS_LA + 4 + c] * xa1
+            + w[WS_LA + 8 + c] * xa2
+            + w[WS_LD + c] * xd0
+            + w[WS_LD + 4 + c] * xd1
+            + w[WS_LD + 8 + c] * xd2
+        )

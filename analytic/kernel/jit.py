@@ -1,0 +1,211 @@
+"""numba plumbing of the compiled kernel: where its cache lives, how functions are compiled, and
+what a cached function's key covers.
+
+**Three kinds of compiled function.**
+
+* :func:`inline` (``njit(inline="always")``, no disk cache): the Gauss stages and the small
+  kinematic helpers; numba pastes their code into the caller, so the Gauss kernel compiles into one
+  function, as fast as the monolithic kernel it replaced.
+* :func:`jit_entry` (``njit(cache=True)``, key tied to the sources, see below): entry points (what
+  Python or another package calls: ``gauss.evaluate``, ``minv2.evaluate``, ``fast_rhs.rhs_into``
+  ...) and the two large blocks both weightings share or only one needs
+  (``system.build_system``, ``minv2.solve_minv2``), compiled once and cached on their own: pasting
+  them into every caller made the first run compile them again for each.
+* :func:`jit` (``njit(cache=True)``, keyed on its own file by numba): only for functions that call
+  nothing from another file (the M⁻² dense helpers).
+
+**Why the tie.** numba's disk cache checks only the source file of the function being cached
+(numba's caching notes: "Cache invalidation fails to recognize changes in symbols defined in another
+file"), yet a cached entry point contains the code of every stage it calls. numba does hash a
+function's closure variables into the cache key, so an entry point built by a factory that closes
+over :func:`source_fingerprint` of the kernel package (and of any other file it embeds) is
+recompiled whenever one of those files changes, instead of running a stale copy.
+
+**Where the cache lives.** numba writes ``__pycache__`` beside the sources, else its user-wide cache
+directory. When this package's own ``__pycache__`` cannot be written (a read-only site-packages)
+and ``NUMBA_CACHE_DIR`` is not set, this module sets ``NUMBA_CACHE_DIR`` (numba's documented
+setting) to ``$XDG_CACHE_HOME/tumbling-testbed/numba`` (``~/.cache/...`` without XDG_CACHE_HOME)
+before numba is imported, and says so once (:class:`CacheFallbackWarning`). When no directory at
+all can be written, entry points are compiled in memory in each process (same results, slower
+first call), also said once.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import inspect
+import os
+import sys
+import tempfile
+import warnings
+from pathlib import Path
+from types import ModuleType
+
+import numpy as np
+
+from analytic.kernel.layout import WS_LEN
+
+APP_NAME = "tumbling-testbed"
+PACKAGE_DIR = Path(__file__).resolve().parent
+
+
+class CacheFallbackWarning(UserWarning):
+    """numba's cache beside the package is not writable: another directory (or none) is used."""
+
+
+def _writable(path: Path) -> bool:
+    """Whether files can be created in ``path`` (made if missing), tested as numba tests it."""
+    try:
+        os.makedirs(path, exist_ok=True)
+        tempfile.TemporaryFile(dir=path).close()
+    except OSError:
+        return False
+    return True
+
+
+def user_cache_dir() -> Path:
+    """``$XDG_CACHE_HOME/tumbling-testbed/numba``, or ``~/.cache/tumbling-testbed/numba``."""
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return Path(base) / APP_NAME / "numba"
+
+
+def _configure_cache_dir() -> str | None:
+    """Point numba at a writable cache directory when the in-tree one is not; returns the note
+    for :func:`cache_dir_note` (None: numba's defaults apply)."""
+    if os.environ.get("NUMBA_CACHE_DIR") or _writable(PACKAGE_DIR / "__pycache__"):
+        return None
+    fallback = user_cache_dir()
+    if not _writable(fallback):
+        return None  # numba's own user-wide directory is tried next; jit() handles "none at all"
+    os.environ["NUMBA_CACHE_DIR"] = str(fallback)
+    numba_config = sys.modules.get("numba.core.config")
+    if numba_config is not None:  # numba imported before this module: it read the environment
+        numba_config.CACHE_DIR = str(fallback)
+    warnings.warn(
+        f"{APP_NAME}: {PACKAGE_DIR / '__pycache__'} is not writable; numba caches the compiled "
+        f"kernel in {fallback}",
+        CacheFallbackWarning,
+        stacklevel=2,
+    )
+    return f"NUMBA_CACHE_DIR={fallback} (the package's __pycache__ is not writable)"
+
+
+_CACHE_NOTE = _configure_cache_dir()
+
+try:  # numba is optional: without it analytic.fast falls back to the numpy model
+    import numba
+
+    HAVE_NUMBA = True
+except ImportError:  # pragma: no cover - exercised only without numba
+    numba = None
+    HAVE_NUMBA = False
+
+_in_memory_said = False
+
+
+def jit(fn):
+    """``numba.njit(cache=True)``, or in memory when no cache directory is usable (said once).
+
+    numba raises ``RuntimeError`` at decoration when none of ``$NUMBA_CACHE_DIR``, ``__pycache__``
+    beside the source and its user-wide directory can be written.
+    """
+    global _in_memory_said
+    if not HAVE_NUMBA:  # pragma: no cover
+        return fn
+    try:
+        return numba.njit(cache=True, fastmath=False, nogil=True)(fn)
+    except RuntimeError:  # no usable cache locator
+        if not _in_memory_said:
+            _in_memory_said = True
+            warnings.warn(
+                f"{APP_NAME}: no writable cache directory for numba; the kernel is compiled in "
+                "memory in every process",
+                CacheFallbackWarning,
+                stacklevel=2,
+            )
+        return numba.njit(cache=False, fastmath=False, nogil=True)(fn)
+
+
+def inline(fn):
+    """A kernel stage or helper: ``numba.njit(inline="always")``, pasted into its callers' code
+    (never cached on its own; plain Python without numba)."""
+    if not HAVE_NUMBA:  # pragma: no cover
+        return fn
+    return numba.njit(inline="always", fastmath=False)(fn)
+
+
+def source_fingerprint(*sources: ModuleType | str | Path) -> int:
+    """A 60-bit integer from the SHA-256 of the given modules' (or files') sources, in order."""
+    h = hashlib.sha256()
+    for src in sources:
+        path = inspect.getfile(src) if isinstance(src, ModuleType) else src
+        with open(path, "rb") as f:
+            h.update(f.read())
+    return int(h.hexdigest()[:15], 16)
+
+
+KERNEL_SOURCES: tuple[Path, ...] = tuple(sorted(PACKAGE_DIR.glob("*.py")))
+"""Every source file of the kernel package: an entry point embeds some of them, and a cached entry
+point is refused when any of them changes (one fingerprint keeps the rule simple)."""
+
+
+def jit_entry(factory, *also: ModuleType | str | Path):
+    """Compile ``factory(fingerprint)`` with :func:`jit`: an entry point whose cache key covers the
+    kernel package's sources and ``also`` (the other files whose code it embeds).
+
+    ``factory`` returns the function to compile, which must refer to the fingerprint (e.g.
+    ``if deps < 0: return STATUS_UNSUPPORTED``, a test that is never true) so that it is a closure
+    variable, which numba hashes into the cache key.
+    """
+    return jit(factory(source_fingerprint(*KERNEL_SOURCES, *also)))
+
+
+def cache_dir_note() -> str:
+    """Where numba caches the kernel in this process (for messages)."""
+    if not HAVE_NUMBA:
+        return "numba not installed"
+    if _CACHE_NOTE:
+        return _CACHE_NOTE
+    env = os.environ.get("NUMBA_CACHE_DIR")
+    return (
+        f"NUMBA_CACHE_DIR={env}" if env else "__pycache__ beside the sources, or numba's user dir"
+    )
+
+
+if HAVE_NUMBA and not numba.config.DISABLE_JIT:
+    from numba.core import cgutils, types
+    from numba.extending import intrinsic
+    from numba.np.arrayobj import populate_array
+
+    @intrinsic
+    def workspace(typingctx):
+        """A float64 array of ``WS_LEN`` uninitialised slots on the calling function's stack
+        (slots: :mod:`analytic.kernel.layout` ``WS_*``).
+
+        An intrinsic, so its code is emitted inside the caller: the memory lives as long as the
+        caller's frame (never return it or a view of it). Unlike ``np.empty`` there is no heap
+        allocation, no reference count, and LLVM may keep constant-index slots in registers.
+        """
+        arrty = types.Array(types.float64, 1, "C")
+
+        def codegen(context, builder, sig, args):
+            f64 = context.get_value_type(types.float64)
+            data = cgutils.alloca_once(builder, f64, size=WS_LEN)
+            ary = context.make_array(arrty)(context, builder)
+            intp = context.get_value_type(types.intp)
+            populate_array(
+                ary,
+                data=data,
+                shape=[intp(WS_LEN)],
+                strides=[intp(8)],
+                itemsize=intp(8),
+                meminfo=None,
+            )
+            return ary._getvalue()
+
+        return arrty(), codegen
+
+else:  # pragma: no cover - plain Python (no numba, or NUMBA_DISABLE_JIT=1)
+
+    def workspace():
+        return np.empty(WS_LEN)

@@ -1,0 +1,152 @@
+"""Where every number lives: the packed parameter arrays ``fp`` (float64) and ``ip`` (int64) that
+:func:`analytic.fast.pack` writes and the kernel reads, the kernel's output array, and the slots of
+its stack workspace. Defined here once; the packer, the kernel stages and the compiled callers
+(:mod:`analytic.fast_rhs`, :mod:`mj_bridge.fast_stage`, :mod:`mj_bridge.native`,
+:mod:`mj_bridge.pinocchio_plant`) all read these names.
+
+Pure constants and two plain functions; no numba here (``pack`` imports it without compiling).
+
+``fp``: a fixed head (``F_*``, ``F_ARR`` slots) then, for n masses and k_p tracked masses, the
+tail of :func:`tail_offsets`: ``m (n), p_e (n), k_l (n+1), k_n (n+1)``, the mass track
+``l, λ, α, β`` (k_p each, Eq. 75, 78) and the rod geometry ``a (3), d (3)`` (body axes).
+
+``ip``: a fixed head (``I_*``), then the per-mass tracked flag (n) at ``I_TRACK`` and the tracked
+indices (k_p, 0-based) at ``I_TRACK + n``.
+
+The kernel's output ``out`` (:func:`output_length`): ``[q̈ (nq), Q^C (nq), τ (3), A_c q̈ - b_c (k)]``
+with ``nq = n + 7``; an ``out`` of length ``nq`` asks for ``q̈`` only (Gauss weighting).
+"""
+
+from __future__ import annotations
+
+# ----------------------------------------------------------------------------------------------
+# fp head
+# ----------------------------------------------------------------------------------------------
+F_MBR = 0  # m_BR, kg
+F_MU0 = 1  # μ0 = Σ m_i, kg
+F_D1 = 2  # δ1 of Eq. (58)
+F_D2 = 3  # δ2 of Eq. (58)
+F_TFREQ = 4  # given torque frequency, rad/s (Remark 2)
+F_J = 5  # 9: J, row-major, body axes, kg·m²
+F_G = 14  # 3: gravity, inertial, m/s²
+F_TC = 17  # 3: given torque, constant part, body axes, N·m
+F_TA = 20  # 3: given torque, amplitude of cos(freq t), body axes, N·m
+F_WB = 23  # 3: ω amplitudes b (Eq. 76), rad/s
+F_WS = 26  # 3: ω frequencies σ (Eq. 76), rad/s
+F_GAIN = 29  # k_ω x k_ω gain P (Eq. B6), row-major (9 slots)
+F_TAT = 38  # 48: T_a (3, 4, 4) row-major, L_a(u) = T_a @ u (Eq. 29; the kernel uses closed forms)
+F_TDT = 86  # 48: T_d, L_d(u) = T_d @ u (Eq. 34)
+F_ARR = 134  # start of the tail (tail_offsets)
+
+# ----------------------------------------------------------------------------------------------
+# ip head
+# ----------------------------------------------------------------------------------------------
+I_N = 0  # n, number of masses
+I_KW = 1  # k_ω, tracked ω components
+I_KP = 2  # k_p, tracked masses
+I_GRAV = 3  # 1: gravity on
+I_SLIN = 4  # 1: linear springs on
+I_SCUB = 5  # 1: cubic springs on
+I_TORQ = 6  # 1: given torque on (Remark 2)
+I_WEIGHT = 7  # W_GAUSS, W_MINV2, or -1 (not compiled)
+I_COMP = 8  # 3 slots: the tracked ω components (0-based)
+I_TRACK = 11  # n: 1 for a tracked mass; then the k_p tracked indices
+
+W_GAUSS = 0  # N = M⁻¹, the paper's Eq. (89)
+W_MINV2 = 1  # N = M⁻² (Eq. B13)
+
+IX = 0x7FFFFFFF
+"""Mask for sizes and indices read from ``ip`` inside the kernel. The values are small and
+non-negative, so the mask changes nothing; it lets LLVM prove every array index non-negative and
+drop numba's negative-index wrap-around code, which otherwise tripled the cost of the O(n) loops."""
+
+STATUS_OK = 0
+STATUS_NOT_PD = 1  # a Schur complement or the bordered Gram matrix is not numerically PD
+STATUS_UNSUPPORTED = 2  # a weighting this kernel does not compile (identity)
+
+
+def tail_offsets(n: int, kp: int) -> tuple[int, int, int, int, int, int, int, int, int, int, int]:
+    """Offsets in ``fp`` of ``m, p_e, k_l, k_n, l, λ, α, β, a, d`` and the total length of ``fp``.
+
+    Plain arithmetic; compiled code calls it as :data:`analytic.kernel.system.tail` (the same
+    function, compiled inline).
+    """
+    o_m = F_ARR
+    o_pe = o_m + n
+    o_kl = o_pe + n
+    o_kn = o_kl + n + 1
+    o_l = o_kn + n + 1
+    o_lam = o_l + kp
+    o_alpha = o_lam + kp
+    o_beta = o_alpha + kp
+    o_a = o_beta + kp
+    o_d = o_a + 3
+    return o_m, o_pe, o_kl, o_kn, o_l, o_lam, o_alpha, o_beta, o_a, o_d, o_d + 3
+
+
+def ip_length(n: int, kp: int) -> int:
+    """Length of ``ip``: the head, the n tracked flags and the k_p tracked indices."""
+    return I_TRACK + n + kp
+
+
+def output_length(n: int, k: int) -> int:
+    """Length of the kernel's full output ``[q̈, Q^C, τ, residual]``: ``2 (n + 7) + 3 + k``."""
+    return 2 * (n + 7) + 3 + k
+
+
+# ----------------------------------------------------------------------------------------------
+# Workspace: one float64 array on the stack per evaluation (analytic.kernel.jit.workspace), carved
+# by these offsets, instead of ~30 small np.empty/np.zeros (each a heap allocation plus reference
+# counting, ~20 ns). The stages hand each other their results through these slots.
+# ----------------------------------------------------------------------------------------------
+WS_MB = 0  # 49: body block M_bb of M (Eq. 51), row-major 7x7, both triangles
+WS_S4 = 49  # 4x4 (row stride 4, lower triangle): S_4, the Schur complement on the u block
+WS_BF = 65  # 3x4: B_F, the R-u block of S_F
+WS_HT = 77  # 4: h = B_Fᵀ Sa
+WS_R4 = 81  # 4: right-hand side on the u block
+WS_C1 = 85  # 7: c1 = [Sa; L_dᵀSa]
+WS_C2 = 92  # 7: c2 = [0; L_aᵀSa]
+WS_RB = 99  # 7: body right-hand side r_b
+WS_Z = 106  # 4 x 4: Z = L⁻¹ Cᵀ (u rows), column j at WS_Z + 4 j
+WS_GC = 122  # 4x4 (row stride 4): G = C S_4⁻¹ Cᵀ, then its LDLᵀ factors
+WS_GI = 138  # 4: 1 / pivots of that factorisation
+WS_NU = 142  # 4: right-hand side, then ν = [λ, μ_ω]
+WS_H = 146  # 12: H(u), row-major (3, 4) (Eq. 13)
+WS_LA = 158  # 12: L_a(u) (Eq. 29)
+WS_LD = 170  # 12: L_d(u) (Eq. 34)
+WS_JH = 182  # 12: J H(u)
+WS_PM = 194  # 12: μ2 L_a + μ1 L_d (first 4 slots reused at the end for H_wᵀ μ_ω)
+WS_OM = 206  # 3: ω = H(u) u̇ (Eq. 12)
+WS_EW = 209  # 3: ω tracking error
+WS_QB = 212  # 7: body rows of Q_α (the rod rows of Q go into out, see forces.rod_pass)
+WS_BW = 219  # 3: b_c of the ω rows (those of the tracked masses go into out)
+WS_SA = 222  # 3: S(u) a, inertial
+WS_LAU = 225  # 3: L_a(u) u̇
+WS_LAD = 228  # 3: L̇_a u̇ = L_a(u̇) u̇
+WS_LDD = 231  # 3: L̇_d u̇ = L_d(u̇) u̇
+WS_JW = 234  # 3: J ω
+WS_XR = 237  # 3: A⁻¹ r_R (Gauss, schur.schur_complement)
+# scalars
+WS_S = 240  # s = (Sa)ᵀSa (Eq. 51, M_pp = s diag(m))
+WS_SLAU = 241  # (Sa)ᵀ L_a u̇
+WS_SLAD = 242  # (Sa)ᵀ L̇_a u̇
+WS_SLDD = 243  # (Sa)ᵀ L̇_d u̇
+WS_MU1 = 244  # μ1 = Σ m_i p_i (all masses)
+WS_MU2 = 245  # μ2 = Σ m_i p_i²
+WS_MPD = 246  # Σ m_i ṗ_i
+WS_MPPD = 247  # Σ m_i p_i ṗ_i
+WS_N0 = 248  # Σ_F m_i (free masses)
+WS_N1 = 249  # Σ_F m_i p_i
+WS_N2 = 250  # Σ_F m_i p_i²
+WS_NT0 = 251  # Σ_T m_i (tracked masses)
+WS_NT1 = 252  # Σ_T m_i p_i
+WS_SQ = 253  # Σ_F Q_i
+WS_SPQ = 254  # Σ_F p_i Q_i
+WS_UU = 255  # |u|²
+WS_BM = 256  # b_m of Eq. (59)
+WS_ALPHA = 257  # α = tr(M) / nq of M_α = M + α a_m a_mᵀ
+WS_T0 = 258  # Σ_T m_i b_i
+WS_T1 = 259  # Σ_T m_i p_i b_i
+WS_GAM = 260  # γ of the closed-form R block inverse (Gauss)
+WS_KT = 261  # 1 / m_T
+WS_LEN = 262
