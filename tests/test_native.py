@@ -281,7 +281,7 @@ def _copy_analytic(dest, *, with_numba_cache: bool):
         return []
 
     shutil.copytree(root / "analytic", dest / "analytic", ignore=ignore)
-    shutil.copy(root / "validation" / "scenes" / "paper_example1.toml", dest / "scene.toml")
+    shutil.copy(root / "analytic" / "scenes" / "paper_example1.toml", dest / "scene.toml")
     return dest
 
 

@@ -239,7 +239,7 @@ LEARNING_GOALS = (
 EXERCISES = (
     (
         "Change γ and predict e_ω(20)",
-        """Copy `validation/scenes/paper_example1_controlled.toml` (in this repository) to
+        """Copy `analytic/scenes/paper_example1_controlled.toml` (in this repository) to
 `gamma.toml`, change `name` and, under `[control.omega]`, `gamma = 0.6` to `gamma = 0.3`, then run
 
     tumble simulate gamma.toml        # or: python -m validation simulate gamma.toml

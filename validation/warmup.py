@@ -115,7 +115,9 @@ def _dispatchers(prefixes: Iterable[str], exclude: Iterable[str] = ()) -> list[A
         if not name.startswith(prefixes) or (exclude and name.startswith(exclude)):
             continue
         for value in list(vars(mod).values()):
-            if isinstance(value, Dispatcher) and id(value) not in seen:
+            if not isinstance(value, Dispatcher) or value.targetoptions.get("inline") == "always":
+                continue  # an inlined stage is compiled into its callers, never on its own
+            if id(value) not in seen:
                 seen.add(id(value))
                 found.append(value)
     return found
@@ -191,9 +193,24 @@ def cold_engines(engines: Sequence[str]) -> tuple[str, ...]:
     except ImportError:  # pragma: no cover - without numba nothing is compiled
         return ()
     _import_entries(engines)
-    return tuple(
-        e for e in engines if engine_is_cold([cache_state(d) for d in _engine_dispatchers(e)])
-    )
+    return tuple(e for e in engines if engine_is_cold(_grouped_states(_engine_dispatchers(e))))
+
+
+def _grouped_states(dispatchers: Sequence[Any]) -> list[CacheState]:
+    """One state per cache index file: the variants one factory makes (a compiled caller per
+    solve, closing over different constants) share an index, and a run compiles only the variant
+    its scene needs, so the index counts as cached when any variant is."""
+    groups: dict[Any, list[CacheState]] = {}
+    for d in dispatchers:
+        try:
+            key = d._cache._cache_file._index_path
+        except AttributeError:
+            key = id(d)
+        groups.setdefault(key, []).append(cache_state(d))
+    return [
+        CacheState.CACHED if CacheState.CACHED in states else states[0]
+        for states in groups.values()
+    ]
 
 
 def cache_writable(engines: Sequence[str]) -> bool:
