@@ -96,8 +96,8 @@ class SweepConfig:
     # first-order integrators' 4x (1e-3 at 3.9e-5 s)
     dts: tuple[float, ...] = tuple(1e-2 / 4**k for k in range(5))  # 1e-2 … 3.9e-5 s
     repeats: int = 3
-    repeat_budget_s: float = 0.5
-    max_run_wall_s: float = 4.0
+    repeat_budget_s: float = 1.0
+    max_run_wall_s: float = 8.0
     diverge_error: float = 1.0
     deltas: tuple[tuple[float, float], ...] = (
         (0.0, 0.0),

@@ -127,10 +127,10 @@ def figure_data(
 def _mark(r: Mapping[str, Any], pts: list[Point], rows: Sequence[Mapping[str, Any]]) -> Mark:
     status = Outcome(r["status"])
     skipped = sum(1 for x in rows if x["status"] == Outcome.SKIPPED)
-    what = f"{r['engine']} {r['method']} {r['setting_name']} {r['setting']:.3g}"
+    what = f"{r['engine']} {r['method']} {r['setting_name']} {r['setting']:.2g}"
     if status is Outcome.TOO_SLOW:
         wall = r["wall_time_s"] if r["wall_time_s"] is not None else r["wall_time_predicted_s"]
-        how = "predicted" if r["wall_time_s"] is None else "stopped at"
+        how = "predicted" if r["wall_time_s"] is None else "stopped at"  # its budget
         label = f"{what}: too slow ({how} {wall:.2g} s)" if wall else f"{what}: too slow"
         error = pts[-1].error if pts else None
     elif status is Outcome.OK:  # ok, but its wall time or error cannot be drawn on log axes
@@ -142,7 +142,7 @@ def _mark(r: Mapping[str, Any], pts: list[Point], rows: Sequence[Mapping[str, An
         label = f"{what}: {status.value}"
         error = None
     if skipped and status is not Outcome.OK:
-        label += f", {skipped} tighter skipped"
+        label += f", {skipped} skipped"
     return Mark(
         str(r["engine"]),
         r["method"],
@@ -158,7 +158,7 @@ def render_png(data: FigureData) -> bytes:
     """The figure as PNG bytes (matplotlib, Agg; no global pyplot state)."""
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=(9, 6.2))
+    fig = Figure(figsize=(11.5, 6.4))
     ax = fig.add_subplot()
     ax.set_xscale("log")
     ax.set_yscale("log")
@@ -169,19 +169,18 @@ def render_png(data: FigureData) -> bytes:
     colour = {m: colours[i % len(colours)] for i, m in enumerate(methods)}
     for ln in data.lines:
         ls, marker = STYLES.get(ln.engine, ("-.", "x"))
+        c = colour[ln.method]
         x = [p.wall for p in ln.points]
         y = [p.error for p in ln.points]
         xerr = [[p.wall - p.wall_min for p in ln.points], [p.wall_max - p.wall for p in ln.points]]
-        ax.errorbar(
-            x, y, xerr=xerr, ls=ls, marker=marker, ms=5, capsize=2, lw=1.2, elinewidth=0.8,
-            color=colour[ln.method], label=f"{ln.engine} {ln.method}",
-        )  # fmt: skip
+        ax.errorbar(x, y, xerr=xerr, ls=ls, marker="none", capsize=2, lw=1.2, elinewidth=0.8,
+                    color=c)  # fmt: skip
+        ax.plot(x, y, ls=ls, lw=1.2, marker=marker, ms=5, color=c, label=f"{ln.engine} {ln.method}",
+                markevery=[i for i, p in enumerate(ln.points) if p.n >= 2])  # fmt: skip
         single = [p for p in ln.points if p.n < 2]
         if single:  # one timing: no spread to show, drawn hollow
-            ax.plot(
-                [p.wall for p in single], [p.error for p in single], ls="none", marker=marker,
-                ms=5, mfc="white", mec=colour[ln.method],
-            )  # fmt: skip
+            ax.plot([p.wall for p in single], [p.error for p in single], ls="none", marker=marker,
+                    ms=5, mfc="white", mec=c, zorder=3)  # fmt: skip
     if data.floor > 0:
         ax.axhline(data.floor, color="0.5", ls=":", lw=1, label="reference floor (3x its error)")
     xs = [p.wall for ln in data.lines for p in ln.points] + [m.wall for m in data.marks if m.wall]
@@ -189,7 +188,7 @@ def render_png(data: FigureData) -> bytes:
         m.error for m in data.marks if m.error
     ]
     if xs and ys:
-        ax.set_xlim(min(xs) / 2, max(xs) * 3)
+        ax.set_xlim(min(xs) / 2, max(xs) * 8)  # room for the marks' labels
         ax.set_ylim(min(min(ys), data.floor or min(ys)) / 5, max(ys) * 50)
     trans_top = ax.get_xaxis_transform()  # x in data, y in axes fractions
     seen_kinds = set()
@@ -221,8 +220,8 @@ def render_png(data: FigureData) -> bytes:
     ax.set_title(data.title, fontsize=11)
     fig.text(0.01, 0.005, f"error: {data.error_measure}", fontsize=7, color="0.25")
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7, ncol=2, loc="lower left")
-    fig.tight_layout(rect=(0, 0.02, 1, 1))
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
+    fig.tight_layout(rect=(0, 0.025, 1, 1))
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=110)
     return buf.getvalue()

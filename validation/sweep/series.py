@@ -4,9 +4,8 @@ executor.
 
 A series stops, and its remaining settings are reported ``skipped`` with the reason, when a run
 
-* is too slow: stopped at its budget, or predicted to pass it (MuJoCo: cost ∝ 1/dt from the last
-  run; scipy plants: the cost grows by the last ratio of successive runs, and passes the budget
-  by :data:`SCIPY_PREDICTION_MARGIN`) and then not started;
+* is too slow: stopped at its budget, or predicted to pass it from the last two runs
+  (:func:`predicted_wall`) and then not started;
 * fails or diverges after an earlier setting worked;
 * is at the reference's floor (error within ``FLOOR_FACTOR`` of its estimated error): a tighter
   setting's error could not be resolved.
@@ -47,24 +46,18 @@ def fill_row(row: dict[str, Any], tr, ref: RefSamples) -> None:
             )
 
 
-SCIPY_PREDICTION_MARGIN = 1.5
-"""A scipy run is not started only when its predicted wall passes the budget by this factor: its
-cost grows less regularly from one rtol to the next than MuJoCo's does with 1/dt (a run near the
-budget is started and stopped there if it passes it)."""
-
-
 def predicted_wall(engine: str, done: list[tuple[float, float]], setting: float) -> float | None:
     """The predicted wall time (s) of the next setting from the series' finished runs ``done``
-    ([(setting, wall)], in order): MuJoCo's cost ∝ 1/dt; a scipy plant's grows from one rtol to the
-    next by (at least 1x) the last ratio. None when there is too little to go on."""
-    if engine == MUJOCO:
-        if not done:
-            return None
-        s, w = done[-1]
-        return w * s / setting
+    ([(setting, wall)], in order), from the last two: MuJoCo's cost is ``a + b/dt`` (a per run
+    and per output sample, b per step: both fitted, neither negative); a scipy plant's grows from
+    one rtol to the next by the last ratio (at least 1x). None with fewer than two runs."""
     if len(done) < 2:
         return None
-    w0, w1 = done[-2][1], done[-1][1]
+    (s0, w0), (s1, w1) = done[-2], done[-1]
+    if engine == MUJOCO:
+        b = max((w1 - w0) / (1.0 / s1 - 1.0 / s0), 0.0) if s1 != s0 else 0.0
+        a = max(w1 - b / s1, 0.0)
+        return max(a + b / setting, w1)
     return w1 * max(w1 / w0, 1.0) if w0 > 0 else None
 
 
@@ -101,9 +94,9 @@ def run_series(
             row.update(status=Outcome.SKIPPED, note=stop)
             continue
         predicted = predicted_wall(engine, done, s)
-        margin = 1.0 if engine == MUJOCO else SCIPY_PREDICTION_MARGIN
-        if predicted is not None and predicted > margin * budget:
-            basis = "cost ∝ 1/dt" if engine == MUJOCO else "cost growth of the last two runs"
+        if predicted is not None and predicted > budget:
+            basis = "cost a + b/dt" if engine == MUJOCO else "cost growth"
+            basis += " from the last two runs"
             row.update(
                 status=Outcome.TOO_SLOW,
                 wall_time_predicted_s=predicted,
