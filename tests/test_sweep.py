@@ -1,9 +1,11 @@
 """The work-precision sweep (validation.sweep): physics of the numbers it reports, the cheapest-setting
-selection, file round trips, series stopping and user executors.
+selection, file round trips, series stopping, user executors, the reference cache, the timing
+summary and what the figure, the recording and the JSON show.
 
 One quick sweep (``quick=True``, 0.5 s of the controlled Example 1) is shared by the module; every
 expected value is computed here independently (integrator orders, the closed-form tracking and
 norm-error dynamics, errors recomputed with rotation matrices), never copied from the sweep's output.
+Every sweep here writes its reference cache under the test's temporary directory.
 """
 
 from __future__ import annotations
@@ -12,7 +14,8 @@ import dataclasses
 import itertools
 import json
 import math
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import Executor, Future, ThreadPoolExecutor
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -25,6 +28,7 @@ from mj_bridge.plants import PinocchioPlant
 from validation import sweep
 from validation.scenes import resolve_scene
 from validation.summary import drift_figures
+from validation.sweep import figure, json_doc, reference, rows, running, series, timing
 
 SCENE = "paper_example1_controlled"
 HAS_PIN = not PinocchioPlant.unavailable()
@@ -32,9 +36,14 @@ needs_pin = pytest.mark.skipif(not HAS_PIN, reason="Pinocchio (pin) is not insta
 
 
 @pytest.fixture(scope="module")
-def result(tmp_path_factory):
+def cache_dir(tmp_path_factory):
+    return tmp_path_factory.mktemp("reference_cache")
+
+
+@pytest.fixture(scope="module")
+def result(tmp_path_factory, cache_dir):
     out = tmp_path_factory.mktemp("sweep")
-    return sweep.run_sweep(SCENE, out, quick=True)
+    return sweep.run_sweep(SCENE, out, quick=True, cache_dir=cache_dir)
 
 
 @pytest.fixture(scope="module")
@@ -194,6 +203,11 @@ def test_cheapest_setting_table(result):
                 assert "★" in md_rows[rid] and f"{lv:.0e}" in md_rows[rid]
 
 
+def _json_number(v):
+    """What JSON holds for ``v``: a number, or None where it is not a finite one."""
+    return None if isinstance(v, float) and not math.isfinite(v) else v
+
+
 def test_csv_and_json_round_trip(result):
     rows_csv = sweep.read_csv(result.files["csv"])
     doc = json.loads(result.files["json"].read_text())
@@ -202,7 +216,8 @@ def test_csv_and_json_round_trip(result):
     for a, b, c in zip(rows_csv, rows_json, result.runs, strict=True):
         assert set(a) == set(sweep.COLUMNS)
         for k in sweep.COLUMNS:
-            assert a[k] == b[k] == c[k], (k, a[k], b[k], c[k])
+            assert _json_number(a[k]) == b[k] == _json_number(c[k]), (k, a[k], b[k], c[k])
+        assert b["wall_time_samples_s"] == c["wall_time_samples_s"]  # every timing, whole
     assert doc["reference"]["error_estimate"] == result.reference["error_estimate"]
 
 
@@ -268,9 +283,11 @@ def test_sweep_without_pinocchio_says_the_series_was_skipped(tmp_path, monkeypat
     def never(*_a, **_k):
         raise AssertionError("a Pinocchio run was attempted without pin")
 
-    monkeypatch.setattr(sweep, "_pinocchio_run", never)
+    monkeypatch.setattr(running, "pinocchio_run", never)
     with ThreadPoolExecutor(max_workers=2) as ex:  # threads: the patches hold in the workers
-        res = sweep.run_sweep(SCENE, tmp_path / "out", executor=ex, config=_tiny())
+        res = sweep.run_sweep(
+            SCENE, tmp_path / "out", executor=ex, config=_tiny(), cache_dir=tmp_path / "cache"
+        )
     assert {r["engine"] for r in res.runs} == {"analytic", "mujoco"}
     assert all(r["status"] == "ok" for r in res.runs)
     assert res.skipped_series == {"pinocchio": reason}
@@ -318,19 +335,20 @@ def test_series_stops_when_too_slow_and_reports_it(scene, result, monkeypatch):
     at every reading (at the start and at each output sample passed: ~20 at rtol 1e-3, ~50 at
     tighter tolerances over these 0.5 s)."""
     ref = sweep.ref_samples(sweep.reference_run(scene, 0.5, result.reference["max_step"]))
-    real = sweep._mujoco_run
+    real = running.mujoco_run
 
-    def costed(sc, integrator, dt, t_end):
+    def costed(sc, integrator, dt, t_end, budget=None):
         tr = real(sc, integrator, dt, t_end)
         return dataclasses.replace(tr, info={**tr.info, "wall_time_s": 5e-5 / dt})
 
-    monkeypatch.setattr(sweep, "_mujoco_run", costed)
+    monkeypatch.setattr(running, "mujoco_run", costed)
     cfg = dataclasses.replace(
         sweep.SweepConfig.quick(), dts=tuple(1e-2 / 2**k for k in range(8)), max_run_wall_s=0.05
     )
     rows = sweep.run_series(scene, "mujoco", "RK4", cfg, ref)
     assert [r["dt"] for r in rows] == list(cfg.dts)
-    # predicted from the last run (cost ∝ 1/dt): 0.04 s at dt = 1.25e-3, 0.08 s > 0.05 s at dt/2
+    # predicted from the last two runs (cost a + b/dt, here a = 0): 0.04 s at dt = 1.25e-3, then
+    # 0.08 s > 0.05 s at dt/2
     assert [r["status"] for r in rows] == ["ok"] * 4 + ["too_slow"] + ["skipped"] * 3
     assert all("too slow" in r["note"] for r in rows[4:])
 
@@ -341,7 +359,7 @@ def test_series_stops_when_too_slow_and_reports_it(scene, result, monkeypatch):
             self.now += 1e-3
             return self.now
 
-    monkeypatch.setattr(sweep, "time", Clock())
+    monkeypatch.setattr(running, "time", Clock())
     cfg_a = dataclasses.replace(sweep.SweepConfig.quick(), max_run_wall_s=0.03)
     rows_a = sweep.run_series(scene, "analytic", "Radau", cfg_a, ref)
     assert [r["rtol"] for r in rows_a] == list(cfg_a.rtols)
@@ -365,12 +383,14 @@ def test_pinocchio_series_keeps_the_budget_and_a_real_interrupt_stops_the_sweep(
             self.now += 1e-3
             return self.now
 
-    monkeypatch.setattr(sweep, "time", Clock())
+    monkeypatch.setattr(running, "time", Clock())
     cfg = dataclasses.replace(sweep.SweepConfig.quick(), max_run_wall_s=0.03)
     rows = sweep.run_series(scene, "pinocchio", "Radau", cfg, ref)
     statuses = [r["status"] for r in rows]
     assert statuses == ["ok", "too_slow"] + ["skipped"] * (len(statuses) - 2), rows
-    assert "interrupted after 0.03 s" in rows[1]["note"]
+    assert "stopped at its budget of 0.03 s" in rows[1]["note"]
+    # the budget's stop is an ordinary exception: no handler of the user's interrupt can take it
+    assert not issubclass(running.BudgetExceeded, KeyboardInterrupt)
 
     class CtrlC:
         """A user's Ctrl-C arriving inside the run (at the third clock reading: in progress)."""
@@ -383,11 +403,11 @@ def test_pinocchio_series_keeps_the_budget_and_a_real_interrupt_stops_the_sweep(
                 raise KeyboardInterrupt
             return 0.0
 
-    monkeypatch.setattr(sweep, "time", CtrlC())
+    monkeypatch.setattr(running, "time", CtrlC())
     with pytest.raises(KeyboardInterrupt) as info:
-        sweep._pinocchio_run(scene, "DOP853", 1e-6, 1e-7, 0.5, budget=100.0)
-    assert not isinstance(info.value, sweep._TooSlow)
-    monkeypatch.setattr(sweep, "time", CtrlC())
+        running.pinocchio_run(scene, "DOP853", 1e-6, 1e-7, 0.5, budget=100.0)
+    assert not isinstance(info.value, running.BudgetExceeded)
+    monkeypatch.setattr(running, "time", CtrlC())
     with pytest.raises(KeyboardInterrupt):
         sweep.run_series(scene, "pinocchio", "DOP853", cfg, ref)
 
@@ -395,9 +415,9 @@ def test_pinocchio_series_keeps_the_budget_and_a_real_interrupt_stops_the_sweep(
 def test_divergence_stops_a_series(scene, result, monkeypatch):
     """A run that blows up after a coarser one worked is 'diverged' and ends the series."""
     ref = sweep.ref_samples(sweep.reference_run(scene, 0.5, result.reference["max_step"]))
-    real = sweep._mujoco_run
+    real = running.mujoco_run
 
-    def fake(sc, integrator, dt, t_end):
+    def fake(sc, integrator, dt, t_end, budget=None):
         tr = real(sc, integrator, dt, t_end)
         if dt < 6e-3:  # pretend the run blew up: C thrown 1 km off
             q = tr.q.copy()
@@ -405,7 +425,7 @@ def test_divergence_stops_a_series(scene, result, monkeypatch):
             return dataclasses.replace(tr, q=q)
         return tr
 
-    monkeypatch.setattr(sweep, "_mujoco_run", fake)
+    monkeypatch.setattr(running, "mujoco_run", fake)
     cfg = dataclasses.replace(sweep.SweepConfig.quick(), dts=(1e-2, 5e-3, 2.5e-3))
     rows = sweep.run_series(scene, "mujoco", "RK4", cfg, ref)
     assert [r["status"] for r in rows] == ["ok", "diverged", "skipped"]
@@ -420,13 +440,13 @@ def _compare_with_quick(res, result):
         assert r["nfev"] == q["nfev"]
 
 
-def test_user_thread_executor(tmp_path, result):
+def test_user_thread_executor(tmp_path, result, cache_dir):
     with ThreadPoolExecutor(max_workers=2) as ex:
-        res = sweep.run_sweep(SCENE, tmp_path, executor=ex, config=_tiny())
+        res = sweep.run_sweep(SCENE, tmp_path, executor=ex, config=_tiny(), cache_dir=cache_dir)
     _compare_with_quick(res, result)
 
 
-def test_dask_local_cluster(tmp_path, result):
+def test_dask_local_cluster(tmp_path, result, cache_dir):
     distributed = pytest.importorskip("dask.distributed")
     with (
         distributed.LocalCluster(
@@ -434,7 +454,9 @@ def test_dask_local_cluster(tmp_path, result):
         ) as cluster,
         distributed.Client(cluster) as client,
     ):
-        res = sweep.run_sweep(SCENE, tmp_path, executor=client.get_executor(), config=_tiny())
+        res = sweep.run_sweep(
+            SCENE, tmp_path, executor=client.get_executor(), config=_tiny(), cache_dir=cache_dir
+        )
     _compare_with_quick(res, result)
 
 
@@ -558,3 +580,279 @@ def test_pinocchio_goal_structure():
     assert g.value == pytest.approx(d["pinocchio_median_s"] / d["analytic_median_s"])
     assert d["max_distance_C_m"] < 1e-9  # same motion (C falls ~1.2 m in 0.5 s)
     assert g.verdict in {"HOLDS", "FAILS"}
+
+
+# ----------------------------------------------------------------------------------------------
+# The recording, the figure, the JSON
+# ----------------------------------------------------------------------------------------------
+
+
+def _rrd_views(path) -> dict[str, tuple[str, str]]:
+    """``{view name: (view class, origin)}`` of the blueprint stored in a recording."""
+    from rerun.chunk import RrdReader
+
+    reader = RrdReader(str(path))
+    (bp,) = reader.blueprints()
+    views: dict[str, tuple[str, str]] = {}
+    for chunk in reader.store(store=bp).stream().to_chunks():
+        rb = chunk.to_record_batch()
+        if "ViewBlueprint:display_name" in rb.schema.names:
+            for name, cls, origin in zip(
+                rb.column("ViewBlueprint:display_name").to_pylist(),
+                rb.column("ViewBlueprint:class_identifier").to_pylist(),
+                rb.column("ViewBlueprint:space_origin").to_pylist(),
+                strict=True,
+            ):
+                views[name[0]] = (cls[0], origin[0])
+    return views
+
+
+def test_recording_shows_the_work_precision_plot_without_a_timeline_or_a_png_link(result):
+    """The recording's blueprint has the work-precision plot as a 2D view of its own entities and
+    the text beside it; nothing is on a timeline (no wall-time axis); its text names the PNG file
+    but links to no file the viewer cannot open."""
+    from rerun.chunk import RrdReader
+
+    views = _rrd_views(result.files["rrd"])
+    assert views["work-precision"] == ("2D", "/work_precision")
+    assert views["sweep.md"] == ("TextDocument", "/report")
+    store = RrdReader(str(result.files["rrd"])).store()
+    assert store.schema().index_columns() == []  # static only: no wall_time (or any) timeline
+    (chunk,) = store.stream().filter(content="/report").to_chunks()
+    text = chunk.to_record_batch().column("TextDocument:text").to_pylist()[0][0]
+    assert "# What accuracy costs in time" in text and "**Figure: work-precision" in text
+    assert ".png)" not in text and "](" not in text  # no markdown link or image
+    assert "![work-precision](work_precision.png)" in result.files["md"].read_text()
+
+
+def test_sweep_json_has_numbers_not_nan_strings(result):
+    """Every number of sweep.json is a JSON number or null: no NaN/Infinity tokens (which strict
+    parsers refuse), no 'nan' / 'inf' strings, no abbreviated arrays."""
+    text = result.files["json"].read_text()
+
+    def refuse(token):
+        raise AssertionError(f"non-standard JSON token {token}")
+
+    doc = json.loads(text, parse_constant=refuse)
+
+    def strings(x):
+        if isinstance(x, dict):
+            for v in x.values():
+                yield from strings(v)
+        elif isinstance(x, list):
+            for v in x:
+                yield from strings(v)
+        elif isinstance(x, str):
+            yield x
+
+    bad = {s for s in strings(doc) if s.lower() in {"nan", "inf", "-inf", "infinity"}}
+    bad |= {s for s in strings(doc) if s.startswith("<") and s.endswith("values>")}
+    assert not bad
+    for r in doc["runs"]:
+        if r["status"] == "ok":
+            assert len(r["wall_time_samples_s"]) == r["wall_time_repeats"] >= 1
+    # a row with a non-finite error (a diverged run) is written with null, not a string
+    row = dict(result.runs[0], error=math.nan, error_final=math.inf, status="diverged")
+    res = dataclasses.replace(result, runs=(row,))
+    out = json.loads(json_doc.sweep_json(res, sweep.SweepConfig.quick()), parse_constant=refuse)
+    assert out["runs"][0]["error"] is None and out["runs"][0]["error_final"] is None
+
+
+def _row(engine, method, setting, status, error=None, walls=(), note="", rid=0, predicted=None):
+    row = rows.blank_row(engine, method, setting, sweep.SweepConfig.quick())
+    row.update(run_id=rid, status=status, error=error, note=note, wall_time_predicted_s=predicted)
+    row.update(timing.summary(list(walls)), at_reference_floor=False)
+    return row
+
+
+def test_failed_and_cut_series_are_marks_in_the_figure(tmp_path):
+    """A series whose every run failed has no line but one labelled mark per failed run; a series
+    cut as too slow keeps its line and gets a mark at the predicted wall time and its last error;
+    the PNG is drawn with both."""
+    runs = [
+        _row("analytic", "DOP853", 1e-4, "ok", 1e-3, [0.02, 0.01, 0.03], rid=0),
+        _row("analytic", "DOP853", 1e-6, "ok", 1e-5, [0.05], rid=1),
+        _row("analytic", "DOP853", 1e-8, "too_slow", predicted=9.0, note="too slow", rid=2),
+        _row("analytic", "DOP853", 1e-10, "skipped", note="series stopped", rid=3),
+        _row("mujoco", "implicit", 1e-2, "failed", note="MuJoCo warning", rid=4),
+        _row("mujoco", "implicit", 5e-3, "failed", walls=[0.2], note="non-finite", rid=5),
+    ]
+    data = figure.figure_data(runs, 1e-12, "a scene", 20.0)
+    assert [(ln.engine, ln.method) for ln in data.lines] == [("analytic", "DOP853")]
+    (line,) = data.lines
+    assert [p.wall for p in line.points] == [0.02, 0.05]  # the medians
+    assert (line.points[0].wall_min, line.points[0].wall_max, line.points[0].n) == (0.01, 0.03, 3)
+    by_run = {m.run_id: m for m in data.marks}
+    assert set(by_run) == {2, 4, 5}  # every run that is not ok and was attempted
+    cut = by_run[2]
+    assert cut.outcome == "too_slow" and (cut.wall, cut.error) == (9.0, 1e-5)
+    assert "too slow" in cut.label and "1 skipped" in cut.label
+    for rid in (4, 5):
+        m = by_run[rid]
+        assert (m.engine, m.method, m.outcome) == ("mujoco", "implicit", "failed")
+        assert "mujoco implicit" in m.label and "failed" in m.label and m.error is None
+    assert by_run[4].wall is None and by_run[5].wall == 0.2
+    assert "horizon 20 s" in data.title and "attitude angle" in data.error_measure
+    assert figure.render_png(data)[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+# ----------------------------------------------------------------------------------------------
+# Timing: medians and spread
+# ----------------------------------------------------------------------------------------------
+
+
+def test_timing_summary_is_the_median_and_the_spread():
+    s = timing.summary([0.3, 0.1, 0.2, 0.25])
+    assert s == {
+        "wall_time_s": pytest.approx(0.225),  # the mean of the middle two: an even count
+        "wall_time_min_s": 0.1,
+        "wall_time_max_s": 0.3,
+        "wall_time_repeats": 4,
+    }
+    assert timing.summary([])["wall_time_s"] is None
+
+
+def test_a_series_reports_the_median_of_its_repeats(scene, result, monkeypatch):
+    """Made-up walls (so the test does not depend on the machine): the MuJoCo runs of the series
+    take 3, 1, 2 ms, then 0.3, 0.4 s (after an untimed warm-up run); a setting is timed up to ``repeats`` times while its
+    timings add up to less than ``repeat_budget_s``, and reports their median, min and max."""
+    ref = sweep.ref_samples(sweep.reference_run(scene, 0.5, result.reference["max_step"]))
+    real = running.mujoco_run
+    walls = iter([9.0, 3e-3, 1e-3, 2e-3, 0.3, 0.4, 0.2])  # the first: the untimed warm-up
+
+    def costed(sc, integrator, dt, t_end, budget=None):
+        tr = real(sc, integrator, dt, t_end)
+        return dataclasses.replace(tr, info={**tr.info, "wall_time_s": next(walls)})
+
+    monkeypatch.setattr(running, "mujoco_run", costed)
+    cfg = dataclasses.replace(
+        sweep.SweepConfig.quick(), dts=(1e-2, 5e-3), repeats=3, repeat_budget_s=0.5
+    )
+    rows = series.run_series(scene, "mujoco", "RK4", cfg, ref)
+    assert [r["status"] for r in rows] == ["ok", "ok"]
+    first, second = rows
+    assert first["wall_time_samples_s"] == [3e-3, 1e-3, 2e-3]
+    assert (first["wall_time_s"], first["wall_time_min_s"], first["wall_time_max_s"]) == (
+        2e-3,
+        1e-3,
+        3e-3,
+    )
+    # 0.3 s: one repeat (0.3 < 0.5), then 0.7 s ≥ 0.5: no third
+    assert second["wall_time_samples_s"] == [0.3, 0.4] and second["wall_time_repeats"] == 2
+    assert second["wall_time_s"] == pytest.approx(0.35)
+
+
+# ----------------------------------------------------------------------------------------------
+# The reference cache
+# ----------------------------------------------------------------------------------------------
+
+
+class _Inline(Executor):
+    """Runs each task at once, in this thread, and counts the reference runs."""
+
+    def __init__(self):
+        self.reference_runs = 0
+
+    def submit(self, fn, /, *args, **kwargs):
+        if fn is reference.reference_task:
+            self.reference_runs += 1
+        f = Future()
+        f.set_result(fn(*args, **kwargs))
+        return f
+
+
+T_CACHE = 0.2  # s: the cache tests' horizon (two reference runs of 0.2 s each)
+
+
+def test_reference_cache_hit_on_the_same_scene(scene, tmp_path):
+    ex = _Inline()
+    first = reference.obtain_reference(scene, T_CACHE, ex, tmp_path)
+    assert ex.reference_runs == 2 and first.info["cache"]["status"].startswith("computed")
+    path = first.info["cache"]["path"]
+    assert path.startswith(str(tmp_path)) and path.endswith(".npz")
+    again = reference.obtain_reference(scene, T_CACHE, ex, tmp_path)
+    assert ex.reference_runs == 2  # nothing recomputed
+    assert again.info["cache"]["status"] == "cached" and again.info["cache"]["path"] == path
+    for k in ("t", "R", "u", "p"):
+        assert np.array_equal(getattr(again.samples, k), getattr(first.samples, k))
+    assert again.error_estimate == first.error_estimate
+    # the scene's name, description and source path do not change the motion: still a hit
+    renamed = scene.replace(name="another_name", description="", source="")
+    reference.obtain_reference(renamed, T_CACHE, ex, tmp_path)
+    assert ex.reference_runs == 2
+
+
+def test_reference_cache_misses_after_a_scene_or_horizon_change(scene, tmp_path):
+    ex = _Inline()
+    base = reference.obtain_reference(scene, T_CACHE, ex, tmp_path)
+    spun = scene.replace(
+        initial=dataclasses.replace(scene.initial, omega=scene.initial.omega * 1.001)
+    )
+    other = reference.obtain_reference(spun, T_CACHE, ex, tmp_path)
+    assert ex.reference_runs == 4 and other.info["cache"]["status"].startswith("computed")
+    assert other.info["cache"]["key"] != base.info["cache"]["key"]
+    assert not np.array_equal(other.samples.u, base.samples.u)  # another motion
+    longer = reference.obtain_reference(scene, 2 * T_CACHE, ex, tmp_path)
+    assert ex.reference_runs == 6 and len(longer.samples.t) > len(base.samples.t)
+    assert len(list(tmp_path.glob("reference-*.npz"))) == 3
+
+
+@pytest.mark.parametrize(
+    "damage", ["garbage", "truncated", "flipped byte", "another scene's file", "empty"]
+)
+def test_a_damaged_reference_cache_file_is_refused_and_recomputed(scene, tmp_path, damage):
+    ex = _Inline()
+    good = reference.obtain_reference(scene, T_CACHE, ex, tmp_path)
+    path = Path(good.info["cache"]["path"])
+    data = path.read_bytes()
+    if damage == "garbage":
+        path.write_bytes(b"not a cache file" * 10)
+    elif damage == "truncated":
+        path.write_bytes(data[: len(data) // 2])
+    elif damage == "flipped byte":  # inside a member's data: the zip CRC no longer matches
+        k = data.index(b"\x93NUMPY") + 200
+        path.write_bytes(data[:k] + bytes([data[k] ^ 0xFF]) + data[k + 1 :])
+    elif damage == "another scene's file":
+        spun = scene.replace(initial=dataclasses.replace(scene.initial, p=scene.initial.p + 0.01))
+        other = reference.obtain_reference(spun, T_CACHE, ex, tmp_path / "elsewhere")
+        path.write_bytes(Path(other.info["cache"]["path"]).read_bytes())
+    else:
+        path.write_bytes(b"")
+    runs_before = ex.reference_runs
+    again = reference.obtain_reference(scene, T_CACHE, ex, tmp_path)
+    assert ex.reference_runs == runs_before + 2  # refused, recomputed
+    assert "cache file refused" in again.info["cache"]["status"]
+    assert np.array_equal(again.samples.u, good.samples.u)
+    # and stored again, whole: the next sweep reads it
+    final = reference.obtain_reference(scene, T_CACHE, ex, tmp_path)
+    assert final.info["cache"]["status"] == "cached" and ex.reference_runs == runs_before + 2
+
+
+def test_the_sweep_reads_its_reference_from_the_cache(result, cache_dir):
+    """The module's quick sweep stored its reference; the key names the scene, horizon, reference
+    settings and code, and a sweep of the same scene finds it."""
+    key = reference.cache_key(resolve_scene(SCENE), sweep.SweepConfig.quick().t_end)
+    assert result.reference["cache"]["key"] == key
+    assert (cache_dir / f"reference-{key}.npz").is_file()
+    assert result.reference["cache"]["status"] in {"cached", "computed (not in the cache)"}
+
+
+def test_python_m_validation_sweep_is_the_tumble_sweep_command_line():
+    """One parser: ``python -m validation.sweep`` is ``tumble sweep`` (same usage, same options)."""
+    import subprocess
+    import sys
+
+    out = subprocess.run(
+        [sys.executable, "-m", "validation.sweep", "--help"],
+        capture_output=True,
+        text=True,
+        check=True,
+        timeout=120,
+    ).stdout
+    assert out.startswith("usage: tumble sweep")
+    assert "--t-end" in out and "--quick" in out and "--out" in out
+    from validation.cli import build_parser
+
+    args = build_parser().parse_args(["sweep"])
+    assert args.scene is None and args.t_end is None  # the defaults: DEFAULT_SCENE, 20 s
+    assert sweep.DEFAULT_SCENE == SCENE and sweep.SweepConfig().t_end == 20.0

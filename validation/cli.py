@@ -230,7 +230,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         if sys.stderr.isatty():
             print(line, file=sys.stderr)
 
-    res = run_sweep(scene, out, quick=args.quick, progress=progress)
+    res = run_sweep(scene, out, quick=args.quick, progress=progress, t_end=args.t_end)
     print(f"sweep of {scene.name}: {len(res.runs)} runs in {res.wall_time_s:.1f} s")
     by_id = {r["run_id"]: r for r in res.runs}
     print("  cheapest setting reaching each accuracy level:")
@@ -400,6 +400,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_scene_arg(p, DEFAULT_SWEEP_SCENE, builtin_names())
     p.add_argument("--out", help="output directory (default: out/sweep_<scene slug>)")
     p.add_argument("--quick", action="store_true", help="a small grid (minutes, not tens)")
+    p.add_argument("--t-end", type=_positive_float, help="horizon in seconds (default 20)")
     p.set_defaults(func=cmd_sweep)
 
     p = sub.add_parser(
