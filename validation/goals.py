@@ -530,6 +530,81 @@ def goal_compiled_stepping(
     )
 
 
+WHOLE_COMMAND_LIMIT = 1.5
+"""``tumble validate`` warm: total wall ≤ 1.5 × the plants' compute. What is not the plants
+(imports, the comparison, figures, the recording, the files) may cost half as much again."""
+
+COLD_WARM_LIMIT = 2.0
+"""``tumble validate`` cold (an empty numba cache) / warm: a first run may take twice a later one."""
+
+
+def _plant_names() -> tuple[str, ...]:
+    from analytic.trajectory import Engine
+
+    return tuple(e.value for e in Engine)
+
+
+def _validate_once(out: str, env: dict[str, str]) -> tuple[float, dict[str, float]]:
+    """Wall of one ``python -m validation validate`` (default scene, every installed plant) in a
+    new process, s, and its ``report.json`` stage walls."""
+    import json
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    t0 = time.perf_counter()
+    proc = subprocess.run(
+        [sys.executable, "-m", "validation", "validate", "--out", out],
+        env=env,
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    wall = time.perf_counter() - t0
+    if proc.returncode != 0:
+        raise RuntimeError(
+            f"tumble validate exited {proc.returncode}: {proc.stderr.strip()[-300:]}"
+        )
+    doc = json.loads((Path(out) / "report.json").read_text(encoding="utf-8"))
+    return wall, {k: float(v) for k, v in doc["run"]["wall_times_s"].items()}
+
+
+def goal_whole_command(progress: Callable[[str], None] = print) -> tuple[Goal, Goal]:
+    """The command a user waits for: ``tumble validate`` on the default scene in a new process.
+
+    Cold: numba's cache pointed at an empty directory (``NUMBA_CACHE_DIR``; the user's own cache
+    is not touched); warm: the same directory, now filled, median of three. Returns the goal
+    "warm wall / plants' compute" (the plants' stage walls in ``report.json``) and the goal
+    "cold wall / warm wall"."""
+    import os
+    import tempfile
+
+    progress("timing tumble validate in new processes: one cold (empty numba cache), three warm")
+    with tempfile.TemporaryDirectory(prefix="tumble-bench-") as tmp:
+        env = dict(os.environ, NUMBA_CACHE_DIR=os.path.join(tmp, "numba"))
+        cold, _ = _validate_once(os.path.join(tmp, "cold"), env)
+        warm = [_validate_once(os.path.join(tmp, f"warm{i}"), env) for i in range(3)]
+    walls = sorted(warm, key=lambda w: w[0])
+    wall, stages = walls[1]
+    plants = sum(v for k, v in stages.items() if k in _plant_names())
+    rest = {k: round(v, 2) for k, v in stages.items() if k not in _plant_names()}
+    whole = Goal(
+        "tumble validate warm: total wall / plants' compute",
+        wall / plants,
+        WHOLE_COMMAND_LIMIT,
+        f"{wall:.2f} s / {plants:.2f} s (other stages, s: {rest})",
+        data={"wall_s": wall, "plants_s": plants, "stages_s": stages},
+    )
+    first = Goal(
+        "tumble validate: cold (empty numba cache) / warm wall",
+        cold / wall,
+        COLD_WARM_LIMIT,
+        f"{cold:.1f} s / {wall:.1f} s",
+        data={"cold_s": cold, "warm_s": wall},
+    )
+    return whole, first
+
+
 def measure(skip_long: bool = False, progress: Callable[[str], None] = print) -> list[Goal]:
     from analytic import fast
 
@@ -550,4 +625,7 @@ def measure(skip_long: bool = False, progress: Callable[[str], None] = print) ->
     if not skip_long:
         goals.append(goal_example1_60s(progress=progress))
         progress(goals[-1].line())
+        for g in goal_whole_command(progress=progress):
+            goals.append(g)
+            progress(g.line())
     return goals
