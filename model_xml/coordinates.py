@@ -37,7 +37,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from analytic.kinematics import S_batch, omega_of
+from analytic.kinematics import S, S_batch, omega_of
 from model_xml.rotations import quat_conj, quat_to_mat
 
 IPOS_AT_C = np.zeros(3)
@@ -90,19 +90,9 @@ def quat_mul_rows(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def rotation_rows(q: np.ndarray) -> np.ndarray:
-    """Rotation matrices of (N, 4) w-first quaternions, normalised first, shape (N, 3, 3)."""
-    w, x, y, z = (q / np.linalg.norm(q, axis=-1, keepdims=True)).T
-    out = np.empty((q.shape[0], 3, 3))
-    out[:, 0, 0] = 1 - 2 * (y * y + z * z)
-    out[:, 0, 1] = 2 * (x * y - w * z)
-    out[:, 0, 2] = 2 * (x * z + w * y)
-    out[:, 1, 0] = 2 * (x * y + w * z)
-    out[:, 1, 1] = 1 - 2 * (x * x + z * z)
-    out[:, 1, 2] = 2 * (y * z - w * x)
-    out[:, 2, 0] = 2 * (x * z - w * y)
-    out[:, 2, 1] = 2 * (y * z + w * x)
-    out[:, 2, 2] = 1 - 2 * (x * x + y * y)
-    return out
+    """Rotation matrices of (N, 4) w-first quaternions, normalised first, shape (N, 3, 3): the
+    project's one numpy ``S(u)`` (:func:`analytic.kinematics.S`, Eq. 11) of the unit quaternions."""
+    return S(q / np.linalg.norm(q, axis=-1, keepdims=True))
 
 
 # ½ H(u)ᵀ w (Eq. 13) = [-u1 w0 - u2 w1 - u3 w2, u0 w0 - u3 w1 + u2 w2, u3 w0 + u0 w1 - u1 w2,
