@@ -226,3 +226,15 @@ def test_version_and_python_dash_m_validation():
         text=True,
     )
     assert proc.returncode == EXIT_USAGE and proc.stdout == ""
+
+
+def test_fast_bench_help_prints_help_and_runs_nothing(capsys):
+    """``python -m validation.fast_bench --help`` prints its usage and exits 0 before timing
+    anything (no "numba available" line, which the benchmark prints first)."""
+    from validation import fast_bench
+
+    with pytest.raises(SystemExit) as exc:
+        fast_bench.main(["--help"])
+    assert exc.value.code == 0
+    out = capsys.readouterr().out
+    assert out.startswith("usage: python -m validation.fast_bench") and "numba available" not in out
