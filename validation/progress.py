@@ -100,7 +100,7 @@ class StageProgress:
     def close(self) -> None:
         self.bar.close()
         if self.walls and not self.tty:
-            times = ", ".join(f"{s} {w:.1f} s" for s, w in self.walls.items())
+            times = ", ".join(f"{s} {w:.3g} s" for s, w in self.walls.items())
             self.stream.write(f"{PREFIX}{self.label}: stages done ({times})\n")
             self.stream.flush()
         self.walls = {}
