@@ -60,6 +60,17 @@ def _ok(result, engine, method):
     return sorted(rows, key=lambda r: -r["setting"])  # loose/large first
 
 
+class _Clock:
+    """A made-up ``time`` module for the budget tests: every reading 1 ms after the previous one,
+    so a run's measured wall time does not depend on the machine's load."""
+
+    now = 0.0
+
+    def perf_counter(self):
+        self.now += 1e-3
+        return self.now
+
+
 def test_every_setting_of_the_grid_is_reported(result):
     cfg = sweep.SweepConfig.quick()
     scipy_plants = 2 if HAS_PIN else 1  # the analytic engine and, when installed, Pinocchio
@@ -352,14 +363,7 @@ def test_series_stops_when_too_slow_and_reports_it(scene, result, monkeypatch):
     assert [r["status"] for r in rows] == ["ok"] * 4 + ["too_slow"] + ["skipped"] * 3
     assert all("too slow" in r["note"] for r in rows[4:])
 
-    class Clock:
-        now = 0.0
-
-        def perf_counter(self):
-            self.now += 1e-3
-            return self.now
-
-    monkeypatch.setattr(running, "time", Clock())
+    monkeypatch.setattr(running, "time", _Clock())
     cfg_a = dataclasses.replace(sweep.SweepConfig.quick(), max_run_wall_s=0.03)
     rows_a = sweep.run_series(scene, "analytic", "Radau", cfg_a, ref)
     assert [r["rtol"] for r in rows_a] == list(cfg_a.rtols)
@@ -376,14 +380,7 @@ def test_pinocchio_series_keeps_the_budget_and_a_real_interrupt_stops_the_sweep(
     propagates out of the run and the series."""
     ref = sweep.ref_samples(sweep.reference_run(scene, 0.5, result.reference["max_step"]))
 
-    class Clock:
-        now = 0.0
-
-        def perf_counter(self):
-            self.now += 1e-3
-            return self.now
-
-    monkeypatch.setattr(running, "time", Clock())
+    monkeypatch.setattr(running, "time", _Clock())
     cfg = dataclasses.replace(sweep.SweepConfig.quick(), max_run_wall_s=0.03)
     rows = sweep.run_series(scene, "pinocchio", "Radau", cfg, ref)
     statuses = [r["status"] for r in rows]
