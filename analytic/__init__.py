@@ -4,12 +4,41 @@ Koganti & Udwadia, "Dynamics and Precision Control of Tumbling Multibody Systems
 Control, and Dynamics 40(3), 2017. Notation and equation numbers as in the paper.
 """
 
-from analytic.builtin_scenes import builtin_scene_names
-from analytic.effects import Effect, SolverMethod, Weighting
-from analytic.model import ControlOutput, TumblingModel
-from analytic.scene import Scene, load_scene, scene_from_dict
-from analytic.simulate import simulate
-from analytic.trajectory import Engine, Invariants, RunStatus, Tracking, Trajectory
+from analytic.simulate import simulate  # bound here: the function, not its module's name
+
+_LAZY = {
+    "builtin_scene_names": "analytic.builtin_scenes",
+    "Effect": "analytic.effects",
+    "SolverMethod": "analytic.effects",
+    "Weighting": "analytic.effects",
+    "ControlOutput": "analytic.model",
+    "TumblingModel": "analytic.model",
+    "Scene": "analytic.scene",
+    "load_scene": "analytic.scene",
+    "scene_from_dict": "analytic.scene",
+    "Engine": "analytic.trajectory",
+    "Invariants": "analytic.trajectory",
+    "RunStatus": "analytic.trajectory",
+    "Tracking": "analytic.trajectory",
+    "Trajectory": "analytic.trajectory",
+}
+"""Public names imported on first use (``import analytic`` then costs numpy, not scipy or numba:
+the command line starts its work sooner)."""
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        import importlib
+
+        value = getattr(importlib.import_module(_LAZY[name]), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'analytic' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
+
 
 __all__ = [
     "ControlOutput",

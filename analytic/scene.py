@@ -29,7 +29,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from analytic.builtin_scenes import builtin_scene_names, builtin_scene_path
 from analytic.effects import (
@@ -1076,6 +1075,8 @@ def _parse_attitude(t: _Table) -> np.ndarray:
     t.finish()
     if allow_off:
         raise ValueError(f"{t.name('allow_off_manifold')}: only meaningful with a quaternion")
+    from scipy.spatial.transform import Rotation  # here: importing scenes stays cheap
+
     rot = Rotation.from_rotvec(axis * angle) * Rotation.from_matrix(ref)
     u = rot.as_quat(scalar_first=True)
     return _frozen(u / np.linalg.norm(u))

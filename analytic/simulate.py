@@ -15,17 +15,16 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from analytic.assemble import N_AUX, assemble
-from analytic.aux_rates import aux_rates
-from analytic.compiled_stepping import integrate
 from analytic.effects import Backend, Effect, SolverMethod, Stepper
-from analytic.model import TumblingModel
-from analytic.scene import Scene
-from analytic.stepping import NonFinite
 from analytic.trajectory import Engine, RunStatus, Trajectory
+
+if TYPE_CHECKING:  # imported where they are used: ``import analytic`` stays cheap
+    from analytic.model import TumblingModel
+    from analytic.scene import Scene
 
 
 def evaluator(model: TumblingModel, backend: Backend) -> Callable:
@@ -47,6 +46,10 @@ def evaluator(model: TumblingModel, backend: Backend) -> Callable:
 
 
 def _rhs(model: TumblingModel, accel: Callable) -> Callable[[float, np.ndarray], np.ndarray]:
+    from analytic.assemble import N_AUX
+    from analytic.aux_rates import aux_rates
+    from analytic.stepping import NonFinite
+
     nq = model.nq
     counter = {"nfev": 0}
     has_tau_g = model.scene.has(Effect.EXTERNAL_TORQUE)
@@ -141,6 +144,10 @@ def simulate(
     method = _solver_method(method or scene.solver.method)
     rtol = scene.solver.rtol if rtol is None else _positive(rtol, "rtol")
     atol = scene.solver.atol if atol is None else _positive(atol, "atol")
+    from analytic.assemble import N_AUX
+    from analytic.compiled_stepping import integrate
+    from analytic.model import TumblingModel
+
     model = TumblingModel(scene)
     accel = evaluator(model, backend)
     t_eval = out.times()
@@ -195,6 +202,8 @@ def _assemble(
 ) -> Trajectory:
     """The record of the samples ``Y`` (N, 2 nq + 7): q̈ and the controller's output evaluated at
     each sample (NaN and none where the model cannot be evaluated), then :func:`assemble`."""
+    from analytic.assemble import assemble
+
     nq = model.nq
     q, qd = Y[:, :nq], Y[:, nq : 2 * nq]
     qdd = np.zeros((len(t), nq))

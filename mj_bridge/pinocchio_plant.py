@@ -49,13 +49,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
 
 import numpy as np
 
 from analytic import aux_rates as _aux
 from analytic.assemble import N_AUX, assemble
-from analytic.effects import Effect, SolverMethod
+from analytic.effects import Effect
 from analytic.fast import FastModel
 from analytic.kernel.entry import Solver, evaluate_as, solver_of
 from analytic.kernel.jit import KERNEL_SOURCES, jit, source_fingerprint
@@ -77,11 +76,11 @@ from analytic.kernel.layout import (
 )
 from analytic.kernel.system import tail
 from analytic.model import ControlOutput, TumblingModel
-from analytic.plant import check_positive, coerce_enum
 from analytic.scene import OutputSettings, Scene
 from analytic.stepping import NonFinite, step_and_sample
 from analytic.trajectory import Engine, RunStatus, Trajectory
 from mj_bridge.pinocchio_model import build_model, import_pinocchio
+from mj_bridge.pinocchio_settings import PinocchioSettings
 from mj_bridge.stages import ControllerSource
 from model_xml.coordinates import (
     paper_to_pinocchio_plant,
@@ -97,50 +96,6 @@ STATUS_NONFINITE = 3  # as analytic.fast_rhs.STATUS_NONFINITE
 
 SUPPORTED_EFFECTS = frozenset(Effect)
 """Every effect of :class:`analytic.effects.Effect` (all are forces this plant applies)."""
-
-
-@dataclass(frozen=True)
-class PinocchioSettings:
-    """How the Pinocchio plant integrates.
-
-    Attributes:
-        method: scipy ``OdeSolver`` (default DOP853).
-        rtol, atol: tolerances on the motion (the quadratures are left out of the error control);
-            None takes the scene's ``[solver]`` values.
-        max_step: largest step, s; None takes the scene's.
-        controller: ``analytic_fast`` (the compiled kernel, numpy where it declines) or
-            ``analytic`` (the numpy model at every stage).
-    """
-
-    method: SolverMethod = SolverMethod.DOP853
-    rtol: float | None = None
-    atol: float | None = None
-    max_step: float | None = None
-    controller: ControllerSource = ControllerSource.ANALYTIC_FAST
-
-    def __post_init__(self):
-        coerce_enum(self, "method", SolverMethod)
-        try:
-            ctrl = ControllerSource(self.controller)
-        except ValueError:
-            ctrl = None
-        if ctrl not in (ControllerSource.ANALYTIC, ControllerSource.ANALYTIC_FAST):
-            raise ValueError(
-                f"controller: must be 'analytic' or 'analytic_fast' (got {self.controller!r})"
-            )
-        object.__setattr__(self, "controller", ctrl)
-        check_positive(self, "rtol", allow_none=True, what="positive number")
-        check_positive(self, "atol", allow_none=True, what="positive number")
-        check_positive(self, "max_step", allow_none=True, allow_inf=True)
-
-    def resolved(self, scene: Scene) -> tuple[float, float, float]:
-        """``(rtol, atol, max_step)`` with the scene's values where these are None."""
-        s = scene.solver
-        return (
-            s.rtol if self.rtol is None else float(self.rtol),
-            s.atol if self.atol is None else float(self.atol),
-            s.max_step if self.max_step is None else float(self.max_step),
-        )
 
 
 # ----------------------------------------------------------------------------------------------

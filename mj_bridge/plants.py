@@ -18,7 +18,7 @@ from analytic.effects import MjIntegrator
 from analytic.plant import AnalyticPlant, AnalyticSettings, Plant, check_positive, coerce_enum
 from analytic.scene import Scene
 from analytic.trajectory import Engine, Trajectory
-from mj_bridge.pinocchio_plant import PinocchioSettings
+from mj_bridge.pinocchio_settings import PinocchioSettings
 from mj_bridge.twin import ControllerSource
 
 

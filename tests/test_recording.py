@@ -19,12 +19,12 @@ from analytic.scene import load_scene
 from analytic.simulate import simulate
 from analytic.trajectory import Engine, Trajectory
 from validation.compare import Group, compare
+from validation.demo import write_demo
 from validation.recording import TIMELINE, log_run, narrative_for, new_stream, write_recording
 from validation.rrd_layout import difference_title, legend_markdown, overlay_title
 from validation.rrd_plots import plot_of, series_path
 from validation.rrd_style import power_of_ten, unit_text
 from validation.rrd_world import DIFFERENCE_TARGET, body_size, exaggerate
-from validation.validate import write_demo
 
 SCENES = Path(__file__).resolve().parents[1] / "analytic" / "scenes"
 T_END = 0.4

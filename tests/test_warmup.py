@@ -106,6 +106,24 @@ def test_stage_progress_in_a_log_is_one_plain_line_per_stage():
     assert len(lines) == 3 and lines[2].startswith("tumble: validate x: stages done (analytic ")
 
 
+def test_stage_progress_of_plants_side_by_side_announces_each_once():
+    """Plants running in workers report interleaved: each is announced once, each wall runs from
+    its own first report to its own last."""
+    buf = io.StringIO()
+    p = StageProgress("validate x", 2.0, stream=buf)
+    for t in (0.0, 1.0, 2.0):
+        p("analytic", t)
+        p("mujoco", t)
+    walls = dict(p.walls)
+    p.close()
+    lines = buf.getvalue().splitlines()
+    assert lines[:2] == [
+        "tumble: validate x: analytic plant, 0 -> 2 s",
+        "tumble: validate x: mujoco plant, 0 -> 2 s",
+    ]
+    assert len(lines) == 3 and set(walls) == {"analytic", "mujoco"}
+
+
 class _Tty(io.StringIO):
     def isatty(self):
         return True

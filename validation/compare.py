@@ -30,7 +30,6 @@ from enum import StrEnum
 from typing import Any
 
 import numpy as np
-from scipy.linalg import expm
 
 from analytic.trajectory import Engine, RunStatus, Trajectory
 from validation.thresholds import Threshold, thresholds_for
@@ -393,6 +392,8 @@ def _propagate(A: np.ndarray, x0: np.ndarray, t: np.ndarray) -> np.ndarray:
     with one matrix exponential, exact up to rounding that grows at most like ``i`` ulps for a
     stable ``A`` (below 1e-12 relative over 10⁴ samples, far under the tracking thresholds).
     Other time grids take one exponential per time (scipy's batched ``expm``)."""
+    from scipy.linalg import expm  # here: scipy.linalg costs 0.2 s to import, at start-up
+
     t = np.asarray(t, float)
     x0 = np.asarray(x0, float)
     out = np.empty((t.shape[0], x0.shape[0]))

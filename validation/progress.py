@@ -81,21 +81,33 @@ class StageProgress:
         self.stream = stream or sys.stderr
         self.tty = _is_tty(self.stream)
         self.bar = Progress(label, t_end, delay=delay, stream=self.stream)
-        self.stage: str | None = None
         self.walls: dict[str, float] = {}
-        self._t0 = 0.0
+        self._started: dict[str, float] = {}
+        self._reached: dict[str, float] = {}
+        self._last: str | None = None
 
     def __call__(self, stage: str, t: float) -> None:
+        """Stage ``stage`` has reached simulated time ``t``; stages may run side by side (their
+        reports interleave), each is announced once."""
         now = time.monotonic()
-        if stage != self.stage:
-            self.stage, self._t0 = stage, now
+        if stage not in self._started:
+            self._started[stage] = now
             if not self.tty:
                 what = f"{stage} plant, 0 -> {self.t_end:g} s" if stage in self.PLANTS else stage
                 self.stream.write(f"{PREFIX}{self.label}: {what}\n")
                 self.stream.flush()
-        self.walls[stage] = now - self._t0
-        self.bar.label = f"{self.label} [{stage}]"
-        self.bar(t)
+        self.walls[stage] = now - self._started[stage]
+        self._reached[stage] = t
+        self._last = stage
+        running = [s for s, r in self._reached.items() if r < self.t_end]
+        shown = running or [stage]
+        self.bar.label = f"{self.label} [{', '.join(shown)}]"
+        self.bar(min(self._reached[s] for s in shown))
+
+    @property
+    def stage(self) -> str | None:
+        """The stage reported last (None before any report)."""
+        return self._last
 
     def close(self) -> None:
         self.bar.close()
@@ -104,7 +116,9 @@ class StageProgress:
             self.stream.write(f"{PREFIX}{self.label}: stages done ({times})\n")
             self.stream.flush()
         self.walls = {}
-        self.stage = None
+        self._started = {}
+        self._reached = {}
+        self._last = None
 
 
 class Status:

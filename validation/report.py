@@ -325,15 +325,17 @@ class ReportFiles:
     entries: tuple[FigureEntry, ...] = ()
 
 
-def _draw_figures(
+def draw_figures(
     out: Path,
     cmp: Comparison | None,
     plants: Sequence[Trajectory],
     ctx: FigureContext,
     formats: Sequence[FigureFormat],
 ) -> tuple[list[Path], list[FigureEntry], list[str]]:
-    """Draw every figure and write each drawn one in every format; a figure that fails to draw
-    is named in the returned errors, it does not cost the report."""
+    """Draw every figure and write each drawn one in every format into ``out``; a figure that
+    fails to draw is named in the returned errors, it does not cost the report.
+
+    Returns the files written, every figure's entry (with its caption) and the errors."""
     makers = {
         "errors": (lambda: figure_errors(cmp, ctx)) if cmp else None,
         "tracking": (lambda: figure_tracking(cmp, ctx)) if cmp else None,
@@ -368,6 +370,7 @@ def write_report(
     verdicts: Sequence[Verdict] = (),
     formats: Sequence[FigureFormat | str] = DEFAULT_FORMATS,
     scene: Any = None,
+    figures: tuple[Sequence[Path], Sequence[FigureEntry], Sequence[str]] | None = None,
 ) -> ReportFiles:
     """Write ``report.md``, ``report.json`` and the figures into ``out_dir`` (atomically).
 
@@ -382,6 +385,8 @@ def write_report(
             default; ValueError naming ``figure_format`` for an unknown one.
         scene: the resolved scene, dumped whole into ``report.json``'s provenance block
             (:mod:`validation.provenance`; None when the run has none).
+        figures: what :func:`draw_figures` returned for this run when it was drawn already (in
+            a worker, :mod:`validation.validate`); None draws them here.
     """
     fmts = tuple(dict.fromkeys(_format(f) for f in formats))
     if not fmts:
@@ -391,7 +396,9 @@ def write_report(
     passed = cmp is not None and cmp.passed and not failure
     verdict = "PASSED" if passed else "FAILED"
     ctx = FigureContext.from_meta(meta, cmp.scene if cmp is not None else "")
-    figs, entries, fig_errors = _draw_figures(out, cmp, plants, ctx, fmts)
+    if figures is None:
+        figures = draw_figures(out, cmp, plants, ctx, fmts)
+    figs, entries, fig_errors = (list(x) for x in figures)
     meta = dict(meta)
     if fig_errors:
         meta["figure_errors"] = fig_errors

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 import inspect
+import math
 import time
 import traceback
 from collections.abc import Callable, Sequence
@@ -21,15 +22,14 @@ from typing import Any
 
 from analytic.scene import Scene, load_scene
 from analytic.trajectory import Engine, RunStatus, Trajectory
+from validation import workers
 from validation.atomic import OutputError
 from validation.compare import Check, Comparison, compare_plants
-from validation.demo import DemoResult, DemoStep, write_demo  # noqa: F401  (moved; old imports)
-from validation.figures import DEFAULT_FORMATS, FigureFormat, parse_formats
+from validation.figures import DEFAULT_FORMATS, FigureContext, FigureFormat, parse_formats
 from validation.outputs import OutputRun, output_run
 from validation.preflight import check_validation_inputs
-from validation.recording import write_recording
 from validation.referee import Verdict, referee
-from validation.report import versions, write_report
+from validation.report import draw_figures, versions, write_report
 
 SCENES = Path(__file__).resolve().parent / "scenes"
 DEFAULT_SCENE = "paper_example1_controlled"
@@ -130,6 +130,7 @@ def run_validation(
     progress: Progress | None = None,
     plants: Sequence[Engine | str] | str | None = None,
     figure_formats: Sequence[FigureFormat | str] = DEFAULT_FORMATS,
+    concurrent: bool = True,
 ) -> ValidationResult:
     """Run ``scene`` on every chosen plant under one controller, compare every pair, rule on
     disagreements, and write the report and ``run.rrd``.
@@ -150,6 +151,9 @@ def run_validation(
             plant that disagrees with the two that agree (:mod:`validation.referee`).
         figure_formats: the figures' file formats, PNG by default (``("png", "svg")`` adds SVG
             files for papers; :class:`validation.figures.FigureFormat`).
+        concurrent: run the plants side by side, and the recording beside the figures, in
+            worker processes where that is safe (:mod:`validation.workers`); False runs every
+            stage here, one after the other. The files are the same either way.
 
     Returns:
         a frozen :class:`ValidationResult`; ``passed`` is False when any check fails or a plant
@@ -183,97 +187,165 @@ def run_validation(
         pl.check_scene(sc)
         runs.append((pl, _plant_settings(e, sc, integrator, dt)))
     with output_run(out_dir, "validate") as run:
-        res = _validate_into(run, sc, runs, horizon, progress, formats)
+        res = _validate_into(run, sc, runs, horizon, progress, formats, concurrent)
     files = {name: run.final(name) for name in res.files}
     files["manifest.json"] = run.final("manifest.json")
     return dataclasses.replace(res, out_dir=run.target, files=files)
 
 
-def _validate_into(
+def _throttled(report: Callable[[float], None], horizon: float, every_s: float = 0.1):
+    """``progress(t)`` passing at most one ``t`` per ``every_s`` seconds on, and the last one."""
+    last = [-math.inf]
+
+    def progress(t: float) -> None:
+        now = time.monotonic()
+        if now - last[0] >= every_s or t >= horizon:
+            last[0] = now
+            report(t)
+
+    return progress
+
+
+def _plant_task(pl: Any, settings: Any, sc: Scene, horizon: float, *, report) -> tuple[Any, float]:
+    """One plant's run (in a worker or here): its trajectory and its own wall time, s."""
+    t0 = time.perf_counter()
+    tr = pl.simulate(sc, settings, t_end=horizon, progress=_throttled(report, horizon))
+    return tr, time.perf_counter() - t0
+
+
+def _recording_task(
+    path: Path, sc: Scene, plants, cmp, run_id: str, *, report
+) -> tuple[Any, float]:
+    from validation.recording import write_recording
+
+    t0 = time.perf_counter()
+    info = write_recording(path, sc, plants, cmp, recording_id=run_id)
+    return info, time.perf_counter() - t0
+
+
+def _figures_task(out: Path, cmp, plants, ctx, formats, *, report) -> tuple[Any, float]:
+    t0 = time.perf_counter()
+    drawn = draw_figures(out, cmp, plants, ctx, formats)
+    return drawn, time.perf_counter() - t0
+
+
+def _import_rerun() -> None:
+    import rerun.blueprint  # noqa: F401
+
+    import validation.recording  # noqa: F401  (scipy.spatial)
+
+
+def _import_matplotlib() -> None:
+    import matplotlib.backends.backend_agg
+    import matplotlib.figure  # noqa: F401
+
+
+PREPARE_NICE = 10
+"""Niceness of the workers that import rerun and matplotlib while the plants run: the plants keep
+the CPUs (their wall times are what the run measures)."""
+
+
+def _run_plants(
+    runs: Sequence[tuple[Any, Any]],
+    sc: Scene,
+    horizon: float,
+    progress: Progress | None,
+    fork: bool,
+    walls: dict[str, float],
+    failures: list[str],
+) -> tuple[list[Trajectory], bool]:
+    """Every plant's run, side by side in workers where ``fork`` (no more at a time than there are
+    CPUs), else one after the other here. Returns the trajectories (in ``runs``' order) and
+    whether the run was interrupted; each plant's own wall time goes into ``walls``."""
+    slots = workers.available_cpus() if fork else 1
+    queue = list(enumerate(runs))
+    running: list[tuple[int, Any, workers.Job]] = []
+    done: dict[int, Trajectory] = {}
+    interrupted = False
+    try:
+        while queue or running:
+            while queue and len(running) < slots and not interrupted:
+                k, (pl, settings) = queue.pop(0)
+                name = pl.engine.value
+                report = _stage_progress(progress, name) or _ignore
+                job = workers.start(
+                    name, _plant_task, pl, settings, sc, horizon, on_message=report, fork=fork
+                )
+                running.append((k, pl, job))
+            if interrupted:  # Ctrl-C stops the run, it does not start the next plant
+                failures += [f"{pl.label} plant: not run (interrupted)" for _, (pl, _) in queue]
+                queue = []
+            if all(job.forked for _, _, job in running):
+                interrupted |= workers.wait([job for _, _, job in running], first=True)
+                finished = [r for r in running if r[2].done]
+            else:  # a plant that runs here
+                finished = [next(r for r in running if not r[2].forked)]
+            for k, pl, job in finished:
+                running.remove((k, pl, job))
+                tr = _plant_outcome(pl, job, walls, failures)
+                interrupted |= job.interrupted
+                if tr is None:
+                    continue
+                done[k] = tr
+                interrupted |= tr.status is RunStatus.INTERRUPTED
+                if tr.status is not RunStatus.OK:
+                    failures.append(f"{pl.engine.value} plant stopped early: {tr.message}")
+    except BaseException:
+        workers.stop([job for _, _, job in running])
+        raise
+    return [done[k] for k in sorted(done)], interrupted
+
+
+def _ignore(_t: float) -> None:
+    pass
+
+
+def _plant_outcome(
+    pl: Any, job: workers.Job, walls: dict[str, float], failures: list[str]
+) -> Trajectory | None:
+    """The plant's trajectory (its wall time into ``walls``), or None with the failure said."""
+    try:
+        tr, wall = job.result()
+    except ValueError:
+        raise  # the caller's input, not a failed run
+    except workers.WorkerError as exc:
+        if exc.kind == "ValueError":
+            raise ValueError(exc.message) from None
+        failures.append(f"{pl.label} plant: {exc}")
+        return None
+    except KeyboardInterrupt:
+        job.interrupted = True
+        failures.append(f"{pl.label} plant: not run (interrupted)")
+        return None
+    except Exception as exc:
+        failures.append(f"{pl.label} plant: {_one_line(exc)}")
+        return None
+    walls[pl.engine.value] = wall
+    return tr
+
+
+def _worker_result(job: workers.Job, redo: Callable[[], Any]) -> Any:
+    """A worker's result; when its worker was lost or interrupted, ``redo()`` does it here."""
+    try:
+        return job.result()
+    except (workers.WorkerLost, KeyboardInterrupt):
+        return redo()
+    except workers.WorkerError as exc:
+        raise RuntimeError(str(exc)) from None
+
+
+def _meta(
     run: OutputRun,
     sc: Scene,
     runs: Sequence[tuple[Any, Any]],
+    names: dict[str, str],
     horizon: float,
-    progress: Progress | None,
-    formats: Sequence[FigureFormat] = DEFAULT_FORMATS,
-) -> ValidationResult:
-    """:func:`run_validation`'s work, writing into the staging directory ``run.path``."""
+    verdicts: Sequence[Verdict],
+) -> dict[str, Any]:
+    """The run's metadata for the report (the wall times are added when they are known)."""
     from mj_bridge.plants import PinocchioPlant
 
-    out = run.path
-    walls: dict[str, float] = {}
-    failures: list[str] = []
-    t_all = time.perf_counter()
-
-    def timed(stage: str, fn: Callable[[], Any]) -> Any:
-        t0 = time.perf_counter()
-        try:
-            return fn()
-        finally:
-            walls[stage] = time.perf_counter() - t0
-
-    trajectories: list[Trajectory] = []
-    names: dict[str, str] = {}
-    interrupted = False
-    for pl, settings in runs:
-        name = pl.engine.value
-        names[name] = pl.describe(settings)
-        if interrupted:  # Ctrl-C stops the run, it does not skip to the next plant
-            failures.append(f"{pl.label} plant: not run (interrupted)")
-            continue
-        try:
-            tr = timed(
-                name,
-                lambda pl=pl, settings=settings, name=name: pl.simulate(
-                    sc, settings, t_end=horizon, progress=_stage_progress(progress, name)
-                ),
-            )
-        except ValueError:
-            raise  # the caller's input, not a failed run
-        except Exception as exc:
-            failures.append(f"{pl.label} plant: {_one_line(exc)}")
-            continue
-        trajectories.append(tr)
-        interrupted = tr.status is RunStatus.INTERRUPTED
-        if tr.status is not RunStatus.OK:
-            failures.append(f"{name} plant stopped early: {tr.message}")
-
-    cmp: Comparison | None = None
-    verdicts: tuple[Verdict, ...] = ()
-    if trajectories and trajectories[0].t.size:
-        try:
-            cmp = timed("compare", lambda: compare_plants(trajectories, sc, t_end=horizon))
-            verdicts = referee(cmp, names)
-        except Exception as exc:
-            failures.append(f"comparison: {_one_line(exc)}")
-            traceback.print_exc()
-    failure = "; ".join(failures)
-    passed = cmp is not None and cmp.passed and not failure and len(trajectories) == len(runs) >= 2
-    if len(runs) < 2 and not failure:
-        failure = "only one plant: nothing to compare it with"
-        passed = False
-
-    files: dict[str, Path] = {}
-    try:
-        rinfo = (
-            timed(
-                "recording",
-                lambda: write_recording(
-                    out / "run.rrd", sc, trajectories, cmp, recording_id=run.run_id
-                ),
-            )
-            if trajectories
-            else None
-        )
-        if rinfo is not None:
-            files["run.rrd"] = rinfo.path
-    except Exception as exc:
-        why = exc.reason if isinstance(exc, OutputError) else _one_line(exc)
-        failure = "; ".join([*failures, f"recording: {why}"])
-        passed = False
-    walls["total"] = time.perf_counter() - t_all
-    by_engine = {pl.engine: (pl, st) for pl, st in runs}
-    mj = by_engine.get(Engine.MUJOCO)
+    mj = next((st for pl, st in runs if pl.engine is Engine.MUJOCO), None)
     referee_note = (
         ""
         if len(runs) >= 3
@@ -283,7 +355,7 @@ def _validate_into(
             else "the referee needs three plants"
         )
     )
-    meta = {
+    return {
         "run_id": run.run_id,
         "scene": {
             "name": sc.name,
@@ -303,19 +375,104 @@ def _validate_into(
             "max_step": sc.solver.max_step,
         },
         "mujoco_settings": {
-            "integrator": (mj[1].integrator.value if mj else sc.mujoco.integrator.value),
-            "timestep": mj[1].dt if mj else sc.mujoco.timestep,
+            "integrator": (mj.integrator.value if mj else sc.mujoco.integrator.value),
+            "timestep": mj.dt if mj else sc.mujoco.timestep,
             "spring_model": sc.mujoco.spring_model.value,
         },
         "controller": "analytic (Udwadia–Kalaba, Eq. 89) in every plant",
         "referee": [v.to_dict() for v in verdicts],
         "referee_note": referee_note,
         "versions": versions(),
-        "wall_times_s": dict(walls),
     }
+
+
+def _validate_into(
+    run: OutputRun,
+    sc: Scene,
+    runs: Sequence[tuple[Any, Any]],
+    horizon: float,
+    progress: Progress | None,
+    formats: Sequence[FigureFormat] = DEFAULT_FORMATS,
+    concurrent: bool = True,
+) -> ValidationResult:
+    """:func:`run_validation`'s work, writing into the staging directory ``run.path``.
+
+    With ``concurrent`` (and where :func:`validation.workers.can_fork`), the plants run side by
+    side in workers, and two more workers import rerun and matplotlib meanwhile, then write the
+    recording and draw the figures side by side; the files are those of a run one stage after
+    the other.
+    """
+    out = run.path
+    walls: dict[str, float] = {}
+    failures: list[str] = []
+    t_all = time.perf_counter()
+    fork = concurrent and workers.can_fork()
+    # Forked first, while this process has one thread; they import while the plants run.
+    prepared = dict(later=True, nice=PREPARE_NICE, fork=fork)
+    rec_job = workers.start("recording", _recording_task, prepare=_import_rerun, **prepared)
+    fig_job = workers.start("figures", _figures_task, prepare=_import_matplotlib, **prepared)
+    try:
+        names = {pl.engine.value: pl.describe(settings) for pl, settings in runs}
+        trajectories, interrupted = _run_plants(runs, sc, horizon, progress, fork, walls, failures)
+        cmp: Comparison | None = None
+        verdicts: tuple[Verdict, ...] = ()
+        if trajectories and trajectories[0].t.size:
+            try:
+                t0 = time.perf_counter()
+                cmp = compare_plants(trajectories, sc, t_end=horizon)
+                walls["compare"] = time.perf_counter() - t0
+                verdicts = referee(cmp, names)
+            except Exception as exc:
+                failures.append(f"comparison: {_one_line(exc)}")
+                traceback.print_exc()
+        meta = _meta(run, sc, runs, names, horizon, verdicts)
+        ctx = FigureContext.from_meta(meta, cmp.scene if cmp is not None else "")
+        rec_args = (out / "run.rrd", sc, trajectories, cmp, run.run_id)
+        fig_args = (out, cmp, trajectories, ctx, formats)
+        if trajectories:
+            rec_job.give(*rec_args)
+        else:
+            rec_job.cancel()
+        fig_job.give(*fig_args)
+        interrupted |= workers.wait([rec_job, fig_job])
+    except BaseException:
+        workers.stop([rec_job, fig_job])
+        raise
+
+    files: dict[str, Path] = {}
+    if trajectories:
+        try:
+            rinfo, walls["recording"] = _worker_result(
+                rec_job, lambda: _recording_task(*rec_args, report=None)
+            )
+            files["run.rrd"] = rinfo.path
+        except Exception as exc:
+            why = exc.reason if isinstance(exc, OutputError) else _one_line(exc)
+            failures.append(f"recording: {why}")
+    try:
+        drawn, walls["figures"] = _worker_result(
+            fig_job, lambda: _figures_task(*fig_args, report=None)
+        )
+    except Exception as exc:  # the figures must not cost the report
+        drawn = ([], [], [f"figures: {_one_line(exc)}"])
+    failure = "; ".join(failures)
+    passed = cmp is not None and cmp.passed and not failure and len(trajectories) == len(runs) >= 2
+    if len(runs) < 2 and not failure:
+        failure = "only one plant: nothing to compare it with"
+        passed = False
+    walls["total"] = time.perf_counter() - t_all
+    meta["wall_times_s"] = dict(walls)
     t0 = time.perf_counter()
     rep = write_report(
-        out, cmp, trajectories, meta, failure=failure, verdicts=verdicts, formats=formats, scene=sc
+        out,
+        cmp,
+        trajectories,
+        meta,
+        failure=failure,
+        verdicts=verdicts,
+        formats=formats,
+        scene=sc,
+        figures=drawn,
     )
     walls["report"] = time.perf_counter() - t0
     files.update({"report.md": rep.markdown, "report.json": rep.json})

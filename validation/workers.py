@@ -1,0 +1,350 @@
+"""Independent stages of one command in forked worker processes, or in this process.
+
+``tumble validate`` has stages that do not need each other: each plant's run, then the figures and
+the recording. On a machine with more than one CPU they run side by side in child processes forked
+from this one (they inherit its imports and its loaded kernels, so a child starts in milliseconds);
+elsewhere, and whenever forking is not safe, each runs here, in order, with the same results.
+
+* :func:`start` forks a :class:`Job` (or makes an in-process one). A job may be started before its
+  inputs exist (``prepare`` runs at once: a child imports matplotlib or rerun while the plants run)
+  and be given them later with :meth:`Job.give`.
+* :func:`wait` collects jobs, forwarding each child's messages (a plant's progress) as they come.
+* A job whose child dies, or cannot deliver its result, raises :class:`WorkerLost`; the caller then
+  does that stage here (nothing is lost to a worker).
+
+Forking is used only where it is safe and useful: the ``fork`` start method exists (Linux; macOS
+frameworks are not fork-safe), this process runs one thread (a fork copies only the calling thread,
+and locks held by the others would stay locked in the child), and more than one CPU is available to
+this process. ``TUMBLE_WORKERS=0`` in the environment turns workers off (everything runs here).
+
+A child's exception comes back as :class:`WorkerError` (its type name and first line); a Ctrl-C
+that reaches a child ends its task the way it would end here (a plant returns its partial run).
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import sys
+import threading
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+ENV_SWITCH = "TUMBLE_WORKERS"
+"""Set to ``0`` to run every stage in this process."""
+
+POLL_S = 0.05
+"""How often :func:`wait` looks at the children, s (it also wakes as soon as one sends)."""
+
+LOST_GRACE_S = 5.0
+"""How long a child whose process has ended, or which was interrupted, may take to deliver, s."""
+
+FORWARD_AFTER_S = 1.0
+"""After a Ctrl-C (or SIGTERM) here, children that have not delivered within this many seconds
+are sent SIGINT themselves: a terminal's Ctrl-C reaches them directly, a signal sent to this
+process alone does not."""
+
+Report = Callable[[Any], None]
+"""``report(message)``: what a task calls to send a message (a plant's progress) to the parent."""
+
+
+class WorkerLost(RuntimeError):
+    """A worker process ended without delivering its result (killed, or it could not pickle it)."""
+
+
+class WorkerError(RuntimeError):
+    """The task raised in the worker: ``kind`` is the exception's type name."""
+
+    def __init__(self, kind: str, message: str):
+        super().__init__(f"{kind}: {message}")
+        self.kind = kind
+        self.message = message
+
+
+_LATER = object()
+
+
+def _os_threads() -> int:
+    """Threads of this process (Linux ``/proc``; Python's own count elsewhere)."""
+    try:
+        return len(os.listdir("/proc/self/task"))
+    except OSError:
+        return threading.active_count()
+
+
+def available_cpus() -> int:
+    """CPUs this process may run on."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        return os.cpu_count() or 1
+
+
+def can_fork() -> bool:
+    """Whether :func:`start` forks here (module docstring)."""
+    import multiprocessing as mp
+
+    if os.environ.get(ENV_SWITCH, "").strip() == "0":
+        return False
+    if not sys.platform.startswith("linux") or "fork" not in mp.get_all_start_methods():
+        return False
+    return available_cpus() > 1 and _os_threads() == 1
+
+
+def _one_line(exc: BaseException) -> str:
+    return str(exc).splitlines()[0] if str(exc) else ""
+
+
+def _child(conn, inbox, prepare, task, args, nice: int) -> None:  # pragma: no cover - in a child
+    """The worker process: prepare, wait for the inputs if they come later, run, send back."""
+    try:
+        if nice:
+            os.nice(nice)
+        if prepare is not None:
+            prepare()
+        if args is _LATER:
+            args = inbox.recv()
+            if args is None:  # the parent gave up on this job
+                return
+        out = task(*args, report=lambda msg: conn.send(("msg", msg)))
+        signal.signal(signal.SIGINT, signal.SIG_IGN)  # a late Ctrl-C must not lose the result
+        conn.send(("ok", out))
+    except KeyboardInterrupt as exc:  # Ctrl-C (or SIGTERM turned into one) before a result
+        conn.send(("err", type(exc).__name__, _one_line(exc) or "interrupted", True))
+    except BaseException as exc:
+        try:
+            conn.send(("err", type(exc).__name__, _one_line(exc), False))
+        except Exception:
+            pass
+    finally:
+        try:
+            conn.close()
+        except Exception:
+            pass
+
+
+@dataclass(eq=False)
+class Job:
+    """One stage: in a child process (``process`` set) or to be run here.
+
+    Attributes:
+        name: what the stage is (for messages).
+        task: ``task(*args, report=...)``.
+        on_message: called with each message the task sends (in the parent).
+    """
+
+    name: str
+    task: Callable[..., Any]
+    args: Any = _LATER
+    on_message: Report | None = None
+    prepare: Callable[[], None] | None = None
+    process: Any = None
+    conn: Any = None
+    inbox: Any = None
+    done: bool = False
+    outcome: tuple = ()
+    interrupted: bool = False
+    sent_at: float = field(default=0.0)
+
+    @property
+    def forked(self) -> bool:
+        return self.process is not None
+
+    def give(self, *args: Any) -> None:
+        """The inputs of a job started without them."""
+        self.args = args
+        if self.forked:
+            try:
+                self.inbox.send(args)
+            except (OSError, ValueError):  # the child is gone; result() says WorkerLost
+                pass
+            self.inbox.close()
+
+    def cancel(self) -> None:
+        """Give up on a job whose inputs will never come (its child exits)."""
+        if self.forked and not self.done and self.args is _LATER:
+            try:
+                self.inbox.send(None)
+                self.inbox.close()
+            except (OSError, ValueError):
+                pass
+        self.done = True
+        self.outcome = ("cancelled",)
+
+    def _receive(self) -> None:
+        """Read what the child has sent (messages forwarded, the result kept)."""
+        while not self.done and self.conn.poll():
+            try:
+                msg = self.conn.recv()
+            except (EOFError, OSError):
+                self.process.join(timeout=LOST_GRACE_S)
+                code = self.process.exitcode
+                self._finish(("lost", f"the worker process ended (exit {code}) without a result"))
+                return
+            if msg[0] == "msg":
+                if self.on_message is not None:
+                    self.on_message(msg[1])
+            else:
+                self._finish(msg)
+
+    def _finish(self, outcome: tuple) -> None:
+        self.done = True
+        self.outcome = outcome
+        self.conn.close()
+        self.process.join(timeout=LOST_GRACE_S)
+
+    def result(self) -> Any:
+        """The task's return value (running it here if it is not forked).
+
+        Raises:
+            WorkerLost: the child ended without a result (the caller does the stage itself).
+            WorkerError: the task raised in the child.
+            KeyboardInterrupt: the task was interrupted in the child before it had a result.
+        """
+        if not self.forked:
+            if not self.done:
+                if self.args is _LATER:
+                    raise RuntimeError(f"{self.name}: no inputs were given")
+                if self.prepare is not None:
+                    self.prepare()
+                self.done = True
+                self.outcome = ("ok", self.task(*self.args, report=self.on_message or _ignore))
+            return self.outcome[1]
+        if wait([self]):
+            self.interrupted = True
+        kind = self.outcome[0]
+        if kind == "ok":
+            return self.outcome[1]
+        if kind == "err":
+            _, name, message, interrupted = self.outcome
+            if interrupted:
+                raise KeyboardInterrupt(message)
+            raise WorkerError(name, message)
+        raise WorkerLost(f"{self.name}: {self.outcome[-1]}")
+
+
+def _ignore(_msg: Any) -> None:
+    pass
+
+
+def start(
+    name: str,
+    task: Callable[..., Any],
+    *args: Any,
+    later: bool = False,
+    prepare: Callable[[], None] | None = None,
+    on_message: Report | None = None,
+    fork: bool = True,
+    nice: int = 0,
+) -> Job:
+    """Start ``task(*args, report=...)`` in a forked child when :func:`can_fork` (and ``fork``),
+    else return a job that runs it here on :meth:`Job.result`.
+
+    Args:
+        name: what the stage is.
+        task: the function; it takes ``report`` (send a message to ``on_message``) as a keyword.
+        args: its inputs, unless ``later`` (then :meth:`Job.give` delivers them).
+        prepare: run in the child at once (imports), before the inputs arrive.
+        on_message: receives the task's messages in this process.
+        fork: False runs the job here whatever the machine.
+        nice: the child's niceness increment (a preparing child yields the CPUs to the plants).
+    """
+    job = Job(name, task, _LATER if later else args, on_message, prepare)
+    if not (fork and can_fork()):
+        return job
+    import multiprocessing as mp
+
+    ctx = mp.get_context("fork")
+    conn, child_conn = ctx.Pipe(duplex=False)
+    inbox_r, inbox_w = ctx.Pipe(duplex=False)
+    for stream in (sys.stdout, sys.stderr):  # a child must not print this process's buffer again
+        try:
+            stream.flush()
+        except (OSError, ValueError, AttributeError):
+            pass
+    proc = ctx.Process(
+        target=_child,
+        args=(child_conn, inbox_r, prepare, task, job.args, nice),
+        name=f"tumble-{name}",
+        daemon=True,
+    )
+    proc.start()
+    child_conn.close()
+    inbox_r.close()
+    job.process, job.conn, job.inbox = proc, conn, inbox_w
+    if not later:
+        inbox_w.close()
+    return job
+
+
+def wait(jobs: Sequence[Job], first: bool = False) -> bool:
+    """Collect the forked ``jobs`` until each has its outcome (``first``: until one more has),
+    forwarding their messages. In-process jobs are left for :meth:`Job.result`.
+
+    Returns whether a Ctrl-C reached this process meanwhile. It does not stop the collecting: the
+    children got the same Ctrl-C and send their partial results, which are kept for up to
+    :data:`LOST_GRACE_S` (a second Ctrl-C stops waiting and is raised).
+    """
+    from multiprocessing.connection import wait as mp_wait
+
+    interrupted = False
+    deadline = forward_at = None
+    pending = [j for j in jobs if j.forked and not j.done]
+    while pending:
+        if forward_at is not None and time.monotonic() >= forward_at:
+            forward_at = None
+            for j in pending:
+                if j.process.is_alive():
+                    os.kill(j.process.pid, signal.SIGINT)
+        if deadline is not None and time.monotonic() >= deadline:
+            for j in pending:
+                j.interrupted = True
+                j._finish(("lost", "interrupted before it sent a result"))
+            break
+        try:
+            mp_wait([j.conn for j in pending] + [j.process.sentinel for j in pending], POLL_S)
+            for j in pending:
+                j._receive()
+                if not j.done and not j.process.is_alive():
+                    j._receive()  # what it sent before it ended
+                    if not j.done:
+                        code = j.process.exitcode
+                        j._finish(
+                            ("lost", f"the worker process ended (exit {code}) without a result")
+                        )
+        except KeyboardInterrupt:
+            if interrupted:
+                raise
+            interrupted = True
+            forward_at = time.monotonic() + FORWARD_AFTER_S
+            deadline = time.monotonic() + LOST_GRACE_S
+        still = [j for j in pending if not j.done]
+        if first and len(still) < len(pending):
+            break
+        pending = still
+    return interrupted
+
+
+def stop(jobs: Sequence[Job]) -> None:
+    """End the children of ``jobs`` that are still running (after an error in the parent)."""
+    for j in jobs:
+        if j.forked and not j.done:
+            j.cancel()
+            if j.process.is_alive():
+                j.process.terminate()
+            j.process.join(timeout=LOST_GRACE_S)
+
+
+__all__ = [
+    "ENV_SWITCH",
+    "Job",
+    "WorkerError",
+    "WorkerLost",
+    "available_cpus",
+    "can_fork",
+    "start",
+    "stop",
+    "wait",
+]
