@@ -331,11 +331,14 @@ def draw_figures(
     plants: Sequence[Trajectory],
     ctx: FigureContext,
     formats: Sequence[FigureFormat],
+    names: Sequence[str] = FIGURES,
 ) -> tuple[list[Path], list[FigureEntry], list[str]]:
     """Draw every figure and write each drawn one in every format into ``out``; a figure that
     fails to draw is named in the returned errors, it does not cost the report.
 
-    Returns the files written, every figure's entry (with its caption) and the errors."""
+    ``names``: which of :data:`validation.figures.FIGURES` to draw (all by default; workers
+    share them). Returns the files written, every figure's entry (with its caption) and the
+    errors."""
     makers = {
         "errors": (lambda: figure_errors(cmp, ctx)) if cmp else None,
         "tracking": (lambda: figure_tracking(cmp, ctx)) if cmp else None,
@@ -346,6 +349,8 @@ def draw_figures(
     entries: list[FigureEntry] = []
     errors: list[str] = []
     for name in FIGURES:
+        if name not in names:
+            continue
         make = makers[name]
         if make is None:
             continue

@@ -25,7 +25,13 @@ from analytic.trajectory import Engine, RunStatus, Trajectory
 from validation import workers
 from validation.atomic import OutputError
 from validation.compare import Check, Comparison, compare_plants
-from validation.figures import DEFAULT_FORMATS, FigureContext, FigureFormat, parse_formats
+from validation.figures import (
+    DEFAULT_FORMATS,
+    FIGURES,
+    FigureContext,
+    FigureFormat,
+    parse_formats,
+)
 from validation.outputs import OutputRun, output_run
 from validation.preflight import check_validation_inputs
 from validation.referee import Verdict, referee
@@ -223,10 +229,32 @@ def _recording_task(
     return info, time.perf_counter() - t0
 
 
-def _figures_task(out: Path, cmp, plants, ctx, formats, *, report) -> tuple[Any, float]:
-    t0 = time.perf_counter()
-    drawn = draw_figures(out, cmp, plants, ctx, formats)
-    return drawn, time.perf_counter() - t0
+RECORDING = "run.rrd"
+
+EVIDENCE_SHARES: tuple[tuple[str, ...], ...] = (
+    (RECORDING, "tracking", "control"),
+    ("errors", "invariants"),
+)
+"""How the recording and the figures (:data:`validation.figures.FIGURES`) are shared between the
+two evidence workers: the error figure is the largest (one panel per compared quantity), the
+recording takes about as long as one figure."""
+
+
+def _evidence_task(share: Sequence[str], rec_args, fig_args, *, report) -> dict[str, Any]:
+    """The recording (when ``share`` names it and there are trajectories) and the figures named
+    in ``share``: ``{"recording": (info, wall), "figures": ((paths, entries, errors), wall)}``."""
+    done: dict[str, Any] = {}
+    if RECORDING in share and rec_args is not None:
+        try:
+            done["recording"] = _recording_task(*rec_args, report=report)
+        except Exception as exc:  # said in the report; the figures are still drawn
+            done["recording_error"] = exc.reason if isinstance(exc, OutputError) else _one_line(exc)
+    names = [n for n in share if n != RECORDING]
+    if names:
+        t0 = time.perf_counter()
+        drawn = draw_figures(*fig_args, names=names)
+        done["figures"] = (drawn, time.perf_counter() - t0)
+    return done
 
 
 def _import_rerun() -> None:
@@ -234,15 +262,12 @@ def _import_rerun() -> None:
 
     import validation.recording  # noqa: F401  (scipy.spatial)
 
+    _import_matplotlib()
+
 
 def _import_matplotlib() -> None:
     import matplotlib.backends.backend_agg
     import matplotlib.figure  # noqa: F401
-
-
-PREPARE_NICE = 10
-"""Niceness of the workers that import rerun and matplotlib while the plants run: the plants keep
-the CPUs (their wall times are what the run measures)."""
 
 
 def _run_plants(
@@ -408,9 +433,16 @@ def _validate_into(
     t_all = time.perf_counter()
     fork = concurrent and workers.can_fork()
     # Forked first, while this process has one thread; they import while the plants run.
-    prepared = dict(later=True, nice=PREPARE_NICE, fork=fork)
-    rec_job = workers.start("recording", _recording_task, prepare=_import_rerun, **prepared)
-    fig_job = workers.start("figures", _figures_task, prepare=_import_matplotlib, **prepared)
+    prepared = dict(later=True, idle_until_given=True, fork=fork)  # the plants keep the CPUs
+    jobs = [
+        workers.start(
+            f"evidence {k + 1}",
+            _evidence_task,
+            prepare=_import_rerun if RECORDING in share else _import_matplotlib,
+            **prepared,
+        )
+        for k, share in enumerate(EVIDENCE_SHARES)
+    ]
     try:
         names = {pl.engine.value: pl.describe(settings) for pl, settings in runs}
         trajectories, interrupted = _run_plants(runs, sc, horizon, progress, fork, walls, failures)
@@ -427,34 +459,40 @@ def _validate_into(
                 traceback.print_exc()
         meta = _meta(run, sc, runs, names, horizon, verdicts)
         ctx = FigureContext.from_meta(meta, cmp.scene if cmp is not None else "")
-        rec_args = (out / "run.rrd", sc, trajectories, cmp, run.run_id)
+        rec_args = (out / RECORDING, sc, trajectories, cmp, run.run_id) if trajectories else None
         fig_args = (out, cmp, trajectories, ctx, formats)
-        if trajectories:
-            rec_job.give(*rec_args)
-        else:
-            rec_job.cancel()
-        fig_job.give(*fig_args)
-        interrupted |= workers.wait([rec_job, fig_job])
+        for job, share in zip(jobs, EVIDENCE_SHARES, strict=True):
+            job.give(share, rec_args, fig_args)
+        interrupted |= workers.wait(jobs)
     except BaseException:
-        workers.stop([rec_job, fig_job])
+        workers.stop(jobs)
         raise
 
     files: dict[str, Path] = {}
-    if trajectories:
+    paths: list[Path] = []
+    entries: dict[str, Any] = {}
+    fig_errors: list[str] = []
+    walls["figures"] = 0.0
+    for job, share in zip(jobs, EVIDENCE_SHARES, strict=True):
         try:
-            rinfo, walls["recording"] = _worker_result(
-                rec_job, lambda: _recording_task(*rec_args, report=None)
+            done = _worker_result(
+                job, lambda share=share: _evidence_task(share, rec_args, fig_args, report=None)
             )
-            files["run.rrd"] = rinfo.path
-        except Exception as exc:
-            why = exc.reason if isinstance(exc, OutputError) else _one_line(exc)
-            failures.append(f"recording: {why}")
-    try:
-        drawn, walls["figures"] = _worker_result(
-            fig_job, lambda: _figures_task(*fig_args, report=None)
-        )
-    except Exception as exc:  # the figures must not cost the report
-        drawn = ([], [], [f"figures: {_one_line(exc)}"])
+        except Exception as exc:  # the evidence must not cost the report
+            fig_errors.append(f"{', '.join(share)}: {_one_line(exc)}")
+            continue
+        if "recording" in done:
+            rinfo, walls["recording"] = done["recording"]
+            files[RECORDING] = rinfo.path
+        if "recording_error" in done:
+            failures.append(f"recording: {done['recording_error']}")
+        if "figures" in done:
+            (got_paths, got_entries, got_errors), wall = done["figures"]
+            paths += got_paths
+            entries.update({e.name: e for e in got_entries})
+            fig_errors += got_errors
+            walls["figures"] += wall
+    drawn = (paths, [entries[n] for n in FIGURES if n in entries], fig_errors)
     failure = "; ".join(failures)
     passed = cmp is not None and cmp.passed and not failure and len(trajectories) == len(runs) >= 2
     if len(runs) < 2 and not failure:

@@ -97,17 +97,29 @@ def _one_line(exc: BaseException) -> str:
     return str(exc).splitlines()[0] if str(exc) else ""
 
 
-def _child(conn, inbox, prepare, task, args, nice: int) -> None:  # pragma: no cover - in a child
+def _set_idle(idle: bool) -> None:
+    """Linux ``SCHED_IDLE`` (run only on a CPU nothing else wants) or back to ``SCHED_OTHER``;
+    where the switch is refused, the process stays as it is."""
+    try:
+        policy = os.SCHED_IDLE if idle else os.SCHED_OTHER
+        os.sched_setscheduler(0, policy, os.sched_param(0))
+    except (AttributeError, OSError):
+        pass
+
+
+def _child(conn, inbox, prepare, task, args, idle: bool) -> None:  # pragma: no cover - in a child
     """The worker process: prepare, wait for the inputs if they come later, run, send back."""
     try:
-        if nice:
-            os.nice(nice)
+        if idle:
+            _set_idle(True)
         if prepare is not None:
             prepare()
         if args is _LATER:
             args = inbox.recv()
             if args is None:  # the parent gave up on this job
                 return
+        if idle:
+            _set_idle(False)
         out = task(*args, report=lambda msg: conn.send(("msg", msg)))
         signal.signal(signal.SIGINT, signal.SIG_IGN)  # a late Ctrl-C must not lose the result
         conn.send(("ok", out))
@@ -237,7 +249,7 @@ def start(
     prepare: Callable[[], None] | None = None,
     on_message: Report | None = None,
     fork: bool = True,
-    nice: int = 0,
+    idle_until_given: bool = False,
 ) -> Job:
     """Start ``task(*args, report=...)`` in a forked child when :func:`can_fork` (and ``fork``),
     else return a job that runs it here on :meth:`Job.result`.
@@ -249,7 +261,9 @@ def start(
         prepare: run in the child at once (imports), before the inputs arrive.
         on_message: receives the task's messages in this process.
         fork: False runs the job here whatever the machine.
-        nice: the child's niceness increment (a preparing child yields the CPUs to the plants).
+        idle_until_given: the child prepares at the lowest priority (Linux ``SCHED_IDLE``: only on
+            a CPU nothing else wants, so the plants keep theirs) and runs at the normal one once
+            it is given its inputs.
     """
     job = Job(name, task, _LATER if later else args, on_message, prepare)
     if not (fork and can_fork()):
@@ -266,7 +280,7 @@ def start(
             pass
     proc = ctx.Process(
         target=_child,
-        args=(child_conn, inbox_r, prepare, task, job.args, nice),
+        args=(child_conn, inbox_r, prepare, task, job.args, idle_until_given),
         name=f"tumble-{name}",
         daemon=True,
     )
