@@ -349,12 +349,18 @@ def _plant_outcome(
     return tr
 
 
-def _worker_result(job: workers.Job, redo: Callable[[], Any]) -> Any:
-    """A worker's result; when its worker was lost or interrupted, ``redo()`` does it here."""
+def _worker_result(job: workers.Job, redo: Callable[[], Any], redo_interrupted: bool) -> Any:
+    """A worker's result; when its worker was lost, ``redo()`` does it here, and when it was
+    interrupted, too if ``redo_interrupted`` (the Ctrl-C that stopped the plants reached it while it
+    prepared: the partial run's evidence is still written), else the interrupt goes on."""
     try:
         return job.result()
-    except (workers.WorkerLost, KeyboardInterrupt):
+    except workers.WorkerLost:
         return redo()
+    except KeyboardInterrupt:
+        if redo_interrupted:
+            return redo()
+        raise
     except workers.WorkerError as exc:
         raise RuntimeError(str(exc)) from None
 
@@ -463,7 +469,8 @@ def _validate_into(
         fig_args = (out, cmp, trajectories, ctx, formats)
         for job, share in zip(jobs, EVIDENCE_SHARES, strict=True):
             job.give(share, rec_args, fig_args)
-        interrupted |= workers.wait(jobs)
+        if workers.wait(jobs):  # Ctrl-C while the evidence is written stops the run, as here
+            raise KeyboardInterrupt
     except BaseException:
         workers.stop(jobs)
         raise
@@ -476,7 +483,9 @@ def _validate_into(
     for job, share in zip(jobs, EVIDENCE_SHARES, strict=True):
         try:
             done = _worker_result(
-                job, lambda share=share: _evidence_task(share, rec_args, fig_args, report=None)
+                job,
+                lambda share=share: _evidence_task(share, rec_args, fig_args, report=None),
+                redo_interrupted=interrupted,
             )
         except Exception as exc:  # the evidence must not cost the report
             fig_errors.append(f"{', '.join(share)}: {_one_line(exc)}")
