@@ -61,9 +61,9 @@ MARKERS_PER_CURVE = 12  # markers on each curve, staggered between curves so coi
 PNG_COMPRESS_LEVEL = 3  # zlib level of the PNG files: Pillow's default 6 takes 1.6x as long
 # for files 8 % smaller
 SVG_HASH_SALT = "validation.figures"  # salt of the SVG element ids (matplotlib: a random uuid)
-TEXT_RASTER = {"text.hinting": "no_hinting", "text.hinting_factor": 1}
-"""How Agg rasterises text: unhinted glyphs at the pixel grid. Matplotlib's default (FreeType's
-autohinter on an 8x wider grid) looks the same at 150 dpi and costs a tenth of the drawing."""
+TEXT_RASTER = {"text.hinting": "no_hinting"}
+"""How Agg rasterises text: glyphs unhinted. Matplotlib's default (FreeType hinting each glyph to
+the pixel grid) looks the same at 150 dpi and costs a tenth of the drawing."""
 
 PLANT_STYLE: Mapping[Subject, Mapping[str, Any]] = {
     Subject.ANALYTIC: {"color": "tab:blue", "linestyle": "-", "marker": "o"},
