@@ -177,9 +177,10 @@ def test_control_figure_shows_the_other_plant_as_its_distance(run):
         assert legend is not None and legend.get_bbox_to_anchor().x0 > right_edge
 
 
-def _drawn(run):
-    """Every figure drawn for the run (the PNG's layout: Agg at the figure's dpi), with the
-    renderer that drew it."""
+@pytest.fixture(scope="module")
+def drawn(run):
+    """Every figure drawn for the run (as its PNG is: Agg at the figure's dpi), with the renderer
+    that drew it."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
     _, plants, cmp, meta = run
@@ -215,11 +216,11 @@ def _apart(a, b) -> bool:
     return a.x1 <= b.x0 + PX or b.x1 <= a.x0 + PX or a.y1 <= b.y0 + PX or b.y1 <= a.y0 + PX
 
 
-def test_nothing_is_clipped_or_overlapping(run):
+def test_nothing_is_clipped_or_overlapping(drawn):
     """The layout is fixed in inches, not searched for: every panel with its title, tick labels
     and axis labels lies inside the figure, below the figure's title and clear of the panels next
     to it; every legend lies inside the figure and outside every panel's data area."""
-    for d, renderer in _drawn(run):
+    for d, renderer in drawn:
         fig, page = d.figure, d.figure.bbox
         panels = [ax.get_tightbbox(renderer) for ax in fig.axes]  # with title, labels, legend
         for ax, box in zip(fig.axes, panels, strict=True):
@@ -242,10 +243,10 @@ def test_nothing_is_clipped_or_overlapping(run):
             assert legend.get_window_extent(renderer).y1 <= panels[-1].y0 + PX, d.name
 
 
-def test_every_panel_shows_its_curves_and_thresholds_whole(run):
+def test_every_panel_shows_its_curves_and_thresholds_whole(drawn):
     """Each panel's y limits enclose every curve it draws and its threshold lines (a log panel's
     limits are set from them, not autoscaled)."""
-    for d, _ in _drawn(run):
+    for d, _ in drawn:
         for ax in d.figure.axes:
             lo, hi = ax.get_ylim()
             for line in ax.lines:
@@ -260,10 +261,10 @@ def test_every_panel_shows_its_curves_and_thresholds_whole(run):
 _SUPERSCRIPT_DIGITS = str.maketrans("⁻⁰¹²³⁴⁵⁶⁷⁸⁹", "-0123456789")
 
 
-def test_log_ticks_name_their_decades_inside_the_view(run):
+def test_log_ticks_name_their_decades_inside_the_view(drawn):
     """Every log panel labels at least one tick; each label, ``10⁻¹²`` in plain text, names the
     power of ten it stands at, and every tick lies inside the panel's limits."""
-    for d, _ in _drawn(run):
+    for d, _ in drawn:
         for ax in d.figure.axes:
             if ax.get_yscale() != "log":
                 continue
