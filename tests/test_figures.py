@@ -7,6 +7,7 @@ by 5e-9 m, the control torque scaled by 1 + 1e-9), so what each figure draws is 
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import json
 import re
 import warnings
@@ -23,6 +24,7 @@ from validation.figures import (
     figure_control,
     figure_errors,
     figure_invariants,
+    figure_tracking,
     parse_formats,
 )
 from validation.report import write_report
@@ -173,6 +175,118 @@ def test_control_figure_shows_the_other_plant_as_its_distance(run):
         legend = ax.get_legend()
         right_edge = ax.transAxes.transform((1.0, 1.0))[0]
         assert legend is not None and legend.get_bbox_to_anchor().x0 > right_edge
+
+
+@pytest.fixture(scope="module")
+def drawn(run):
+    """Every figure drawn for the run (as its PNG is: Agg at the figure's dpi), with the renderer
+    that drew it."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    _, plants, cmp, meta = run
+    ctx = FigureContext.from_meta(meta)
+    drawings = (
+        figure_errors(cmp, ctx),
+        figure_tracking(cmp, ctx),
+        figure_invariants(cmp, ctx),
+        figure_control(plants, ctx, cmp.thresholds),
+    )
+    out = []
+    for d in drawings:
+        if d.drawn:
+            canvas = FigureCanvasAgg(d.figure)
+            canvas.draw()
+            out.append((d, canvas.get_renderer()))
+    return out
+
+
+PX = 0.5  # px: rounding of text extents
+
+
+def _inside(box, page) -> bool:
+    return (
+        box.x0 >= page.x0 - PX
+        and box.x1 <= page.x1 + PX
+        and box.y0 >= page.y0 - PX
+        and box.y1 <= page.y1 + PX
+    )
+
+
+def _apart(a, b) -> bool:
+    return a.x1 <= b.x0 + PX or b.x1 <= a.x0 + PX or a.y1 <= b.y0 + PX or b.y1 <= a.y0 + PX
+
+
+def test_nothing_is_clipped_or_overlapping(drawn):
+    """The layout is fixed in inches, not searched for: every panel with its title, tick labels
+    and axis labels lies inside the figure, below the figure's title and clear of the panels next
+    to it; every legend lies inside the figure and outside every panel's data area."""
+    for d, renderer in drawn:
+        fig, page = d.figure, d.figure.bbox
+        panels = [ax.get_tightbbox(renderer) for ax in fig.axes]  # with title, labels, legend
+        for ax, box in zip(fig.axes, panels, strict=True):
+            assert _inside(box, page), (d.name, ax.get_title(loc="left"))
+        for upper, lower in itertools.pairwise(panels):
+            assert lower.y1 <= upper.y0 + PX, d.name
+        title = next(
+            t
+            for t in fig.get_children()
+            if getattr(t, "get_text", None) and t.get_text() == fig.get_suptitle()
+        ).get_window_extent(renderer)
+        assert _inside(title, page) and panels[0].y1 <= title.y0 + PX, d.name
+        legends = [*fig.legends, *(ax.get_legend() for ax in fig.axes if ax.get_legend())]
+        assert legends, d.name
+        for legend in legends:
+            box = legend.get_window_extent(renderer)
+            assert _inside(box, page), d.name
+            assert all(_apart(box, ax.bbox) for ax in fig.axes), d.name
+        for legend in fig.legends:  # below the panels, their tick and axis labels
+            assert legend.get_window_extent(renderer).y1 <= panels[-1].y0 + PX, d.name
+
+
+def test_every_panel_shows_its_curves_and_thresholds_whole(drawn):
+    """Each panel's y limits enclose every curve it draws and its threshold lines (a log panel's
+    limits are set from them, not autoscaled)."""
+    for d, _ in drawn:
+        for ax in d.figure.axes:
+            lo, hi = ax.get_ylim()
+            for line in ax.lines:
+                y = np.asarray(line.get_ydata(), float)
+                y = y[np.isfinite(y) & ((y > 0) if ax.get_yscale() == "log" else True)]
+                if line.get_label() == "threshold" or ax.get_yscale() == "log":
+                    assert y.size, (d.name, line.get_label())
+                if y.size:
+                    assert lo <= y.min() and y.max() <= hi, (d.name, line.get_label())
+
+
+_SUPERSCRIPT_DIGITS = str.maketrans("⁻⁰¹²³⁴⁵⁶⁷⁸⁹", "-0123456789")
+
+
+def test_log_ticks_name_their_decades_inside_the_view(drawn):
+    """Every log panel labels at least one tick; each label, ``10⁻¹²`` in plain text, names the
+    power of ten it stands at, and every tick lies inside the panel's limits."""
+    for d, _ in drawn:
+        for ax in d.figure.axes:
+            if ax.get_yscale() != "log":
+                continue
+            lo, hi = ax.get_ylim()
+            locs = ax.yaxis.get_majorticklocs()
+            labels = ax.yaxis.get_major_formatter().format_ticks(locs)
+            assert len(locs) >= 1, d.name
+            for loc, text in zip(locs, labels, strict=True):
+                m = re.fullmatch("10([⁻]?[⁰¹²³⁴⁵⁶⁷⁸⁹]+)", text)
+                assert m, (d.name, text)
+                assert loc == pytest.approx(10.0 ** int(m.group(1).translate(_SUPERSCRIPT_DIGITS)))
+                assert lo <= loc <= hi, (d.name, text)
+
+
+def test_equal_figures_give_equal_files(run):
+    """No time stamp and no random SVG ids: the same figure drawn twice gives the same bytes in
+    every format."""
+    _, _, cmp, meta = run
+    ctx = FigureContext.from_meta(meta)
+    a, b = figure_invariants(cmp, ctx), figure_invariants(cmp, ctx)
+    for fmt in FigureFormat:
+        assert a.render(fmt) == b.render(fmt), fmt
 
 
 def test_figure_formats_are_parsed_and_bad_ones_named():

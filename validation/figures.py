@@ -18,11 +18,18 @@ the caption says which and why; a figure with nothing to show is not drawn, and 
 why (an uncontrolled scene has no control and no tracking figure). Curves that coincide are told
 apart by their markers, staggered along the time axis. Legends stand outside the data.
 
+The layout is fixed, in inches, from the figure's size (:class:`_Layout`): no layout engine, titles
+at a set height, y labels at one offset measured from the widest tick label, log ticks labelled
+``10⁻¹²`` in plain text and made only inside the view. A layout engine, automatic title placement
+and math text tick labels lay out every text several times over: with them the four figures of a
+default run took 2.7x as long to draw and write.
+
 Every drawing renders to PNG, SVG or PDF (:class:`FigureFormat`) without a time stamp in the file.
 """
 
 from __future__ import annotations
 
+import functools
 import io
 import math
 from collections.abc import Mapping, Sequence
@@ -51,6 +58,11 @@ PNG_DPI = 150  # pixels per inch of the PNG files (10 in wide: 1500 px)
 WIDTH_IN = 10.0  # figure width, in
 ROW_IN = 2.3  # height of one panel, in
 MARKERS_PER_CURVE = 12  # markers on each curve, staggered between curves so coinciding ones show
+PNG_COMPRESS_LEVEL = 3  # zlib level of the PNGs (Pillow's default 6: 1.6x the time, 8 % smaller)
+SVG_HASH_SALT = "validation.figures"  # salt of the SVG element ids (matplotlib: a random uuid)
+TEXT_RASTER = {"text.hinting": "no_hinting"}
+"""How Agg rasterises text: glyphs unhinted. Matplotlib's default (FreeType hinting each glyph to
+the pixel grid) looks the same at 150 dpi and adds about a sixth to the drawing time."""
 
 PLANT_STYLE: Mapping[Subject, Mapping[str, Any]] = {
     Subject.ANALYTIC: {"color": "tab:blue", "linestyle": "-", "marker": "o"},
@@ -166,8 +178,11 @@ class Drawing:
         return self.figure is not None
 
     def render(self, fmt: FigureFormat | str = FigureFormat.PNG) -> bytes:
-        """The figure's file content in ``fmt`` (no time stamp, so equal figures give equal
-        SVG text)."""
+        """The figure's file content in ``fmt``: no time stamp, and SVG element ids drawn from a
+        fixed salt rather than a random one, so equal figures give equal files; text rasterised
+        as :data:`TEXT_RASTER` says."""
+        import matplotlib as mpl
+
         if self.figure is None:
             raise ValueError(f"figure {self.name!r}: not drawn ({self.caption})")
         fmt = FigureFormat(fmt)
@@ -177,7 +192,13 @@ class Drawing:
             FigureFormat.SVG: {"Date": None},
             FigureFormat.PDF: {"CreationDate": None},
         }[fmt]
-        self.figure.savefig(buf, format=fmt.value, dpi=PNG_DPI, metadata=metadata)
+        extra = (
+            {"pil_kwargs": {"compress_level": PNG_COMPRESS_LEVEL}}
+            if fmt is FigureFormat.PNG
+            else {}
+        )
+        with mpl.rc_context({"svg.hashsalt": SVG_HASH_SALT, **TEXT_RASTER}):
+            self.figure.savefig(buf, format=fmt.value, dpi=PNG_DPI, metadata=metadata, **extra)
         return buf.getvalue()
 
 
@@ -203,14 +224,194 @@ def parse_formats(text: str) -> tuple[FigureFormat, ...]:
 # ----------------------------------------------------------------------------------------------
 
 
-def _figure(nrows: int, title: str, height_rows: Sequence[float] | None = None):
+@dataclass(frozen=True)
+class _Layout:
+    """Fixed margins of a figure, in inches (figure width :data:`WIDTH_IN`).
+
+    Attributes:
+        left_in: room left of the panels for the y tick labels and label (widened when a tick
+            label needs more, :func:`_place_axis_labels`).
+        right_in: room right of the panels (a side legend's width, or a small margin).
+        top_in: room above the first panel: the figure's title and the panel's title.
+        gap_in: room between panels: the lower panel's title.
+        bottom_in: room below the last panel: x tick labels, the x label and the figure legend.
+    """
+
+    left_in: float = 0.9
+    right_in: float = 0.25
+    top_in: float = 0.62
+    gap_in: float = 0.4
+    bottom_in: float = 0.55
+
+
+FIGURE_LEGEND_IN = 0.3  # height of the one-row legend below the panels, in
+SIDE_LEGEND_IN = 1.8  # width reserved right of the panels for their side legends, in
+SUPTITLE_TOP_IN = 0.08  # from the figure's top edge to its title's top, in
+TITLE_PAD_PT = 5.0  # from a panel's top edge to its title's baseline, points
+FIGURE_TITLE_PT = 12.0  # font sizes, points
+PANEL_TITLE_PT = 10.0
+
+
+def _figure(
+    nrows: int,
+    title: str,
+    height_rows: Sequence[float] | None = None,
+    *,
+    side_legends: bool = False,
+):
+    """A figure of ``nrows`` panels stacked over a shared time axis, laid out once in inches: a
+    legend row below the panels, or with ``side_legends`` room on the right for one legend per
+    panel."""
     from matplotlib.figure import Figure
 
     ratios = list(height_rows) if height_rows is not None else [1.0] * nrows
-    fig = Figure(figsize=(WIDTH_IN, ROW_IN * sum(ratios) + 1.0), layout="constrained")
-    axes = fig.subplots(nrows, 1, sharex=True, squeeze=False, height_ratios=ratios)[:, 0]
-    fig.suptitle(title, fontsize=12)
+    layout = _Layout(
+        right_in=SIDE_LEGEND_IN if side_legends else _Layout.right_in,
+        bottom_in=_Layout.bottom_in + (0.0 if side_legends else FIGURE_LEGEND_IN),
+    )
+    height = ROW_IN * sum(ratios) + 1.0
+    fig = Figure(figsize=(WIDTH_IN, height), dpi=PNG_DPI)
+    panels_in = height - layout.top_in - layout.bottom_in - (nrows - 1) * layout.gap_in
+    axes = fig.subplots(
+        nrows,
+        1,
+        sharex=True,
+        squeeze=False,
+        gridspec_kw={
+            "left": layout.left_in / WIDTH_IN,
+            "right": 1.0 - layout.right_in / WIDTH_IN,
+            "top": 1.0 - layout.top_in / height,
+            "bottom": layout.bottom_in / height,
+            "hspace": layout.gap_in / (panels_in / nrows),
+            "height_ratios": ratios,
+        },
+    )[:, 0]
+    fig.suptitle(title, fontsize=FIGURE_TITLE_PT, y=1.0 - SUPTITLE_TOP_IN / height, va="top")
     return fig, axes
+
+
+def _title(ax, text: str) -> None:
+    """The panel's title, left, at a set height above it (no search for overlapping labels:
+    the layout leaves it room)."""
+    ax.set_title(text, fontsize=PANEL_TITLE_PT, loc="left", y=1.0, pad=TITLE_PAD_PT)
+
+
+_SUPERSCRIPT = str.maketrans("0123456789-", "⁰¹²³⁴⁵⁶⁷⁸⁹⁻")
+
+
+def _power_of_ten(x: float, pos: int | None = None) -> str:
+    """A log axis' tick label in plain text: ``1e-12`` -> ``10⁻¹²`` (other values as ``%g``)."""
+    if not (x > 0 and math.isfinite(x)):
+        return ""
+    e = round(math.log10(x))
+    if math.isclose(x, 10.0**e, rel_tol=1e-9):
+        return "10" + str(e).translate(_SUPERSCRIPT)
+    return f"{x:g}"
+
+
+@functools.lru_cache(maxsize=512)
+def _text_size_pt(text: str, size: float | str) -> tuple[float, float]:
+    """(width, height) of one line of ``text`` in the default font at ``size``, points (cached:
+    the figures use matplotlib's default font throughout)."""
+    from matplotlib.font_manager import FontProperties
+    from matplotlib.textpath import text_to_path
+
+    prop = FontProperties(size=size)
+    w, h, _ = text_to_path.get_text_width_height_descent(text, prop, ismath=False)
+    _, lp, _ = text_to_path.get_text_width_height_descent("lp", prop, ismath=False)
+    return w, max(h, lp)
+
+
+def _widest_ytick_label_pt(ax) -> float:
+    """Width of the widest major y tick label the panel will draw, points (0 if none)."""
+    import matplotlib as mpl
+
+    lo, hi = sorted(ax.get_ybound())
+    locs = [v for v in ax.yaxis.get_majorticklocs() if lo <= v <= hi]
+    if not locs:
+        return 0.0
+    size = mpl.rcParams["ytick.labelsize"]
+    return max(_text_size_pt(s, size)[0] for s in ax.yaxis.get_major_formatter().format_ticks(locs))
+
+
+def _in_view(base):
+    """``base``, a tick locator, keeping only the ticks inside the view: matplotlib makes a tick
+    object (two lines, a grid line, two labels) for every location its locator returns, drawn or
+    not, and the usual locators return one beyond each end. (A class made here, not at import:
+    this module imports matplotlib only when it draws.)"""
+    from matplotlib.ticker import Locator
+
+    class InView(Locator):
+        def set_axis(self, axis):
+            super().set_axis(axis)
+            base.set_axis(axis)
+
+        def __call__(self):
+            return self._inside(base(), *self.axis.get_view_interval())
+
+        def tick_values(self, vmin, vmax):
+            return self._inside(base.tick_values(vmin, vmax), vmin, vmax)
+
+        def nonsingular(self, v0, v1):
+            return base.nonsingular(v0, v1)
+
+        def view_limits(self, vmin, vmax):
+            return base.view_limits(vmin, vmax)
+
+        def _inside(self, locs, vmin, vmax):
+            locs = np.asarray(locs, float)
+            if self.axis is None or not locs.size:
+                return locs
+            to_screen = self.axis.get_transform()  # the scale: log ticks compare in log space
+            lo, hi = sorted(to_screen.transform(np.array([vmin, vmax], float)))
+            t = to_screen.transform(locs)
+            tol = 1e-9 * (hi - lo)
+            with np.errstate(invalid="ignore"):
+                return locs[(t >= lo - tol) & (t <= hi + tol)]
+
+    return InView()
+
+
+def _finish_axes(fig, axes) -> None:
+    """After every panel is drawn into: ticks only inside the view (:func:`_in_view`), and the
+    axis labels placed (:func:`_place_axis_labels`)."""
+    for ax in axes:
+        ax.yaxis.set_major_locator(_in_view(ax.yaxis.get_major_locator()))
+    axes[-1].xaxis.set_major_locator(_in_view(axes[-1].xaxis.get_major_locator()))  # shared
+    _place_axis_labels(fig, axes)
+
+
+def _place_axis_labels(fig, axes) -> None:
+    """Put every panel's y label at one offset left of the panels, just beyond the widest tick
+    label of all panels (aligned, as a layout engine would), widening the left margin if that
+    label needs it; the x label below the last panel's tick labels. Fixed positions: matplotlib
+    then skips measuring every tick label for them at each draw."""
+    import matplotlib as mpl
+
+    rc = mpl.rcParams
+    tick_pt = max(rc["ytick.major.size"], rc["ytick.minor.size"]) + rc["ytick.major.pad"]
+    widest = max(_widest_ytick_label_pt(ax) for ax in axes)
+    offset_in = (tick_pt + widest + rc["axes.labelpad"]) / 72.0
+    label_in = _text_size_pt("1 (relative)", rc["axes.labelsize"])[1] / 72.0
+    fig_w, fig_h = fig.get_size_inches()
+    gs = axes[0].get_subplotspec().get_gridspec()
+    need = (offset_in + label_in) / fig_w + 0.1 / fig_w
+    if gs.left < need:
+        gs.update(left=need)  # repositions the axes of pyplot's figures only
+        for ax in axes:
+            ax.set_position(ax.get_subplotspec().get_position(fig))
+    width_in = (gs.right - gs.left) * fig_w
+    for ax in axes:
+        ax.yaxis.set_label_coords(-offset_in / width_in, 0.5)
+    ax = axes[-1]
+    height_in = ax.get_position().height * fig_h
+    xtick_in = (
+        rc["xtick.major.size"]
+        + rc["xtick.major.pad"]
+        + _text_size_pt("0", rc["xtick.labelsize"])[1]
+        + rc["axes.labelpad"]
+    ) / 72.0
+    ax.xaxis.set_label_coords(0.5, -xtick_in / height_in)
 
 
 def _markevery(n: int, k: int) -> tuple[int, int]:
@@ -236,11 +437,17 @@ def _line(ax, t: np.ndarray, v: np.ndarray, subject: Subject, k: int, label: str
 
 def _log_axis(ax, values: Sequence[np.ndarray]) -> None:
     """A log y axis with limits a factor 5 beyond the positive finite ``values``, set before any
-    line is drawn (autoscale would warn on a constant series, such as a threshold alone)."""
+    line is drawn (autoscale would warn on a constant series, such as a threshold alone); decades
+    labelled ``10⁻¹²`` (:func:`_power_of_ten`), minor ticks unlabelled (the limits span more than
+    a decade, so at least one decade is labelled)."""
+    from matplotlib.ticker import NullFormatter
+
     pos = [np.asarray(v, float).ravel() for v in values]
     allpos = np.concatenate(pos) if pos else np.zeros(0)
     allpos = allpos[(allpos > 0) & np.isfinite(allpos)]
     ax.set_yscale("log")
+    ax.yaxis.set_major_formatter(_power_of_ten)
+    ax.yaxis.set_minor_formatter(NullFormatter())
     if allpos.size:
         ax.set_ylim(allpos.min() / 5, allpos.max() * 5)
     else:
@@ -268,7 +475,8 @@ def _log_panel(
 
 
 def _figure_legend(fig, axes) -> None:
-    """One legend for the whole figure, below the panels (every panel shows the same curves)."""
+    """One legend for the whole figure, in the row kept for it below the panels (every panel
+    shows the same curves); then the axes are finished (:func:`_finish_axes`)."""
     handles: dict[str, Any] = {}
     for ax in axes:
         for h, lab in zip(*ax.get_legend_handles_labels(), strict=True):
@@ -277,11 +485,13 @@ def _figure_legend(fig, axes) -> None:
         fig.legend(
             list(handles.values()),
             list(handles),
-            loc="outside lower center",
+            loc="lower center",
+            bbox_to_anchor=(0.5, 0.0),
             ncols=min(len(handles), 4),
             fontsize=9,
             frameon=False,
         )
+    _finish_axes(fig, axes)
 
 
 def _side_legend(ax) -> None:
@@ -379,7 +589,7 @@ def figure_errors(cmp: Comparison, ctx: FigureContext | None = None) -> Drawing:
         unit = "1 (relative)" if th is not None and th.relative else ss[0].unit
         ax.set_ylabel(unit)
         limit = f"; threshold {th.value:g}" if th is not None else ""
-        ax.set_title(f"{PANEL_TITLES.get(name, ss[0].label)}{limit}", fontsize=10, loc="left")
+        _title(ax, f"{PANEL_TITLES.get(name, ss[0].label)}{limit}")
     axes[-1].set_xlabel("t (s)")
     _figure_legend(fig, axes)
     return Drawing(
@@ -419,7 +629,7 @@ def figure_tracking(cmp: Comparison, ctx: FigureContext | None = None) -> Drawin
             zeros.append((name, z))
         ax.set_ylabel(ss[0].unit)
         limit = f"; threshold {th.value:g} {th.unit}" if th is not None else ""
-        ax.set_title(f"{PANEL_TITLES.get(name, ss[0].label)}{limit}", fontsize=10, loc="left")
+        _title(ax, f"{PANEL_TITLES.get(name, ss[0].label)}{limit}")
     axes[-1].set_xlabel("t (s)")
     _figure_legend(fig, axes)
     caption = _caption(
@@ -453,7 +663,7 @@ def figure_invariants(cmp: Comparison, ctx: FigureContext | None = None) -> Draw
             zeros.append((name, z))
         ax.set_ylabel("1 (relative)" if th is not None and th.relative else ss[0].unit)
         limit = f"; threshold {th.value:g}" if th is not None else ""
-        ax.set_title(f"{PANEL_TITLES.get(name, ss[0].label)}{limit}", fontsize=10, loc="left")
+        _title(ax, f"{PANEL_TITLES.get(name, ss[0].label)}{limit}")
     axes[-1].set_xlabel("t (s)")
     _figure_legend(fig, axes)
     caption = _caption(
@@ -477,6 +687,14 @@ def _eng(maxabs: float) -> tuple[float, str]:
         return 1.0, ""
     exp = int(np.clip(3 * math.floor(math.log10(maxabs) / 3), -24, 24))
     return 10.0**exp, EngFormatter.ENG_PREFIXES[exp]
+
+
+def _linear_axis(ax) -> None:
+    """A linear y axis: the zero line, a grid, and tick labels without an offset (an offset, as
+    ``+5e2`` above the axis for a nearly constant force, would stand where the title is)."""
+    ax.axhline(0.0, color="0.6", linewidth=0.6)
+    ax.grid(True, alpha=0.3)
+    ax.ticklabel_format(axis="y", useOffset=False)
 
 
 def _common_samples(a: Trajectory, b: Trajectory) -> int:
@@ -504,7 +722,7 @@ def figure_control(
     ref, others = plants[0], plants[1:]
     n = ref.n
     nrows = 1 + (1 if n else 0) + len(others)
-    fig, axes = _figure(nrows, f"{ctx.scene}: control forces")
+    fig, axes = _figure(nrows, f"{ctx.scene}: control forces", side_legends=True)
     refname = ref.engine.value
     colors = [f"C{j}" for j in range(10)]
 
@@ -519,9 +737,8 @@ def figure_control(
             label=f"$\\tau_{'xyz'[j]}$",
         )
     ax.set_ylabel(f"τ ({prefix}N·m)")
-    ax.set_title(f"{refname} plant: control torque τ, body axes", fontsize=10, loc="left")
-    ax.axhline(0.0, color="0.6", linewidth=0.6)
-    ax.grid(True, alpha=0.3)
+    _title(ax, f"{refname} plant: control torque τ, body axes")
+    _linear_axis(ax)
     _side_legend(ax)
     row = 1
     units = [f"{prefix}N·m"]
@@ -537,9 +754,8 @@ def figure_control(
                 label=f"$F_{{{i + 1}}}$",
             )
         ax.set_ylabel(f"F ({fprefix}N)")
-        ax.set_title(f"{refname} plant: rod force on each mass", fontsize=10, loc="left")
-        ax.axhline(0.0, color="0.6", linewidth=0.6)
-        ax.grid(True, alpha=0.3)
+        _title(ax, f"{refname} plant: rod force on each mass")
+        _linear_axis(ax)
         _side_legend(ax)
         units.append(f"{fprefix}N")
         row += 1
@@ -582,14 +798,15 @@ def figure_control(
         for m, lim in enumerate(limits):
             ax.axhline(lim, label="threshold" if m == 0 else None, **THRESHOLD_STYLE)
         ax.set_ylabel("1 (relative)")
-        ax.set_title(
-            f"{other.engine.value} − {refname}: distance relative to the {refname} plant's largest force",
-            fontsize=10,
-            loc="left",
+        _title(
+            ax,
+            f"{other.engine.value} − {refname}: distance relative to the {refname} plant's "
+            "largest force",
         )
         ax.grid(True, which="major", alpha=0.3)
         _side_legend(ax)
     axes[-1].set_xlabel("t (s)")
+    _finish_axes(fig, axes)
     what = "control torque τ (body axes)" + (" and the rod force F_i on each mass" if n else "")
     sentences = [
         f"Control forces. Top: the {refname} plant's {what}, in {' and '.join(units)}; this plant "
