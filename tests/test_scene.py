@@ -520,3 +520,27 @@ def test_no_builtin_scene_draws_a_mass_off_its_rod():
         with warnings.catch_warnings():
             warnings.filterwarnings("error", message=".*beyond the drawn rod")
             load_scene(scene_path(name))
+
+
+def test_axis_angle_attitude_is_the_rotation_it_names_and_scipys_quaternion():
+    """u(0) from an axis, an angle and a reference-from-principal matrix: S(u) equals Rodrigues'
+    rotation times the reference, and u equals scipy's composed quaternion (sign included), for
+    random rotations and the awkward ones (half turns, identity, a permutation)."""
+    from scipy.spatial.transform import Rotation
+
+    from analytic.kinematics import S
+    from analytic.scene import axis_angle_quat, matrix_quat, quat_product
+
+    rng = np.random.default_rng(11)
+    refs = [np.eye(3), np.diag([1.0, -1.0, -1.0]), np.array([[0, 0, 1], [1, 0, 0], [0, 1, 0.0]])]
+    refs += [Rotation.random(random_state=int(s)).as_matrix() for s in rng.integers(0, 2**31, 40)]
+    for ref in refs:
+        axis = rng.standard_normal(3)
+        axis /= np.linalg.norm(axis)
+        for angle in (0.0, np.pi, -2.5, float(rng.uniform(-7, 7))):
+            u = quat_product(axis_angle_quat(axis, angle), matrix_quat(ref))
+            k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+            rodrigues = np.eye(3) + np.sin(angle) * k + (1 - np.cos(angle)) * k @ k
+            np.testing.assert_allclose(S(u), rodrigues @ ref, atol=1e-14)
+            want = Rotation.from_rotvec(axis * angle) * Rotation.from_matrix(ref)
+            np.testing.assert_allclose(u, want.as_quat(scalar_first=True), atol=1e-14)

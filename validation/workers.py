@@ -23,6 +23,7 @@ that reaches a child ends its task the way it would end here (a plant returns it
 
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
 import sys
@@ -105,6 +106,16 @@ def _set_idle(idle: bool) -> None:
         os.sched_setscheduler(0, policy, os.sched_param(0))
     except (AttributeError, OSError):
         pass
+
+
+@contextlib.contextmanager
+def idle_priority():
+    """This process at idle priority (Linux ``SCHED_IDLE``) inside the block, normal after."""
+    _set_idle(True)
+    try:
+        yield
+    finally:
+        _set_idle(False)
 
 
 def _child(conn, inbox, prepare, task, args, idle: bool) -> None:  # pragma: no cover - in a child
@@ -202,10 +213,12 @@ class Job:
                 self._finish(msg)
 
     def _finish(self, outcome: tuple) -> None:
+        """Keep the outcome. The child is not waited for: it exits on its own (multiprocessing
+        reaps it when the next worker starts, or at exit), and freeing a large process's memory
+        takes a tenth of a second nobody needs to wait."""
         self.done = True
         self.outcome = outcome
         self.conn.close()
-        self.process.join(timeout=LOST_GRACE_S)
 
     def result(self) -> Any:
         """The task's return value (running it here if it is not forked).
@@ -358,6 +371,7 @@ __all__ = [
     "WorkerLost",
     "available_cpus",
     "can_fork",
+    "idle_priority",
     "start",
     "stop",
     "wait",
