@@ -21,20 +21,28 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import integrate
 
 from analytic.effects import SolverMethod, Stepper
 from analytic.trajectory import RunStatus
 
-SOLVERS: dict[SolverMethod, type[integrate.OdeSolver]] = {
-    SolverMethod.DOP853: integrate.DOP853,
-    SolverMethod.RK45: integrate.RK45,
-    SolverMethod.RK23: integrate.RK23,
-    SolverMethod.RADAU: integrate.Radau,
-    SolverMethod.BDF: integrate.BDF,
-    SolverMethod.LSODA: integrate.LSODA,
+SOLVERS: dict[SolverMethod, str] = {
+    SolverMethod.DOP853: "DOP853",
+    SolverMethod.RK45: "RK45",
+    SolverMethod.RK23: "RK23",
+    SolverMethod.RADAU: "Radau",
+    SolverMethod.BDF: "BDF",
+    SolverMethod.LSODA: "LSODA",
 }
-"""scipy's solver class for each :class:`SolverMethod`."""
+"""The name of scipy's ``OdeSolver`` class in ``scipy.integrate`` for each :class:`SolverMethod`
+(looked up when a run starts: importing scipy's integrators costs 0.4 s)."""
+
+
+def solver_class(method: SolverMethod) -> type:
+    """scipy's ``OdeSolver`` class for ``method``."""
+    from scipy import integrate
+
+    return getattr(integrate, SOLVERS[method])
+
 
 QUADRATURE_ATOL = 1e300
 """``atol`` of the quadratures: large enough that they never take part in the error control."""
@@ -119,7 +127,7 @@ def step_and_sample(
     norm_err_steps = 0.0
     wall0 = time.perf_counter()
     try:
-        solver = SOLVERS[method](
+        solver = solver_class(method)(
             f, t_eval[0], y0, t_eval[-1], rtol=rtol, atol=atol_vec, max_step=max_step
         )
         while solver.status == "running":
@@ -158,4 +166,11 @@ def step_and_sample(
     )
 
 
-__all__ = ["QUADRATURE_ATOL", "SOLVERS", "NonFinite", "Stepped", "step_and_sample"]
+__all__ = [
+    "QUADRATURE_ATOL",
+    "SOLVERS",
+    "NonFinite",
+    "Stepped",
+    "solver_class",
+    "step_and_sample",
+]

@@ -281,7 +281,7 @@ def _run_plants(
     """Every plant's run, side by side in workers where ``fork`` (no more at a time than there are
     CPUs), else one after the other here. Returns the trajectories (in ``runs``' order) and
     whether the run was interrupted; each plant's own wall time goes into ``walls``.
-    ``on_started()`` runs once, here, as soon as the first plants are started."""
+    ``on_started()`` runs once, here, as soon as every plant has started."""
     slots = workers.available_cpus() if fork else 1
     queue = list(enumerate(runs))
     running: list[tuple[int, Any, workers.Job]] = []
@@ -297,7 +297,7 @@ def _run_plants(
                     name, _plant_task, pl, settings, sc, horizon, on_message=report, fork=fork
                 )
                 running.append((k, pl, job))
-            if on_started is not None:
+            if on_started is not None and not queue:  # every plant has started
                 on_started, then = None, on_started
                 then()
             if interrupted:  # Ctrl-C stops the run, it does not start the next plant
@@ -444,8 +444,9 @@ def _validate_into(
     jobs: list[workers.Job] = []
 
     def start_evidence() -> None:
-        """While the plants run: matplotlib imported here at idle priority (the workers forked
-        next inherit it), then the two evidence workers, one importing rerun meanwhile."""
+        """Once every plant runs: matplotlib imported here at idle priority (the workers forked
+        next inherit it, so it is imported once), then the two evidence workers, one importing
+        rerun meanwhile, also at idle priority: the plants keep the CPUs."""
         if fork:
             with workers.idle_priority():
                 _import_matplotlib()
@@ -483,7 +484,12 @@ def _validate_into(
         ctx = FigureContext.from_meta(meta, cmp.scene if cmp is not None else "")
         rec_args = (out / RECORDING, sc, trajectories, cmp, run.run_id) if trajectories else None
         fig_args = (out, cmp, trajectories, ctx, formats)
-        for job, share in zip(jobs, EVIDENCE_SHARES, strict=True):
+        # The worker without a recording first: the other may still be importing rerun, and a
+        # pipe blocks until its reader reads.
+        by_readiness = sorted(
+            zip(jobs, EVIDENCE_SHARES, strict=True), key=lambda js: RECORDING in js[1]
+        )
+        for job, share in by_readiness:
             job.give(share, rec_args, fig_args)
         if workers.wait(jobs):  # Ctrl-C while the evidence is written stops the run, as here
             raise KeyboardInterrupt

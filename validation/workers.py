@@ -98,12 +98,12 @@ def _one_line(exc: BaseException) -> str:
     return str(exc).splitlines()[0] if str(exc) else ""
 
 
-def _set_idle(idle: bool) -> None:
-    """Linux ``SCHED_IDLE`` (run only on a CPU nothing else wants) or back to ``SCHED_OTHER``;
-    where the switch is refused, the process stays as it is."""
+def _set_idle(idle: bool, pid: int = 0) -> None:
+    """Process ``pid`` (0: this one) to Linux ``SCHED_IDLE`` (run only on a CPU nothing else
+    wants) or back to ``SCHED_OTHER``; where the switch is refused, it stays as it is."""
     try:
         policy = os.SCHED_IDLE if idle else os.SCHED_OTHER
-        os.sched_setscheduler(0, policy, os.sched_param(0))
+        os.sched_setscheduler(pid, policy, os.sched_param(0))
     except (AttributeError, OSError):
         pass
 
@@ -179,6 +179,7 @@ class Job:
         """The inputs of a job started without them."""
         self.args = args
         if self.forked:
+            _set_idle(False, self.process.pid)  # what it still prepares is now on the way
             try:
                 self.inbox.send(args)
             except (OSError, ValueError):  # the child is gone; result() says WorkerLost
