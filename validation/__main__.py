@@ -1,7 +1,5 @@
 """``python -m validation`` is ``tumble``: the same commands, options and exit statuses."""
 
-import sys
+from validation.cli import run
 
-from validation.cli import main
-
-sys.exit(main())
+run()

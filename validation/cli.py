@@ -485,5 +485,21 @@ def main(argv: list[str] | None = None) -> int:
         signal.signal(signal.SIGTERM, previous)
 
 
+def run(argv: list[str] | None = None) -> None:
+    """The ``tumble`` program: :func:`main`, then the process ends at once with its status.
+
+    Every file is written and closed by then and the output streams are flushed here; what is
+    skipped is the interpreter's teardown of the loaded compiled kernels, about 0.3 s of nothing
+    (measured on the default ``validate``). Code that calls ``tumble`` in-process uses
+    :func:`main`, which returns the status instead."""
+    status = main(argv)
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except (OSError, ValueError):
+            pass
+    os._exit(status)
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    run()

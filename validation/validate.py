@@ -444,12 +444,14 @@ def _validate_into(
     jobs: list[workers.Job] = []
 
     def start_evidence() -> None:
-        """Once every plant runs: matplotlib imported here at idle priority (the workers forked
-        next inherit it, so it is imported once), then the two evidence workers, one importing
-        rerun meanwhile, also at idle priority: the plants keep the CPUs."""
+        """Once every plant runs: matplotlib (the workers forked next inherit it, so it is
+        imported once) and scipy.linalg (for the comparison) imported here at idle priority, then
+        the two evidence workers, one importing rerun meanwhile, also at idle priority: the
+        plants keep the CPUs."""
         if fork:
             with workers.idle_priority():
                 _import_matplotlib()
+                import scipy.linalg  # noqa: F401  (the comparison's exponentials, next)
         jobs[:] = [
             workers.start(
                 f"evidence {k + 1}",
