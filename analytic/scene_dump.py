@@ -6,7 +6,8 @@ scene file may give the attitude as a rotation matrix or leave the solver table 
 the quaternion ``initial.u`` (w first) and ``solver.method``, ``rtol``, ``atol``, ``max_step`` as the
 loader resolved them. Units are those of the record's docstrings (SI: m, kg, s, rad, N).
 
-Conversions: numpy arrays -> nested lists of floats; enums -> their value; frozensets -> sorted
+Conversions: numpy arrays -> nested lists of floats; string enums stay (they are ``str``), other
+enums -> their value; frozensets -> sorted
 lists; tuples -> lists; mappings -> dicts with string keys. Floats are kept as they are (``inf``
 included, e.g. ``solver.max_step``): turning them into JSON is the encoder's job
 (:func:`validation.provenance.to_json_value`).
@@ -28,8 +29,8 @@ def plain(x: Any) -> Any:
     """``x`` with dataclasses, arrays, enums and sets turned into dicts, lists and scalars."""
     if dataclasses.is_dataclass(x) and not isinstance(x, type):
         return {f.name: plain(getattr(x, f.name)) for f in dataclasses.fields(x)}
-    if isinstance(x, enum.Enum):
-        return x.value
+    if isinstance(x, enum.Enum):  # a string enum stays itself (a str): the encoder knows that
+        return x if isinstance(x, str) else x.value  # "none" is a declared value, not a gap
     if isinstance(x, np.ndarray):
         return x.tolist()
     if isinstance(x, np.generic):

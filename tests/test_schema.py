@@ -228,6 +228,21 @@ def test_encoder_refuses_placeholder_strings(placeholder):
         to_json_value({"run": {"t_max": placeholder}})
 
 
+def test_an_enum_value_that_reads_like_a_placeholder_is_data():
+    """A scene without a picture of BR has ``shape.kind = "none"``: a declared enum value, written
+    as it is (its report once failed to write); the bare string is still refused."""
+    from analytic.effects import ShapeKind
+    from analytic.scene import load_scene
+
+    assert to_json_value({"kind": ShapeKind.NONE}) == {"kind": "none"}
+    with pytest.raises(PlaceholderError):
+        to_json_value({"kind": "none"})
+    sc = load_scene(ROOT / "validation" / "scenes" / "hard" / "many_masses.toml")
+    assert sc.body.shape.kind is ShapeKind.NONE
+    doc = json.loads(dumps({"provenance": provenance(FileKind.REPORT, sc)}))
+    assert doc["provenance"]["scene"]["body"]["shape"]["kind"] == "none"
+
+
 def test_encoder_refuses_unknown_objects():
     @dataclasses.dataclass
     class Thing:

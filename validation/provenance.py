@@ -183,7 +183,8 @@ def to_json_value(x: Any, where: str = "$") -> Any:
     if x is None or isinstance(x, bool):
         return x
     if isinstance(x, enum.Enum):  # before str/int: a StrEnum is a str
-        return to_json_value(x.value, where)
+        value = x.value  # a declared value (a shape kind "none"), never a placeholder
+        return value if isinstance(value, str) else to_json_value(value, where)
     if isinstance(x, str):
         if _PLACEHOLDER.fullmatch(x):
             raise PlaceholderError(
