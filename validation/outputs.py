@@ -270,6 +270,25 @@ def _check_replaceable(target: Path) -> None:
         )
 
 
+_HELD_LOCKS: set[int] = set()
+"""File descriptors of the locks this process holds. A process forked while one is held (a worker
+of :mod:`validation.workers`) closes its copy at once: an ``flock`` lives while any copy is open,
+and the directory must be free as soon as its run ends."""
+
+
+def _forget_held_locks() -> None:  # pragma: no cover - in a forked child
+    for fd in _HELD_LOCKS:
+        try:
+            os.close(fd)
+        except OSError:
+            pass
+    _HELD_LOCKS.clear()
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_forget_held_locks)
+
+
 @contextlib.contextmanager
 def _lock(target: Path) -> Iterator[None]:
     """An exclusive, non-blocking lock for ``target`` on the hidden file ``.<name>.lock`` beside it."""
@@ -296,6 +315,7 @@ def _lock(target: Path) -> Iterator[None]:
         if same:
             break
         os.close(fd)
+    _HELD_LOCKS.add(fd)
     try:
         os.ftruncate(fd, 0)
         os.write(fd, f"{os.getpid()}\n".encode())
@@ -303,6 +323,7 @@ def _lock(target: Path) -> Iterator[None]:
     finally:
         with contextlib.suppress(OSError):
             lock.unlink()
+        _HELD_LOCKS.discard(fd)
         os.close(fd)
 
 

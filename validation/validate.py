@@ -299,7 +299,10 @@ def _run_plants(
                 running.append((k, pl, job))
             if on_started is not None and not queue:  # every plant has started
                 on_started, then = None, on_started
-                then()
+                try:
+                    then()
+                except KeyboardInterrupt:  # the plants heard it too: collect what they reached
+                    interrupted = True
             if interrupted:  # Ctrl-C stops the run, it does not start the next plant
                 failures += [f"{pl.label} plant: not run (interrupted)" for _, (pl, _) in queue]
                 queue = []
@@ -449,7 +452,7 @@ def _validate_into(
         the two evidence workers, one importing rerun meanwhile, also at idle priority: the
         plants keep the CPUs."""
         if fork:
-            with workers.idle_priority():
+            with workers.signals_deferred(), workers.idle_priority():
                 _import_matplotlib()
                 import scipy.linalg  # noqa: F401  (the comparison's exponentials, next)
         jobs[:] = [

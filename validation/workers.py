@@ -118,8 +118,41 @@ def idle_priority():
         _set_idle(False)
 
 
+@contextlib.contextmanager
+def signals_deferred():
+    """SIGINT and SIGTERM held back inside the block and delivered when it ends: an import cut by
+    Ctrl-C half way leaves a module half made (matplotlib then fails on its next import), so a
+    preparing import finishes first and the interrupt is raised after it."""
+    held = {signal.SIGINT, signal.SIGTERM}
+    try:
+        signal.pthread_sigmask(signal.SIG_BLOCK, held)
+    except (AttributeError, OSError, ValueError):  # no signal masks here: nothing is deferred
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, held)
+
+
+_PARENT_ENDS: list[Any] = []
+"""The parent's ends of every worker's pipes (results in, inputs out). A child closes its copies
+first thing: else a child whose parent is gone would wait forever for inputs (a sibling holding
+the write end) or block writing its result into a pipe it holds the read end of."""
+
+
+def _close_parent_ends() -> None:  # pragma: no cover - in a child
+    for end in _PARENT_ENDS:
+        try:
+            end.close()
+        except OSError:
+            pass
+    _PARENT_ENDS.clear()
+
+
 def _child(conn, inbox, prepare, task, args, idle: bool) -> None:  # pragma: no cover - in a child
     """The worker process: prepare, wait for the inputs if they come later, run, send back."""
+    _close_parent_ends()
     try:
         if idle:
             _set_idle(True)
@@ -292,6 +325,8 @@ def start(
             stream.flush()
         except (OSError, ValueError, AttributeError):
             pass
+    _PARENT_ENDS[:] = [end for end in _PARENT_ENDS if not end.closed]
+    _PARENT_ENDS.extend((conn, inbox_w))
     proc = ctx.Process(
         target=_child,
         args=(child_conn, inbox_r, prepare, task, job.args, idle_until_given),
@@ -373,6 +408,7 @@ __all__ = [
     "available_cpus",
     "can_fork",
     "idle_priority",
+    "signals_deferred",
     "start",
     "stop",
     "wait",
