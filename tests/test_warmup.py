@@ -198,3 +198,21 @@ def test_first_run_compiles_once_and_says_so(tmp_path):
     second = _validate(tmp_path, env, timeout=600)
     assert second.returncode == 0, second.stderr
     assert "compiling" not in second.stderr and "kernels ready" not in second.stderr
+
+
+def test_the_compiling_helper_imports_this_copy_not_the_working_directorys(tmp_path, monkeypatch):
+    """``pip install .`` in a clone, then ``tumble validate`` in it: the helper process must
+    compile the installed copy (the one this process runs), not the checkout in the working
+    directory (``python -c`` puts that first on sys.path)."""
+    fake = tmp_path / "validation"
+    fake.mkdir()
+    (fake / "__init__.py").write_text("raise ImportError('the working directory copy')\n")
+    monkeypatch.chdir(tmp_path)
+    sc = resolve_scene("paper_example1_controlled")
+    helper = warmup._Helper(sc, "analytic")
+    try:
+        helper.go()
+        st = helper.result()
+    finally:
+        helper.stop()
+    assert st.error == "", st.error

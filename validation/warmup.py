@@ -291,9 +291,12 @@ class _Helper:
         env = dict(os.environ)  # this copy of the project first, wherever it was imported from
         root = str(Path(__file__).resolve().parents[1])
         env["PYTHONPATH"] = os.pathsep.join(p for p in (root, env.get("PYTHONPATH")) if p)
+        # cwd: ``-c`` puts the working directory first on sys.path, and a source checkout there
+        # (the README's ``pip install .`` in a clone) would be compiled instead of this copy.
         self.proc = subprocess.Popen(
             [sys.executable, "-c", code],
             env=env,
+            cwd=root,
             stdin=subprocess.PIPE,
             stdout=subprocess.PIPE,
             stderr=subprocess.PIPE,
