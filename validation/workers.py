@@ -98,11 +98,26 @@ def _one_line(exc: BaseException) -> str:
     return str(exc).splitlines()[0] if str(exc) else ""
 
 
+def _policy() -> int | None:
+    """This process's scheduling policy (None where there are none to set)."""
+    try:
+        return os.sched_getscheduler(0)
+    except (AttributeError, OSError):
+        return None
+
+
+_START_POLICY = _policy()
+"""The policy the command started with (``SCHED_OTHER`` normally): what idle stages return to."""
+
+
 def _set_idle(idle: bool, pid: int = 0) -> None:
     """Process ``pid`` (0: this one) to Linux ``SCHED_IDLE`` (run only on a CPU nothing else
-    wants) or back to ``SCHED_OTHER``; where the switch is refused, it stays as it is."""
+    wants) or back to the policy the command started with; where the switch is refused, or the
+    command started idle already, it stays as it is."""
+    if _START_POLICY is None or _START_POLICY == getattr(os, "SCHED_IDLE", None):
+        return
     try:
-        policy = os.SCHED_IDLE if idle else os.SCHED_OTHER
+        policy = os.SCHED_IDLE if idle else _START_POLICY
         os.sched_setscheduler(pid, policy, os.sched_param(0))
     except (AttributeError, OSError):
         pass
@@ -168,7 +183,10 @@ def _child(conn, inbox, prepare, task, args, idle: bool) -> None:  # pragma: no 
         signal.signal(signal.SIGINT, signal.SIG_IGN)  # a late Ctrl-C must not lose the result
         conn.send(("ok", out))
     except KeyboardInterrupt as exc:  # Ctrl-C (or SIGTERM turned into one) before a result
-        conn.send(("err", type(exc).__name__, _one_line(exc) or "interrupted", True))
+        try:
+            conn.send(("err", type(exc).__name__, _one_line(exc) or "interrupted", True))
+        except OSError:  # the parent is gone
+            pass
     except BaseException as exc:
         try:
             conn.send(("err", type(exc).__name__, _one_line(exc), False))
