@@ -109,3 +109,43 @@ def udot_of(u: np.ndarray, omega: np.ndarray) -> np.ndarray:
     """Inverse of Eq. (12) on the tangent space: ``u̇ = H(u)ᵀ ω / (4|u|²)`` (= ¼Hᵀω for unit u)."""
     Hu = np.einsum("rck,...k->...rc", T_H, u)
     return np.einsum("...rc,...r->...c", Hu, omega) / (4.0 * np.sum(u * u, axis=-1))[..., None]
+
+
+def quat_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Hamilton product ``a ⊗ b`` (w first), shape (4,): the rotation b followed by a."""
+    aw, ax, ay, az = a
+    bw, bx, by, bz = b
+    return np.array(
+        [
+            aw * bw - ax * bx - ay * by - az * bz,
+            aw * bx + ax * bw + ay * bz - az * by,
+            aw * by - ax * bz + ay * bw + az * bx,
+            aw * bz + ax * by - ay * bx + az * bw,
+        ]
+    )
+
+
+def axis_angle_quat(axis: np.ndarray, angle: float) -> np.ndarray:
+    """Unit quaternion (w first) of the rotation by ``angle`` (rad) about the unit ``axis``."""
+    half = 0.5 * float(angle)
+    return np.concatenate([[np.cos(half)], np.sin(half) * np.asarray(axis, float)])
+
+
+def matrix_quat(m: np.ndarray) -> np.ndarray:
+    """Unit quaternion (w first) of the rotation matrix ``m`` (3, 3), by the largest of the four
+    candidate components (Shepperd's method; scipy's ``Rotation.from_matrix`` makes the same
+    choice, so the sign agrees with it too; no sign is imposed on w)."""
+    m = np.asarray(m, float)
+    tr = float(np.trace(m))
+    c = int(np.argmax([m[0, 0], m[1, 1], m[2, 2], tr]))
+    q = np.empty(4)  # x, y, z, w
+    if c == 3:
+        q[:] = [m[2, 1] - m[1, 2], m[0, 2] - m[2, 0], m[1, 0] - m[0, 1], 1.0 + tr]
+    else:
+        i, j, k = c, (c + 1) % 3, (c + 2) % 3
+        q[i] = 1.0 - tr + 2.0 * m[i, i]
+        q[j] = m[j, i] + m[i, j]
+        q[k] = m[k, i] + m[i, k]
+        q[3] = m[k, j] - m[j, k]
+    q /= np.linalg.norm(q)
+    return np.array([q[3], q[0], q[1], q[2]])

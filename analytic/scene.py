@@ -40,6 +40,7 @@ from analytic.effects import (
     SpringModel,
     Weighting,
 )
+from analytic.kinematics import axis_angle_quat, matrix_quat, quat_mul
 from analytic.scene_keys import (
     DEFAULT_GRAVITY,
     NO_DEFAULT,
@@ -1075,42 +1076,8 @@ def _parse_attitude(t: _Table) -> np.ndarray:
     t.finish()
     if allow_off:
         raise ValueError(f"{t.name('allow_off_manifold')}: only meaningful with a quaternion")
-    u = quat_product(axis_angle_quat(axis, angle), matrix_quat(ref))
+    u = quat_mul(axis_angle_quat(axis, angle), matrix_quat(ref))
     return _frozen(u / np.linalg.norm(u))
-
-
-def axis_angle_quat(axis: np.ndarray, angle: float) -> np.ndarray:
-    """Unit quaternion (w first) of the rotation by ``angle`` (rad) about the unit ``axis``."""
-    half = 0.5 * float(angle)
-    return np.concatenate([[math.cos(half)], math.sin(half) * np.asarray(axis, float)])
-
-
-def matrix_quat(m: np.ndarray) -> np.ndarray:
-    """Unit quaternion (w first) of the rotation matrix ``m`` (3, 3), by the largest of the four
-    candidate components (Shepperd's method; scipy's ``Rotation.from_matrix`` makes the same
-    choice, so the sign agrees with it too)."""
-    m = np.asarray(m, float)
-    tr = float(np.trace(m))
-    decision = [m[0, 0], m[1, 1], m[2, 2], tr]
-    c = int(np.argmax(decision))
-    q = np.empty(4)  # x, y, z, w
-    if c == 3:
-        q[:] = [m[2, 1] - m[1, 2], m[0, 2] - m[2, 0], m[1, 0] - m[0, 1], 1.0 + tr]
-    else:
-        i, j, k = c, (c + 1) % 3, (c + 2) % 3
-        q[i] = 1.0 - tr + 2.0 * m[i, i]
-        q[j] = m[j, i] + m[i, j]
-        q[k] = m[k, i] + m[i, k]
-        q[3] = m[k, j] - m[j, k]
-    q /= np.linalg.norm(q)
-    return np.array([q[3], q[0], q[1], q[2]])
-
-
-def quat_product(p: np.ndarray, q: np.ndarray) -> np.ndarray:
-    """Hamilton product ``p ⊗ q`` of w-first quaternions (the rotation ``q`` then ``p``)."""
-    pw, pv = p[0], np.asarray(p[1:], float)
-    qw, qv = q[0], np.asarray(q[1:], float)
-    return np.concatenate([[pw * qw - pv @ qv], pw * qv + qw * pv + np.cross(pv, qv)])
 
 
 def _parse_control(t: _Table, n: int) -> Control:

@@ -9,27 +9,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from analytic.kinematics import S
+from analytic.kinematics import S, quat_mul  # noqa: F401  (quat_mul is used from here too)
 
 
 def cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """``a × b`` for two 3-vectors (np.cross costs ~50x more on single vectors)."""
     return np.array(
         [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-    )
-
-
-def quat_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Hamilton product ``a ⊗ b`` (w first), shape (4,): the rotation b followed by a."""
-    aw, ax, ay, az = a
-    bw, bx, by, bz = b
-    return np.array(
-        [
-            aw * bw - ax * bx - ay * by - az * bz,
-            aw * bx + ax * bw + ay * bz - az * by,
-            aw * by - ax * bz + ay * bw + az * bx,
-            aw * bz + ax * by - ay * bx + az * bw,
-        ]
     )
 
 

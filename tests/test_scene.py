@@ -528,8 +528,7 @@ def test_axis_angle_attitude_is_the_rotation_it_names_and_scipys_quaternion():
     random rotations and the awkward ones (half turns, identity, a permutation)."""
     from scipy.spatial.transform import Rotation
 
-    from analytic.kinematics import S
-    from analytic.scene import axis_angle_quat, matrix_quat, quat_product
+    from analytic.kinematics import S, axis_angle_quat, matrix_quat, quat_mul
 
     rng = np.random.default_rng(11)
     refs = [np.eye(3), np.diag([1.0, -1.0, -1.0]), np.array([[0, 0, 1], [1, 0, 0], [0, 1, 0.0]])]
@@ -538,7 +537,7 @@ def test_axis_angle_attitude_is_the_rotation_it_names_and_scipys_quaternion():
         axis = rng.standard_normal(3)
         axis /= np.linalg.norm(axis)
         for angle in (0.0, np.pi, -2.5, float(rng.uniform(-7, 7))):
-            u = quat_product(axis_angle_quat(axis, angle), matrix_quat(ref))
+            u = quat_mul(axis_angle_quat(axis, angle), matrix_quat(ref))
             k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
             rodrigues = np.eye(3) + np.sin(angle) * k + (1 - np.cos(angle)) * k @ k
             np.testing.assert_allclose(S(u), rodrigues @ ref, atol=1e-14)

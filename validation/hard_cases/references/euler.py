@@ -1,8 +1,8 @@
 """A torque-free rigid body, integrated on its own: Euler's equations ``J ω̇ = (J ω) × ω`` and
 ``u̇ = ½ u ⊗ (0, ω)`` (body-axis ω, u body → inertial, w first), scipy's DOP853.
 
-It shares no code with the model (the quaternion product is :func:`model_xml.rotations.quat_mul`,
-not the paper's ``H(u)``). It is the exact motion of a scene whose masses all rest at C (none, or
+It shares no code with the model's equations (the quaternion product is
+:func:`analytic.kinematics.quat_mul`, which the model does not use, not the paper's ``H(u)``). It is the exact motion of a scene whose masses all rest at C (none, or
 every one at ``p = 0`` on a rod through C, at rest and at equilibrium): nothing moves them off C,
 and the body turns as one rigid body of inertia ``J_BR + Σ J_i`` (Remark 1).
 """
@@ -13,8 +13,8 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from analytic.effects import Effect
+from analytic.kinematics import quat_mul
 from analytic.scene import Scene
-from model_xml.rotations import quat_mul
 
 RTOL = 1e-13
 """DOP853's relative tolerance: four decades below the tightest bound it judges (1e-9); the
