@@ -292,7 +292,7 @@ def _run_plants(
             while queue and len(running) < slots and not interrupted:
                 k, (pl, settings) = queue.pop(0)
                 name = pl.engine.value
-                report = _stage_progress(progress, name) or _ignore
+                report = _stage_progress(progress, name)  # None: the messages are dropped
                 job = workers.start(
                     name, _plant_task, pl, settings, sc, horizon, on_message=report, fork=fork
                 )
@@ -325,10 +325,6 @@ def _run_plants(
         workers.stop([job for _, _, job in running])
         raise
     return [done[k] for k in sorted(done)], interrupted
-
-
-def _ignore(_t: float) -> None:
-    pass
 
 
 def _plant_outcome(

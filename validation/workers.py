@@ -30,7 +30,7 @@ import sys
 import threading
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 ENV_SWITCH = "TUMBLE_WORKERS"
@@ -220,7 +220,6 @@ class Job:
     done: bool = False
     outcome: tuple = ()
     interrupted: bool = False
-    sent_at: float = field(default=0.0)
 
     @property
     def forked(self) -> bool:
