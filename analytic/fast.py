@@ -48,6 +48,8 @@ user's cache directory, said once; with none writable the kernel is compiled in 
 
 from __future__ import annotations
 
+from enum import StrEnum
+
 import numpy as np
 
 from analytic.effects import Effect, Weighting
@@ -55,6 +57,7 @@ from analytic.kernel import gauss, minv2
 from analytic.kernel import layout as L
 from analytic.kernel.entry import Solver, solver_of
 from analytic.kernel.jit import HAVE_NUMBA
+from analytic.kernel.system import build_system
 from analytic.model import ControlOutput, TumblingModel
 from analytic.scene import Scene
 
@@ -242,4 +245,44 @@ class FastModel:
         return out[:nq], ctrl
 
 
-__all__ = ["FastModel", "available", "pack"]
+class KernelHalf(StrEnum):
+    """The two halves of the kernel, each compiled and cached on its own (:func:`compile_half`)."""
+
+    SYSTEM = "system"
+    """:func:`analytic.kernel.system.build_system`: stages 1-6, the same for every weighting."""
+    SOLVE = "solve"
+    """The scene's solve: :func:`analytic.kernel.gauss.solve_gauss` (Gauss weighting and
+    uncontrolled scenes) or :func:`analytic.kernel.minv2.solve_minv2`."""
+
+
+def compile_half(scene: Scene, half: KernelHalf | str) -> bool:
+    """Compile one half of the kernel ``scene`` evaluates (or load it from numba's disk cache),
+    with the argument types the kernel's entry points pass, without running it.
+
+    The kernel's entry points only join the two halves, so two processes can compile one half
+    each at the same time (:mod:`validation.warmup`, a first run); the entry point compiled after
+    them loads both from the cache. Returns False when there is nothing to compile (numba absent,
+    or a weighting the kernel does not serve).
+    """
+    half = KernelHalf(half)
+    fm = FastModel(scene)
+    if not fm.compiled:
+        return False
+    import numba
+
+    q = np.ascontiguousarray(scene.initial.q0(), dtype=float)
+    out = np.empty(fm._nout)
+    w = np.empty(L.WS_LEN)
+    n, kw, kp = (int(fm.ip[i]) for i in (L.I_N, L.I_KW, L.I_KP))
+    if half is KernelHalf.SYSTEM:
+        args: tuple = (0.0, q, q, fm.fp, fm.ip, out, True, w)
+        fn = build_system
+    elif fm.solver is Solver.MINV2:
+        args, fn = (q, fm.fp, fm.ip, out, w, n, kw, kp), minv2.solve_minv2
+    else:
+        args, fn = (q, fm.fp, fm.ip, out, w, n, kw, kp, True), gauss.solve_gauss
+    fn.compile(tuple(numba.typeof(a) for a in args))
+    return True
+
+
+__all__ = ["FastModel", "KernelHalf", "available", "compile_half", "pack"]

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import importlib
 import io
+import json
 import os
 import subprocess
 import sys
@@ -195,9 +196,51 @@ def test_first_run_compiles_once_and_says_so(tmp_path):
     assert lines[0].startswith("tumble: compiling the fast kernels (once per machine"), lines
     assert any(line.startswith("tumble:   the analytic kernel (analytic.fast): ") for line in lines)
     assert any(line.startswith("tumble:   kernels ready in ") for line in lines)
+    assert not any("will compile in the run instead" in line for line in lines), lines
+    if warmup.free_cpus() >= 2:  # the kernel's halves in two processes, the MuJoCo stage beside
+        helped = [line for line in lines if line.endswith("(helper process)")]
+        assert any("stages 1-6" in line for line in helped), lines
+        assert any("MuJoCo" in line for line in helped), lines
     second = _validate(tmp_path, env, timeout=600)
     assert second.returncode == 0, second.stderr
     assert "compiling" not in second.stderr and "kernels ready" not in second.stderr
+
+
+HALVES_PROBE = """
+import dataclasses, json, sys
+from analytic import load_scene
+from analytic.fast import FastModel, compile_half
+from analytic.kernel import gauss, minv2, system
+
+sc = load_scene(sys.argv[1])
+sc = sc.replace(control=dataclasses.replace(sc.control, weighting=sys.argv[2]))
+for half in ("system", "solve"):
+    compile_half(sc, half)
+solve = minv2.solve_minv2 if FastModel(sc).solver.name == "MINV2" else gauss.solve_gauss
+before = {d: set(d.overloads) for d in (system.build_system, solve)}
+FastModel(sc).acceleration(0.0, sc.initial.q0(), sc.initial.qdot0())
+print(json.dumps([[len(before[d]), len(set(d.overloads))] for d in before]))
+"""
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("weighting", ["M^-1", "M^-2"])
+def test_the_kernels_halves_are_compiled_with_the_types_the_kernel_passes(tmp_path, weighting):
+    """The first run compiles the kernel's two halves in two processes and then the entry point
+    that joins them: that saves time only if the halves were compiled for exactly the argument
+    types the entry point passes. In a fresh cache, compiling the halves and then evaluating adds
+    no signature to either half (a mismatch would compile a second one)."""
+    env = _env(NUMBA_CACHE_DIR=str(tmp_path / "numba_cache"))
+    proc = subprocess.run(
+        [sys.executable, "-c", HALVES_PROBE, "paper_example1_controlled", weighting],
+        capture_output=True,
+        text=True,
+        timeout=1200,
+        env=env,
+        cwd=tmp_path,
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert json.loads(proc.stdout.splitlines()[-1]) == [[1, 1], [1, 1]]
 
 
 def test_the_compiling_helper_imports_this_copy_not_the_working_directorys(tmp_path, monkeypatch):

@@ -14,12 +14,17 @@ would otherwise print nothing while it compiles and then sit at its first percen
    stage by calling the plants' public entry points (:class:`analytic.fast.FastModel`, each plant's
    ``simulate`` for one output interval), reporting each stage with its wall time:
 
-   * the analytic kernel (:mod:`analytic.fast`), which the other stages embed, first;
-   * then the MuJoCo native stage in a *helper process* while this process compiles the analytic
-     plant's right-hand side and the Pinocchio stage. numba holds the GIL while it compiles, so
-     threads would not overlap; a second process does, and it leaves its result in the on-disk
-     cache, where this process's plant loads it. Used when two CPUs are free to this process and
-     the cache is writable (otherwise everything is compiled here, in order).
+   * the analytic kernel (:mod:`analytic.fast`), which the other stages embed, first: its two
+     halves (:func:`analytic.fast.compile_half`) at the same time, stages 1-6 in a *helper
+     process* and the scene's solve here, then the entry point that joins them (loaded from the
+     cache both left);
+   * then the MuJoCo native stage in the helper while this process compiles the analytic plant's
+     right-hand side and the Pinocchio stage.
+
+   numba holds the GIL while it compiles, so threads would not overlap; a second process does, and
+   it leaves its result in the on-disk cache, where this process loads it. Used when two CPUs are
+   free to this process and the cache is writable (otherwise everything is compiled here, in
+   order).
 
 A failure while warming up is never fatal: the plant's own run compiles what is missing and
 reports its own error.
@@ -63,6 +68,9 @@ ENTRY_MODULES: dict[str, tuple[str, ...]] = {
 (some are imported lazily by the plants). A module that no longer exists is skipped."""
 
 TITLES = {
+    "system": "the analytic kernel's stages 1-6 (analytic.kernel.system)",
+    "solve": "the analytic kernel's solve (analytic.kernel)",
+    "aux": "the analytic plant's work and impulse rates (analytic.aux_rates)",
     "kernel": "the analytic kernel (analytic.fast)",
     ANALYTIC: "the analytic plant's right-hand side",
     MUJOCO: "the MuJoCo native controller stage (mj_bridge.native, fast_stage)",
@@ -238,6 +246,23 @@ def compile_kernel(scene: Scene) -> None:
         fast.FastModel(scene).acceleration(0.0, q, qd)
 
 
+def compile_kernel_half(scene: Scene, half: str) -> None:
+    """One half of the analytic kernel (:func:`analytic.fast.compile_half`): two processes
+    compile one each at the same time, and :func:`compile_kernel` then only joins them."""
+    from analytic import fast
+
+    fast.compile_half(scene, half)
+
+
+def compile_aux_rates(scene: Scene) -> None:
+    """The analytic plant's work and impulse rates (:func:`analytic.aux_rates.compile_for`),
+    which its right-hand side embeds but which do not embed the kernel."""
+    from analytic import aux_rates, fast
+
+    if fast.available():
+        aux_rates.compile_for(scene.n)
+
+
 def compile_plant(scene: Scene, engine: str) -> None:
     """One output interval of ``engine``'s plant (its default settings): what the run calls first,
     with the argument types the run uses, so every kernel it needs is compiled and cached."""
@@ -260,9 +285,11 @@ def _timed(title: str, fn: Callable[[], None], where: str = "here") -> StageTime
 
 
 def _helper_main() -> None:  # pragma: no cover - runs in the helper process
-    """The helper process: read ``(scene, engine)`` (pickled) from stdin, import the engine's
-    modules, wait for the ``go`` line (the kernel is on disk), compile, print the stage's time as
-    one JSON line on stdout."""
+    """The helper process: read ``(scene, engine, system_first)`` (pickled) from stdin, import the
+    modules; with ``system_first`` compile the kernel's stages 1-6 at once (:func:`compile_kernel_half`)
+    and print that stage's time as one JSON line; then, for an engine, wait for the ``go`` line (the
+    rest of the kernel is on disk), compile the engine's stage (and the entry point joining the
+    kernel's halves, when this process is first to need it) and print its time as one JSON line."""
     import json
     import pickle
     import signal
@@ -271,7 +298,16 @@ def _helper_main() -> None:  # pragma: no cover - runs in the helper process
     for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ.setdefault(var, "1")
     size = int(sys.stdin.buffer.readline())
-    scene, engine = pickle.loads(sys.stdin.buffer.read(size))
+    scene, engine, system_first = pickle.loads(sys.stdin.buffer.read(size))
+    if system_first:
+        st = _timed(
+            TITLES["system"],
+            lambda: compile_kernel_half(scene, "system"),
+            where="helper process",
+        )
+        print(json.dumps(dataclasses.asdict(st)), flush=True)
+    if engine is None:
+        return
     _import_entries([engine])  # the imports overlap the parent's compiling
     if sys.stdin.buffer.readline().strip() != b"go":
         return
@@ -281,9 +317,10 @@ def _helper_main() -> None:  # pragma: no cover - runs in the helper process
 
 class _Helper:
     """A helper process (``python -c``, so no ``__main__`` of the caller is re-imported) that
-    compiles one engine's stage into numba's disk cache."""
+    compiles into numba's disk cache: with ``system_first`` the kernel's stages 1-6 at once
+    (:meth:`first` waits for them), then ``engine``'s stage after :meth:`go` (:meth:`result`)."""
 
-    def __init__(self, scene: Scene, engine: str):
+    def __init__(self, scene: Scene, engine: str | None, system_first: bool = False):
         import pickle
         import subprocess
 
@@ -302,12 +339,22 @@ class _Helper:
             stdout=subprocess.PIPE,
             stderr=subprocess.PIPE,
         )
-        data = pickle.dumps((scene, engine))
+        data = pickle.dumps((scene, engine, system_first))
         try:
             self.proc.stdin.write(b"%d\n" % len(data) + data)
             self.proc.stdin.flush()
         except OSError:
             pass
+
+    def first(self) -> StageTime:
+        """The kernel's stages 1-6, once the helper has compiled them (waits for its line)."""
+        import json
+
+        line = self.proc.stdout.readline()
+        try:
+            return StageTime(**json.loads(line.decode()))
+        except (ValueError, TypeError):
+            return StageTime(TITLES["system"], 0.0, "helper process", "helper failed")
 
     def go(self) -> None:
         try:
@@ -325,7 +372,8 @@ class _Helper:
             return StageTime(**json.loads(out.decode().strip().splitlines()[-1]))
         except (ValueError, IndexError, TypeError):
             why = (err.decode(errors="replace").strip().splitlines() or ["no output"])[-1]
-            return StageTime(TITLES[self.engine], 0.0, "helper process", f"helper failed: {why}")
+            title = TITLES[self.engine] if self.engine else TITLES["system"]
+            return StageTime(title, 0.0, "helper process", f"helper failed: {why}")
 
     def stop(self) -> None:
         if self.proc.poll() is None:
@@ -380,7 +428,10 @@ def warm_up(
     rest = list(cold)
     if concurrent is None:
         concurrent = free_cpus() >= 2
-    concurrent = bool(concurrent and cached and MUJOCO in rest and len(rest) >= 2)
+    concurrent = bool(concurrent and cached)
+    split = concurrent and kernel_cold  # the kernel's two halves compiled at once
+    engine_beside = concurrent and MUJOCO in rest and len(rest) >= 2
+    concurrent = split or engine_beside
     names = [TITLES["kernel"]] if kernel_cold else []
     names += [TITLES[e] for e in rest]
     how = (
@@ -389,11 +440,10 @@ def warm_up(
         else "numba has no writable cache directory here (set NUMBA_CACHE_DIR), so every run "
         "compiles them"
     )
-    say(
-        f"compiling the fast kernels ({how}; ~{EXPECTED_COLD_S} s): "
-        + ", ".join(names)
-        + (" (the MuJoCo stage in a helper process)" if concurrent else "")
-    )
+    beside = ["the kernel's stages 1-6"] if split else []
+    beside += ["the MuJoCo stage"] if engine_beside else []
+    where = f" ({' and '.join(beside)} in a helper process)" if beside else ""
+    say(f"compiling the fast kernels ({how}; ~{EXPECTED_COLD_S} s): {', '.join(names)}{where}")
     stages: list[StageTime] = []
 
     def report(st: StageTime) -> None:
@@ -404,16 +454,24 @@ def warm_up(
 
     helper = None
     try:
-        if concurrent:
-            helper = _Helper(scene, MUJOCO)  # starts now: its imports overlap the kernel
-            rest.remove(MUJOCO)
+        if concurrent:  # starts now: its imports overlap the kernel
+            helper = _Helper(scene, MUJOCO if engine_beside else None, system_first=split)
+            if engine_beside:
+                rest.remove(MUJOCO)
+        if split:  # here the solve, meanwhile the helper stages 1-6; then the join loads both
+            report(_timed(TITLES["solve"], lambda: compile_kernel_half(scene, "solve")))
+            if engine_beside:  # the helper joins the halves itself once its own is done
+                helper.go()
+            if ANALYTIC in rest:  # meanwhile, what the right-hand side embeds beside the kernel
+                report(_timed(TITLES["aux"], lambda: compile_aux_rates(scene)))
+            report(helper.first())
         if kernel_cold:
             report(_timed(TITLES["kernel"], lambda: compile_kernel(scene)))
-        if helper is not None:
+        if helper is not None and engine_beside and not split:
             helper.go()  # the kernel is on disk: the helper loads it instead of compiling it
         for e in rest:
             report(_timed(TITLES[e], lambda e=e: compile_plant(scene, e)))
-        if helper is not None:
+        if helper is not None and engine_beside:
             report(helper.result())
     finally:
         if helper is not None:

@@ -20,7 +20,8 @@ one int array ``ip``, so a call unboxes six arguments. ``evaluate(t, q, q̇, fp,
 ``[q̈ (nq), Q^C (nq), τ (3), A_c q̈ - b_c (k)]`` into ``out`` and returns a status (0 = done).
 
 Cost notes (one evaluation is ~0.5 µs at small n, so constant factors matter): the Gauss stages
-are compiled inline into two functions (``system.build_system``, ``gauss.evaluate``); no heap
+are compiled inline into two functions (``system.build_system``, ``gauss.solve_gauss``, which
+``gauss.evaluate`` joins; two, so that two processes compile a first run's kernel at once); no heap
 allocation on the Gauss path (one stack workspace carved
 by ``layout.WS_*``; the rod rows of ``Q`` and ``b_c`` live in ``out``); closed forms for ``L_a(u)``,
 ``L̇_a u̇`` and ``H(u)ᵀx`` instead of the (3, 4, 4) tensor contractions; no square roots on the Gauss

@@ -1,10 +1,11 @@
 """The kernel for Gauss weighting (N = M⁻¹, the paper's Eq. 89) and for uncontrolled scenes:
 :func:`evaluate`, O(n), no heap allocation.
 
-Stages: :func:`analytic.kernel.system.build_system` (1-6: M, Q, b_m, b_c), then
+Stages: :func:`analytic.kernel.system.build_system` (1-6: M, Q, b_m, b_c), then :func:`solve_gauss`:
 :func:`analytic.kernel.schur.schur_complement` (7: rods and R eliminated),
 :func:`analytic.kernel.bordered.bordered_solve` (8: the bordered 4x4 system on u, q̈_b), and
-:func:`control_outputs` (9: q̈ of the free rods, ``Q^C``, ``τ``, the residual).
+:func:`control_outputs` (9: q̈ of the free rods, ``Q^C``, ``τ``, the residual). The two halves are
+compiled and cached on their own, so two processes can compile them at once.
 """
 
 from __future__ import annotations
@@ -99,6 +100,39 @@ def control_outputs(q, fp, ip, n, kw, kp, out, full, w):
         out[ores + kw + j] = out[7 + i] - out[7 + i]  # q̈_i - b_i, b_i stored as q̈_i
 
 
+def _make_solve_gauss(deps: int):
+    """:func:`solve_gauss` closing over the kernel's source fingerprint (see
+    :func:`analytic.kernel.jit.jit_entry`)."""
+
+    def solve_gauss(q, fp, ip, out, w, n, kw, kp, full):
+        """Stages 7-9 (Gauss): the Schur complement, the bordered solve and the control outputs,
+        from what :func:`analytic.kernel.system.build_system` wrote into ``w`` and ``out``.
+
+        Compiled and cached on its own, like :func:`analytic.kernel.minv2.solve_minv2`: a first
+        run compiles it in one process while another compiles ``build_system``
+        (:mod:`validation.warmup`), and :func:`evaluate` only joins the two.
+
+        Returns:
+            ``STATUS_NOT_PD`` when a Schur complement or the bordered Gram matrix is not
+            numerically positive definite, else ``STATUS_OK``.
+        """
+        if deps < 0:  # never true: ties numba's cache key to the kernel's sources
+            return STATUS_UNSUPPORTED
+        status = schur_complement(q, fp, w)
+        if status != STATUS_OK:
+            return status
+        status = bordered_solve(q, ip, kw, out, w)
+        if status != STATUS_OK:
+            return status
+        control_outputs(q, fp, ip, n, kw, kp, out, full, w)
+        return STATUS_OK
+
+    return solve_gauss
+
+
+solve_gauss = jit_entry(_make_solve_gauss)
+
+
 def _make_evaluate(deps: int):
     """:func:`evaluate` closing over the kernel's source fingerprint (see
     :func:`analytic.kernel.jit.jit_entry`)."""
@@ -127,14 +161,7 @@ def _make_evaluate(deps: int):
         full = out.shape[0] >= 2 * (n + 7) + 3 + kw + kp  # else: q̈ only
         w = workspace()
         build_system(t, q, qd, fp, ip, out, full, w)
-        status = schur_complement(q, fp, w)
-        if status != STATUS_OK:
-            return status
-        status = bordered_solve(q, ip, kw, out, w)
-        if status != STATUS_OK:
-            return status
-        control_outputs(q, fp, ip, n, kw, kp, out, full, w)
-        return STATUS_OK
+        return solve_gauss(q, fp, ip, out, w, n, kw, kp, full)
 
     return evaluate
 

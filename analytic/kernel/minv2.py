@@ -310,7 +310,8 @@ def _make_evaluate(deps: int):
 
         Returns:
             status: 0 done; 1 not numerically positive definite (the caller falls back); 2 the
-            scene is not controlled under M⁻². With a nonzero status ``out`` is unspecified.
+            scene is not controlled under M⁻², or ``out`` is shorter than the full output. With a
+            nonzero status ``out`` is unspecified.
         """
         if deps < 0:  # never true: ties numba's cache key to the kernel's sources
             return STATUS_UNSUPPORTED
@@ -319,8 +320,13 @@ def _make_evaluate(deps: int):
         kp = ip[I_KP] & IX
         if kw + kp == 0 or ip[I_WEIGHT] != W_MINV2:
             return STATUS_UNSUPPORTED
+        # computed, not the constant True: numba would type a literal as its own signature and
+        # compile build_system a second time beside the Gauss kernel's
+        full = out.shape[0] >= 2 * (n + 7) + 3 + kw + kp
+        if not full:  # this weighting needs Q^C on the way to q̈: the whole output
+            return STATUS_UNSUPPORTED
         w = workspace()
-        build_system(t, q, qd, fp, ip, out, True, w)
+        build_system(t, q, qd, fp, ip, out, full, w)
         return solve_minv2(q, fp, ip, out, w, n, kw, kp)
 
     return evaluate
