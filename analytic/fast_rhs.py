@@ -113,4 +113,9 @@ def rhs_for(ip: np.ndarray):
 rhs_into = rhs_as(Solver.ANY)
 """The compiled right-hand side for any scene (embeds both solves; compiled on first call)."""
 
-__all__ = ["DEPS", "STATUS_NONFINITE", "rhs_as", "rhs_for", "rhs_into"]
+rhs_gauss = rhs_as(Solver.GAUSS)
+rhs_minv2 = rhs_as(Solver.MINV2)
+"""The variants :func:`rhs_for` gives, bound at module level like every compiled function, so
+that a look at numba's cache (:func:`validation.warmup.cold_engines`) sees the one a run used."""
+
+__all__ = ["DEPS", "STATUS_NONFINITE", "rhs_as", "rhs_for", "rhs_gauss", "rhs_into", "rhs_minv2"]

@@ -7,11 +7,13 @@ by 5e-9 m, the control torque scaled by 1 + 1e-9), so what each figure draws is 
 from __future__ import annotations
 
 import dataclasses
+import io
 import itertools
 import json
 import re
 import warnings
 
+import matplotlib as mpl
 import numpy as np
 import pytest
 
@@ -19,6 +21,8 @@ from analytic.simulate import simulate
 from analytic.trajectory import Engine
 from validation.compare import compare
 from validation.figures import (
+    PNG_DPI,
+    TEXT_RASTER,
     FigureContext,
     FigureFormat,
     figure_control,
@@ -287,6 +291,24 @@ def test_equal_figures_give_equal_files(run):
     a, b = figure_invariants(cmp, ctx), figure_invariants(cmp, ctx)
     for fmt in FigureFormat:
         assert a.render(fmt) == b.render(fmt), fmt
+
+
+def test_png_is_the_picture_matplotlib_draws(run):
+    """The PNG written as RGB (every pixel opaque) holds exactly the pixels of matplotlib's own
+    RGBA ``savefig`` at the same resolution, and records that resolution."""
+    from PIL import Image
+
+    _, _, cmp, meta = run
+    d = figure_invariants(cmp, FigureContext.from_meta(meta))
+    ours = Image.open(io.BytesIO(d.render(FigureFormat.PNG)))
+    buf = io.BytesIO()
+    with mpl.rc_context(TEXT_RASTER):
+        d.figure.savefig(buf, format="png", dpi=PNG_DPI)
+    theirs = np.asarray(Image.open(io.BytesIO(buf.getvalue())))
+    assert ours.mode == "RGB" and (theirs[..., 3] == 255).all()
+    assert np.array_equal(np.asarray(ours), theirs[..., :3])
+    # PNG stores whole pixels per metre: within half of one (0.0127 dpi) of the figure's dpi
+    assert ours.info["dpi"] == pytest.approx((PNG_DPI, PNG_DPI), abs=0.5 * 0.0254)
 
 
 def test_figure_formats_are_parsed_and_bad_ones_named():
