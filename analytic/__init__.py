@@ -4,6 +4,7 @@ Koganti & Udwadia, "Dynamics and Precision Control of Tumbling Multibody Systems
 Control, and Dynamics 40(3), 2017. Notation and equation numbers as in the paper.
 """
 
+from analytic.lazy import lazy_attributes
 from analytic.simulate import simulate  # bound here: the function, not its module's name
 
 _LAZY = {
@@ -26,18 +27,7 @@ _LAZY = {
 the command line starts its work sooner)."""
 
 
-def __getattr__(name: str):
-    if name in _LAZY:
-        import importlib
-
-        value = getattr(importlib.import_module(_LAZY[name]), name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module 'analytic' has no attribute {name!r}")
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_LAZY))
+__getattr__, __dir__ = lazy_attributes(__name__, _LAZY)
 
 
 __all__ = [

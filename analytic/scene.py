@@ -80,7 +80,7 @@ MAX_MUJOCO_STEPS = 1_000_000_000
 # and rates are not exact in binary (0.3 s x 10 Hz = 3.0000000000000004); the product's round-off,
 # at most 2.2e-16 x MAX_OUTPUT_SAMPLES = 2.2e-10 intervals, stays below it. A sample interval must
 # fit a whole number of MuJoCo steps to the same relative tolerance
-# (mj_bridge.simulate.STEP_FIT_RTOL).
+# (mj_bridge.plan.STEP_FIT_RTOL).
 GRID_RTOL = 1e-9
 
 # --- What the MuJoCo twin can represent (checked here so that a scene is refused at load, naming

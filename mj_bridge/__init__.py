@@ -9,11 +9,27 @@
 * :class:`Twin`: a compiled model with all of the above and the in-integrator controller.
 """
 
-from mj_bridge.callbacks import installed
-from mj_bridge.simulate import simulate
-from mj_bridge.twin import ControllerSource, MjControl, Twin, acceleration, mujoco_control
-from mj_bridge.twin_model import to_mujoco, to_paper, to_paper_acc
-from model_xml.coordinates import mujoco_to_paper_acc, mujoco_to_paper_state, paper_to_mujoco_state
+from analytic.lazy import lazy_attributes
+from mj_bridge.simulate import simulate  # bound here: the function, not its module's name (light)
+
+_LAZY = {
+    "installed": "mj_bridge.callbacks",
+    "ControllerSource": "mj_bridge.mujoco_settings",
+    "MjControl": "mj_bridge.twin",
+    "Twin": "mj_bridge.twin",
+    "acceleration": "mj_bridge.twin",
+    "mujoco_control": "mj_bridge.twin",
+    "to_mujoco": "mj_bridge.twin_model",
+    "to_paper": "mj_bridge.twin_model",
+    "to_paper_acc": "mj_bridge.twin_model",
+    "mujoco_to_paper_acc": "model_xml.coordinates",
+    "mujoco_to_paper_state": "model_xml.coordinates",
+    "paper_to_mujoco_state": "model_xml.coordinates",
+}
+"""Public names imported on first use: importing this package (or :mod:`mj_bridge.plants`, to
+choose plants) costs neither MuJoCo nor numba."""
+
+__getattr__, __dir__ = lazy_attributes(__name__, _LAZY)
 
 __all__ = [
     "ControllerSource",

@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 
 from analytic.effects import SolverMethod
 from analytic.plant import check_positive, coerce_enum
-from mj_bridge.stages import ControllerSource
+from mj_bridge.mujoco_settings import ControllerSource
 
 if TYPE_CHECKING:
     from analytic.scene import Scene

@@ -12,37 +12,12 @@
 from __future__ import annotations
 
 import importlib.util
-from dataclasses import dataclass
 
-from analytic.effects import MjIntegrator
-from analytic.plant import AnalyticPlant, AnalyticSettings, Plant, check_positive, coerce_enum
+from analytic.plant import AnalyticPlant, AnalyticSettings, Plant
 from analytic.scene import Scene
 from analytic.trajectory import Engine, Trajectory
+from mj_bridge.mujoco_settings import MujocoRunSettings
 from mj_bridge.pinocchio_settings import PinocchioSettings
-from mj_bridge.twin import ControllerSource
-
-
-@dataclass(frozen=True)
-class MujocoRunSettings:
-    """How the MuJoCo plant steps.
-
-    Attributes:
-        integrator: MuJoCo's integrator (``mjtIntegrator``).
-        dt: time step, s; it must divide the output interval.
-        controller: where the control comes from (:class:`ControllerSource`; the compiled
-            analytic kernel by default).
-        native_callback: the compiled controller as a native ``mjcb_control`` where it applies.
-    """
-
-    integrator: MjIntegrator = MjIntegrator.RK4
-    dt: float = 2.5e-4
-    controller: ControllerSource = ControllerSource.ANALYTIC_FAST
-    native_callback: bool = True
-
-    def __post_init__(self) -> None:
-        coerce_enum(self, "integrator", MjIntegrator)
-        coerce_enum(self, "controller", ControllerSource)
-        check_positive(self, "dt", what="positive finite time step in s")
 
 
 class MujocoPlant(Plant):

@@ -19,8 +19,6 @@ twin's :class:`ControllerSource`:
 
 from __future__ import annotations
 
-from enum import StrEnum
-
 import mujoco
 import numpy as np
 
@@ -30,23 +28,12 @@ from analytic.scene import Scene
 from mj_bridge import fast_stage
 from mj_bridge.accumulator import Accumulator
 from mj_bridge.mujoco_law import check_weighting, mujoco_law
+from mj_bridge.mujoco_settings import ControllerSource
 from mj_bridge.twin_model import TwinModel
 from model_xml.builder import CONTROL_GEAR
 from model_xml.rotations import cross3, quat_to_mat
 
 INV_GEAR = 1.0 / CONTROL_GEAR  # exact: a power of two
-
-
-class ControllerSource(StrEnum):
-    """Which implementation of the (same) control law drives the MuJoCo plant."""
-
-    ANALYTIC = "analytic"
-    """``analytic.TumblingModel.acceleration`` at MuJoCo's state (the paper's Eq. 89)."""
-    ANALYTIC_FAST = "analytic_fast"
-    """The same controller from the analytic side's compiled kernel (``analytic.fast.FastModel``,
-    tested against the numpy model to 1e-12 there); the numpy model answers when numba is absent."""
-    MUJOCO = "mujoco"
-    """Udwadia–Kalaba from MuJoCo's own ``M`` and forces (Gauss weighting only)."""
 
 
 class Stages:

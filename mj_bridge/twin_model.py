@@ -17,6 +17,7 @@ import numpy as np
 
 from analytic.effects import Effect, MjIntegrator, SpringModel
 from analytic.scene import Scene
+from mj_bridge.plan import as_enum
 from model_xml import (
     BODY,
     TORQUE_ACTUATORS,
@@ -34,17 +35,6 @@ from model_xml.coordinates import (
     paper_to_mujoco_state,
 )
 from model_xml.rotations import quat_to_mat
-
-
-def as_enum(kind, value, name: str):
-    """``value`` as a member of the enum ``kind``, or ValueError naming ``name`` and the choices."""
-    if isinstance(value, kind):
-        return value
-    try:
-        return kind(value)
-    except ValueError:
-        allowed = ", ".join(repr(e.value) for e in kind)
-        raise ValueError(f"{name}: unknown value {value!r} (allowed: {allowed})") from None
 
 
 @dataclass(frozen=True)

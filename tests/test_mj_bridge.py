@@ -255,6 +255,7 @@ def test_simulate_reports_mujoco_bad_warning_as_failed(monkeypatch):
     import sys
 
     sim = sys.modules["mj_bridge.simulate"]
+    twin_module = sys.modules["mj_bridge.twin"]  # simulate() takes Twin from there when it runs
 
     class HugeTwin(Twin):
         def __init__(self, *a, **kw):
@@ -272,7 +273,7 @@ def test_simulate_reports_mujoco_bad_warning_as_failed(monkeypatch):
 
             self.stages.controller_fn = huge
 
-    monkeypatch.setattr(sim, "Twin", HugeTwin)
+    monkeypatch.setattr(twin_module, "Twin", HugeTwin)
     tr = sim.simulate(paper_scene("paper_example1_controlled"), dt=5e-3, t_end=0.2)
     assert tr.status.value == "failed"
     assert "mjWARN_BADCTRL" in tr.message

@@ -213,7 +213,7 @@ def test_output_grid_starts_at_zero_and_ends_at_t_end(t_end, rate):
 def test_mujoco_steps_land_on_the_output_grid(steps_per_sample, samples, extra_steps, dt):
     """t_end a whole number of steps: MuJoCo's steps between samples add up to the same grid."""
     from analytic.scene import OutputSettings
-    from mj_bridge.simulate import plan_steps
+    from mj_bridge.plan import plan_steps
 
     extra_steps %= steps_per_sample
     base = scene_from_dict(_paper("paper_example1"))

@@ -4,6 +4,7 @@ stderr that reads in a log (one line per event, no carriage returns) as well as 
 
 from __future__ import annotations
 
+import dataclasses
 import importlib
 import io
 import json
@@ -89,6 +90,68 @@ def test_warm_up_is_silent_when_every_kernel_is_cached():
     res = warmup.warm_up(sc, plants, heard.append)
     assert heard == [] and res.stages == () and res.cold == ()
     assert warmup.cold_engines([p.value for p in plants]) == ()
+
+
+STAMP_PROBE = """
+import json, sys
+from validation import warmup
+from validation.scenes import resolve_scene
+
+res = warmup.warm_up(resolve_scene("paper_example1_controlled"), ["analytic", "mujoco"])
+print(json.dumps([list(res.cold), "numba" in sys.modules, "mujoco" in sys.modules]))
+"""
+
+
+def test_a_run_after_a_warm_check_does_not_import_the_engines_to_check_again():
+    """Once numba's cache was found warm (or warmed up), the stamp beside it lets the next run
+    skip the check: the process that starts the plants imports neither numba nor MuJoCo."""
+    sc = resolve_scene("paper_example1_controlled")
+    warmup.warm_up(sc, ["analytic", "mujoco"])  # compiles what is cold, then stamps
+    assert warmup.is_stamped_warm(warmup.warm_key(["analytic", "mujoco"], sc))
+    proc = subprocess.run(
+        [sys.executable, "-c", STAMP_PROBE], capture_output=True, text=True, env=_env(), timeout=600
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert json.loads(proc.stdout.splitlines()[-1]) == [[], False, False]
+
+
+def test_the_warm_key_follows_what_the_compiled_code_depends_on(tmp_path, monkeypatch):
+    """The same inputs give the same key; a changed source, CPU, numba setting, engine list or
+    weighting gives another (the next run then checks numba's cache again)."""
+    sc = resolve_scene("paper_example1_controlled")
+    src = tmp_path / "pkg"
+    src.mkdir()
+    (src / "mod.py").write_text("x = 1\n")
+    monkeypatch.setattr(warmup, "_source_roots", lambda: [src])
+    monkeypatch.delenv("NUMBA_OPT", raising=False)
+    key = warmup.warm_key(["analytic"], sc)
+    assert warmup.warm_key(["analytic"], sc) == key
+    others = []
+    (src / "mod.py").write_text("x = 2\n")
+    others.append(warmup.warm_key(["analytic"], sc))
+    (src / "mod.py").write_text("x = 1\n")
+    assert warmup.warm_key(["analytic"], sc) == key
+    others.append(warmup.warm_key(["analytic", "mujoco"], sc))
+    m2 = sc.replace(control=dataclasses.replace(sc.control, weighting="M^-2"))
+    others.append(warmup.warm_key(["analytic"], m2))
+    monkeypatch.setenv("NUMBA_OPT", "0")
+    others.append(warmup.warm_key(["analytic"], sc))
+    monkeypatch.delenv("NUMBA_OPT")
+    monkeypatch.setattr(warmup, "_cpu_identity", lambda: "another CPU")
+    others.append(warmup.warm_key(["analytic"], sc))
+    assert len({key, *others}) == 1 + len(others)
+
+
+def test_a_damaged_stamp_counts_as_no_stamp_and_is_rewritten(tmp_path, monkeypatch):
+    stamp = tmp_path / warmup.WARM_STAMP
+    monkeypatch.setattr(warmup, "_stamp_path", lambda: stamp)
+    stamp.write_text("{not json", encoding="utf-8")
+    assert not warmup.is_stamped_warm("k0")
+    for i in range(warmup.STAMP_KEYS_KEPT + 3):
+        warmup.stamp_warm(f"k{i}")
+    kept = json.loads(stamp.read_text(encoding="utf-8"))["warm_keys"]
+    assert len(kept) == warmup.STAMP_KEYS_KEPT and kept[-1] == f"k{warmup.STAMP_KEYS_KEPT + 2}"
+    assert warmup.is_stamped_warm(kept[0]) and not warmup.is_stamped_warm("k0")
 
 
 def test_stage_progress_in_a_log_is_one_plain_line_per_stage():

@@ -34,10 +34,8 @@ def check_validation_inputs(
     scene.output.with_t_end(t_end, "t_end")  # the output grid every plant samples
     if not mujoco:
         return
-    try:
-        from mj_bridge.simulate import plan_steps
-    except ImportError:  # no MuJoCo here: the run reports that plant as missing
-        return
+    from mj_bridge.plan import plan_steps  # light: numpy and the scene, not MuJoCo
+
     plan_steps(scene, integrator, dt, t_end)  # MuJoCo's steps on that grid
 
 

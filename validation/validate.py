@@ -232,12 +232,13 @@ def _recording_task(
 RECORDING = "run.rrd"
 
 EVIDENCE_SHARES: tuple[tuple[str, ...], ...] = (
-    (RECORDING, "errors", "invariants"),
-    ("tracking", "control"),
+    (RECORDING, "errors"),
+    ("tracking", "invariants", "control"),
 )
 """How the recording and the figures (:data:`validation.figures.FIGURES`) are shared between the
-two evidence workers, balanced as measured on the default scene in the workers: the recording
-0.1 s, the error figure (a panel per compared quantity) 0.5 s, the others 0.25-0.4 s each."""
+two evidence workers, balanced as measured on the default scene (one process, 2-core machine):
+the recording 0.1 s, the error figure (a panel per compared quantity) 0.8-1.0 s, the others
+0.3-0.4 s each."""
 
 
 def _evidence_task(share: Sequence[str], rec_args, fig_args, *, report) -> dict[str, Any]:

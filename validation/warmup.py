@@ -222,6 +222,107 @@ def _grouped_states(dispatchers: Sequence[Any]) -> list[CacheState]:
     ]
 
 
+WARM_STAMP = "tumble-kernels-warm.json"
+"""A file beside numba's cache of the kernel (:func:`analytic.kernel.cache_dir.kernel_cache_dir`)
+listing the :func:`warm_key` values for which every kernel a run needs is cached: written when
+:func:`cold_engines` finds nothing cold, or after a warm-up whose every stage compiled (it runs the
+plants' own entry points). A run whose key is listed skips the check, which imports numba, MuJoCo
+and every compiled module (about half a second) in the process that then starts the plants, where
+each plant imports what it needs side by side. Should the stamp outlive the cache (a deleted
+``__pycache__`` of another package), the plants compile what is missing themselves, unannounced."""
+
+STAMP_KEYS_KEPT = 16  # keys a stamp keeps (engines x weighting x interpreters sharing one tree)
+
+
+def _cpu_identity() -> str:
+    """What tells this machine's CPU from another for compiled code (numba keys its cache on the
+    CPU's name and features): the model and feature flags from ``/proc/cpuinfo``, else
+    :func:`platform.processor`."""
+    import platform
+
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8", errors="replace") as f:
+            lines = f.read().split("\n\n", 1)[0].splitlines()
+        wanted = ("model name", "flags", "Features", "CPU implementer", "CPU part")
+        return "\n".join(line for line in lines if line.split(":", 1)[0].strip() in wanted)
+    except OSError:
+        return f"{platform.machine()} {platform.processor()}"
+
+
+def _source_roots() -> list[Path]:
+    """The directories of the packages that hold compiled code."""
+    import analytic
+    import mj_bridge
+
+    return [Path(pkg.__file__).resolve().parent for pkg in (analytic, mj_bridge)]
+
+
+def warm_key(engines: Sequence[str], scene: Scene) -> str:
+    """The hash under which a warm cache is stamped: every source of the packages that hold
+    compiled code (:mod:`analytic`, :mod:`mj_bridge`), the versions of numba, llvmlite and
+    Python, the CPU, the ``NUMBA_*`` settings, the engines and the scene's weighting (which
+    selects the compiled solve). Any change makes the next run check numba's cache again."""
+    import hashlib
+    import platform
+    from importlib import metadata
+
+    h = hashlib.sha256()
+    for root in _source_roots():
+        for path in sorted(root.rglob("*.py")):
+            h.update(str(path.relative_to(root.parent)).encode())
+            h.update(path.read_bytes())
+    for dist in ("numba", "llvmlite"):
+        try:
+            h.update(f"{dist} {metadata.version(dist)}".encode())
+        except metadata.PackageNotFoundError:
+            h.update(f"{dist} absent".encode())
+    h.update(f"{sys.version} {platform.machine()}".encode())
+    h.update(_cpu_identity().encode())
+    h.update(repr(sorted((k, v) for k, v in os.environ.items() if k.startswith("NUMBA_"))).encode())
+    h.update(repr((sorted(engines), str(scene.control.weighting))).encode())
+    return h.hexdigest()
+
+
+def _stamp_path() -> Path | None:
+    from analytic.kernel.cache_dir import kernel_cache_dir
+
+    where = kernel_cache_dir()
+    return where / WARM_STAMP if where is not None else None
+
+
+def _stamped_keys() -> list[str]:
+    import json
+
+    path = _stamp_path()
+    try:
+        keys = json.loads(path.read_text(encoding="utf-8"))["warm_keys"] if path else []
+    except (OSError, ValueError, KeyError, TypeError):
+        return []
+    return [k for k in keys if isinstance(k, str)] if isinstance(keys, list) else []
+
+
+def is_stamped_warm(key: str) -> bool:
+    """Whether a check of numba's cache found every kernel of ``key`` cached before."""
+    return key in _stamped_keys()
+
+
+def stamp_warm(key: str) -> None:
+    """Record ``key`` as warm (atomically; a stamp that cannot be written is no error)."""
+    import json
+
+    from validation.atomic import write_text
+
+    path = _stamp_path()
+    if path is None:
+        return
+    kept = [k for k in _stamped_keys() if k != key][-(STAMP_KEYS_KEPT - 1) :]
+    keys = [*kept, key]
+    try:
+        write_text(path, json.dumps({"warm_keys": keys}, indent=1) + "\n")
+    except OSError:
+        pass
+
+
 def cache_writable(engines: Sequence[str]) -> bool:
     """Whether numba keeps these engines' compiled code on disk (a writable cache directory)."""
     from numba.core.caching import Cache
@@ -418,8 +519,12 @@ def warm_up(
     engines = [str(getattr(p, "value", p)) for p in plants]
     engines = [e for e in (ANALYTIC, MUJOCO, PINOCCHIO) if e in engines]
     t0 = time.perf_counter()
+    key = warm_key(engines, scene)
+    if is_stamped_warm(key):  # checked before: nothing imports numba here
+        return WarmupResult()
     cold = cold_engines(engines)
     if not cold:
+        stamp_warm(key)
         return WarmupResult()
     say = progress or (lambda _line: None)
     cached = cache_writable(cold)
@@ -478,6 +583,10 @@ def warm_up(
             helper.stop()
     total = time.perf_counter() - t0
     say(f"  kernels ready in {total:.1f} s")
+    if cached and not any(st.error for st in stages):
+        # every stage ran the plants' own entry points: what a run of this key needs is on disk
+        # (the cache check would still count variants no run of this scene uses)
+        stamp_warm(key)
     return WarmupResult(tuple(cold), tuple(stages), total, concurrent, cached)
 
 
@@ -491,5 +600,8 @@ __all__ = [
     "compile_kernel",
     "compile_plant",
     "engine_is_cold",
+    "is_stamped_warm",
+    "stamp_warm",
+    "warm_key",
     "warm_up",
 ]

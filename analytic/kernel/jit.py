@@ -36,46 +36,27 @@ import hashlib
 import inspect
 import os
 import sys
-import tempfile
 import warnings
 from pathlib import Path
 from types import ModuleType
 
 import numpy as np
 
+from analytic.kernel.cache_dir import APP_NAME, PACKAGE_DIR, user_cache_dir, writable
 from analytic.kernel.layout import WS_LEN
-
-APP_NAME = "tumbling-testbed"
-PACKAGE_DIR = Path(__file__).resolve().parent
 
 
 class CacheFallbackWarning(UserWarning):
     """numba's cache beside the package is not writable: another directory (or none) is used."""
 
 
-def _writable(path: Path) -> bool:
-    """Whether files can be created in ``path`` (made if missing), tested as numba tests it."""
-    try:
-        os.makedirs(path, exist_ok=True)
-        tempfile.TemporaryFile(dir=path).close()
-    except OSError:
-        return False
-    return True
-
-
-def user_cache_dir() -> Path:
-    """``$XDG_CACHE_HOME/tumbling-testbed/numba``, or ``~/.cache/tumbling-testbed/numba``."""
-    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    return Path(base) / APP_NAME / "numba"
-
-
 def _configure_cache_dir() -> str | None:
     """Point numba at a writable cache directory when the in-tree one is not; returns the note
     for :func:`cache_dir_note` (None: numba's defaults apply)."""
-    if os.environ.get("NUMBA_CACHE_DIR") or _writable(PACKAGE_DIR / "__pycache__"):
+    if os.environ.get("NUMBA_CACHE_DIR") or writable(PACKAGE_DIR / "__pycache__"):
         return None
     fallback = user_cache_dir()
-    if not _writable(fallback):
+    if not writable(fallback):
         return None  # numba's own user-wide directory is tried next; jit() handles "none at all"
     os.environ["NUMBA_CACHE_DIR"] = str(fallback)
     numba_config = sys.modules.get("numba.core.config")
