@@ -49,7 +49,7 @@ ANALYTIC, MUJOCO, PINOCCHIO = "analytic", "mujoco", "pinocchio"
 
 EXPECTED_COLD_S = 15
 """What the message announces: the compile time of every kernel on an idle 2-core machine, s
-(measured: 11.8 s for two plants, 13.4 s for three)."""
+(measured: 11.5 s for two plants in a fresh clone, 11-13 s in other runs on that machine)."""
 
 ENGINE_MODULES: dict[str, tuple[str, ...]] = {
     ANALYTIC: ("analytic.",),
