@@ -30,6 +30,7 @@ from validation.figures import (
     figure_invariants,
     figure_tracking,
     parse_formats,
+    prepare_drawing,
 )
 from validation.report import write_report
 from validation.scenes import resolve_scene
@@ -309,6 +310,16 @@ def test_png_is_the_picture_matplotlib_draws(run):
     assert np.array_equal(np.asarray(ours), theirs[..., :3])
     # PNG stores whole pixels per metre: within half of one (0.0127 dpi) of the figure's dpi
     assert ours.info["dpi"] == pytest.approx((PNG_DPI, PNG_DPI), abs=0.5 * 0.0254)
+
+
+def test_preparing_the_drawing_changes_no_figure(run):
+    """The throw-away figure drawn to load fonts and caches before the evidence workers fork
+    leaves no setting behind: a figure renders to the same bytes before and after it."""
+    _, _, cmp, meta = run
+    ctx = FigureContext.from_meta(meta)
+    before = figure_invariants(cmp, ctx).render(FigureFormat.PNG)
+    prepare_drawing()
+    assert figure_invariants(cmp, ctx).render(FigureFormat.PNG) == before
 
 
 def test_figure_formats_are_parsed_and_bad_ones_named():

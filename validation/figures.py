@@ -523,6 +523,24 @@ def _side_legend(ax) -> None:
         ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, fontsize=8)
 
 
+def prepare_drawing() -> None:
+    """Draw and encode one small throw-away figure with the figures' own helpers, so that what a
+    process's first figure would otherwise load while it draws (the fonts at the figures' sizes,
+    glyph and text-layout caches, the log-axis tick machinery, the PNG encoder) is loaded now.
+
+    ``tumble validate`` calls it at idle priority while the plants run; the evidence workers
+    forked afterwards inherit all of it, and their first figure costs what a second one would
+    (measured on the error figure: 0.9-1.25 s first in a process, 0.55-0.6 s after this)."""
+    fig, axes = _figure(1, "prepare")
+    t = np.linspace(0.0, 1.0, 5)
+    _log_panel(axes[0], [(Subject.BOTH, t, 10.0**-t)], 1e-3)
+    axes[0].set_ylabel("m")
+    _title(axes[0], "prepare")
+    axes[-1].set_xlabel("t (s)")
+    _figure_legend(fig, axes)
+    Drawing("prepare", "", fig).render(FigureFormat.PNG)
+
+
 def _checks_by_series(cmp: Comparison) -> dict[str, Check]:
     return {c.series: c for c in cmp.checks if c.series}
 

@@ -264,9 +264,12 @@ def _import_rerun() -> None:
     import validation.recording  # noqa: F401  (scipy.spatial)
 
 
-def _import_matplotlib() -> None:
-    import matplotlib.backends.backend_agg
-    import matplotlib.figure  # noqa: F401
+def _prepare_figures() -> None:
+    """matplotlib imported and one throw-away figure drawn (:func:`validation.figures.prepare_drawing`):
+    the evidence workers forked next inherit the fonts and caches their first figure needs."""
+    from validation.figures import prepare_drawing
+
+    prepare_drawing()
 
 
 def _run_plants(
@@ -444,13 +447,14 @@ def _validate_into(
     jobs: list[workers.Job] = []
 
     def start_evidence() -> None:
-        """Once every plant runs: matplotlib (the workers forked next inherit it, so it is
-        imported once) and scipy.linalg (for the comparison) imported here at idle priority, then
+        """Once every plant runs: matplotlib imported and its fonts and caches loaded by one
+        throw-away figure (the workers forked next inherit them, so it is done once) and
+        scipy.linalg (for the comparison) imported here at idle priority, then
         the two evidence workers, one importing rerun meanwhile, also at idle priority: the
         plants keep the CPUs."""
         if fork:
             with workers.signals_deferred(), workers.idle_priority():
-                _import_matplotlib()
+                _prepare_figures()
                 import scipy.linalg  # noqa: F401  (the comparison's exponentials, next)
         jobs[:] = [
             workers.start(
