@@ -269,7 +269,10 @@ def _prepare_figures() -> None:
     the evidence workers forked next inherit the fonts and caches their first figure needs."""
     from validation.figures import prepare_drawing
 
-    prepare_drawing()
+    try:
+        prepare_drawing()
+    except Exception:  # an optimisation only: the figures, drawn later, report their own errors
+        pass
 
 
 def _run_plants(
