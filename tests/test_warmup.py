@@ -9,6 +9,7 @@ import importlib
 import io
 import json
 import os
+import re
 import subprocess
 import sys
 import textwrap
@@ -246,6 +247,13 @@ def test_validate_in_a_log_says_what_it_does(tmp_path):
     assert all(line.startswith("tumble: ") for line in lines), err
     for plant in ("analytic", "mujoco"):
         assert f"tumble: validate paper_example1_controlled: {plant} plant, 0 -> 0.05 s" in lines
+    # the closing line states each plant's own wall time, as report.json records it
+    done = next(line for line in lines if ": stages done (" in line)
+    said = dict(re.findall(r"(\w+) ([0-9.e+-]+) s", done.split("stages done (", 1)[1]))
+    walls = json.loads((tmp_path / "out" / "report.json").read_text())["run"]["wall_times_s"]
+    assert set(said) == {k for k in walls if k in ("analytic", "mujoco", "pinocchio")}
+    for plant, text in said.items():
+        assert float(text) == pytest.approx(walls[plant], rel=5e-3), (plant, done)  # 3 digits
 
 
 def test_first_run_compiles_once_and_says_so(tmp_path):

@@ -113,6 +113,7 @@ def cmd_validate(args: argparse.Namespace) -> int:
     t_end = args.t_end or scene.output.t_end
     _warm_up_checked(scene, args, Status())
     progress = StageProgress(f"validate {scene.name}", t_end)
+    res = None
     try:
         res = run_validation(
             scene,
@@ -125,7 +126,7 @@ def cmd_validate(args: argparse.Namespace) -> int:
             figure_formats=args.figure_format,
         )
     finally:
-        progress.close()
+        progress.close(walls=res.wall_times if res is not None else None)
     n_fail = sum(1 for c in res.checks if not c.passed)
     verdict = "PASS" if res.passed else "FAIL"
     print(f"{verdict}: {len(res.checks) - n_fail}/{len(res.checks)} checks passed for {scene.name}")

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import sys
 import time
+from collections.abc import Mapping
 
 PREFIX = "tumble: "
 
@@ -109,8 +110,14 @@ class StageProgress:
         """The stage reported last (None before any report)."""
         return self._last
 
-    def close(self) -> None:
+    def close(self, walls: Mapping[str, float] | None = None) -> None:
+        """End the display; not on a terminal, one line with each stage's wall time: ``walls``
+        where given (the stages' own measurements: stages in worker processes report through
+        pipes read in bursts, so first-to-last report can badly understate them), else from
+        each stage's first to its last report."""
         self.bar.close()
+        if walls:
+            self.walls.update({s: float(w) for s, w in walls.items() if s in self.walls})
         if self.walls and not self.tty:
             times = ", ".join(f"{s} {w:.3g} s" for s, w in self.walls.items())
             self.stream.write(f"{PREFIX}{self.label}: stages done ({times})\n")
