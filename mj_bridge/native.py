@@ -51,7 +51,7 @@ import mujoco
 import numpy as np
 
 from analytic.kernel.entry import Solver, solver_of
-from analytic.kernel.jit import HAVE_NUMBA, KERNEL_SOURCES, jit, source_fingerprint
+from analytic.kernel.jit import HAVE_NUMBA, KERNEL_SOURCES, inline, source_fingerprint
 from analytic.kernel.layout import F_TA, F_TC, F_TFREQ, STATUS_OK
 from mj_bridge import fast_stage
 
@@ -242,14 +242,16 @@ def _make_native_stage(deps: int, solver: int):
 DEPS = source_fingerprint(*KERNEL_SOURCES, fast_stage)
 
 
-def _compiled_stage(solver: Solver):
-    return jit(_make_native_stage(DEPS, int(solver))) if HAVE_NUMBA else None
+def _inlined_stage(solver: Solver):
+    return inline(_make_native_stage(DEPS, int(solver))) if HAVE_NUMBA else None
 
 
-# one per solve, compiled on first call (module globals: the callback refers to them by name)
-native_stage_gauss = _compiled_stage(Solver.GAUSS)
-native_stage_minv2 = _compiled_stage(Solver.MINV2)
-native_stage = _compiled_stage(Solver.ANY)
+# one per solve (module globals: the callback refers to them by name), pasted into the callback
+# rather than compiled and linked on their own: one compile and one LLVM pass over the linked
+# kernel fewer on a first run's critical path
+native_stage_gauss = _inlined_stage(Solver.GAUSS)
+native_stage_minv2 = _inlined_stage(Solver.MINV2)
+native_stage = _inlined_stage(Solver.ANY)
 
 
 def available() -> bool:

@@ -59,9 +59,11 @@ _GAUSS, _MINV2 = int(Solver.GAUSS), int(Solver.MINV2)
 def evaluate_as(solver, t, q, qd, fp, ip, out):
     """The kernel a compiled caller embeds, by ``solver`` (a :class:`Solver` value). Pass a
     constant of the caller (a closure variable of its factory): numba then drops the other branches
-    before compiling, so only that solve is compiled into the caller."""
+    before compiling, so only that solve is compiled into the caller. A single solve is called as
+    its two cached halves (``join``), not through its entry point: a first run compiles the caller
+    as soon as the halves are on disk."""
     if solver == _GAUSS:
-        return gauss.evaluate(t, q, qd, fp, ip, out)
+        return gauss.join(t, q, qd, fp, ip, out)
     if solver == _MINV2:
-        return minv2.evaluate(t, q, qd, fp, ip, out)
+        return minv2.join(t, q, qd, fp, ip, out)
     return evaluate(t, q, qd, fp, ip, out)

@@ -153,17 +153,25 @@ def _make_evaluate(deps: int):
         """
         if deps < 0:  # never true: ties numba's cache key to the kernel's sources
             return STATUS_UNSUPPORTED
-        n = ip[I_N] & IX
-        kw = ip[I_KW] & IX
-        kp = ip[I_KP] & IX
-        if kw + kp > 0 and ip[I_WEIGHT] != W_GAUSS:
-            return STATUS_UNSUPPORTED
-        full = out.shape[0] >= 2 * (n + 7) + 3 + kw + kp  # else: q̈ only
-        w = workspace()
-        build_system(t, q, qd, fp, ip, out, full, w)
-        return solve_gauss(q, fp, ip, out, w, n, kw, kp, full)
+        return join(t, q, qd, fp, ip, out)
 
     return evaluate
+
+
+@inline
+def join(t, q, qd, fp, ip, out):
+    """:func:`evaluate`'s body, pasted into compiled callers (``analytic.kernel.entry.evaluate_as``):
+    they call the two cached halves themselves, so a first run compiles them without waiting for
+    the entry point that joins them."""
+    n = ip[I_N] & IX
+    kw = ip[I_KW] & IX
+    kp = ip[I_KP] & IX
+    if kw + kp > 0 and ip[I_WEIGHT] != W_GAUSS:
+        return STATUS_UNSUPPORTED
+    full = out.shape[0] >= 2 * (n + 7) + 3 + kw + kp  # else: q̈ only
+    w = workspace()
+    build_system(t, q, qd, fp, ip, out, full, w)
+    return solve_gauss(q, fp, ip, out, w, n, kw, kp, full)
 
 
 evaluate = jit_entry(_make_evaluate)

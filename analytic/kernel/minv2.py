@@ -19,7 +19,7 @@ import math
 
 import numpy as np
 
-from analytic.kernel.jit import jit, jit_entry, workspace
+from analytic.kernel.jit import inline, jit, jit_entry, workspace
 from analytic.kernel.layout import (
     F_ARR,
     F_MU0,
@@ -315,21 +315,28 @@ def _make_evaluate(deps: int):
         """
         if deps < 0:  # never true: ties numba's cache key to the kernel's sources
             return STATUS_UNSUPPORTED
-        n = ip[I_N] & IX
-        kw = ip[I_KW] & IX
-        kp = ip[I_KP] & IX
-        if kw + kp == 0 or ip[I_WEIGHT] != W_MINV2:
-            return STATUS_UNSUPPORTED
-        # computed, not the constant True: numba would type a literal as its own signature and
-        # compile build_system a second time beside the Gauss kernel's
-        full = out.shape[0] >= 2 * (n + 7) + 3 + kw + kp
-        if not full:  # this weighting needs Q^C on the way to q̈: the whole output
-            return STATUS_UNSUPPORTED
-        w = workspace()
-        build_system(t, q, qd, fp, ip, out, full, w)
-        return solve_minv2(q, fp, ip, out, w, n, kw, kp)
+        return join(t, q, qd, fp, ip, out)
 
     return evaluate
+
+
+@inline
+def join(t, q, qd, fp, ip, out):
+    """:func:`evaluate`'s body, pasted into compiled callers (``analytic.kernel.entry.evaluate_as``):
+    they call the two cached halves themselves."""
+    n = ip[I_N] & IX
+    kw = ip[I_KW] & IX
+    kp = ip[I_KP] & IX
+    if kw + kp == 0 or ip[I_WEIGHT] != W_MINV2:
+        return STATUS_UNSUPPORTED
+    # computed, not the constant True: numba would type a literal as its own signature and
+    # compile build_system a second time beside the Gauss kernel's
+    full = out.shape[0] >= 2 * (n + 7) + 3 + kw + kp
+    if not full:  # this weighting needs Q^C on the way to q̈: the whole output
+        return STATUS_UNSUPPORTED
+    w = workspace()
+    build_system(t, q, qd, fp, ip, out, full, w)
+    return solve_minv2(q, fp, ip, out, w, n, kw, kp)
 
 
 evaluate = jit_entry(_make_evaluate)
