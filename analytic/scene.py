@@ -524,16 +524,7 @@ class _Table:
         return v
 
     def enum(self, key: str, kind: type, default: Any = ...):
-        v = self.raw(key, default, kinds=(Kind.CHOICE,))
-        if isinstance(v, kind):
-            return v
-        try:
-            return kind(v)
-        except ValueError:
-            allowed = ", ".join(repr(e.value) for e in kind)
-            raise ValueError(
-                f"{self.name(key)}: unknown value {_show(v)} (allowed: {allowed})"
-            ) from None
+        return as_enum(kind, self.raw(key, default, kinds=(Kind.CHOICE,)), self.name(key))
 
     def finish(self) -> None:
         extra = sorted(set(self.data) - self.used)
@@ -541,6 +532,18 @@ class _Table:
             raise ValueError(
                 f"{self.name(extra[0])}: unknown key (got {_show(self.data[extra[0]])})"
             )
+
+
+def as_enum(kind: type, value: Any, name: str) -> Any:
+    """``value`` as a member of the enum ``kind``, or ValueError naming ``name``, the value and
+    the choices."""
+    if isinstance(value, kind):
+        return value
+    try:
+        return kind(value)
+    except ValueError:
+        allowed = ", ".join(repr(e.value) for e in kind)
+        raise ValueError(f"{name}: unknown value {_show(value)} (allowed: {allowed})") from None
 
 
 def _show(v: Any) -> str:

@@ -11,19 +11,7 @@ import math
 import numpy as np
 
 from analytic.effects import MjIntegrator
-from analytic.scene import MAX_MUJOCO_STEPS, Scene
-
-
-def as_enum(kind, value, name: str):
-    """``value`` as a member of the enum ``kind``, or ValueError naming ``name`` and the choices."""
-    if isinstance(value, kind):
-        return value
-    try:
-        return kind(value)
-    except ValueError:
-        allowed = ", ".join(repr(e.value) for e in kind)
-        raise ValueError(f"{name}: unknown value {value!r} (allowed: {allowed})") from None
-
+from analytic.scene import MAX_MUJOCO_STEPS, Scene, as_enum
 
 # A sample interval must be a whole number of steps to this relative tolerance.
 STEP_FIT_RTOL = 1e-9
@@ -92,4 +80,4 @@ def plan_steps(
     return integ, h, times, steps_between(times, h, t_name)
 
 
-__all__ = ["STEP_FIT_RTOL", "as_enum", "plan_steps", "steps_between"]
+__all__ = ["STEP_FIT_RTOL", "plan_steps", "steps_between"]

@@ -16,8 +16,7 @@ import mujoco
 import numpy as np
 
 from analytic.effects import Effect, MjIntegrator, SpringModel
-from analytic.scene import Scene
-from mj_bridge.plan import as_enum
+from analytic.scene import Scene, as_enum
 from model_xml import (
     BODY,
     TORQUE_ACTUATORS,
