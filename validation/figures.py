@@ -186,21 +186,12 @@ class Drawing:
         if self.figure is None:
             raise ValueError(f"figure {self.name!r}: not drawn ({self.caption})")
         fmt = FigureFormat(fmt)
-        buf = io.BytesIO()
         if fmt is FigureFormat.PNG:
             return _png(self.figure)
-        metadata = {
-            FigureFormat.PNG: {"Software": None},
-            FigureFormat.SVG: {"Date": None},
-            FigureFormat.PDF: {"CreationDate": None},
-        }[fmt]
-        extra = (
-            {"pil_kwargs": {"compress_level": PNG_COMPRESS_LEVEL}}
-            if fmt is FigureFormat.PNG
-            else {}
-        )
+        metadata = {FigureFormat.SVG: {"Date": None}, FigureFormat.PDF: {"CreationDate": None}}[fmt]
+        buf = io.BytesIO()
         with mpl.rc_context({"svg.hashsalt": SVG_HASH_SALT, **TEXT_RASTER}):
-            self.figure.savefig(buf, format=fmt.value, dpi=PNG_DPI, metadata=metadata, **extra)
+            self.figure.savefig(buf, format=fmt.value, dpi=PNG_DPI, metadata=metadata)
         return buf.getvalue()
 
 

@@ -389,8 +389,8 @@ def _helper_main() -> None:  # pragma: no cover - runs in the helper process
     """The helper process: read ``(scene, engine, system_first)`` (pickled) from stdin, import the
     modules; with ``system_first`` compile the kernel's stages 1-6 at once (:func:`compile_kernel_half`)
     and print that stage's time as one JSON line; then, for an engine, wait for the ``go`` line (the
-    rest of the kernel is on disk), compile the engine's stage (and the entry point joining the
-    kernel's halves, when this process is first to need it) and print its time as one JSON line."""
+    scene's solve is on disk too), compile the engine's stage (which calls the two halves
+    directly) and print its time as one JSON line."""
     import json
     import pickle
     import signal
@@ -565,7 +565,7 @@ def warm_up(
                 rest.remove(MUJOCO)
         if split:  # here the solve, meanwhile the helper stages 1-6; then the join loads both
             report(_timed(TITLES["solve"], lambda: compile_kernel_half(scene, "solve")))
-            if engine_beside:  # the helper joins the halves itself once its own is done
+            if engine_beside:  # the MuJoCo stage calls both halves: its compile starts after 1-6
                 helper.go()
             if ANALYTIC in rest:  # meanwhile, what the right-hand side embeds beside the kernel
                 report(_timed(TITLES["aux"], lambda: compile_aux_rates(scene)))

@@ -42,7 +42,7 @@ from types import ModuleType
 
 import numpy as np
 
-from analytic.kernel.cache_dir import APP_NAME, PACKAGE_DIR, user_cache_dir, writable
+from analytic.kernel.cache_dir import APP_NAME, PACKAGE_DIR, kernel_cache_dir
 from analytic.kernel.layout import WS_LEN
 
 
@@ -53,11 +53,9 @@ class CacheFallbackWarning(UserWarning):
 def _configure_cache_dir() -> str | None:
     """Point numba at a writable cache directory when the in-tree one is not; returns the note
     for :func:`cache_dir_note` (None: numba's defaults apply)."""
-    if os.environ.get("NUMBA_CACHE_DIR") or writable(PACKAGE_DIR / "__pycache__"):
-        return None
-    fallback = user_cache_dir()
-    if not writable(fallback):
-        return None  # numba's own user-wide directory is tried next; jit() handles "none at all"
+    fallback = kernel_cache_dir()
+    if os.environ.get("NUMBA_CACHE_DIR") or fallback in (None, PACKAGE_DIR / "__pycache__"):
+        return None  # none writable: numba's own user-wide directory is tried next (see jit())
     os.environ["NUMBA_CACHE_DIR"] = str(fallback)
     numba_config = sys.modules.get("numba.core.config")
     if numba_config is not None:  # numba imported before this module: it read the environment
