@@ -382,6 +382,60 @@ def test_sigterm_is_handled_like_ctrl_c(tmp_path):
     assert _leftovers(tmp_path) == []
 
 
+def _signal_inside_a_c_callback(signum: int) -> None:
+    """Deliver ``signum`` while Python code runs as a C callback (as llvmlite's object-cache
+    callback does while numba compiles): the handler's KeyboardInterrupt ends the callback and
+    the C caller swallows it."""
+    import ctypes
+
+    @ctypes.CFUNCTYPE(None)
+    def callback():
+        signal.raise_signal(signum)
+        for _ in range(3):  # the handler runs at the next bytecodes, still inside the callback
+            pass
+
+    callback()
+
+
+@pytest.mark.parametrize(
+    ("signum", "status", "word"),
+    [(signal.SIGTERM, EXIT_SIGTERM, "terminated"), (signal.SIGINT, EXIT_SIGINT, "interrupted")],
+)
+def test_a_signal_swallowed_by_compiled_code_still_stops_the_run(
+    tmp_path, monkeypatch, capfd, signum, status, word
+):
+    """A signal landing in a C callback (numba compiling in the process) is not lost: the run
+    stops at its next progress report, exit 143/130, the partial trajectory kept, marked
+    interrupted, and no "Exception ignored" traceback."""
+    import importlib
+
+    simulate_mod = importlib.import_module("analytic.simulate")  # the module, not the function
+    real = simulate_mod.simulate
+
+    def signalled_then_run(*args, **kwargs):
+        _signal_inside_a_c_callback(signum)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(simulate_mod, "simulate", signalled_then_run)
+    out = tmp_path / "v"
+    code = main(["simulate", "paper_example1", "--t-end", "2", "--out", str(out)])
+    err = capfd.readouterr().err
+    assert code == status, err
+    assert len(err.strip().splitlines()) == 1 and word in err and "Exception" not in err
+    man = json.loads((out / MANIFEST).read_text())
+    assert man["state"] == "interrupted"
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "interrupted"
+    assert _leftovers(tmp_path) == []
+
+
+def test_interrupt_keeping_is_undone_after_the_command():
+    """Outside a command the interpreter's own hook and SIGTERM handler are back."""
+    hook, handler = sys.unraisablehook, signal.getsignal(signal.SIGTERM)
+    assert main(["scene-reference", "--out", os.devnull]) == 0
+    assert sys.unraisablehook is hook and signal.getsignal(signal.SIGTERM) is handler
+
+
 def test_validate_controlled_then_uncontrolled_leaves_only_the_second_run(tmp_path):
     """End to end on both plants: the first run's tracking.png does not outlive it."""
     from validation.validate import run_validation

@@ -7,7 +7,9 @@ interrupted). Every output directory is one run, whole (:mod:`validation.outputs
 paths are built from a sanitised slug of the scene's name, always under ``out/``.
 
 Only the standard library is imported before ``main`` has installed its signal handlers, so a
-Ctrl-C during start-up (numpy, MuJoCo, numba loading) is one line too.
+Ctrl-C during start-up (numpy, MuJoCo, numba loading) is one line too; an interrupt that lands
+inside compiled code's Python callback is kept and raised at the next progress report
+(:mod:`validation.interrupts`).
 """
 
 from __future__ import annotations
@@ -20,10 +22,11 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import argparse  # noqa: E402
 import json  # noqa: E402
-import signal  # noqa: E402
 import sys  # noqa: E402
 import warnings  # noqa: E402
 from pathlib import Path  # noqa: E402
+
+from validation import interrupts  # noqa: E402
 
 EXIT_FAILED = 1  # a run or a check failed, or its results could not be written
 EXIT_USAGE = 2  # bad input (scene, arguments), found before any work
@@ -429,21 +432,6 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-class _Terminated(KeyboardInterrupt):
-    """SIGTERM, handled like Ctrl-C: the run stops, its partial results are kept."""
-
-
-_received_sigterm = False
-"""Set by the SIGTERM handler: the plants turn the interrupt into a partial run and whoever
-re-raises it raises a plain KeyboardInterrupt, so the exit status is decided from this flag."""
-
-
-def _on_sigterm(signum, frame):
-    global _received_sigterm
-    _received_sigterm = True
-    raise _Terminated
-
-
 def _one_line_warning(message, category, filename, lineno, file=None, line=None):
     """Warnings as one line each (``tumble: warning: ...``), without the source line."""
     text = str(message).splitlines()[0] if str(message) else category.__name__
@@ -452,38 +440,43 @@ def _one_line_warning(message, category, filename, lineno, file=None, line=None)
 
 def main(argv: list[str] | None = None) -> int:
     """Run one ``tumble`` command; returns the exit status (see the module docstring)."""
-    global _received_sigterm
-    _received_sigterm = False
-    previous = signal.signal(signal.SIGTERM, _on_sigterm)
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("default")
-            warnings.showwarning = _one_line_warning
-            parser = build_parser()
-            args = parser.parse_args(argv)
-            return args.func(args)
-    except ValueError as exc:  # bad input (also OutputBusy: another run holds the directory)
-        print(f"tumble: error: {exc}", file=sys.stderr)
-        return EXIT_USAGE
-    except OSError as exc:
-        from validation.atomic import OutputError
-
-        if isinstance(exc, OutputError):  # the run happened; its results could not be written
+    with interrupts.handled():
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("default")
+                warnings.showwarning = _one_line_warning
+                parser = build_parser()
+                args = parser.parse_args(argv)
+                status = args.func(args)
+        except ValueError as exc:  # bad input (also OutputBusy: another run holds the directory)
             print(f"tumble: error: {exc}", file=sys.stderr)
-            return EXIT_FAILED
-        where = f": {exc.filename}" if exc.filename else ""
-        print(f"tumble: error: {exc.strerror or exc}{where}", file=sys.stderr)
-        return EXIT_USAGE
-    except KeyboardInterrupt as exc:
-        sigterm = isinstance(exc, _Terminated) or _received_sigterm
-        print(
-            f"tumble: {'terminated' if sigterm else 'interrupted'}; "
-            "partial results (if any) are kept, marked interrupted",
-            file=sys.stderr,
-        )
-        return EXIT_SIGTERM if sigterm else EXIT_SIGINT
-    finally:
-        signal.signal(signal.SIGTERM, previous)
+            return EXIT_USAGE
+        except OSError as exc:
+            from validation.atomic import OutputError
+
+            if isinstance(exc, OutputError):  # the run happened; its results could not be written
+                print(f"tumble: error: {exc}", file=sys.stderr)
+                return EXIT_FAILED
+            where = f": {exc.filename}" if exc.filename else ""
+            print(f"tumble: error: {exc.strerror or exc}{where}", file=sys.stderr)
+            return EXIT_USAGE
+        except KeyboardInterrupt as exc:
+            sigterm = isinstance(exc, interrupts.Terminated) or interrupts.received_sigterm()
+            print(
+                f"tumble: {'terminated' if sigterm else 'interrupted'}; "
+                "partial results (if any) are kept, marked interrupted",
+                file=sys.stderr,
+            )
+            return EXIT_SIGTERM if sigterm else EXIT_SIGINT
+        if interrupts.pending():  # swallowed by compiled code after the last progress report
+            sigterm = interrupts.received_sigterm()
+            print(
+                f"tumble: {'terminated' if sigterm else 'interrupted'} as the run ended; "
+                "its results are complete",
+                file=sys.stderr,
+            )
+            return EXIT_SIGTERM if sigterm else EXIT_SIGINT
+        return status
 
 
 def run(argv: list[str] | None = None) -> None:

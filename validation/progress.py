@@ -9,6 +9,9 @@
 * :class:`Status`: free-text events (the kernels' compilation, :mod:`validation.warmup`), one line
   each.
 
+Each report is also where an interrupt that compiled code swallowed is raised again
+(:func:`validation.interrupts.raise_pending`).
+
 Lines written when stderr is not a terminal start with ``tumble: `` so they read apart from the
 results on stdout and from warnings (``tumble: warning: ...``).
 """
@@ -18,6 +21,8 @@ from __future__ import annotations
 import sys
 import time
 from collections.abc import Mapping
+
+from validation.interrupts import raise_pending
 
 PREFIX = "tumble: "
 
@@ -43,6 +48,7 @@ class Progress:
         self.shown = False
 
     def __call__(self, t: float) -> None:
+        raise_pending()  # an interrupt compiled code swallowed stops the run here
         if not self.enabled:
             return
         now = time.monotonic()
@@ -138,6 +144,7 @@ class Status:
         self.tty = _is_tty(self.stream)
 
     def __call__(self, text: str) -> None:
+        raise_pending()
         self.stream.write(f"{'' if self.tty else PREFIX}{text.rstrip()}\n")
         self.stream.flush()
 

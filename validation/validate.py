@@ -32,6 +32,7 @@ from validation.figures import (
     FigureFormat,
     parse_formats,
 )
+from validation.interrupts import raise_pending
 from validation.outputs import OutputRun, output_run
 from validation.preflight import check_validation_inputs
 from validation.referee import Verdict, referee
@@ -200,10 +201,13 @@ def run_validation(
 
 
 def _throttled(report: Callable[[float], None], horizon: float, every_s: float = 0.1):
-    """``progress(t)`` passing at most one ``t`` per ``every_s`` seconds on, and the last one."""
+    """``progress(t)`` passing at most one ``t`` per ``every_s`` seconds on, and the last one;
+    every call is a point where an interrupt compiled code swallowed is raised again (a plant in
+    a worker process compiles or loads its kernels there)."""
     last = [-math.inf]
 
     def progress(t: float) -> None:
+        raise_pending()
         now = time.monotonic()
         if now - last[0] >= every_s or t >= horizon:
             last[0] = now
