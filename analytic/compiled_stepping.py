@@ -204,6 +204,17 @@ def _runtime(solver: int = -1) -> SimpleNamespace:
     return SimpleNamespace(**vars(_cyrk()), address=cfunc.address, cfunc=cfunc, layout=compiled_rhs)
 
 
+def prepare(solver: int) -> bool:
+    """Compile (or load) the loop's right-hand side ``cfunc`` embedding the solve ``solver`` (a
+    :class:`analytic.kernel.entry.Solver` value) without running it; False when the compiled loop
+    cannot run here. It calls the kernel's halves by address (:mod:`analytic.kernel.abi`), so it
+    compiles before they do (a first run, :mod:`validation.warmup`)."""
+    if unavailable():
+        return False
+    _runtime(int(solver))
+    return True
+
+
 def unavailable() -> str:
     """Why the compiled loop cannot run on this installation ("" when it can). The first call
     imports CyRK (the right-hand side ``cfunc`` is compiled when a run first needs it)."""

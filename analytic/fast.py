@@ -48,16 +48,14 @@ user's cache directory, said once; with none writable the kernel is compiled in 
 
 from __future__ import annotations
 
-from enum import StrEnum
-
 import numpy as np
 
 from analytic.effects import Effect, Weighting
-from analytic.kernel import gauss, minv2
+from analytic.kernel import gauss, halves, minv2
 from analytic.kernel import layout as L
 from analytic.kernel.entry import Solver, solver_of
+from analytic.kernel.halves import KernelHalf
 from analytic.kernel.jit import HAVE_NUMBA
-from analytic.kernel.system import build_system
 from analytic.model import ControlOutput, TumblingModel
 from analytic.scene import Scene
 
@@ -78,7 +76,9 @@ def pack(model: TumblingModel) -> tuple[np.ndarray, np.ndarray]:
         ``(fp, ip)``: float64 array (the ``F_*`` head of :mod:`analytic.kernel.layout`, then the
         tail of ``layout.tail_offsets``: ``m, p_e, k_l, k_n``, the mass-track ``l, λ, α, β``,
         ``a``, ``d``) and int64 array (the ``I_*`` head, then the per-mass tracked flag (n) and
-        the tracked indices (k_p)).
+        the tracked indices (k_p)). The head's two addresses of the compiled halves
+        (``I_FN_SYSTEM``, ``I_FN_SOLVE``) are left 0: they belong to one process, and
+        :class:`FastModel` writes them.
     """
     sc = model.scene
     n = model.n
@@ -158,19 +158,40 @@ class FastModel:
         self.n = self.model.n
         self.nq = self.model.nq
         self.k = self.model.k
-        self.fp, self.ip = pack(self.model)
+        self.fp, self._ip = pack(self.model)
+        self._bound = False  # ip's addresses of the compiled halves not written yet
         self.compiled = available() and (
             self.k == 0 or self.model.weighting in (Weighting.M_INV, Weighting.M_INV2)
         )
         self.fallbacks = 0
         self._nout = L.output_length(self.n, self.k)
-        self.solver = solver_of(self.ip)
+        self.solver = solver_of(self._ip)
         if not available():
             self._evaluate = self._qddot_into = None
         elif self.solver is Solver.MINV2:
             self._evaluate, self._qddot_into = minv2.evaluate, minv2.qddot_into
         else:  # the Gauss kernel writes q̈ alone when given an array of length nq
             self._evaluate = self._qddot_into = gauss.evaluate
+
+    @property
+    def ip(self) -> np.ndarray:
+        """The packed integers (:func:`pack`) with the addresses of the kernel's two compiled
+        halves in this process (:mod:`analytic.kernel.halves`), which are compiled, or loaded
+        from numba's cache, on the first access; what every compiled caller is given."""
+        if not self._bound:
+            if self.compiled:
+                minv2_solve = self.solver is Solver.MINV2
+                self._ip[L.I_FN_SYSTEM], self._ip[L.I_FN_SOLVE] = halves.addresses(minv2_solve)
+            self._bound = True
+        return self._ip
+
+    def __getstate__(self) -> dict:
+        """Pickled without this process's addresses: another process binds its own."""
+        state = dict(self.__dict__)
+        state["_ip"] = self._ip.copy()
+        state["_ip"][[L.I_FN_SYSTEM, L.I_FN_SOLVE]] = 0
+        state["_bound"] = False
+        return state
 
     def _raw(self, t: float, q: np.ndarray, qdot: np.ndarray) -> np.ndarray | None:
         """The kernel's output ``[q̈, Q^C, τ, residual]`` or None when the numpy path must answer."""
@@ -245,43 +266,19 @@ class FastModel:
         return out[:nq], ctrl
 
 
-class KernelHalf(StrEnum):
-    """The two halves of the kernel, each compiled and cached on its own (:func:`compile_half`)."""
-
-    SYSTEM = "system"
-    """:func:`analytic.kernel.system.build_system`: stages 1-6, the same for every weighting."""
-    SOLVE = "solve"
-    """The scene's solve: :func:`analytic.kernel.gauss.solve_gauss` (Gauss weighting and
-    uncontrolled scenes) or :func:`analytic.kernel.minv2.solve_minv2`."""
-
-
 def compile_half(scene: Scene, half: KernelHalf | str) -> bool:
     """Compile one half of the kernel ``scene`` evaluates (or load it from numba's disk cache),
-    with the argument types the kernel's entry points pass, without running it.
+    without running it (:mod:`analytic.kernel.halves`).
 
-    The kernel's entry points only join the two halves, so two processes can compile one half
-    each at the same time (:mod:`validation.warmup`, a first run); the entry point compiled after
-    them loads both from the cache. Returns False when there is nothing to compile (numba absent,
-    or a weighting the kernel does not serve).
+    The kernel's callers call the two halves by address, so two processes can compile one half
+    each at the same time (:mod:`validation.warmup`, a first run), and the callers compile without
+    either. Returns False when there is nothing to compile (numba absent, or a weighting the
+    kernel does not serve).
     """
-    half = KernelHalf(half)
-    fm = FastModel(scene)
+    fm = FastModel(scene)  # its ip (and so the other half) is not touched
     if not fm.compiled:
         return False
-    import numba
-
-    q = np.ascontiguousarray(scene.initial.q0(), dtype=float)
-    out = np.empty(fm._nout)
-    w = np.empty(L.WS_LEN)
-    n, kw, kp = (int(fm.ip[i]) for i in (L.I_N, L.I_KW, L.I_KP))
-    if half is KernelHalf.SYSTEM:
-        args: tuple = (0.0, q, q, fm.fp, fm.ip, out, True, w)
-        fn = build_system
-    elif fm.solver is Solver.MINV2:
-        args, fn = (q, fm.fp, fm.ip, out, w, n, kw, kp), minv2.solve_minv2
-    else:
-        args, fn = (q, fm.fp, fm.ip, out, w, n, kw, kp, True), gauss.solve_gauss
-    fn.compile(tuple(numba.typeof(a) for a in args))
+    halves.compiled(half, fm.solver is Solver.MINV2)
     return True
 
 

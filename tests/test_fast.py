@@ -28,11 +28,12 @@ from analytic import fast
 from analytic.effects import Weighting
 from analytic.kernel.layout import STATUS_NOT_PD
 from analytic.model import TumblingModel
+from tests import tolerances as tol
 from tests.random_scenes import FORCE_EFFECTS, random_scene_dict, random_state, unit
 
 pytestmark = pytest.mark.skipif(not fast.available(), reason="numba not installed")
 
-TOL = 1e-12
+TOL = tol.FAST_VS_NUMPY_REL.value
 # W = I (the numpy path, which the fast engine falls back to) against the dense KKT solve below:
 # measured worst 1.6e-7 relative over test_random_small_scenes_every_effect_combination's scenes
 # (masses over six decades; the weighted Gram matrix ZᵀZ squares the conditioning, while the KKT
@@ -383,6 +384,42 @@ def test_qddot_matches_acceleration():
     q, qd = random_state(rng, 5)
     # bit-identical: q̈ alone and the full output run the same compiled body on the same inputs
     np.testing.assert_array_equal(fm.qddot(0.4, q, qd), fm.qddot_and_forces(0.4, q, qd)[0])
+
+
+@pytest.mark.parametrize("weighting", ["M^-1", "M^-2"])
+def test_the_halves_are_called_only_through_addresses_this_process_wrote(weighting):
+    """The kernel's callers call its two compiled halves by the addresses in ``ip``
+    (analytic.kernel.abi). An ``ip`` without them (straight from ``pack``, or a pickled model in
+    another process) must give ``STATUS_UNSUPPORTED``, never a call; a pickled model binds its own
+    addresses again and answers as the original; a strided ``q`` (a caller's slice) answers as a
+    contiguous one."""
+    import pickle
+
+    from analytic.kernel import gauss, minv2
+    from analytic.kernel.layout import I_FN_SOLVE, I_FN_SYSTEM, STATUS_OK, STATUS_UNSUPPORTED
+
+    rng = np.random.default_rng(21)
+    sc = make_scene(rng, 4, FORCE_EFFECTS, omega=True, masses=True, weighting=weighting)
+    fm = fast.FastModel(sc)
+    evaluate = minv2.evaluate if weighting == "M^-2" else gauss.evaluate
+    q, qd = random_state(rng, 4)
+    want = np.empty(fm._nout)
+    assert evaluate(0.2, q, qd, fm.fp, fm.ip, want) == STATUS_OK
+    _, packed_ip = fast.pack(fm.model)
+    assert packed_ip[I_FN_SYSTEM] == packed_ip[I_FN_SOLVE] == 0
+    out = np.full(fm._nout, 7.0)
+    assert evaluate(0.2, q, qd, fm.fp, packed_ip, out) == STATUS_UNSUPPORTED
+    assert np.all(out == 7.0)  # nothing was called
+    state = fm.__getstate__()
+    assert state["_ip"][I_FN_SYSTEM] == state["_ip"][I_FN_SOLVE] == 0
+    again = pickle.loads(pickle.dumps(fm))
+    got = np.empty(fm._nout)
+    assert evaluate(0.2, q, qd, again.fp, again.ip, got) == STATUS_OK
+    np.testing.assert_array_equal(got, want)  # the same compiled code on the same inputs
+    strided_q, strided_qd = np.repeat(q, 2)[::2], np.repeat(qd, 2)[::2]
+    assert not strided_q.flags.c_contiguous
+    assert evaluate(0.2, strided_q, strided_qd, fm.fp, fm.ip, got) == STATUS_OK
+    np.testing.assert_array_equal(got, want)
 
 
 def _rhs_pair(sc):

@@ -14,12 +14,14 @@ would otherwise print nothing while it compiles and then sit at its first percen
    stage by calling the plants' public entry points (:class:`analytic.fast.FastModel`, each plant's
    ``simulate`` for one output interval), reporting each stage with its wall time:
 
-   * the analytic kernel (:mod:`analytic.fast`), which the other stages embed, first: its two
-     halves (:func:`analytic.fast.compile_half`) at the same time, stages 1-6 in a *helper
-     process* and the scene's solve here, then the entry point that joins them (loaded from the
-     cache both left);
-   * then the MuJoCo native stage in the helper while this process compiles the analytic plant's
-     right-hand side and the Pinocchio stage.
+   * the analytic kernel's two halves (:mod:`analytic.kernel.halves`) at the same time: stages
+     1-6 in a *helper process* (after the analytic plant's work and impulse rates), the scene's
+     solve here;
+   * meanwhile, here, what calls the halves by address and so compiles without them
+     (:mod:`analytic.kernel.abi`): the MuJoCo native callback and the analytic plant's compiled
+     right-hand side; then the kernel's entry point;
+   * then each plant for one output interval (the MuJoCo plant in the helper), which finds
+     everything on disk and compiles whatever else its settings need.
 
    numba holds the GIL while it compiles, so threads would not overlap; a second process does, and
    it leaves its result in the on-disk cache, where this process loads it. Used when two CPUs are
@@ -71,6 +73,8 @@ TITLES = {
     "system": "the analytic kernel's stages 1-6 (analytic.kernel.system)",
     "solve": "the analytic kernel's solve (analytic.kernel)",
     "aux": "the analytic plant's work and impulse rates (analytic.aux_rates)",
+    "rhs": "the analytic plant's compiled right-hand side (analytic.compiled_rhs)",
+    "native": "the MuJoCo native controller callback (mj_bridge.native)",
     "kernel": "the analytic kernel (analytic.fast)",
     ANALYTIC: "the analytic plant's right-hand side",
     MUJOCO: "the MuJoCo native controller stage (mj_bridge.native, fast_stage)",
@@ -113,8 +117,10 @@ class WarmupResult:
 
 
 def _dispatchers(prefixes: Iterable[str], exclude: Iterable[str] = ()) -> list[Any]:
-    """numba dispatchers defined at module level in the loaded modules named by ``prefixes``."""
+    """numba dispatchers and C callbacks (``cfunc``) defined at module level in the loaded modules
+    named by ``prefixes``."""
     try:
+        from numba.core.ccallback import CFunc
         from numba.core.dispatcher import Dispatcher
     except ImportError:  # pragma: no cover - numba is a dependency
         return []
@@ -124,7 +130,9 @@ def _dispatchers(prefixes: Iterable[str], exclude: Iterable[str] = ()) -> list[A
         if not name.startswith(prefixes) or (exclude and name.startswith(exclude)):
             continue
         for value in list(vars(mod).values()):
-            if not isinstance(value, Dispatcher) or value.targetoptions.get("inline") == "always":
+            if isinstance(value, CFunc):  # a C callback (the kernel's halves)
+                pass
+            elif not isinstance(value, Dispatcher) or value.targetoptions.get("inline") == "always":
                 continue  # an inlined stage is compiled into its callers, never on its own
             if id(value) not in seen:
                 seen.add(id(value))
@@ -157,7 +165,9 @@ def cache_state(dispatcher: Any) -> CacheState:
         index_file = cache._cache_file
         if not os.path.exists(index_file._index_path):
             return CacheState.ABSENT
-        want = cache._index_key(None, dispatcher.targetctx.codegen())[1:]
+        target = getattr(dispatcher, "targetctx", None)  # a C callback: its target descriptor's
+        target = target or dispatcher._targetdescr.target_context
+        want = cache._index_key(None, target.codegen())[1:]
         found = any(key[1:] == want for key in index_file._load_index())
         return CacheState.CACHED if found else CacheState.STALE
     except Exception:
@@ -364,6 +374,31 @@ def compile_aux_rates(scene: Scene) -> None:
         aux_rates.compile_for(scene.n)
 
 
+def compile_rhs(scene: Scene) -> None:
+    """The analytic plant's compiled right-hand side (the stepping loop's C callback and the
+    function it calls, :func:`analytic.compiled_stepping.prepare`) without running it: it calls
+    the kernel's halves by address, so it compiles while they are still being compiled."""
+    from analytic import compiled_stepping, fast
+
+    if fast.available():
+        fm = fast.FastModel(scene)  # ip untouched: no half compiled
+        if fm.compiled:
+            compiled_stepping.prepare(int(fm.solver))
+
+
+def compile_native(scene: Scene) -> None:
+    """The MuJoCo plant's native controller callback (:func:`mj_bridge.native.compiled`) for the
+    scene's solve, without running it (it calls the kernel's halves by address)."""
+    from analytic import fast
+
+    if fast.available():
+        fm = fast.FastModel(scene)  # ip untouched: no half compiled
+        from mj_bridge import native
+
+        if fm.compiled and native.available():
+            native.compiled(fm.solver)
+
+
 def compile_plant(scene: Scene, engine: str) -> None:
     """One output interval of ``engine``'s plant (its default settings): what the run calls first,
     with the argument types the run uses, so every kernel it needs is compiled and cached."""
@@ -385,12 +420,18 @@ def _timed(title: str, fn: Callable[[], None], where: str = "here") -> StageTime
     return StageTime(title, time.perf_counter() - t0, where, error)
 
 
+HELPER_STAGES: dict[str, Callable[[Scene], None]] = {
+    "aux": compile_aux_rates,
+    "system": lambda scene: compile_kernel_half(scene, "system"),
+}
+"""What the helper process can compile before the ``go`` line, by :data:`TITLES` key."""
+
+
 def _helper_main() -> None:  # pragma: no cover - runs in the helper process
-    """The helper process: read ``(scene, engine, system_first)`` (pickled) from stdin, import the
-    modules; with ``system_first`` compile the kernel's stages 1-6 at once (:func:`compile_kernel_half`)
-    and print that stage's time as one JSON line; then, for an engine, wait for the ``go`` line (the
-    scene's solve is on disk too), compile the engine's stage (which calls the two halves
-    directly) and print its time as one JSON line."""
+    """The helper process: read ``(scene, engine, first)`` (pickled) from stdin, compile each
+    stage named in ``first`` (:data:`HELPER_STAGES`) at once, printing each one's time as one JSON
+    line; then, for an engine, wait for the ``go`` line (what the engine's plant embeds is on
+    disk by then), run its plant for one interval (:func:`compile_plant`) and print its time."""
     import json
     import pickle
     import signal
@@ -399,13 +440,9 @@ def _helper_main() -> None:  # pragma: no cover - runs in the helper process
     for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ.setdefault(var, "1")
     size = int(sys.stdin.buffer.readline())
-    scene, engine, system_first = pickle.loads(sys.stdin.buffer.read(size))
-    if system_first:
-        st = _timed(
-            TITLES["system"],
-            lambda: compile_kernel_half(scene, "system"),
-            where="helper process",
-        )
+    scene, engine, first = pickle.loads(sys.stdin.buffer.read(size))
+    for name in first:
+        st = _timed(TITLES[name], lambda name=name: HELPER_STAGES[name](scene), "helper process")
         print(json.dumps(dataclasses.asdict(st)), flush=True)
     if engine is None:
         return
@@ -418,14 +455,15 @@ def _helper_main() -> None:  # pragma: no cover - runs in the helper process
 
 class _Helper:
     """A helper process (``python -c``, so no ``__main__`` of the caller is re-imported) that
-    compiles into numba's disk cache: with ``system_first`` the kernel's stages 1-6 at once
-    (:meth:`first` waits for them), then ``engine``'s stage after :meth:`go` (:meth:`result`)."""
+    compiles into numba's disk cache: the stages named in ``first`` at once (:meth:`next` waits for
+    each in turn), then ``engine``'s plant after :meth:`go` (:meth:`result`)."""
 
-    def __init__(self, scene: Scene, engine: str | None, system_first: bool = False):
+    def __init__(self, scene: Scene, engine: str | None, first: Sequence[str] = ()):
         import pickle
         import subprocess
 
         self.engine = engine
+        self.first = list(first)
         code = "from validation.warmup import _helper_main; _helper_main()"
         env = dict(os.environ)  # this copy of the project first, wherever it was imported from
         root = str(Path(__file__).resolve().parents[1])
@@ -440,22 +478,23 @@ class _Helper:
             stdout=subprocess.PIPE,
             stderr=subprocess.PIPE,
         )
-        data = pickle.dumps((scene, engine, system_first))
+        data = pickle.dumps((scene, engine, self.first))
         try:
             self.proc.stdin.write(b"%d\n" % len(data) + data)
             self.proc.stdin.flush()
         except OSError:
             pass
 
-    def first(self) -> StageTime:
-        """The kernel's stages 1-6, once the helper has compiled them (waits for its line)."""
+    def next(self) -> StageTime:
+        """The next stage of ``first``, once the helper has compiled it (waits for its line)."""
         import json
 
+        title = TITLES[self.first.pop(0)]
         line = self.proc.stdout.readline()
         try:
             return StageTime(**json.loads(line.decode()))
         except (ValueError, TypeError):
-            return StageTime(TITLES["system"], 0.0, "helper process", "helper failed")
+            return StageTime(title, 0.0, "helper process", "helper failed")
 
     def go(self) -> None:
         try:
@@ -546,8 +585,9 @@ def warm_up(
         "compiles them"
     )
     beside = ["the kernel's stages 1-6"] if split else []
-    beside += ["the MuJoCo stage"] if engine_beside else []
-    where = f" ({' and '.join(beside)} in a helper process)" if beside else ""
+    beside += ["the work and impulse rates"] if split and ANALYTIC in rest else []
+    beside += ["the MuJoCo plant's first interval"] if engine_beside else []
+    where = f" ({', '.join(beside)} in a helper process)" if beside else ""
     say(f"compiling the fast kernels ({how}; ~{EXPECTED_COLD_S} s): {', '.join(names)}{where}")
     stages: list[StageTime] = []
 
@@ -559,21 +599,26 @@ def warm_up(
 
     helper = None
     try:
-        if concurrent:  # starts now: its imports overlap the kernel
-            helper = _Helper(scene, MUJOCO if engine_beside else None, system_first=split)
+        if concurrent:  # starts now: its imports overlap this process's first stage
+            first = [s for s in ("aux", "system") if split and (s == "system" or ANALYTIC in rest)]
+            helper = _Helper(scene, MUJOCO if engine_beside else None, first)
             if engine_beside:
                 rest.remove(MUJOCO)
-        if split:  # here the solve, meanwhile the helper stages 1-6; then the join loads both
+        if split:
+            # Here the solve, then what calls the kernel's halves by address and so compiles
+            # without them: the MuJoCo native stage and the right-hand side (after the rates it
+            # embeds, which the helper compiles first); meanwhile the helper compiles stages 1-6.
             report(_timed(TITLES["solve"], lambda: compile_kernel_half(scene, "solve")))
-            if engine_beside:  # the MuJoCo stage calls both halves: its compile starts after 1-6
-                helper.go()
-            if ANALYTIC in rest:  # meanwhile, what the right-hand side embeds beside the kernel
-                report(_timed(TITLES["aux"], lambda: compile_aux_rates(scene)))
-            report(helper.first())
+            if MUJOCO in cold:
+                report(_timed(TITLES["native"], lambda: compile_native(scene)))
+            if ANALYTIC in rest:
+                report(helper.next())  # the work and impulse rates
+                report(_timed(TITLES["rhs"], lambda: compile_rhs(scene)))
+            report(helper.next())  # stages 1-6
         if kernel_cold:
             report(_timed(TITLES["kernel"], lambda: compile_kernel(scene)))
-        if helper is not None and engine_beside and not split:
-            helper.go()  # the kernel is on disk: the helper loads it instead of compiling it
+        if helper is not None and engine_beside:
+            helper.go()  # what its plant embeds is on disk: it loads rather than compiles
         for e in rest:
             report(_timed(TITLES[e], lambda e=e: compile_plant(scene, e)))
         if helper is not None and engine_beside:

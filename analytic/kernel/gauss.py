@@ -5,16 +5,22 @@ Stages: :func:`analytic.kernel.system.build_system` (1-6: M, Q, b_m, b_c), then 
 :func:`analytic.kernel.schur.schur_complement` (7: rods and R eliminated),
 :func:`analytic.kernel.bordered.bordered_solve` (8: the bordered 4x4 system on u, q̈_b), and
 :func:`control_outputs` (9: q̈ of the free rods, ``Q^C``, ``τ``, the residual). The two halves are
-compiled and cached on their own, so two processes can compile them at once.
+compiled and cached on their own (:mod:`analytic.kernel.halves`), so two processes can compile
+them at once, and every caller calls them by address (:mod:`analytic.kernel.abi`).
 """
 
 from __future__ import annotations
 
+import numpy as np
+
+from analytic.kernel.abi import arrays, call_solve, call_system
 from analytic.kernel.bordered import bordered_solve
 from analytic.kernel.jit import inline, jit_entry, workspace
 from analytic.kernel.layout import (
     F_ARR,
     I_COMP,
+    I_FN_SOLVE,
+    I_FN_SYSTEM,
     I_KP,
     I_KW,
     I_N,
@@ -33,7 +39,6 @@ from analytic.kernel.layout import (
     WS_S,
 )
 from analytic.kernel.schur import schur_complement
-from analytic.kernel.system import build_system
 
 
 @inline
@@ -100,17 +105,15 @@ def control_outputs(q, fp, ip, n, kw, kp, out, full, w):
         out[ores + kw + j] = out[7 + i] - out[7 + i]  # q̈_i - b_i, b_i stored as q̈_i
 
 
-def _make_solve_gauss(deps: int):
-    """:func:`solve_gauss` closing over the kernel's source fingerprint (see
-    :func:`analytic.kernel.jit.jit_entry`)."""
+def make_solve_gauss(deps: int):
+    """The C callback body of stages 7-9 under Gauss weighting (:data:`analytic.kernel.abi.
+    SOLVE_SIG`), closing over the kernel's source fingerprint; :mod:`analytic.kernel.halves`
+    compiles it once (a first run: in one process while another compiles stages 1-6,
+    :mod:`validation.warmup`)."""
 
-    def solve_gauss(q, fp, ip, out, w, n, kw, kp, full):
+    def solve_gauss(q_p, fp_p, ip_p, out_p, len_out, w_p, full):
         """Stages 7-9 (Gauss): the Schur complement, the bordered solve and the control outputs,
-        from what :func:`analytic.kernel.system.build_system` wrote into ``w`` and ``out``.
-
-        Compiled and cached on its own, like :func:`analytic.kernel.minv2.solve_minv2`: a first
-        run compiles it in one process while another compiles ``build_system``
-        (:mod:`validation.warmup`), and :func:`evaluate` only joins the two.
+        from what stages 1-6 wrote into ``w`` and ``out``.
 
         Returns:
             ``STATUS_NOT_PD`` when a Schur complement or the bordered Gram matrix is not
@@ -118,19 +121,20 @@ def _make_solve_gauss(deps: int):
         """
         if deps < 0:  # never true: ties numba's cache key to the kernel's sources
             return STATUS_UNSUPPORTED
+        q, fp, ip, out, w = arrays(q_p, fp_p, ip_p, out_p, len_out, w_p)
+        n = ip[I_N] & IX
+        kw = ip[I_KW] & IX
+        kp = ip[I_KP] & IX
         status = schur_complement(q, fp, w)
         if status != STATUS_OK:
             return status
         status = bordered_solve(q, ip, kw, out, w)
         if status != STATUS_OK:
             return status
-        control_outputs(q, fp, ip, n, kw, kp, out, full, w)
+        control_outputs(q, fp, ip, n, kw, kp, out, full != 0, w)
         return STATUS_OK
 
     return solve_gauss
-
-
-solve_gauss = jit_entry(_make_solve_gauss)
 
 
 def _make_evaluate(deps: int):
@@ -161,17 +165,22 @@ def _make_evaluate(deps: int):
 @inline
 def join(t, q, qd, fp, ip, out):
     """:func:`evaluate`'s body, pasted into compiled callers (``analytic.kernel.entry.evaluate_as``):
-    they call the two cached halves themselves, so a first run compiles them without waiting for
-    the entry point that joins them."""
+    the two compiled halves called by the addresses in ``ip`` (:mod:`analytic.kernel.abi`;
+    ``STATUS_UNSUPPORTED`` when they are not set, i.e. ``ip`` did not come from a
+    :class:`analytic.fast.FastModel`)."""
     n = ip[I_N] & IX
     kw = ip[I_KW] & IX
     kp = ip[I_KP] & IX
     if kw + kp > 0 and ip[I_WEIGHT] != W_GAUSS:
         return STATUS_UNSUPPORTED
+    if ip[I_FN_SYSTEM] == 0 or ip[I_FN_SOLVE] == 0:
+        return STATUS_UNSUPPORTED
     full = out.shape[0] >= 2 * (n + 7) + 3 + kw + kp  # else: q̈ only
     w = workspace()
-    build_system(t, q, qd, fp, ip, out, full, w)
-    return solve_gauss(q, fp, ip, out, w, n, kw, kp, full)
+    q = np.ascontiguousarray(q)  # a view (no copy) unless the caller's slice is strided
+    qd = np.ascontiguousarray(qd)
+    call_system(ip[I_FN_SYSTEM], t, q, qd, fp, ip, out, full, w)
+    return call_solve(ip[I_FN_SOLVE], q, fp, ip, out, w, full)
 
 
 evaluate = jit_entry(_make_evaluate)

@@ -1,16 +1,16 @@
 """numba plumbing of the compiled kernel: where its cache lives, how functions are compiled, and
 what a cached function's key covers.
 
-**Three kinds of compiled function.**
+**Four kinds of compiled function.**
 
-* :func:`inline` (``njit(inline="always")``, no disk cache): the Gauss stages and the small
-  kinematic helpers; numba pastes their code into the caller, so the Gauss kernel compiles into one
-  function, as fast as the monolithic kernel it replaced.
+* :func:`inline` (``njit(inline="always")``, no disk cache): the kernel's stages and the small
+  kinematic helpers; numba pastes their code into the caller.
+* the kernel's two halves (:mod:`analytic.kernel.halves`): C callbacks (``cfunc``) into which the
+  stages are pasted, compiled once and cached on their own; every compiled caller calls them by
+  address (:mod:`analytic.kernel.abi`).
 * :func:`jit_entry` (``njit(cache=True)``, key tied to the sources, see below): entry points (what
   Python or another package calls: ``gauss.evaluate``, ``minv2.evaluate``, ``fast_rhs.rhs_into``
-  ...) and the two large blocks both weightings share or only one needs
-  (``system.build_system``, ``minv2.solve_minv2``), compiled once and cached on their own: pasting
-  them into every caller made the first run compile them again for each.
+  ...), which join the halves.
 * :func:`jit` (``njit(cache=True)``, keyed on its own file by numba): only for functions that call
   nothing from another file (the M⁻² dense helpers).
 

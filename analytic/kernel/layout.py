@@ -50,7 +50,9 @@ I_SCUB = 5  # 1: cubic springs on
 I_TORQ = 6  # 1: given torque on (Remark 2)
 I_WEIGHT = 7  # W_GAUSS, W_MINV2, or -1 (not compiled)
 I_COMP = 8  # 3 slots: the tracked ω components (0-based)
-I_TRACK = 11  # n: 1 for a tracked mass; then the k_p tracked indices
+I_FN_SYSTEM = 11  # address of the compiled stages 1-6 in this process (analytic.kernel.halves)
+I_FN_SOLVE = 12  # address of the compiled solve of this scene's weighting, in this process
+I_TRACK = 13  # n: 1 for a tracked mass; then the k_p tracked indices
 
 W_GAUSS = 0  # N = M⁻¹, the paper's Eq. (89)
 W_MINV2 = 1  # N = M⁻² (Eq. B13)

@@ -19,11 +19,14 @@ import math
 
 import numpy as np
 
+from analytic.kernel.abi import arrays, call_solve, call_system
 from analytic.kernel.jit import inline, jit, jit_entry, workspace
 from analytic.kernel.layout import (
     F_ARR,
     F_MU0,
     I_COMP,
+    I_FN_SOLVE,
+    I_FN_SYSTEM,
     I_KP,
     I_KW,
     I_N,
@@ -47,7 +50,6 @@ from analytic.kernel.layout import (
     WS_S,
     WS_UU,
 )
-from analytic.kernel.system import build_system
 
 
 @jit
@@ -84,11 +86,12 @@ def chol_solve(L, k, b):
         b[i] = v / L[i, i]
 
 
-def _make_solve_minv2(deps: int):
-    """:func:`solve_minv2` closing over the kernel's source fingerprint (see
-    :func:`analytic.kernel.jit.jit_entry`)."""
+def make_solve_minv2(deps: int):
+    """The C callback body of stage 7 under M⁻² (:data:`analytic.kernel.abi.SOLVE_SIG`; ``full``
+    is always 1 here), closing over the kernel's source fingerprint; :mod:`analytic.kernel.halves`
+    compiles it once."""
 
-    def solve_minv2(q, fp, ip, out, w, n, kw, kp):
+    def solve_minv2(q_p, fp_p, ip_p, out_p, len_out, w_p, full):
         """Stage 7 (M⁻²): ``q̈``, ``Q^C``, ``τ`` and the residual into ``out`` (Eq. B13, with the
         closed forms of the module docstring), mirroring :func:`analytic.fundamental.solve`. ``w`` and
         the rod rows of ``out`` hold what :func:`analytic.kernel.system.build_system` wrote.
@@ -97,11 +100,15 @@ def _make_solve_minv2(deps: int):
             ``STATUS_NOT_PD`` when the Schur complement of ``M_α`` is not numerically positive
             definite, else ``STATUS_OK``.
 
-        Compiled and cached on its own (heap arrays and dense helpers: far cheaper to compile once
-        than to paste into each caller).
+        Compiled once, as the C callback :data:`analytic.kernel.halves.SOLVE_MINV2` (cached on its
+        own), which the kernel's callers call by address (:mod:`analytic.kernel.abi`).
         """
         if deps < 0:  # never true: ties numba's cache key to the kernel's sources
             return STATUS_UNSUPPORTED
+        q, fp, ip, out, w = arrays(q_p, fp_p, ip_p, out_p, len_out, w_p)
+        n = ip[I_N] & IX
+        kw = ip[I_KW] & IX
+        kp = ip[I_KP] & IX
         s = w[WS_S]
         mu0 = fp[F_MU0]
         mu1 = w[WS_MU1]
@@ -251,9 +258,6 @@ def _make_solve_minv2(deps: int):
     return solve_minv2
 
 
-solve_minv2 = jit_entry(_make_solve_minv2)
-
-
 @jit
 def ma_solve(SB, c1, c2, s, fp, om, p, n, x):
     """In place x <- M_α⁻¹ x by the Schur complement SB (Cholesky factor) on the body block."""
@@ -323,20 +327,23 @@ def _make_evaluate(deps: int):
 @inline
 def join(t, q, qd, fp, ip, out):
     """:func:`evaluate`'s body, pasted into compiled callers (``analytic.kernel.entry.evaluate_as``):
-    they call the two cached halves themselves."""
+    the two compiled halves called by the addresses in ``ip`` (:mod:`analytic.kernel.abi`;
+    ``STATUS_UNSUPPORTED`` when they are not set)."""
     n = ip[I_N] & IX
     kw = ip[I_KW] & IX
     kp = ip[I_KP] & IX
     if kw + kp == 0 or ip[I_WEIGHT] != W_MINV2:
         return STATUS_UNSUPPORTED
-    # computed, not the constant True: numba would type a literal as its own signature and
-    # compile build_system a second time beside the Gauss kernel's
     full = out.shape[0] >= 2 * (n + 7) + 3 + kw + kp
     if not full:  # this weighting needs Q^C on the way to q̈: the whole output
         return STATUS_UNSUPPORTED
+    if ip[I_FN_SYSTEM] == 0 or ip[I_FN_SOLVE] == 0:
+        return STATUS_UNSUPPORTED
     w = workspace()
-    build_system(t, q, qd, fp, ip, out, full, w)
-    return solve_minv2(q, fp, ip, out, w, n, kw, kp)
+    q = np.ascontiguousarray(q)  # a view (no copy) unless the caller's slice is strided
+    qd = np.ascontiguousarray(qd)
+    call_system(ip[I_FN_SYSTEM], t, q, qd, fp, ip, out, full, w)
+    return call_solve(ip[I_FN_SOLVE], q, fp, ip, out, w, full)
 
 
 evaluate = jit_entry(_make_evaluate)

@@ -8,38 +8,42 @@ follows is the weighting's: :mod:`analytic.kernel.gauss` or :mod:`analytic.kerne
 
 from __future__ import annotations
 
+from analytic.kernel.abi import arrays, tail
 from analytic.kernel.constraints import control_rows, modeling_row
 from analytic.kernel.forces import body_forces, rod_pass
-from analytic.kernel.jit import inline, jit_entry
+from analytic.kernel.jit import HAVE_NUMBA
 from analytic.kernel.kinematics import kinematic_terms
-from analytic.kernel.layout import I_KP, I_KW, I_N, IX, tail_offsets
+from analytic.kernel.layout import I_KP, I_KW, I_N, IX
 from analytic.kernel.mass_matrix import body_block
 
-tail = inline(tail_offsets)
-""":func:`analytic.kernel.layout.tail_offsets` for compiled callers (the kernel, the compiled
-right-hand sides and stages): the offsets of ``fp``'s tail, computed where they are read."""
+if HAVE_NUMBA:
+    from numba import carray
 
 
-def _make_build_system(deps: int):
-    """:func:`build_system` closing over the kernel's source fingerprint (see
-    :func:`analytic.kernel.jit.jit_entry`)."""
+def make_build_system(deps: int):
+    """The C callback body of stages 1-6 (:data:`analytic.kernel.abi.SYSTEM_SIG`), closing over
+    the kernel's source fingerprint ``deps`` (numba hashes closure variables into its cache key, so
+    an edit of any kernel file recompiles it). :mod:`analytic.kernel.halves` compiles it once."""
 
-    def build_system(t, q, qd, fp, ip, out, full, w):
-        """Stages 1-6 (kinematics Eqs. 11-34; Q rod rows Eq. 52 and springs Eq. 38; M Eq. 51; Q body
-        rows Eq. 52, 61; b_m and M_α Eq. 59; b_c Eqs. 81, 86). ``full``: whether ``out`` holds the whole
-        output (a tracked mass's ``Q_i`` then goes to its ``Q^C_i`` slot).
+    def build_system(t, q_p, qd_p, fp_p, ip_p, out_p, len_out, full, w_p):
+        """Stages 1-6 (kinematics Eqs. 11-34; Q rod rows Eq. 52 and springs Eq. 38; M Eq. 51; Q
+        body rows Eq. 52, 61; b_m and M_α Eq. 59; b_c Eqs. 81, 86) into ``w`` and the rod rows of
+        ``out``. ``full`` (0/1): whether ``out`` holds the whole output (a tracked mass's ``Q_i``
+        then goes to its ``Q^C_i`` slot).
 
-        Compiled once and cached on its own (not pasted into its callers): both weightings' kernels
-        call it, so a process that needs both compiles these stages once.
-        """
+        The stages are pasted in here, one level deep: pasting a function that itself pastes the
+        stages doubled numba's compile time (the inlined code is copied at each level)."""
         if deps < 0:  # never true: ties numba's cache key to the kernel's sources
             return
+        q, fp, ip, out, w = arrays(q_p, fp_p, ip_p, out_p, len_out, w_p)
+        qd = carray(qd_p, q.shape)
+        on = full != 0
         n = ip[I_N] & IX
         kw = ip[I_KW] & IX
         kp = ip[I_KP] & IX
         o_m, o_pe, o_kl, o_kn, o_l, o_lam, o_alpha, o_beta, o_a, _o_d, _end = tail(n, kp)
         kinematic_terms(q, qd, fp, o_a, w)
-        rod_pass(q, qd, fp, ip, n, o_m, o_pe, o_kl, o_kn, out, full, w)
+        rod_pass(q, qd, fp, ip, n, o_m, o_pe, o_kl, o_kn, out, on, w)
         body_block(fp, w)
         body_forces(t, q, qd, fp, ip, w)
         modeling_row(q, qd, fp, n + 7, w)
@@ -48,4 +52,4 @@ def _make_build_system(deps: int):
     return build_system
 
 
-build_system = jit_entry(_make_build_system)
+__all__ = ["make_build_system", "tail"]
