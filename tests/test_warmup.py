@@ -336,6 +336,21 @@ def test_the_kernels_callers_compile_before_its_halves(tmp_path):
     assert err < tol.FAST_VS_NUMPY_REL.value
 
 
+def test_a_helper_without_a_job_ends_quietly():
+    """The helper starts before numba's cache is checked; when the check finds nothing to do it
+    gets an empty job (or is stopped) and ends without output or error."""
+    helper = warmup._Helper()
+    try:
+        helper.proc.stdin.write(b"\n")
+        helper.proc.stdin.close()
+        out, err = helper.proc.stdout.read(), helper.proc.stderr.read()
+        assert helper.proc.wait(timeout=120) == 0, err
+    finally:
+        helper.proc.stdin = None
+        helper.stop()
+    assert out == b"" and err == b""
+
+
 def test_the_compiling_helper_imports_this_copy_not_the_working_directorys(tmp_path, monkeypatch):
     """``pip install .`` in a clone, then ``tumble validate`` in it: the helper process must
     compile the installed copy (the one this process runs), not the checkout in the working
@@ -345,8 +360,9 @@ def test_the_compiling_helper_imports_this_copy_not_the_working_directorys(tmp_p
     (fake / "__init__.py").write_text("raise ImportError('the working directory copy')\n")
     monkeypatch.chdir(tmp_path)
     sc = resolve_scene("paper_example1_controlled")
-    helper = warmup._Helper(sc, "analytic")
+    helper = warmup._Helper()
     try:
+        helper.send(sc, "analytic", [])
         helper.go()
         st = helper.result()
     finally:

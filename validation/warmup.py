@@ -423,12 +423,14 @@ def _timed(title: str, fn: Callable[[], None], where: str = "here") -> StageTime
 HELPER_STAGES: dict[str, Callable[[Scene], None]] = {
     "aux": compile_aux_rates,
     "system": lambda scene: compile_kernel_half(scene, "system"),
+    "rhs": compile_rhs,
 }
 """What the helper process can compile before the ``go`` line, by :data:`TITLES` key."""
 
 
 def _helper_main() -> None:  # pragma: no cover - runs in the helper process
-    """The helper process: read ``(scene, engine, first)`` (pickled) from stdin, compile each
+    """The helper process: import the kernel's modules, read ``(scene, engine, first)`` (pickled)
+    from stdin (an empty line: nothing to do), compile each
     stage named in ``first`` (:data:`HELPER_STAGES`) at once, printing each one's time as one JSON
     line; then, for an engine, wait for the ``go`` line (what the engine's plant embeds is on
     disk by then), run its plant for one interval (:func:`compile_plant`) and print its time."""
@@ -439,7 +441,15 @@ def _helper_main() -> None:  # pragma: no cover - runs in the helper process
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent stops it; no second traceback
     for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ.setdefault(var, "1")
-    size = int(sys.stdin.buffer.readline())
+    import importlib
+
+    for name in ("analytic.aux_rates", "analytic.fast"):  # what every job compiles first,
+        importlib.import_module(name)  # imported while the parent still checks numba's cache
+
+    line = sys.stdin.buffer.readline()
+    if not line.strip():  # no job: the cache was warm after all
+        return
+    size = int(line)
     scene, engine, first = pickle.loads(sys.stdin.buffer.read(size))
     for name in first:
         st = _timed(TITLES[name], lambda name=name: HELPER_STAGES[name](scene), "helper process")
@@ -455,15 +465,15 @@ def _helper_main() -> None:  # pragma: no cover - runs in the helper process
 
 class _Helper:
     """A helper process (``python -c``, so no ``__main__`` of the caller is re-imported) that
-    compiles into numba's disk cache: the stages named in ``first`` at once (:meth:`next` waits for
-    each in turn), then ``engine``'s plant after :meth:`go` (:meth:`result`)."""
+    compiles into numba's disk cache. Started before the cache is checked (its imports overlap
+    the check); :meth:`send` gives it its job: the stages named in ``first`` at once (:meth:`next`
+    waits for each in turn), then ``engine``'s plant after :meth:`go` (:meth:`result`)."""
 
-    def __init__(self, scene: Scene, engine: str | None, first: Sequence[str] = ()):
-        import pickle
+    def __init__(self) -> None:
         import subprocess
 
-        self.engine = engine
-        self.first = list(first)
+        self.engine: str | None = None
+        self.first: list[str] = []
         code = "from validation.warmup import _helper_main; _helper_main()"
         env = dict(os.environ)  # this copy of the project first, wherever it was imported from
         root = str(Path(__file__).resolve().parents[1])
@@ -478,6 +488,13 @@ class _Helper:
             stdout=subprocess.PIPE,
             stderr=subprocess.PIPE,
         )
+
+    def send(self, scene: Scene, engine: str | None, first: Sequence[str]) -> None:
+        """The job: compile the stages named in ``first`` now, then ``engine``'s plant after
+        :meth:`go` (None: no plant)."""
+        import pickle
+
+        self.engine, self.first = engine, list(first)
         data = pickle.dumps((scene, engine, self.first))
         try:
             self.proc.stdin.write(b"%d\n" % len(data) + data)
@@ -561,6 +578,27 @@ def warm_up(
     key = warm_key(engines, scene)
     if is_stamped_warm(key):  # checked before: nothing imports numba here
         return WarmupResult()
+    if concurrent is None:
+        concurrent = free_cpus() >= 2
+    # not known warm: a helper starts importing now, in case the check below finds work for it
+    helper = _Helper() if concurrent else None
+    try:
+        return _warm_up(scene, engines, key, helper, progress, concurrent, t0)
+    finally:
+        if helper is not None:
+            helper.stop()
+
+
+def _warm_up(
+    scene: Scene,
+    engines: list[str],
+    key: str,
+    helper: _Helper | None,
+    progress: Callable[[str], None] | None,
+    concurrent: bool,
+    t0: float,
+) -> WarmupResult:
+    """:func:`warm_up` once the stamp did not answer; ``helper`` (started, no job yet) or None."""
     cold = cold_engines(engines)
     if not cold:
         stamp_warm(key)
@@ -570,9 +608,7 @@ def warm_up(
     # every plant embeds the analytic kernel: compiled first, whichever plants run
     kernel_cold = ANALYTIC in cold or bool(cold_engines([ANALYTIC]))
     rest = list(cold)
-    if concurrent is None:
-        concurrent = free_cpus() >= 2
-    concurrent = bool(concurrent and cached)
+    concurrent = bool(concurrent and cached and helper is not None)
     split = concurrent and kernel_cold  # the kernel's two halves compiled at once
     engine_beside = concurrent and MUJOCO in rest and len(rest) >= 2
     concurrent = split or engine_beside
@@ -585,7 +621,9 @@ def warm_up(
         "compiles them"
     )
     beside = ["the kernel's stages 1-6"] if split else []
-    beside += ["the work and impulse rates"] if split and ANALYTIC in rest else []
+    beside += (
+        ["the analytic plant's rates and right-hand side"] if split and ANALYTIC in rest else []
+    )
     beside += ["the MuJoCo plant's first interval"] if engine_beside else []
     where = f" ({', '.join(beside)} in a helper process)" if beside else ""
     say(f"compiling the fast kernels ({how}; ~{EXPECTED_COLD_S} s): {', '.join(names)}{where}")
@@ -597,35 +635,30 @@ def warm_up(
         tail = f"; it will compile in the run instead ({st.error})" if st.error else ""
         say(f"  {st.title}: {st.seconds:.1f} s{where}{tail}")
 
-    helper = None
-    try:
-        if concurrent:  # starts now: its imports overlap this process's first stage
-            first = [s for s in ("aux", "system") if split and (s == "system" or ANALYTIC in rest)]
-            helper = _Helper(scene, MUJOCO if engine_beside else None, first)
-            if engine_beside:
-                rest.remove(MUJOCO)
-        if split:
-            # Here the solve, then what calls the kernel's halves by address and so compiles
-            # without them: the MuJoCo native stage and the right-hand side (after the rates it
-            # embeds, which the helper compiles first); meanwhile the helper compiles stages 1-6.
-            report(_timed(TITLES["solve"], lambda: compile_kernel_half(scene, "solve")))
-            if MUJOCO in cold:
-                report(_timed(TITLES["native"], lambda: compile_native(scene)))
-            if ANALYTIC in rest:
-                report(helper.next())  # the work and impulse rates
-                report(_timed(TITLES["rhs"], lambda: compile_rhs(scene)))
-            report(helper.next())  # stages 1-6
-        if kernel_cold:
-            report(_timed(TITLES["kernel"], lambda: compile_kernel(scene)))
-        if helper is not None and engine_beside:
-            helper.go()  # what its plant embeds is on disk: it loads rather than compiles
-        for e in rest:
-            report(_timed(TITLES[e], lambda e=e: compile_plant(scene, e)))
-        if helper is not None and engine_beside:
-            report(helper.result())
-    finally:
-        if helper is not None:
-            helper.stop()
+    if concurrent:
+        first = ["system"]
+        if split and ANALYTIC in rest:  # the right-hand side embeds the rates: compiled first
+            first = ["aux", "system", "rhs"]
+        helper.send(scene, MUJOCO if engine_beside else None, first if split else [])
+        if engine_beside:
+            rest.remove(MUJOCO)
+    if split:
+        # Here the solve and the MuJoCo native callback (it calls the kernel's halves by address,
+        # so it compiles without them); meanwhile the helper compiles the work and impulse rates,
+        # stages 1-6 and the analytic plant's right-hand side (also calling the halves by address).
+        report(_timed(TITLES["solve"], lambda: compile_kernel_half(scene, "solve")))
+        if MUJOCO in cold:
+            report(_timed(TITLES["native"], lambda: compile_native(scene)))
+        while helper.first:
+            report(helper.next())
+    if kernel_cold:
+        report(_timed(TITLES["kernel"], lambda: compile_kernel(scene)))
+    if concurrent and engine_beside:
+        helper.go()  # what its plant embeds is on disk: it loads rather than compiles
+    for e in rest:
+        report(_timed(TITLES[e], lambda e=e: compile_plant(scene, e)))
+    if concurrent and engine_beside:
+        report(helper.result())
     total = time.perf_counter() - t0
     say(f"  kernels ready in {total:.1f} s")
     if cached and not any(st.error for st in stages):
