@@ -1,7 +1,7 @@
 """The C calling convention of the kernel's two halves, and how compiled callers call them.
 
 The kernel is two compiled functions (:mod:`analytic.kernel.halves`): stages 1-6
-(:func:`analytic.kernel.system.build_system`) and the weighting's solve. Each is compiled once, as
+(:func:`analytic.kernel.system.make_build_system`) and the weighting's solve. Each is compiled once, as
 a C callback (numba ``cfunc``) with one of the signatures below, and cached on disk on its own.
 A compiled caller (the integrator's right-hand side, the MuJoCo and Pinocchio stages, the entry
 points) calls them through their addresses, which :class:`analytic.fast.FastModel` writes into
@@ -29,8 +29,20 @@ Signatures (all pointers to contiguous arrays; lengths follow from ``ip``, see t
 
 from __future__ import annotations
 
-from analytic.kernel.jit import HAVE_NUMBA, inline
-from analytic.kernel.layout import I_KP, I_N, I_TRACK, IX, WS_LEN, tail_offsets
+import numpy as np
+
+from analytic.kernel.jit import HAVE_NUMBA, inline, workspace
+from analytic.kernel.layout import (
+    I_FN_SOLVE,
+    I_FN_SYSTEM,
+    I_KP,
+    I_N,
+    I_TRACK,
+    IX,
+    STATUS_UNSUPPORTED,
+    WS_LEN,
+    tail_offsets,
+)
 
 tail = inline(tail_offsets)
 """:func:`analytic.kernel.layout.tail_offsets` for compiled code (the kernel, the compiled
@@ -145,6 +157,20 @@ if HAVE_NUMBA:
 
         return sig, codegen
 
+    @inline
+    def call_halves(t, q, qd, fp, ip, out, full):
+        """Stages 1-6, then the solve, by the addresses in ``ip`` (one stack workspace between
+        them): the body both weightings' ``join`` share. ``STATUS_UNSUPPORTED`` without a call
+        when the addresses are not set (``ip`` straight from :func:`analytic.fast.pack`, or
+        another process's); a strided ``q`` or ``qd`` (a caller's slice) is copied first."""
+        if ip[I_FN_SYSTEM] == 0 or ip[I_FN_SOLVE] == 0:
+            return STATUS_UNSUPPORTED
+        w = workspace()
+        q = np.ascontiguousarray(q)  # a view (no copy) unless the caller's slice is strided
+        qd = np.ascontiguousarray(qd)
+        call_system(ip[I_FN_SYSTEM], t, q, qd, fp, ip, out, full, w)
+        return call_solve(ip[I_FN_SOLVE], q, fp, ip, out, w, full)
+
 else:  # pragma: no cover - without numba nothing calls the compiled halves
     SYSTEM_SIG = SOLVE_SIG = None
 
@@ -155,4 +181,7 @@ else:  # pragma: no cover - without numba nothing calls the compiled halves
         raise RuntimeError("the compiled kernel needs numba")
 
     def call_solve(*args):
+        raise RuntimeError("the compiled kernel needs numba")
+
+    def call_halves(*args):
         raise RuntimeError("the compiled kernel needs numba")

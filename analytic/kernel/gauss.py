@@ -1,7 +1,7 @@
 """The kernel for Gauss weighting (N = M⁻¹, the paper's Eq. 89) and for uncontrolled scenes:
 :func:`evaluate`, O(n), no heap allocation.
 
-Stages: :func:`analytic.kernel.system.build_system` (1-6: M, Q, b_m, b_c), then :func:`solve_gauss`:
+Stages: :func:`analytic.kernel.system.make_build_system` (1-6: M, Q, b_m, b_c), then :func:`make_solve_gauss`:
 :func:`analytic.kernel.schur.schur_complement` (7: rods and R eliminated),
 :func:`analytic.kernel.bordered.bordered_solve` (8: the bordered 4x4 system on u, q̈_b), and
 :func:`control_outputs` (9: q̈ of the free rods, ``Q^C``, ``τ``, the residual). The two halves are
@@ -11,16 +11,12 @@ them at once, and every caller calls them by address (:mod:`analytic.kernel.abi`
 
 from __future__ import annotations
 
-import numpy as np
-
-from analytic.kernel.abi import arrays, call_solve, call_system
+from analytic.kernel.abi import arrays, call_halves
 from analytic.kernel.bordered import bordered_solve
-from analytic.kernel.jit import inline, jit_entry, workspace
+from analytic.kernel.jit import inline, jit_entry
 from analytic.kernel.layout import (
     F_ARR,
     I_COMP,
-    I_FN_SOLVE,
-    I_FN_SYSTEM,
     I_KP,
     I_KW,
     I_N,
@@ -173,14 +169,8 @@ def join(t, q, qd, fp, ip, out):
     kp = ip[I_KP] & IX
     if kw + kp > 0 and ip[I_WEIGHT] != W_GAUSS:
         return STATUS_UNSUPPORTED
-    if ip[I_FN_SYSTEM] == 0 or ip[I_FN_SOLVE] == 0:
-        return STATUS_UNSUPPORTED
     full = out.shape[0] >= 2 * (n + 7) + 3 + kw + kp  # else: q̈ only
-    w = workspace()
-    q = np.ascontiguousarray(q)  # a view (no copy) unless the caller's slice is strided
-    qd = np.ascontiguousarray(qd)
-    call_system(ip[I_FN_SYSTEM], t, q, qd, fp, ip, out, full, w)
-    return call_solve(ip[I_FN_SOLVE], q, fp, ip, out, w, full)
+    return call_halves(t, q, qd, fp, ip, out, full)
 
 
 evaluate = jit_entry(_make_evaluate)

@@ -36,7 +36,7 @@ class KernelHalf(StrEnum):
     """The two halves of the kernel, each compiled and cached on its own."""
 
     SYSTEM = "system"
-    """Stages 1-6 (:func:`analytic.kernel.system.build_system`), the same for every weighting."""
+    """Stages 1-6 (:func:`analytic.kernel.system.make_build_system`), the same for every weighting."""
     SOLVE = "solve"
     """The scene's solve: Gauss (also uncontrolled scenes) or M⁻²."""
 

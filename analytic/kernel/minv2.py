@@ -9,7 +9,7 @@ one product with ``M`` (for ``Q^C``) and ``M_α⁻¹ M v = v - α y (a_mᵀ v)``
 of a product with ``M`` followed by a solve, which would cost about cond(M) in accuracy. Cost O(n)
 (a few heap arrays of size n + 7, unlike the Gauss kernel).
 
-Stages: :func:`analytic.kernel.system.build_system` (1-6, shared with Gauss), then
+Stages: :func:`analytic.kernel.system.make_build_system` (1-6, shared with Gauss), then
 :func:`solve_minv2`.
 """
 
@@ -19,14 +19,12 @@ import math
 
 import numpy as np
 
-from analytic.kernel.abi import arrays, call_solve, call_system
-from analytic.kernel.jit import inline, jit, jit_entry, workspace
+from analytic.kernel.abi import arrays, call_halves
+from analytic.kernel.jit import inline, jit, jit_entry
 from analytic.kernel.layout import (
     F_ARR,
     F_MU0,
     I_COMP,
-    I_FN_SOLVE,
-    I_FN_SYSTEM,
     I_KP,
     I_KW,
     I_N,
@@ -94,7 +92,7 @@ def make_solve_minv2(deps: int):
     def solve_minv2(q_p, fp_p, ip_p, out_p, len_out, w_p, full):
         """Stage 7 (M⁻²): ``q̈``, ``Q^C``, ``τ`` and the residual into ``out`` (Eq. B13, with the
         closed forms of the module docstring), mirroring :func:`analytic.fundamental.solve`. ``w`` and
-        the rod rows of ``out`` hold what :func:`analytic.kernel.system.build_system` wrote.
+        the rod rows of ``out`` hold what :func:`analytic.kernel.system.make_build_system` wrote.
 
         Returns:
             ``STATUS_NOT_PD`` when the Schur complement of ``M_α`` is not numerically positive
@@ -337,13 +335,7 @@ def join(t, q, qd, fp, ip, out):
     full = out.shape[0] >= 2 * (n + 7) + 3 + kw + kp
     if not full:  # this weighting needs Q^C on the way to q̈: the whole output
         return STATUS_UNSUPPORTED
-    if ip[I_FN_SYSTEM] == 0 or ip[I_FN_SOLVE] == 0:
-        return STATUS_UNSUPPORTED
-    w = workspace()
-    q = np.ascontiguousarray(q)  # a view (no copy) unless the caller's slice is strided
-    qd = np.ascontiguousarray(qd)
-    call_system(ip[I_FN_SYSTEM], t, q, qd, fp, ip, out, full, w)
-    return call_solve(ip[I_FN_SOLVE], q, fp, ip, out, w, full)
+    return call_halves(t, q, qd, fp, ip, out, full)
 
 
 evaluate = jit_entry(_make_evaluate)
