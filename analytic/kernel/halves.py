@@ -13,7 +13,9 @@ process asks, and :func:`addresses` gives the two addresses a scene's callers re
 time (:mod:`validation.warmup`, a first run); the callers do not need either to compile.
 
 Each body rebuilds the arrays behind its pointers (:func:`analytic.kernel.abi.arrays`) and calls
-its stages, pasted in one level deep.
+its stages. numba compiles each half from source in which the stages are already pasted
+(:func:`analytic.kernel.paste.flatten`): numba's own inlining re-ran its front end and deep-copied
+the stages' code at every call site, about a third of a first compile.
 """
 
 from __future__ import annotations
@@ -30,6 +32,7 @@ from analytic.kernel.jit import (
     CacheFallbackWarning,
     source_fingerprint,
 )
+from analytic.kernel.paste import flatten
 
 
 class KernelHalf(StrEnum):
@@ -61,11 +64,11 @@ def _callback(pyfunc, sig):
 
 if HAVE_NUMBA:
     _DEPS = source_fingerprint(*KERNEL_SOURCES)
-    SYSTEM = _callback(system.make_build_system(_DEPS), SYSTEM_SIG)
+    SYSTEM = _callback(flatten(system.make_build_system(_DEPS)), SYSTEM_SIG)
     """Stages 1-6: ``void(t, q*, qd*, fp*, ip*, out*, len_out, full, w*)``."""
-    SOLVE_GAUSS = _callback(gauss.make_solve_gauss(_DEPS), SOLVE_SIG)
+    SOLVE_GAUSS = _callback(flatten(gauss.make_solve_gauss(_DEPS)), SOLVE_SIG)
     """The Gauss solve: ``int64(q*, fp*, ip*, out*, len_out, w*, full)`` -> status."""
-    SOLVE_MINV2 = _callback(minv2.make_solve_minv2(_DEPS), SOLVE_SIG)
+    SOLVE_MINV2 = _callback(flatten(minv2.make_solve_minv2(_DEPS)), SOLVE_SIG)
     """The M⁻² solve, same signature (``full`` must be 1: this weighting needs ``Q^C``)."""
 else:  # pragma: no cover - without numba the numpy model answers
     SYSTEM = SOLVE_GAUSS = SOLVE_MINV2 = None

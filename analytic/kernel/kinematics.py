@@ -11,6 +11,8 @@ from __future__ import annotations
 from analytic.kernel.jit import inline
 from analytic.kernel.layout import (
     F_J,
+    F_TAT,
+    F_TDT,
     WS_H,
     WS_JW,
     WS_LA,
@@ -84,77 +86,66 @@ def Ht_times(u0, u1, u2, u3, x0, x1, x2):
 
 
 @inline
-def L_into(x0, x1, x2, u0, u1, u2, u3, w, o):
-    """``L_x(u) = Σ x_i L_i(u)`` (Eqs. 23-29, 34), row-major (3, 4) at ``w[o:o+12]``: the closed
-    form of ``T_x @ u`` (each entry has at most three of the 48 terms)."""
-    w[o] = 4.0 * x0 * u0 - 2.0 * x1 * u3 + 2.0 * x2 * u2
-    w[o + 1] = 4.0 * x0 * u1 + 2.0 * x1 * u2 + 2.0 * x2 * u3
-    w[o + 2] = 2.0 * x1 * u1 + 2.0 * x2 * u0
-    w[o + 3] = -2.0 * x1 * u0 + 2.0 * x2 * u1
-    w[o + 4] = 2.0 * x0 * u3 + 4.0 * x1 * u0 - 2.0 * x2 * u1
-    w[o + 5] = 2.0 * x0 * u2 - 2.0 * x2 * u0
-    w[o + 6] = 2.0 * x0 * u1 + 4.0 * x1 * u2 + 2.0 * x2 * u3
-    w[o + 7] = 2.0 * x0 * u0 + 2.0 * x2 * u2
-    w[o + 8] = -2.0 * x0 * u2 + 2.0 * x1 * u1 + 4.0 * x2 * u0
-    w[o + 9] = 2.0 * x0 * u3 + 2.0 * x1 * u0
-    w[o + 10] = -2.0 * x0 * u0 + 2.0 * x1 * u3
-    w[o + 11] = 2.0 * x0 * u1 + 2.0 * x1 * u2 + 4.0 * x2 * u3
-
-
-@inline
 def kinematic_terms(q, qd, fp, o_a, w):
     """Stage 1: everything kinematic the other stages read (Eqs. 11-13, 23-29, 34), into ``w``.
 
-    ``Sa = S(u) a`` and ``s = (Sa)ᵀSa`` (the rod direction and ``M_pp = s diag(m)``, Eq. 51);
-    ``H(u)``, ``L_a(u)``, ``L_d(u)``; ``L_a u̇``; ``L̇_a u̇ = L_a(u̇) u̇`` and ``L̇_d u̇``; their
-    projections on Sa; ``ω = H u̇`` (Eq. 12) and ``J ω``. ``o_a``: offset of ``a`` (then ``d``) in fp.
+    ``L_a(u) = T_a u`` and ``L_d(u) = T_d u`` (Eqs. 29, 34; ``T`` packed in ``fp``), ``L_a u̇``,
+    ``L̇_a u̇ = L_a(u̇) u̇`` and ``L̇_d u̇`` (L is linear in u); ``Sa = S(u) a = ½ L_a(u) u - a``
+    (``S(u) a + a`` is quadratic in u with Jacobian ``L_a``, Eqs. 23-29) and
+    ``s = (Sa)ᵀSa`` (``M_pp = s diag(m)``, Eq. 51); the projections on Sa; ``H(u)``;
+    ``ω = H u̇`` (Eq. 12) and ``J ω``. ``o_a``: offset of ``a`` in fp.
+
+    Written as loops over the packed tensors rather than unrolled: numba's compile time grows
+    with the number of statements, not of iterations (LLVM unrolls these fixed-count loops).
     """
-    u0, u1, u2, u3 = q[3], q[4], q[5], q[6]
-    v0, v1, v2, v3 = qd[3], qd[4], qd[5], qd[6]  # u̇
-    s00, s01, s02, s10, s11, s12, s20, s21, s22 = rotation(u0, u1, u2, u3)
-    a0, a1, a2 = fp[o_a], fp[o_a + 1], fp[o_a + 2]
-    d0, d1, d2 = fp[o_a + 3], fp[o_a + 4], fp[o_a + 5]
-    Sa0 = s00 * a0 + s01 * a1 + s02 * a2
-    Sa1 = s10 * a0 + s11 * a1 + s12 * a2
-    Sa2 = s20 * a0 + s21 * a1 + s22 * a2
-    w[WS_SA] = Sa0
-    w[WS_SA + 1] = Sa1
-    w[WS_SA + 2] = Sa2
-    w[WS_S] = Sa0 * Sa0 + Sa1 * Sa1 + Sa2 * Sa2
-    H_into(u0, u1, u2, u3, w, WS_H)
-    L_into(a0, a1, a2, u0, u1, u2, u3, w, WS_LA)
-    L_into(d0, d1, d2, u0, u1, u2, u3, w, WS_LD)
-    # L̇_a u̇ = L_a(u̇) u̇ = 2 (S(u̇) + I) a: L_a(u) is the Jacobian of the quadratic form S(u) a
-    # (Eqs. 23-29), so L_a(v) v is twice that form at v; same for d
-    r00 = 2 * v0 * v0 + 2 * v1 * v1
-    r01 = 2 * v1 * v2 - 2 * v0 * v3
-    r02 = 2 * v1 * v3 + 2 * v0 * v2
-    r10 = 2 * v1 * v2 + 2 * v0 * v3
-    r11 = 2 * v0 * v0 + 2 * v2 * v2
-    r12 = 2 * v2 * v3 - 2 * v0 * v1
-    r20 = 2 * v1 * v3 - 2 * v0 * v2
-    r21 = 2 * v2 * v3 + 2 * v0 * v1
-    r22 = 2 * v0 * v0 + 2 * v3 * v3
-    Lad0 = 2.0 * (r00 * a0 + r01 * a1 + r02 * a2)
-    Lad1 = 2.0 * (r10 * a0 + r11 * a1 + r12 * a2)
-    Lad2 = 2.0 * (r20 * a0 + r21 * a1 + r22 * a2)
-    Ldd0 = 2.0 * (r00 * d0 + r01 * d1 + r02 * d2)
-    Ldd1 = 2.0 * (r10 * d0 + r11 * d1 + r12 * d2)
-    Ldd2 = 2.0 * (r20 * d0 + r21 * d1 + r22 * d2)
-    la = WS_LA
-    Lau0 = w[la] * v0 + w[la + 1] * v1 + w[la + 2] * v2 + w[la + 3] * v3
-    Lau1 = w[la + 4] * v0 + w[la + 5] * v1 + w[la + 6] * v2 + w[la + 7] * v3
-    Lau2 = w[la + 8] * v0 + w[la + 9] * v1 + w[la + 10] * v2 + w[la + 11] * v3
-    w[WS_LAD], w[WS_LAD + 1], w[WS_LAD + 2] = Lad0, Lad1, Lad2
-    w[WS_LDD], w[WS_LDD + 1], w[WS_LDD + 2] = Ldd0, Ldd1, Ldd2
-    w[WS_LAU], w[WS_LAU + 1], w[WS_LAU + 2] = Lau0, Lau1, Lau2
-    w[WS_SLAU] = Sa0 * Lau0 + Sa1 * Lau1 + Sa2 * Lau2
-    w[WS_SLAD] = Sa0 * Lad0 + Sa1 * Lad1 + Sa2 * Lad2
-    w[WS_SLDD] = Sa0 * Ldd0 + Sa1 * Ldd1 + Sa2 * Ldd2
-    om0, om1, om2 = omega(u0, u1, u2, u3, v0, v1, v2, v3)
-    w[WS_OM] = om0
-    w[WS_OM + 1] = om1
-    w[WS_OM + 2] = om2
-    w[WS_JW] = fp[F_J] * om0 + fp[F_J + 1] * om1 + fp[F_J + 2] * om2
-    w[WS_JW + 1] = fp[F_J + 3] * om0 + fp[F_J + 4] * om1 + fp[F_J + 5] * om2
-    w[WS_JW + 2] = fp[F_J + 6] * om0 + fp[F_J + 7] * om1 + fp[F_J + 8] * om2
+    s = 0.0
+    slau = 0.0
+    slad = 0.0
+    sldd = 0.0
+    for r in range(3):
+        lad = 0.0
+        ldd = 0.0
+        lau = 0.0
+        sa = 0.0
+        for c in range(4):
+            ta = F_TAT + 16 * r + 4 * c
+            td = F_TDT + 16 * r + 4 * c
+            va = 0.0  # L_a(u)[r, c]
+            vd = 0.0
+            xa = 0.0  # L_a(u̇)[r, c]
+            xd = 0.0
+            for k in range(4):
+                va += fp[ta + k] * q[3 + k]
+                vd += fp[td + k] * q[3 + k]
+                xa += fp[ta + k] * qd[3 + k]
+                xd += fp[td + k] * qd[3 + k]
+            w[WS_LA + 4 * r + c] = va
+            w[WS_LD + 4 * r + c] = vd
+            sa += va * q[3 + c]
+            lau += va * qd[3 + c]
+            lad += xa * qd[3 + c]
+            ldd += xd * qd[3 + c]
+        sa = 0.5 * sa - fp[o_a + r]
+        w[WS_SA + r] = sa
+        w[WS_LAU + r] = lau
+        w[WS_LAD + r] = lad
+        w[WS_LDD + r] = ldd
+        s += sa * sa
+        slau += sa * lau
+        slad += sa * lad
+        sldd += sa * ldd
+    w[WS_S] = s
+    w[WS_SLAU] = slau
+    w[WS_SLAD] = slad
+    w[WS_SLDD] = sldd
+    H_into(q[3], q[4], q[5], q[6], w, WS_H)
+    for r in range(3):
+        om = 0.0
+        for c in range(4):
+            om += w[WS_H + 4 * r + c] * qd[3 + c]
+        w[WS_OM + r] = om
+    for r in range(3):
+        jw = 0.0
+        for c in range(3):
+            jw += fp[F_J + 3 * r + c] * w[WS_OM + c]
+        w[WS_JW + r] = jw

@@ -34,7 +34,7 @@ F_TA = 20  # 3: given torque, amplitude of cos(freq t), body axes, N·m
 F_WB = 23  # 3: ω amplitudes b (Eq. 76), rad/s
 F_WS = 26  # 3: ω frequencies σ (Eq. 76), rad/s
 F_GAIN = 29  # k_ω x k_ω gain P (Eq. B6), row-major (9 slots)
-F_TAT = 38  # 48: T_a (3, 4, 4) row-major, L_a(u) = T_a @ u (Eq. 29; the kernel uses closed forms)
+F_TAT = 38  # 48: T_a (3, 4, 4) row-major, L_a(u) = T_a @ u (Eq. 29; kinematics.kinematic_terms)
 F_TDT = 86  # 48: T_d, L_d(u) = T_d @ u (Eq. 34)
 F_ARR = 134  # start of the tail (tail_offsets)
 

@@ -31,8 +31,8 @@ def make_build_system(deps: int):
         ``out``. ``full`` (0/1): whether ``out`` holds the whole output (a tracked mass's ``Q_i``
         then goes to its ``Q^C_i`` slot).
 
-        The stages are pasted in here, one level deep: pasting a function that itself pastes the
-        stages doubled numba's compile time (the inlined code is copied at each level)."""
+        :mod:`analytic.kernel.halves` compiles it with the stages pasted in at the source level
+        (:func:`analytic.kernel.paste.flatten`)."""
         if deps < 0:  # never true: ties numba's cache key to the kernel's sources
             return
         q, fp, ip, out, w = arrays(q_p, fp_p, ip_p, out_p, len_out, w_p)
