@@ -75,16 +75,24 @@ def is_inline(obj: Any) -> bool:
     return isinstance(opts, dict) and opts.get("inline") == "always" and hasattr(obj, "py_func")
 
 
+class NoSource(LookupError):
+    """A function's source is not available (an install without ``.py`` files, or a file changed
+    since import): it is not pasted, and numba inlines it as before (same numbers)."""
+
+
 def _function_def(fn: Callable) -> ast.FunctionDef:
     """A fresh syntax tree of ``fn``'s definition, with the line numbers of its file (its lines
     are those its code object spans; the file is read through :mod:`linecache`)."""
     code = fn.__code__
     last = max(end or 0 for _, end, _, _ in code.co_positions())
     lines = linecache.getlines(code.co_filename)[code.co_firstlineno - 1 : last]
-    tree = ast.parse("\n" * (code.co_firstlineno - 1) + textwrap.dedent("".join(lines)))
-    fdef = tree.body[0]
+    try:
+        tree = ast.parse("\n" * (code.co_firstlineno - 1) + textwrap.dedent("".join(lines)))
+    except SyntaxError as exc:  # the file changed since it was imported
+        raise NoSource(fn.__qualname__) from exc
+    fdef = tree.body[0] if tree.body else None
     if not isinstance(fdef, ast.FunctionDef) or fdef.name != code.co_name:
-        raise TypeError(f"{fn.__qualname__}: its definition was not found in {code.co_filename}")
+        raise NoSource(fn.__qualname__)  # no source installed, or not this function's
     fdef.decorator_list = []
     return fdef
 
@@ -309,7 +317,10 @@ class _Paster:
 
     def paste(self, fn: Callable, args: list[ast.expr], target, site: ast.stmt):
         """The statements that replace ``site`` (a call of ``fn``), or None to leave it."""
-        shape = _shape(fn)
+        try:
+            shape = _shape(fn)
+        except NoSource:
+            return None
         if not shape.pasteable or len(shape.params) != len(args):
             return None
         body = _body(_function_def(fn))
@@ -345,10 +356,14 @@ class _Paster:
 def flatten(fn: Callable) -> Callable:
     """``fn`` with every pasteable inline call in its body replaced by the callee's code (module
     docstring), as a new function of the same name, closure values and source file (numba's cache
-    keys on the file). Returns ``fn`` itself when there is nothing to paste."""
-    fdef = _function_def(fn)
+    keys on the file). Returns ``fn`` itself when there is nothing to paste, or when its source
+    is not available (:class:`NoSource`)."""
+    try:
+        fdef = _function_def(fn)
+        shape = _shape(fn)
+    except NoSource:
+        return fn
     paster = _Paster(fn.__globals__)
-    shape = _shape(fn)
     local = shape.stored | set(shape.params) | set(fn.__code__.co_freevars)
     own = paster.resolver(fn, "")
 
@@ -385,4 +400,4 @@ def flatten(fn: Callable) -> Callable:
     return new
 
 
-__all__ = ["flatten", "is_inline"]
+__all__ = ["NoSource", "flatten", "is_inline"]
