@@ -117,7 +117,11 @@ class _Shape:
 
 @functools.cache
 def _shape(fn: Callable) -> _Shape:
-    fdef = _function_def(fn)
+    """The shape of a callee (its source parsed once per process)."""
+    return _shape_of(_function_def(fn), fn)
+
+
+def _shape_of(fdef: ast.FunctionDef, fn: Callable) -> _Shape:
     a = fdef.args
     body = _body(fdef)
     stored, plain, returns = set(), True, []
@@ -360,9 +364,9 @@ def flatten(fn: Callable) -> Callable:
     is not available (:class:`NoSource`)."""
     try:
         fdef = _function_def(fn)
-        shape = _shape(fn)
     except NoSource:
         return fn
+    shape = _shape_of(fdef, fn)  # not cached: a factory makes a new function each time
     paster = _Paster(fn.__globals__)
     local = shape.stored | set(shape.params) | set(fn.__code__.co_freevars)
     own = paster.resolver(fn, "")
