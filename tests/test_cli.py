@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from validation.cli import EXIT_USAGE, main
+from validation.cli import EXIT_USAGE, main, user_warnings
 
 
 def test_simulate_writes_trajectory_and_summary(tmp_path, capsys):
@@ -190,6 +190,18 @@ def test_unstable_run_keeps_stderr_readable(tmp_path):
     # the rest is progress, one plain line per stage (a pipe is not a terminal)
     assert all(line.startswith("tumble: ") for line in progress), proc.stderr
     assert len(progress) <= 12, proc.stderr
+
+
+def test_user_warnings_one_line_each_resource_warnings_hidden(capsys):
+    """What a user sees of warnings: one line per warning and place, no source line; a
+    ResourceWarning (a SIGTERM landing inside an import leaves its .pyc open) shows nothing."""
+    import warnings
+
+    with user_warnings():
+        for _ in range(3):
+            warnings.warn("x is odd\nsecond line", UserWarning, stacklevel=1)
+        warnings.warn("unclosed file <_io.BufferedReader>", ResourceWarning, stacklevel=1)
+    assert capsys.readouterr().err.splitlines() == ["tumble: warning: x is odd"]
 
 
 def test_no_colour_codes_when_stderr_is_not_a_terminal():

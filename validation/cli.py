@@ -21,6 +21,7 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
 import argparse  # noqa: E402
+import contextlib  # noqa: E402
 import json  # noqa: E402
 import sys  # noqa: E402
 import warnings  # noqa: E402
@@ -438,13 +439,26 @@ def _one_line_warning(message, category, filename, lineno, file=None, line=None)
     print(f"tumble: warning: {text}", file=file or sys.stderr)
 
 
+@contextlib.contextmanager
+def user_warnings():
+    """The warnings a ``tumble`` user sees: each once per place, one line each.
+
+    ``ResourceWarning`` stays hidden, as in Python's own default: the one a user would meet is a
+    Ctrl-C or SIGTERM landing inside an ``import``, which leaves that import's open ``.pyc`` file to
+    the collector, a line about Python's internals before the one line that says what happened.
+    """
+    with warnings.catch_warnings():
+        warnings.simplefilter("default")
+        warnings.simplefilter("ignore", ResourceWarning)
+        warnings.showwarning = _one_line_warning
+        yield
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run one ``tumble`` command; returns the exit status (see the module docstring)."""
     with interrupts.handled():
         try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("default")
-                warnings.showwarning = _one_line_warning
+            with user_warnings():
                 parser = build_parser()
                 args = parser.parse_args(argv)
                 status = args.func(args)
