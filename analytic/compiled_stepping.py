@@ -197,10 +197,12 @@ def _runtime(solver: int = -1) -> SimpleNamespace:
     embedding the solve ``solver`` (an :class:`analytic.kernel.entry.Solver` value; the default
     ``ANY`` embeds both) (compiled, or loaded from numba's cache, on the first call)."""
     from analytic import compiled_rhs
+    from analytic.kernel import compile_lock
     from analytic.kernel.entry import Solver
     from analytic.kernel.jit import source_fingerprint
 
-    cfunc = compiled_rhs.make(source_fingerprint(*_rhs_modules()), Solver(solver))
+    with compile_lock.compiling(compile_lock.RHS):  # a first run's helper may be compiling it
+        cfunc = compiled_rhs.make(source_fingerprint(*_rhs_modules()), Solver(solver))
     return SimpleNamespace(**vars(_cyrk()), address=cfunc.address, cfunc=cfunc, layout=compiled_rhs)
 
 

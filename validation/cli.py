@@ -115,22 +115,26 @@ def cmd_validate(args: argparse.Namespace) -> int:
     scene = resolve_scene(args.scene, DEFAULT_VALIDATE_SCENE)
     out = Path(args.out) if args.out else default_out_dir("validate_", scene.name)
     t_end = args.t_end or scene.output.t_end
-    _warm_up_checked(scene, args, Status())
-    progress = StageProgress(f"validate {scene.name}", t_end)
+    from validation.warmup import warming
+
+    chosen = _checked_plants(scene, args)
     res = None
-    try:
-        res = run_validation(
-            scene,
-            out,
-            integrator=args.integrator,
-            dt=args.dt,
-            t_end=args.t_end,
-            progress=progress,
-            plants=args.plants,
-            figure_formats=args.figure_format,
-        )
-    finally:
-        progress.close(walls=res.wall_times if res is not None else None)
+    # the analytic plant's last kernels may still compile while the plants start (warming)
+    with warming(scene, chosen, Status()):
+        progress = StageProgress(f"validate {scene.name}", t_end)
+        try:
+            res = run_validation(
+                scene,
+                out,
+                integrator=args.integrator,
+                dt=args.dt,
+                t_end=args.t_end,
+                progress=progress,
+                plants=args.plants,
+                figure_formats=args.figure_format,
+            )
+        finally:
+            progress.close(walls=res.wall_times if res is not None else None)
     n_fail = sum(1 for c in res.checks if not c.passed)
     verdict = "PASS" if res.passed else "FAIL"
     print(f"{verdict}: {len(res.checks) - n_fail}/{len(res.checks)} checks passed for {scene.name}")
@@ -150,13 +154,12 @@ def cmd_validate(args: argparse.Namespace) -> int:
     return 0 if res.passed else EXIT_FAILED
 
 
-def _warm_up_checked(scene, args: argparse.Namespace, status) -> None:
+def _checked_plants(scene, args: argparse.Namespace) -> list:
     """The input checks of :func:`validation.validate.run_validation` (bad input is refused before
-    anything is compiled), then :func:`validation.warmup.warm_up` for the chosen plants."""
+    anything is compiled); returns the chosen plants."""
     from analytic.trajectory import Engine
     from mj_bridge.plants import installed_plants, parse_plants, plant
     from validation.preflight import check_validation_inputs
-    from validation.warmup import warm_up
 
     chosen = parse_plants(args.plants) if args.plants is not None else installed_plants()
     mujoco = Engine.MUJOCO in chosen
@@ -165,7 +168,7 @@ def _warm_up_checked(scene, args: argparse.Namespace, status) -> None:
     )
     for e in chosen:
         plant(e).check_scene(scene)
-    warm_up(scene, chosen, status)
+    return chosen
 
 
 def cmd_export_mjcf(args: argparse.Namespace) -> int:

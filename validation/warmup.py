@@ -15,11 +15,12 @@ would otherwise print nothing while it compiles and then sit at its first percen
    ``simulate`` for one output interval), reporting each stage with its wall time:
 
    * the analytic kernel's two halves (:mod:`analytic.kernel.halves`) at the same time: stages
-     1-6 in a *helper process* (after the analytic plant's work and impulse rates), the scene's
-     solve here;
-   * meanwhile, here, what calls the halves by address and so compiles without them
-     (:mod:`analytic.kernel.abi`): the MuJoCo native callback and the analytic plant's compiled
-     right-hand side; then the kernel's entry point;
+     1-6 in a *helper process*, the scene's solve here;
+   * beside them, what calls the halves by address and so compiles without them
+     (:mod:`analytic.kernel.abi`): here the analytic plant's work and impulse rates (before the
+     solve) and the MuJoCo native callback (after it); in the helper, after stages 1-6, the
+     analytic plant's compiled right-hand side (it embeds the rates, on disk by then); then the
+     kernel's entry point, here;
    * then each plant for one output interval (the MuJoCo plant in the helper), which finds
      everything on disk and compiles whatever else its settings need.
 
@@ -34,12 +35,13 @@ reports its own error.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import enum
 import os
 import sys
 import time
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -427,9 +429,13 @@ HELPER_STAGES: dict[str, Callable[[Scene], None]] = {
 }
 """What the helper process can compile before the ``go`` line, by :data:`TITLES` key."""
 
+HELD_LOCKS = {"rhs": "RHS"}
+"""Stages whose compile lock the helper can hold from the moment it gets its job, so that a plant
+started meanwhile waits for its result: the name in :mod:`analytic.kernel.compile_lock`."""
+
 
 def _helper_main() -> None:  # pragma: no cover - runs in the helper process
-    """The helper process: import the kernel's modules, read ``(scene, engine, first)`` (pickled)
+    """The helper process: import the kernel's modules, read ``(scene, engine, first, held)`` (pickled)
     from stdin (an empty line: nothing to do), compile each
     stage named in ``first`` (:data:`HELPER_STAGES`) at once, printing each one's time as one JSON
     line; then, for an engine, wait for the ``go`` line (what the engine's plant embeds is on
@@ -450,9 +456,16 @@ def _helper_main() -> None:  # pragma: no cover - runs in the helper process
     if not line.strip():  # no job: the cache was warm after all
         return
     size = int(line)
-    scene, engine, first = pickle.loads(sys.stdin.buffer.read(size))
+    scene, engine, first, held = pickle.loads(sys.stdin.buffer.read(size))
+    from analytic.kernel import compile_lock
+
+    locks = {name: getattr(compile_lock, HELD_LOCKS[name]) for name in held}
+    for lock in locks.values():  # before anything else: a plant that needs it waits for it
+        compile_lock.hold(lock)
     for name in first:
         st = _timed(TITLES[name], lambda name=name: HELPER_STAGES[name](scene), "helper process")
+        if name in locks:
+            compile_lock.release(locks[name])
         print(json.dumps(dataclasses.asdict(st)), flush=True)
     if engine is None:
         return
@@ -489,13 +502,16 @@ class _Helper:
             stderr=subprocess.PIPE,
         )
 
-    def send(self, scene: Scene, engine: str | None, first: Sequence[str]) -> None:
+    def send(
+        self, scene: Scene, engine: str | None, first: Sequence[str], held: Sequence[str] = ()
+    ) -> None:
         """The job: compile the stages named in ``first`` now, then ``engine``'s plant after
-        :meth:`go` (None: no plant)."""
+        :meth:`go` (None: no plant); ``held``: stages of ``first`` whose compile lock it takes
+        at once (:data:`HELD_LOCKS`)."""
         import pickle
 
         self.engine, self.first = engine, list(first)
-        data = pickle.dumps((scene, engine, self.first))
+        data = pickle.dumps((scene, engine, self.first, tuple(held)))
         try:
             self.proc.stdin.write(b"%d\n" % len(data) + data)
             self.proc.stdin.flush()
@@ -566,106 +582,173 @@ def warm_up(
         plants: engine names or :class:`~analytic.trajectory.Engine` members.
         progress: receives one line of text per event: what will be compiled (once), each stage
             done with its wall time, the total. Nothing is sent when the cache is warm.
-        concurrent: compile the MuJoCo stage in a helper process alongside this one (default:
-            when at least two CPUs are free to this process and the cache is writable).
+        concurrent: compile in a helper process alongside this one (default: when at least two
+            CPUs are free to this process and the cache is writable).
 
     Returns:
         a :class:`WarmupResult`.
     """
+    with warming(scene, plants, progress, concurrent, overlap=False) as result:
+        return result
+
+
+@contextlib.contextmanager
+def warming(
+    scene: Scene,
+    plants: Sequence[Any],
+    progress: Callable[[str], None] | None = None,
+    concurrent: bool | None = None,
+    overlap: bool = True,
+) -> Iterator[WarmupResult]:
+    """:func:`warm_up` around the run that needs it: with ``overlap``, when the MuJoCo and the
+    analytic plant both run, the body starts as soon as the MuJoCo plant's kernels are compiled,
+    while the helper process still compiles the analytic plant's work and impulse rates and its
+    right-hand side (about a third of the whole; the MuJoCo plant's run takes longer than the
+    analytic plant's). The helper holds that kernel's compile lock
+    (:mod:`analytic.kernel.compile_lock`), so the analytic plant's run waits for it and loads it
+    from disk rather than compiling it again. On leaving, the helper's last stages are reported
+    (waited for when the body ended normally, stopped otherwise)."""
     engines = [str(getattr(p, "value", p)) for p in plants]
     engines = [e for e in (ANALYTIC, MUJOCO, PINOCCHIO) if e in engines]
     t0 = time.perf_counter()
     key = warm_key(engines, scene)
     if is_stamped_warm(key):  # checked before: nothing imports numba here
-        return WarmupResult()
+        yield WarmupResult()
+        return
     if concurrent is None:
         concurrent = free_cpus() >= 2
     # not known warm: a helper starts importing now, in case the check below finds work for it
     helper = _Helper() if concurrent else None
     try:
-        return _warm_up(scene, engines, key, helper, progress, concurrent, t0)
+        job = _Warmup(scene, engines, key, helper, progress, concurrent, t0)
+        result = job.run(overlap)
+        yield result
+        job.finish()
     finally:
         if helper is not None:
             helper.stop()
 
 
-def _warm_up(
-    scene: Scene,
-    engines: list[str],
-    key: str,
-    helper: _Helper | None,
-    progress: Callable[[str], None] | None,
-    concurrent: bool,
-    t0: float,
-) -> WarmupResult:
-    """:func:`warm_up` once the stamp did not answer; ``helper`` (started, no job yet) or None."""
-    cold = cold_engines(engines)
-    if not cold:
-        stamp_warm(key)
-        return WarmupResult()
-    say = progress or (lambda _line: None)
-    cached = cache_writable(cold)
-    # every plant embeds the analytic kernel: compiled first, whichever plants run
-    kernel_cold = ANALYTIC in cold or bool(cold_engines([ANALYTIC]))
-    rest = list(cold)
-    concurrent = bool(concurrent and cached and helper is not None)
-    split = concurrent and kernel_cold  # the kernel's two halves compiled at once
-    engine_beside = concurrent and MUJOCO in rest and len(rest) >= 2
-    concurrent = split or engine_beside
-    names = [TITLES["kernel"]] if kernel_cold else []
-    names += [TITLES[e] for e in rest]
-    how = (
-        "once per machine; later runs load them from numba's cache"
-        if cached
-        else "numba has no writable cache directory here (set NUMBA_CACHE_DIR), so every run "
-        "compiles them"
-    )
-    beside = ["the kernel's stages 1-6"] if split else []
-    beside += (
-        ["the analytic plant's rates and right-hand side"] if split and ANALYTIC in rest else []
-    )
-    beside += ["the MuJoCo plant's first interval"] if engine_beside else []
-    where = f" ({', '.join(beside)} in a helper process)" if beside else ""
-    say(f"compiling the fast kernels ({how}; ~{EXPECTED_COLD_S} s): {', '.join(names)}{where}")
-    stages: list[StageTime] = []
+class _Warmup:
+    """:func:`warming` once the stamp did not answer; ``helper`` (started, no job yet) or None."""
 
-    def report(st: StageTime) -> None:
-        stages.append(st)
+    def __init__(
+        self,
+        scene: Scene,
+        engines: list[str],
+        key: str,
+        helper: _Helper | None,
+        progress: Callable[[str], None] | None,
+        concurrent: bool,
+        t0: float,
+    ) -> None:
+        self.scene, self.engines, self.key, self.helper = scene, engines, key, helper
+        self.say = progress or (lambda _line: None)
+        self.concurrent, self.t0 = concurrent, t0
+        self.stages: list[StageTime] = []
+        self.cached = True
+        self.deferred = False  # the helper still compiles the analytic plant's stages
+
+    def report(self, st: StageTime) -> None:
+        self.stages.append(st)
         where = "" if st.where == "here" else f" ({st.where})"
         tail = f"; it will compile in the run instead ({st.error})" if st.error else ""
-        say(f"  {st.title}: {st.seconds:.1f} s{where}{tail}")
+        self.say(f"  {st.title}: {st.seconds:.1f} s{where}{tail}")
 
-    if concurrent:
-        first = ["system"]
-        if split and ANALYTIC in rest:  # the right-hand side embeds the rates: compiled first
-            first = ["aux", "system", "rhs"]
-        helper.send(scene, MUJOCO if engine_beside else None, first if split else [])
-        if engine_beside:
-            rest.remove(MUJOCO)
-    if split:
-        # Here the solve and the MuJoCo native callback (it calls the kernel's halves by address,
-        # so it compiles without them); meanwhile the helper compiles the work and impulse rates,
-        # stages 1-6 and the analytic plant's right-hand side (also calling the halves by address).
-        report(_timed(TITLES["solve"], lambda: compile_kernel_half(scene, "solve")))
-        if MUJOCO in cold:
-            report(_timed(TITLES["native"], lambda: compile_native(scene)))
-        while helper.first:
-            report(helper.next())
-    if kernel_cold:
-        report(_timed(TITLES["kernel"], lambda: compile_kernel(scene)))
-    if concurrent and engine_beside:
-        helper.go()  # what its plant embeds is on disk: it loads rather than compiles
-    for e in rest:
-        report(_timed(TITLES[e], lambda e=e: compile_plant(scene, e)))
-    if concurrent and engine_beside:
-        report(helper.result())
-    total = time.perf_counter() - t0
-    say(f"  kernels ready in {total:.1f} s")
-    if cached and not any(st.error for st in stages):
-        # every stage ran the plants' own entry points: what a run of this key needs is on disk
-        # (the cache check would still count variants no run of this scene uses)
-        stamp_warm(key)
-    return WarmupResult(tuple(cold), tuple(stages), total, concurrent, cached)
+    def run(self, overlap: bool) -> WarmupResult:
+        scene, helper, report = self.scene, self.helper, self.report
+        cold = cold_engines(self.engines)
+        if not cold:
+            stamp_warm(self.key)
+            return WarmupResult()
+        self.cached = cached = cache_writable(cold)
+        # every plant embeds the analytic kernel: compiled first, whichever plants run
+        kernel_cold = ANALYTIC in cold or bool(cold_engines([ANALYTIC]))
+        rest = list(cold)
+        concurrent = bool(self.concurrent and cached and helper is not None)
+        split = concurrent and kernel_cold  # the kernel's two halves compiled at once
+        # the analytic plant's own stages in the helper while the MuJoCo plant runs
+        self.deferred = deferred = bool(overlap and split and {ANALYTIC, MUJOCO} <= set(rest))
+        engine_beside = concurrent and not deferred and MUJOCO in rest and len(rest) >= 2
+        concurrent = split or engine_beside
+        names = [TITLES["kernel"]] if kernel_cold else []
+        names += [TITLES[e] for e in rest]
+        how = (
+            "once per machine; later runs load them from numba's cache"
+            if cached
+            else "numba has no writable cache directory here (set NUMBA_CACHE_DIR), so every run "
+            "compiles them"
+        )
+        rates_here = split and ANALYTIC in rest and not deferred
+        beside = ["the kernel's stages 1-6"] if split else []
+        if deferred:
+            beside += ["the analytic plant's rates and right-hand side, while the plants start"]
+        elif split and ANALYTIC in rest:
+            beside += ["the analytic plant's right-hand side"]
+        beside += ["the MuJoCo plant's first interval"] if engine_beside else []
+        where = f" ({', '.join(beside)} in a helper process)" if beside else ""
+        self.say(
+            f"compiling the fast kernels ({how}; ~{EXPECTED_COLD_S} s): {', '.join(names)}{where}"
+        )
+        if concurrent:
+            if deferred:  # locked at once: the analytic plant's run waits for the helper's result
+                helper.send(scene, None, ["system", "aux", "rhs"], held=["rhs"])
+            else:
+                # the right-hand side embeds the rates: they are compiled here first, long before
+                # the helper is done with stages 1-6 (were they not on disk, it would compile them)
+                first = ["system", "rhs"] if rates_here else ["system"]
+                helper.send(scene, MUJOCO if engine_beside else None, first if split else [])
+            if engine_beside:
+                rest.remove(MUJOCO)
+        if split:
+            # Here the solve and the MuJoCo native callback (it calls the kernel's halves by
+            # address, so it compiles without them), and before them the work and impulse rates
+            # unless the helper takes them; meanwhile the helper compiles stages 1-6, then the
+            # analytic plant's right-hand side (also calling the halves by address): measured,
+            # the two sides then take about as long.
+            if rates_here:
+                report(_timed(TITLES["aux"], lambda: compile_aux_rates(scene)))
+            report(_timed(TITLES["solve"], lambda: compile_kernel_half(scene, "solve")))
+            if MUJOCO in cold:
+                report(_timed(TITLES["native"], lambda: compile_native(scene)))
+            report(helper.next())  # stages 1-6
+            if not deferred:
+                while helper.first:
+                    report(helper.next())
+        if kernel_cold:
+            report(_timed(TITLES["kernel"], lambda: compile_kernel(scene)))
+        if concurrent and engine_beside:
+            helper.go()  # what its plant embeds is on disk: it loads rather than compiles
+        if deferred:
+            rest.remove(ANALYTIC)  # its own run loads what the helper leaves on disk
+        for e in rest:
+            report(_timed(TITLES[e], lambda e=e: compile_plant(scene, e)))
+        if concurrent and engine_beside:
+            report(helper.result())
+        total = time.perf_counter() - self.t0
+        if deferred:
+            self.say(
+                f"  kernels ready in {total:.1f} s but the analytic plant's (still compiling in "
+                "the helper process; its run waits for them)"
+            )
+        else:
+            self.say(f"  kernels ready in {total:.1f} s")
+            self._stamp()
+        return WarmupResult(tuple(cold), tuple(self.stages), total, concurrent, cached)
+
+    def finish(self) -> None:
+        """After the body of :func:`warming` ended normally: the helper's last stages, if any."""
+        if not self.deferred:
+            return
+        while self.helper.first:
+            self.report(self.helper.next())
+        self._stamp()
+
+    def _stamp(self) -> None:
+        if self.cached and not any(st.error for st in self.stages):
+            # every stage ran the plants' own entry points: what a run of this key needs is on
+            # disk (the cache check would still count variants no run of this scene uses)
+            stamp_warm(self.key)
 
 
 __all__ = [
@@ -682,4 +765,5 @@ __all__ = [
     "stamp_warm",
     "warm_key",
     "warm_up",
+    "warming",
 ]

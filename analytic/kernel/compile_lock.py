@@ -1,0 +1,91 @@
+"""One process compiles a kernel; another that needs it meanwhile waits, then loads it from disk.
+
+numba's on-disk cache has no locking: two processes that need the same uncompiled kernel at the
+same time both compile it (same result, twice the work). That happens by design on a first
+``tumble validate`` (:mod:`validation.warmup`): a helper process is still compiling the analytic
+plant's compiled right-hand side when the plants start, and the analytic plant's run then needs it.
+
+:func:`compiling` wraps the compile of a named kernel: it takes an exclusive lock on a file in the
+kernel cache directory (``fcntl.flock``; released by the operating system if the holder dies), so a
+second process waits there and then finds the code on disk. :func:`hold` / :func:`release` take
+the same lock ahead of time (the helper takes it as soon as it is given the job, before the plants
+can ask). Within one process a held name is not waited for again. Where ``fcntl`` or a writable
+cache directory is missing, nothing is locked (each process compiles, as numba does).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import re
+from collections.abc import Iterator
+from typing import IO
+
+from analytic.kernel.cache_dir import kernel_cache_dir
+
+try:
+    import fcntl
+except ImportError:  # pragma: no cover - not POSIX
+    fcntl = None
+
+RHS = "compiled-rhs"
+"""The analytic plant's compiled right-hand side (:func:`analytic.compiled_stepping.prepare`)."""
+
+_held: dict[str, IO[bytes]] = {}
+
+
+def _open(name: str) -> IO[bytes] | None:
+    if fcntl is None or not re.fullmatch(r"[a-z0-9-]+", name):
+        return None
+    where = kernel_cache_dir()
+    if where is None:
+        return None
+    try:
+        os.makedirs(where, exist_ok=True)
+        return open(where / f"tumble-compiling-{name}.lock", "ab")  # kept open while held
+    except OSError:
+        return None
+
+
+def hold(name: str) -> bool:
+    """Take the lock of ``name`` and keep it (until :func:`release`); waits while another process
+    holds it. False when nothing could be locked here."""
+    if name in _held:
+        return True
+    f = _open(name)
+    if f is None:
+        return False
+    try:
+        fcntl.flock(f, fcntl.LOCK_EX)
+    except BaseException:
+        f.close()
+        raise
+    _held[name] = f
+    return True
+
+
+def release(name: str) -> None:
+    """Let go of the lock of ``name`` (nothing when not held here)."""
+    f = _held.pop(name, None)
+    if f is not None:
+        try:
+            fcntl.flock(f, fcntl.LOCK_UN)
+        finally:
+            f.close()
+
+
+@contextlib.contextmanager
+def compiling(name: str) -> Iterator[None]:
+    """Around the compile (or load) of kernel ``name``: waits while another process compiles it;
+    a lock this process already holds is kept as it is."""
+    if name in _held:
+        yield
+        return
+    hold(name)
+    try:
+        yield
+    finally:
+        release(name)
+
+
+__all__ = ["RHS", "compiling", "hold", "release"]
