@@ -29,6 +29,7 @@ from numba.extending import intrinsic
 
 from analytic import fast_rhs
 from analytic.kernel.entry import Solver
+from analytic.kernel.paste import flatten
 
 A_NY, A_NFP, A_NIP, A_NWORK, A_FP, A_IP, A_WORK, A_CTX = range(8)
 N_ARGS = 8
@@ -127,7 +128,7 @@ def make(deps: int, solver: Solver = Solver.ANY):
         solver: the solve it embeds (:func:`analytic.kernel.entry.solver_of` of the scene), so a
             Gauss scene compiles no M⁻² code.
     """
-    body = _make(deps, int(solver))
+    body = flatten(_make(deps, int(solver)))
     try:
         return numba.cfunc(SIGNATURE, cache=True)(body)
     except (

@@ -37,6 +37,7 @@ from analytic.kernel.layout import (
     STATUS_OK,
     STATUS_UNSUPPORTED,
 )
+from analytic.kernel.paste import flatten
 from analytic.kernel.system import tail
 
 STATUS_NONFINITE = 3
@@ -101,7 +102,7 @@ DEPS = source_fingerprint(*KERNEL_SOURCES, _aux)
 def rhs_as(solver: Solver):
     """The compiled right-hand side embedding the solve ``solver`` (a :class:`Solver`; compiled,
     or loaded from numba's cache, on its first call); None without numba."""
-    return jit(_make(DEPS, int(solver))) if HAVE_NUMBA else None
+    return jit(flatten(_make(DEPS, int(solver)))) if HAVE_NUMBA else None
 
 
 def rhs_for(ip: np.ndarray):

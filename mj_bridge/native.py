@@ -53,6 +53,7 @@ import numpy as np
 from analytic.kernel.entry import Solver, solver_of
 from analytic.kernel.jit import HAVE_NUMBA, KERNEL_SOURCES, inline, source_fingerprint
 from analytic.kernel.layout import F_TA, F_TC, F_TFREQ, STATUS_OK
+from analytic.kernel.paste import flatten
 from mj_bridge import fast_stage
 
 if HAVE_NUMBA:
@@ -321,9 +322,9 @@ def compiled(solver: Solver = Solver.GAUSS):
         raise RuntimeError("the native controller callback is not available here")
     sig = types.void(types.voidptr, types.voidptr)
     try:
-        return cfunc(sig, nopython=True, cache=True)(_make_cb(DEPS, int(solver)))
+        return cfunc(sig, nopython=True, cache=True)(flatten(_make_cb(DEPS, int(solver))))
     except RuntimeError:  # no usable cache directory (see analytic.kernel.jit)
-        return cfunc(sig, nopython=True)(_make_cb(DEPS, int(solver)))
+        return cfunc(sig, nopython=True)(flatten(_make_cb(DEPS, int(solver))))
 
 
 def callback():

@@ -101,6 +101,72 @@ def test_pasted_code_reads_module_numbers_as_constants():
     assert "_first_at_least" in names  # inside a comparison: left to numba's own inlining
 
 
+def _scaler(k):
+    """A factory: the inline function closes over ``k`` (a number)."""
+
+    @inline
+    def scale(x):
+        if k == 2:
+            return x * k
+        return x + k
+
+    return scale
+
+
+def _closes_over_an_array():
+    table = np.arange(3.0)
+
+    @inline
+    def look(i):
+        return table[i]
+
+    return look
+
+
+_double, _plus_three, _look = _scaler(2), _scaler(3), _closes_over_an_array()
+
+
+def _uses_closures(x):
+    a = _double(x)
+    b = _plus_three(x)
+    c = _look(1)
+    return a + b + c
+
+
+def test_a_callees_closure_numbers_are_pasted_as_literals():
+    """A factory's inline function (a solve chosen by a closure constant) is pasted with its
+    closure numbers as literals; one closing over anything else is left to numba."""
+    pasted = paste.flatten(_uses_closures)
+    names = set(pasted.__code__.co_names)
+    assert "_double" not in names and "_plus_three" not in names and "k" not in names
+    assert "_look" in names
+    assert pasted.__code__.co_freevars == ()
+    for x in (0.5, -2.0, 7.0):
+        expected = numba.njit(_uses_closures)(x)
+        assert numba.njit(pasted)(x) == expected == pasted(x)
+        assert expected == x * 2 + (x + 3) + 1.0
+
+
+def _caller_of(k):
+    """A factory of callers (one per solve in the kernel): its closure value stays a closure
+    variable of the pasted function (numba's cache key hashes it)."""
+
+    def call(x):
+        y = _double(x)
+        return y + k
+
+    return call
+
+
+def test_variants_of_one_factory_share_the_pasted_code_not_their_closures():
+    first, second = _caller_of(1.0), _caller_of(10.0)
+    one, two = paste.flatten(first), paste.flatten(second)
+    assert one is not first and one.__code__ is two.__code__  # pasted, once
+    assert one.__code__.co_freevars == ("k",) and "_double" not in one.__code__.co_names
+    assert (one(2.0), two(2.0)) == (5.0, 14.0)
+    assert numba.njit(two)(2.0) == 14.0
+
+
 @functools.cache
 def _inlined_halves() -> dict[str, object]:
     """The halves compiled from the unpasted factories (numba inlines the stages), in memory."""
@@ -158,6 +224,7 @@ def test_without_source_nothing_is_pasted(monkeypatch):
     import linecache
 
     monkeypatch.setattr(linecache, "getlines", lambda *a, **k: [])
+    monkeypatch.setattr(paste, "_factories", {})  # what this process pasted already
     paste._shape.cache_clear()
     try:
         assert paste.flatten(_caller) is _caller

@@ -44,6 +44,7 @@ import numpy as np
 
 from analytic.kernel.cache_dir import APP_NAME, PACKAGE_DIR, kernel_cache_dir
 from analytic.kernel.layout import WS_LEN
+from analytic.kernel.paste import flatten
 
 
 class CacheFallbackWarning(UserWarning):
@@ -136,7 +137,7 @@ def jit_entry(factory, *also: ModuleType | str | Path):
     ``if deps < 0: return STATUS_UNSUPPORTED``, a test that is never true) so that it is a closure
     variable, which numba hashes into the cache key.
     """
-    return jit(factory(source_fingerprint(*KERNEL_SOURCES, *also)))
+    return jit(flatten(factory(source_fingerprint(*KERNEL_SOURCES, *also))))
 
 
 def cache_dir_note() -> str:

@@ -16,8 +16,9 @@ pasting on the Python syntax tree instead, once, so numba compiles one plain fun
   assign the result and break out (a return inside a loop also sets a flag that breaks the loops
   around it);
 * a callee is pasted only when it uses nothing but plain statements and expressions (no nested
-  functions, lambdas, comprehensions, ``global``, ``yield``, ``try``); any other inline call is
-  left to numba's own inlining, which gives the same code;
+  functions, lambdas, comprehensions, ``global``, ``yield``, ``try``) and closes over numbers
+  only (a factory's constants, pasted as literals); any other inline call is left to numba's
+  own inlining, which gives the same code;
 * the names of the callees' module-level numbers (the :mod:`analytic.kernel.layout` offsets, for
   example) become literal constants and constant sub-expressions are folded, as numba would have
   frozen them anyway: fewer statements to type and lower.
@@ -138,9 +139,17 @@ def _shape_of(fdef: ast.FunctionDef, fn: Callable) -> _Shape:
     return _Shape(
         params=tuple(x.arg for x in a.args),
         stored=frozenset(stored),
-        pasteable=plain and simple_args and not fn.__code__.co_freevars,
+        pasteable=plain and simple_args and _closure_numbers(fn) is not None,
         early_return=len(returns) > (1 if final else 0),
     )
+
+
+def _closure_numbers(fn: Callable) -> dict[str, Any] | None:
+    """The values of ``fn``'s closure variables by name when every one is a number (a factory's
+    constants: pasted as literals, like module numbers), else None (not pasted)."""
+    cells = fn.__closure__ or ()
+    values = dict(zip(fn.__code__.co_freevars, (c.cell_contents for c in cells), strict=True))
+    return values if all(_is_number(v) for v in values.values()) else None
 
 
 def _has_return(nodes: list[ast.stmt]) -> bool:
@@ -306,8 +315,11 @@ class _Paster:
         """How a global name of ``fn`` reads in the pasted code: a number as a constant, anything
         else as a name (aliased when the caller's globals bind the same name otherwise)."""
         fglobals = fn.__globals__
+        closure = _closure_numbers(fn) or {}
 
         def resolve(name: str) -> ast.expr:
+            if name in closure:  # a callee's closure constant (the caller keeps its own cells)
+                return ast.Constant(closure[name])
             if name not in fglobals:
                 if not hasattr(builtins, name):
                     raise NameError(f"{fn.__qualname__}: {name} is not defined")
@@ -361,11 +373,36 @@ def flatten(fn: Callable) -> Callable:
     """``fn`` with every pasteable inline call in its body replaced by the callee's code (module
     docstring), as a new function of the same name, closure values and source file (numba's cache
     keys on the file). Returns ``fn`` itself when there is nothing to paste, or when its source
-    is not available (:class:`NoSource`)."""
+    is not available (:class:`NoSource`).
+
+    The pasted code depends only on ``fn``'s code and globals, not on its closure values (they
+    stay closure variables), so the variants a factory makes (one per solve) are pasted once per
+    process and each gets its own closure."""
+    key = (fn.__code__, id(fn.__globals__))
+    if key not in _factories:
+        _factories[key] = _pasted_factory(fn)
+    factory = _factories[key]
+    if factory is None:
+        return fn
+    cells = [c.cell_contents for c in fn.__closure__ or ()]
+    new = factory(*cells)
+    new.__qualname__ = fn.__qualname__
+    new.__module__ = fn.__module__
+    new.__doc__ = fn.__doc__
+    return new
+
+
+_factories: dict[tuple[Any, int], Callable | None] = {}
+""":func:`flatten`'s pasted code by the original's code object (and globals)."""
+
+
+def _pasted_factory(fn: Callable) -> Callable | None:
+    """A function of ``fn``'s closure values that returns the pasted function, or None when
+    nothing is pasted (or the source is not available)."""
     try:
         fdef = _function_def(fn)
     except NoSource:
-        return fn
+        return None
     shape = _shape_of(fdef, fn)  # not cached: a factory makes a new function each time
     paster = _Paster(fn.__globals__)
     local = shape.stored | set(shape.params) | set(fn.__code__.co_freevars)
@@ -377,7 +414,7 @@ def flatten(fn: Callable) -> Callable:
     fdef = _Rewrite({}, {}, resolve).visit(fdef)  # its own numbers to constants
     fdef.body = paster.expand(fdef.body)
     if paster.pasted == 0:
-        return fn
+        return None
     free = fn.__code__.co_freevars
     where = {"lineno": fdef.lineno, "col_offset": 0, "end_lineno": fdef.lineno, "end_col_offset": 0}
     factory = ast.FunctionDef(
@@ -396,12 +433,7 @@ def flatten(fn: Callable) -> Callable:
     module = ast.Module([factory], type_ignores=[])  # every node pasted or made has a location
     namespace = paster.globals
     exec(compile(module, fn.__code__.co_filename, "exec"), namespace)
-    cells = [c.cell_contents for c in fn.__closure__ or ()]
-    new = namespace.pop("_pasted_factory")(*cells)
-    new.__qualname__ = fn.__qualname__
-    new.__module__ = fn.__module__
-    new.__doc__ = fn.__doc__
-    return new
+    return namespace.pop("_pasted_factory")
 
 
 __all__ = ["NoSource", "flatten", "is_inline"]
