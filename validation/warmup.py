@@ -24,6 +24,11 @@ would otherwise print nothing while it compiles and then sit at its first percen
    * then each plant for one output interval (the MuJoCo plant in the helper), which finds
      everything on disk and compiles whatever else its settings need.
 
+   Around a run of both the MuJoCo and the analytic plant (:func:`warming`, what ``tumble
+   validate`` uses) the analytic plant's own stages are left to the helper instead: it compiles
+   the rates and the right-hand side after stages 1-6 while the plants already run, holding their
+   compile lock (:mod:`analytic.kernel.compile_lock`) so that the analytic plant waits for them.
+
    numba holds the GIL while it compiles, so threads would not overlap; a second process does, and
    it leaves its result in the on-disk cache, where this process loads it. Used when two CPUs are
    free to this process and the cache is writable (otherwise everything is compiled here, in
@@ -435,10 +440,10 @@ started meanwhile waits for its result: the name in :mod:`analytic.kernel.compil
 
 
 def _helper_main() -> None:  # pragma: no cover - runs in the helper process
-    """The helper process: import the kernel's modules, read ``(scene, engine, first, held)`` (pickled)
-    from stdin (an empty line: nothing to do), compile each
-    stage named in ``first`` (:data:`HELPER_STAGES`) at once, printing each one's time as one JSON
-    line; then, for an engine, wait for the ``go`` line (what the engine's plant embeds is on
+    """The helper process: import the kernel's modules, read ``(scene, engine, first, held)``
+    (pickled) from stdin (an empty line: nothing to do), take the compile locks of the stages in
+    ``held``, compile each stage named in ``first`` (:data:`HELPER_STAGES`) at once, printing each
+    one's time as one JSON line (a held lock is let go as its stage ends); then, for an engine, wait for the ``go`` line (what the engine's plant embeds is on
     disk by then), run its plant for one interval (:func:`compile_plant`) and print its time."""
     import json
     import pickle
@@ -649,10 +654,13 @@ class _Warmup:
         self.cached = True
         self.deferred = False  # the helper still compiles the analytic plant's stages
 
-    def report(self, st: StageTime) -> None:
+    def report(self, st: StageTime, after_run: bool = False) -> None:
         self.stages.append(st)
         where = "" if st.where == "here" else f" ({st.where})"
-        tail = f"; it will compile in the run instead ({st.error})" if st.error else ""
+        instead = (
+            "the run compiled it instead" if after_run else "it will compile in the run instead"
+        )
+        tail = f"; {instead} ({st.error})" if st.error else ""
         self.say(f"  {st.title}: {st.seconds:.1f} s{where}{tail}")
 
     def run(self, overlap: bool) -> WarmupResult:
@@ -741,7 +749,7 @@ class _Warmup:
         if not self.deferred:
             return
         while self.helper.first:
-            self.report(self.helper.next())
+            self.report(self.helper.next(), after_run=True)
         self._stamp()
 
     def _stamp(self) -> None:
