@@ -321,10 +321,11 @@ def compiled(solver: Solver = Solver.GAUSS):
     if not available():
         raise RuntimeError("the native controller callback is not available here")
     sig = types.void(types.voidptr, types.voidptr)
+    cb = flatten(_make_cb(DEPS, int(solver)))
     try:
-        return cfunc(sig, nopython=True, cache=True)(flatten(_make_cb(DEPS, int(solver))))
+        return cfunc(sig, nopython=True, cache=True)(cb)
     except RuntimeError:  # no usable cache directory (see analytic.kernel.jit)
-        return cfunc(sig, nopython=True)(flatten(_make_cb(DEPS, int(solver))))
+        return cfunc(sig, nopython=True)(cb)
 
 
 def callback():

@@ -100,3 +100,26 @@ def test_only_plain_names_make_lock_files(cache_dir):
     assert sorted(p.name for p in cache_dir.iterdir()) == [
         f"tumble-compiling-{compile_lock.RHS}.lock"
     ]
+
+
+@pytest.mark.skipif(not hasattr(os, "fork"), reason="no fork")
+def test_a_forked_child_does_not_inherit_the_holders_lock(cache_dir):
+    """A worker forked while this process holds the lock holds nothing itself: the lock stays
+    taken (by the parent) and the child would wait for it like any other process."""
+    assert compile_lock.hold(compile_lock.RHS)
+    pid = os.fork()
+    if pid == 0:  # pragma: no cover - the child
+        code = 1
+        try:
+            f = open(cache_dir / f"tumble-compiling-{compile_lock.RHS}.lock", "ab")
+            try:
+                compile_lock.fcntl.flock(f, compile_lock.fcntl.LOCK_EX | compile_lock.fcntl.LOCK_NB)
+            except BlockingIOError:
+                code = 0 if not compile_lock._held else 2
+        finally:
+            os._exit(code)
+    _, status = os.waitpid(pid, 0)
+    assert os.waitstatus_to_exitcode(status) == 0
+    compile_lock.release(compile_lock.RHS)
+    with compile_lock.compiling(compile_lock.RHS):  # the child's copy did not keep it either
+        pass

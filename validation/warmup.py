@@ -434,16 +434,12 @@ HELPER_STAGES: dict[str, Callable[[Scene], None]] = {
 }
 """What the helper process can compile before the ``go`` line, by :data:`TITLES` key."""
 
-HELD_LOCKS = {"rhs": "RHS"}
-"""Stages whose compile lock the helper can hold from the moment it gets its job, so that a plant
-started meanwhile waits for its result: the name in :mod:`analytic.kernel.compile_lock`."""
-
 
 def _helper_main() -> None:  # pragma: no cover - runs in the helper process
     """The helper process: import the kernel's modules, read ``(scene, engine, first, held)``
-    (pickled) from stdin (an empty line: nothing to do), take the compile locks of the stages in
+    (pickled) from stdin (an empty line: nothing to do), take the compile locks named in
     ``held``, compile each stage named in ``first`` (:data:`HELPER_STAGES`) at once, printing each
-    one's time as one JSON line (a held lock is let go as its stage ends); then, for an engine, wait for the ``go`` line (what the engine's plant embeds is on
+    one's time as one JSON line (the locks are let go as the last stage ends); then, for an engine, wait for the ``go`` line (what the engine's plant embeds is on
     disk by then), run its plant for one interval (:func:`compile_plant`) and print its time."""
     import json
     import pickle
@@ -464,13 +460,13 @@ def _helper_main() -> None:  # pragma: no cover - runs in the helper process
     scene, engine, first, held = pickle.loads(sys.stdin.buffer.read(size))
     from analytic.kernel import compile_lock
 
-    locks = {name: getattr(compile_lock, HELD_LOCKS[name]) for name in held}
-    for lock in locks.values():  # before anything else: a plant that needs it waits for it
+    for lock in held:  # before anything else: a plant that needs one waits for it
         compile_lock.hold(lock)
     for name in first:
         st = _timed(TITLES[name], lambda name=name: HELPER_STAGES[name](scene), "helper process")
-        if name in locks:
-            compile_lock.release(locks[name])
+        if name == first[-1]:  # what the held locks guard is compiled
+            for lock in held:
+                compile_lock.release(lock)
         print(json.dumps(dataclasses.asdict(st)), flush=True)
     if engine is None:
         return
@@ -511,8 +507,8 @@ class _Helper:
         self, scene: Scene, engine: str | None, first: Sequence[str], held: Sequence[str] = ()
     ) -> None:
         """The job: compile the stages named in ``first`` now, then ``engine``'s plant after
-        :meth:`go` (None: no plant); ``held``: stages of ``first`` whose compile lock it takes
-        at once (:data:`HELD_LOCKS`)."""
+        :meth:`go` (None: no plant); ``held``: compile locks (:mod:`analytic.kernel.
+        compile_lock`) it takes at once and keeps until the last of ``first`` is compiled."""
         import pickle
 
         self.engine, self.first = engine, list(first)
@@ -700,7 +696,9 @@ class _Warmup:
         )
         if concurrent:
             if deferred:  # locked at once: the analytic plant's run waits for the helper's result
-                helper.send(scene, None, ["system", "aux", "rhs"], held=["rhs"])
+                from analytic.kernel import compile_lock
+
+                helper.send(scene, None, ["system", "aux", "rhs"], held=[compile_lock.RHS])
             else:
                 # the right-hand side embeds the rates: they are compiled here first, long before
                 # the helper is done with stages 1-6 (were they not on disk, it would compile them)

@@ -32,6 +32,23 @@ RHS = "compiled-rhs"
 """The analytic plant's compiled right-hand side (:func:`analytic.compiled_stepping.prepare`)."""
 
 _held: dict[str, IO[bytes]] = {}
+"""The locks this process holds. A process forked meanwhile (a worker of
+:mod:`validation.workers`) closes its copies at once: it holds none of them itself (so it waits
+like any other process), and an ``flock`` lives while any copy of its file is open (as for the
+output directories' locks, :mod:`validation.outputs`)."""
+
+
+def _forget_held() -> None:  # pragma: no cover - in a forked child
+    for f in _held.values():
+        try:
+            f.close()
+        except OSError:
+            pass
+    _held.clear()
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_forget_held)
 
 
 def _open(name: str) -> IO[bytes] | None:
