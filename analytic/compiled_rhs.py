@@ -29,6 +29,7 @@ from numba.extending import intrinsic
 
 from analytic import fast_rhs
 from analytic.kernel.entry import Solver
+from analytic.kernel.jit import LeanCompiler
 from analytic.kernel.paste import flatten
 
 A_NY, A_NFP, A_NIP, A_NWORK, A_FP, A_IP, A_WORK, A_CTX = range(8)
@@ -130,11 +131,11 @@ def make(deps: int, solver: Solver = Solver.ANY):
     """
     body = flatten(_make(deps, int(solver)))
     try:
-        return numba.cfunc(SIGNATURE, cache=True)(body)
+        return numba.cfunc(SIGNATURE, cache=True, pipeline_class=LeanCompiler)(body)
     except (
         RuntimeError
     ):  # no usable cache directory: compiled in memory (as analytic.kernel.jit.jit)
-        return numba.cfunc(SIGNATURE)(body)
+        return numba.cfunc(SIGNATURE, pipeline_class=LeanCompiler)(body)
 
 
 __all__ = ["N_ARGS", "N_CTX", "SIGNATURE", "make"]

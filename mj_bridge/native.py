@@ -51,7 +51,13 @@ import mujoco
 import numpy as np
 
 from analytic.kernel.entry import Solver, solver_of
-from analytic.kernel.jit import HAVE_NUMBA, KERNEL_SOURCES, inline, source_fingerprint
+from analytic.kernel.jit import (
+    HAVE_NUMBA,
+    KERNEL_SOURCES,
+    LeanCompiler,
+    inline,
+    source_fingerprint,
+)
 from analytic.kernel.layout import F_TA, F_TC, F_TFREQ, STATUS_OK
 from analytic.kernel.paste import flatten
 from mj_bridge import fast_stage
@@ -323,9 +329,9 @@ def compiled(solver: Solver = Solver.GAUSS):
     sig = types.void(types.voidptr, types.voidptr)
     cb = flatten(_make_cb(DEPS, int(solver)))
     try:
-        return cfunc(sig, nopython=True, cache=True)(cb)
+        return cfunc(sig, nopython=True, cache=True, pipeline_class=LeanCompiler)(cb)
     except RuntimeError:  # no usable cache directory (see analytic.kernel.jit)
-        return cfunc(sig, nopython=True)(cb)
+        return cfunc(sig, nopython=True, pipeline_class=LeanCompiler)(cb)
 
 
 def callback():

@@ -166,10 +166,10 @@ if HAVE_NUMBA:
         if ip[I_FN_SYSTEM] == 0 or ip[I_FN_SOLVE] == 0:
             return STATUS_UNSUPPORTED
         w = workspace()
-        q = np.ascontiguousarray(q)  # a view (no copy) unless the caller's slice is strided
-        qd = np.ascontiguousarray(qd)
-        call_system(ip[I_FN_SYSTEM], t, q, qd, fp, ip, out, full, w)
-        return call_solve(ip[I_FN_SOLVE], q, fp, ip, out, w, full)
+        qc = np.ascontiguousarray(q)  # a view (no copy) unless the caller's slice is strided
+        qdc = np.ascontiguousarray(qd)  # (new names: a name has one type, jit.LeanCompiler)
+        call_system(ip[I_FN_SYSTEM], t, qc, qdc, fp, ip, out, full, w)
+        return call_solve(ip[I_FN_SOLVE], qc, fp, ip, out, w, full)
 
 else:  # pragma: no cover - without numba nothing calls the compiled halves
     SYSTEM_SIG = SOLVE_SIG = None

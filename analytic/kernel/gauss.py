@@ -11,7 +11,7 @@ them at once, and every caller calls them by address (:mod:`analytic.kernel.abi`
 
 from __future__ import annotations
 
-from analytic.kernel.abi import arrays, call_halves
+from analytic.kernel.abi import call_halves
 from analytic.kernel.bordered import bordered_solve
 from analytic.kernel.jit import inline, jit_entry
 from analytic.kernel.layout import (
@@ -107,9 +107,10 @@ def make_solve_gauss(deps: int):
     compiles it once (a first run: in one process while another compiles stages 1-6,
     :mod:`validation.warmup`)."""
 
-    def solve_gauss(q_p, fp_p, ip_p, out_p, len_out, w_p, full):
+    def solve_gauss(q, fp, ip, out, len_out, w, full):
         """Stages 7-9 (Gauss): the Schur complement, the bordered solve and the control outputs,
-        from what stages 1-6 wrote into ``w`` and ``out``.
+        from what stages 1-6 wrote into ``w`` and ``out``, indexing the C pointers themselves (see
+        :func:`analytic.kernel.system.make_build_system`).
 
         Returns:
             ``STATUS_NOT_PD`` when a Schur complement or the bordered Gram matrix is not
@@ -117,7 +118,6 @@ def make_solve_gauss(deps: int):
         """
         if deps < 0:  # never true: ties numba's cache key to the kernel's sources
             return STATUS_UNSUPPORTED
-        q, fp, ip, out, w = arrays(q_p, fp_p, ip_p, out_p, len_out, w_p)
         n = ip[I_N] & IX
         kw = ip[I_KW] & IX
         kp = ip[I_KP] & IX

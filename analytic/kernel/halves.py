@@ -30,6 +30,7 @@ from analytic.kernel.jit import (
     HAVE_NUMBA,
     KERNEL_SOURCES,
     CacheFallbackWarning,
+    LeanCompiler,
     source_fingerprint,
 )
 from analytic.kernel.paste import flatten
@@ -49,7 +50,13 @@ def _callback(pyfunc, sig):
     from numba.core import sigutils
     from numba.core.ccallback import CFunc
 
-    cf = CFunc(pyfunc, sigutils.normalize_signature(sig), locals={}, options={})
+    cf = CFunc(
+        pyfunc,
+        sigutils.normalize_signature(sig),
+        locals={},
+        options={},
+        pipeline_class=LeanCompiler,
+    )
     try:
         cf.enable_caching()
     except RuntimeError:  # no usable cache directory: compiled in memory (as jit.jit says once)

@@ -138,9 +138,9 @@ def make_solve_minv2(deps: int):
         for j in range(kp):
             bc[kw + j] = out[7 + ip[iidx + j]]
         Hm = np.empty((3, 4))  # H(u), Eq. (13), as kinematics.kinematic_terms wrote it
-        for r in range(3):
+        for row in range(3):
             for c in range(4):
-                Hm[r, c] = w[WS_H + 4 * r + c]
+                Hm[row, c] = w[WS_H + 4 * row + c]
         Hw = np.empty((kw, 4))
         for j in range(kw):
             for c in range(4):

@@ -8,16 +8,12 @@ follows is the weighting's: :mod:`analytic.kernel.gauss` or :mod:`analytic.kerne
 
 from __future__ import annotations
 
-from analytic.kernel.abi import arrays, tail
+from analytic.kernel.abi import tail
 from analytic.kernel.constraints import control_rows, modeling_row
 from analytic.kernel.forces import body_forces, rod_pass
-from analytic.kernel.jit import HAVE_NUMBA
 from analytic.kernel.kinematics import kinematic_terms
 from analytic.kernel.layout import I_KP, I_KW, I_N, IX
 from analytic.kernel.mass_matrix import body_block
-
-if HAVE_NUMBA:
-    from numba import carray
 
 
 def make_build_system(deps: int):
@@ -25,18 +21,18 @@ def make_build_system(deps: int):
     the kernel's source fingerprint ``deps`` (numba hashes closure variables into its cache key, so
     an edit of any kernel file recompiles it). :mod:`analytic.kernel.halves` compiles it once."""
 
-    def build_system(t, q_p, qd_p, fp_p, ip_p, out_p, len_out, full, w_p):
+    def build_system(t, q, qd, fp, ip, out, len_out, full, w):
         """Stages 1-6 (kinematics Eqs. 11-34; Q rod rows Eq. 52 and springs Eq. 38; M Eq. 51; Q
         body rows Eq. 52, 61; b_m and M_α Eq. 59; b_c Eqs. 81, 86) into ``w`` and the rod rows of
         ``out``. ``full`` (0/1): whether ``out`` holds the whole output (a tracked mass's ``Q_i``
         then goes to its ``Q^C_i`` slot).
 
         :mod:`analytic.kernel.halves` compiles it with the stages pasted in at the source level
-        (:func:`analytic.kernel.paste.flatten`)."""
+        (:func:`analytic.kernel.paste.flatten`). The stages index the C pointers themselves (no
+        array is built around them): numba compiles a pointer's index as one address and one
+        load, an array's with its checks and wraparound, several times the compile work."""
         if deps < 0:  # never true: ties numba's cache key to the kernel's sources
             return
-        q, fp, ip, out, w = arrays(q_p, fp_p, ip_p, out_p, len_out, w_p)
-        qd = carray(qd_p, q.shape)
         on = full != 0
         n = ip[I_N] & IX
         kw = ip[I_KW] & IX
