@@ -266,6 +266,9 @@ def test_first_run_compiles_once_and_says_so(tmp_path):
     In the default suite (about 15 s) although it compiles everything: a warm run that warmed up
     again, announcing it each time, once went unnoticed while this test was marked slow."""
     env = _env(NUMBA_CACHE_DIR=str(tmp_path / "numba_cache"))
+    before = _cold_probe(env)
+    # the kernel's halves are seen cold without importing any plant (the full check is skipped)
+    assert before == {"halves": ["absent", "absent"], "imported": []}, before
     first = _validate(tmp_path, env, timeout=1800)
     assert first.returncode == 0, first.stderr
     lines = first.stderr.splitlines()
@@ -284,19 +287,36 @@ def test_first_run_compiles_once_and_says_so(tmp_path):
     second = _validate(tmp_path, env, timeout=600)
     assert second.returncode == 0, second.stderr
     assert "compiling" not in second.stderr and "kernels ready" not in second.stderr
-    check = subprocess.run(  # the check itself, without the stamp, finds every kernel on disk
-        [sys.executable, "-c", COLD_PROBE], capture_output=True, text=True, env=env, timeout=600
+    after = _cold_probe(env, every_engine=True)  # the checks themselves, without the stamp
+    assert after == {"halves": ["cached", "cached"], "cold": []}, after
+
+
+def _cold_probe(env: dict[str, str], every_engine: bool = False) -> dict:
+    proc = subprocess.run(
+        [sys.executable, "-c", COLD_PROBE, "1" if every_engine else ""],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=600,
     )
-    assert check.returncode == 0, check.stderr
-    assert json.loads(check.stdout.splitlines()[-1]) == [], check.stdout
+    assert proc.returncode == 0, proc.stderr
+    return json.loads(proc.stdout.splitlines()[-1])
 
 
 COLD_PROBE = """
-import json
-from mj_bridge.plants import installed_plants
+import json, sys
 from validation import warmup
+from validation.scenes import DEFAULT_VALIDATE_SCENE, resolve_scene
 
-print(json.dumps(list(warmup.cold_engines([p.value for p in installed_plants()]))))
+got = {"halves": [s.value for s in warmup.kernel_halves_state(resolve_scene(DEFAULT_VALIDATE_SCENE))]}
+if sys.argv[1]:
+    from mj_bridge.plants import installed_plants
+
+    got["cold"] = list(warmup.cold_engines([p.value for p in installed_plants()]))
+else:  # nothing but the kernel was imported to tell
+    got["imported"] = sorted(m for m in ("mujoco", "mj_bridge.native") if m in sys.modules)
+    assert not got["imported"], got
+print(json.dumps(got))
 """
 
 

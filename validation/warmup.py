@@ -7,9 +7,11 @@ would otherwise print nothing while it compiles and then sit at its first percen
 
 :func:`warm_up` (called by ``tumble validate`` before the plants run):
 
-1. finds the kernels whose cache is cold (:func:`cold_engines`): numba's own index of each compiled
-   function of the plants' modules is read (:func:`cache_state`), nothing is compiled; when every
-   one is cached it returns at once, silently;
+1. finds the kernels whose cache is cold: first the kernel's two halves
+   (:func:`kernel_halves_state`, importing nothing but the kernel); when they are cold so is every
+   plant (each embeds the kernel), otherwise numba's own index of each compiled function of the
+   plants' modules is read (:func:`cold_engines`, :func:`cache_state`). Nothing is compiled to
+   tell; when every one is cached it returns at once, silently;
 2. otherwise says what it compiles and that it happens once per machine, then compiles each cold
    stage by calling the plants' public entry points (:class:`analytic.fast.FastModel`, each plant's
    ``simulate`` for one output interval), reporting each stage with its wall time:
@@ -340,6 +342,24 @@ def stamp_warm(key: str) -> None:
         pass
 
 
+def kernel_halves_state(scene: Scene) -> list[CacheState] | None:
+    """What numba's disk cache holds for the two halves of the kernel ``scene`` evaluates
+    (:mod:`analytic.kernel.halves`: stages 1-6 and the scene's solve), read without compiling;
+    None without numba. Imports only the kernel."""
+    try:
+        from analytic.kernel import halves
+    except ImportError:  # pragma: no cover - numba is a dependency
+        return None
+    if halves.SYSTEM is None:  # pragma: no cover - without numba nothing is compiled
+        return None
+    from analytic.effects import Weighting
+
+    minv2_solve = scene.controlled and scene.control.weighting is Weighting.M_INV2
+    return [
+        cache_state(halves.callback(h, minv2_solve)) for h in (halves.KernelHalf.SYSTEM, "solve")
+    ]
+
+
 def cache_writable(engines: Sequence[str]) -> bool:
     """Whether numba keeps these engines' compiled code on disk (a writable cache directory)."""
     from numba.core.caching import Cache
@@ -661,13 +681,21 @@ class _Warmup:
 
     def run(self, overlap: bool) -> WarmupResult:
         scene, helper, report = self.scene, self.helper, self.report
-        cold = cold_engines(self.engines)
+        # every plant embeds the analytic kernel: when its halves are cold, so is every plant
+        # (each caller's cache key holds the kernel's fingerprint), and the full check, which
+        # imports every plant's modules, would only delay the compile on the critical path
+        halves_state = kernel_halves_state(scene)
+        kernel_cold = halves_state is not None and engine_is_cold(halves_state)
+        cold = tuple(self.engines) if kernel_cold else cold_engines(self.engines)
         if not cold:
             stamp_warm(self.key)
             return WarmupResult()
-        self.cached = cached = cache_writable(cold)
-        # every plant embeds the analytic kernel: compiled first, whichever plants run
-        kernel_cold = ANALYTIC in cold or bool(cold_engines([ANALYTIC]))
+        if kernel_cold:
+            cached = CacheState.NO_CACHE not in halves_state
+        else:
+            cached = cache_writable(cold)
+            kernel_cold = ANALYTIC in cold or bool(cold_engines([ANALYTIC]))
+        self.cached = cached
         rest = list(cold)
         concurrent = bool(self.concurrent and cached and helper is not None)
         split = concurrent and kernel_cold  # the kernel's two halves compiled at once
@@ -768,6 +796,7 @@ __all__ = [
     "compile_plant",
     "engine_is_cold",
     "is_stamped_warm",
+    "kernel_halves_state",
     "stamp_warm",
     "warm_key",
     "warm_up",
