@@ -85,6 +85,7 @@ _in_memory_said = False
 if HAVE_NUMBA:
     from numba.core import typed_passes, untyped_passes
     from numba.core.compiler import CompilerBase, DefaultPassBuilder
+    from numba.core.compiler_machinery import PassManager
 
     LEAN_DROPPED = (
         untyped_passes.WithLifting,
@@ -105,20 +106,22 @@ if HAVE_NUMBA:
         without SSA reconstruction, passed as numba's documented ``pipeline_class``.
 
         Why: numba's compile time grows with the statements of a function, and these passes
-        each walk all of them; on the kernel's two halves they were about half of a first
-        compile (measured with numba 0.68: the Gauss solve 2.9 -> 1.5 s, stages 1-6 3.0 ->
-        1.8 s). What is left types, lowers and optimises the same statements, so the machine
-        code does the same arithmetic in the same order (the tests compare the compiled kernel
-        with the numpy model and with numba's own inlining bit for bit where they did before).
+        each walk all of them; on the kernel's two halves they were a third to a half of a
+        first compile (measured with numba 0.68). What is left types, lowers and optimises the
+        same statements, so the machine code does the same arithmetic in the same order
+        (``tests/test_fast.py`` compiles the halves with numba's default pipeline too and
+        compares every output bit for bit).
 
         Without SSA a variable has one type in a function: code compiled this way must not reuse
         a name for values of two types (numba says so at compile time, never silently)."""
 
         def define_pipelines(self):
             self.state.flags.enable_ssa = False
-            pm = DefaultPassBuilder.define_nopython_pipeline(self.state)
-            pm.passes = [p for p in pm.passes if p[0] not in LEAN_DROPPED]
-            pm._finalized = False
+            default = DefaultPassBuilder.define_nopython_pipeline(self.state)
+            pm = PassManager("lean")
+            for pass_class, description in default.passes:
+                if pass_class not in LEAN_DROPPED:
+                    pm.add_pass(pass_class, description)
             pm.finalize()
             return [pm]
 
