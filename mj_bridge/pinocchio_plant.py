@@ -56,6 +56,7 @@ from analytic import aux_rates as _aux
 from analytic.assemble import N_AUX, assemble
 from analytic.effects import Effect
 from analytic.fast import FastModel
+from analytic.kernel import compile_lock
 from analytic.kernel.entry import Solver, evaluate_as, solver_of
 from analytic.kernel.jit import KERNEL_SOURCES, jit, source_fingerprint
 from analytic.kernel.kinematics import rotation
@@ -74,6 +75,7 @@ from analytic.kernel.layout import (
     STATUS_OK,
     STATUS_UNSUPPORTED,
 )
+from analytic.kernel.paste import flatten
 from analytic.kernel.system import tail
 from analytic.model import ControlOutput, TumblingModel
 from analytic.scene import OutputSettings, Scene
@@ -306,9 +308,9 @@ def _finish(acc, work, ydot):  # pragma: no cover - compiled
 
 
 DEPS = source_fingerprint(*KERNEL_SOURCES, _aux)
-stage_gauss = jit(_make_stage(DEPS, int(Solver.GAUSS)))
-stage_minv2 = jit(_make_stage(DEPS, int(Solver.MINV2)))
-stage = jit(_make_stage(DEPS, int(Solver.ANY)))  # any scene: both solves compiled in
+stage_gauss = jit(flatten(_make_stage(DEPS, int(Solver.GAUSS))))
+stage_minv2 = jit(flatten(_make_stage(DEPS, int(Solver.MINV2))))
+stage = jit(flatten(_make_stage(DEPS, int(Solver.ANY))))  # any scene: both solves compiled in
 
 
 def stage_for(ip: np.ndarray):
@@ -433,6 +435,21 @@ class PinocchioDynamics:
 
         return f
 
+    def compile(self) -> None:
+        """Compile (or load from numba's cache) the compiled stage and copy for the argument types
+        :attr:`rhs` passes them, without running them (nothing when the compiled controller is
+        not used)."""
+        if not self.fast.compiled:
+            return
+        import numba
+
+        ydot = np.empty(self.ny)
+        if not self._numpy_each_stage:
+            args = (0.0, self.initial_state(), self.fp, self.ip, self.work, ydot, self._mode)
+            self._kernel_stage.compile(tuple(numba.typeof(a) for a in args))
+        acc = self.pin.aba(self.model, self.data, self._qpin, self._vpin, self._tau)
+        finish.compile(tuple(numba.typeof(a) for a in (acc, self.work, ydot)))
+
     # -- one state, paper coordinates -------------------------------------------------------
 
     def pinocchio_state(self) -> tuple[np.ndarray, np.ndarray]:
@@ -504,7 +521,9 @@ def simulate(
     settings = settings or PinocchioSettings()
     if t_end is not None and not (math.isfinite(t_end) and t_end > 0):
         raise ValueError(f"t_end: must be a positive time in s (got {t_end!r})")
-    plant = PinocchioDynamics(scene, settings.controller)
+    with compile_lock.compiling(compile_lock.PINOCCHIO):  # a first run's helper may be at it
+        plant = PinocchioDynamics(scene, settings.controller)
+        plant.compile()
     rtol, atol, max_step = settings.resolved(scene)
     out = scene.output if t_end is None else OutputSettings(t_end=t_end, rate=scene.output.rate)
     run = step_and_sample(

@@ -392,3 +392,33 @@ def test_the_compiling_helper_imports_this_copy_not_the_working_directorys(tmp_p
     finally:
         helper.stop()
     assert st.error == "", st.error
+
+
+def test_a_helper_result_written_before_the_last_stage_is_read_is_not_lost():
+    """The helper prints one JSON line per stage; when all of them are in the pipe before the
+    parent reads the first (the plants ran meanwhile), reading one line buffers the rest, and the
+    engine's result must come from that buffer, not be reported as a helper failure."""
+    import dataclasses
+    import time
+
+    lines = [
+        warmup.StageTime("rates", 0.5, "helper process"),
+        warmup.StageTime("the Pinocchio stage", 2.0, "helper process"),
+    ]
+    code = "import sys; sys.stdout.write(sys.argv[1]); sys.stdout.flush()"
+    text = "".join(json.dumps(dataclasses.asdict(st)) + "\n" for st in lines)
+    helper = warmup._Helper.__new__(warmup._Helper)
+    helper.proc = subprocess.Popen(
+        [sys.executable, "-c", code, text],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+    )
+    helper.first, helper.engine = ["aux"], warmup.PINOCCHIO
+    try:
+        helper.proc.wait(timeout=60)  # both lines are in the pipe before the first is read
+        time.sleep(0.1)
+        got = [helper.next(), helper.result()]
+    finally:
+        helper.stop()
+    assert got == lines

@@ -483,11 +483,15 @@ def _helper_main() -> None:  # pragma: no cover - runs in the helper process
 
     for lock in held:  # before anything else: a plant that needs one waits for it
         compile_lock.hold(lock)
+
+    def compiled(name: str) -> None:  # what the locks held until ``name`` guard is on disk
+        for lock, until in held.items():
+            if until == name:
+                compile_lock.release(lock)
+
     for name in first:
         st = _timed(TITLES[name], lambda name=name: HELPER_STAGES[name](scene), "helper process")
-        if name == first[-1]:  # what the held locks guard is compiled
-            for lock in held:
-                compile_lock.release(lock)
+        compiled(name)
         print(json.dumps(dataclasses.asdict(st)), flush=True)
     if engine is None:
         return
@@ -495,6 +499,7 @@ def _helper_main() -> None:  # pragma: no cover - runs in the helper process
     if sys.stdin.buffer.readline().strip() != b"go":
         return
     st = _timed(TITLES[engine], lambda: compile_plant(scene, engine), where="helper process")
+    compiled(engine)
     print(json.dumps(dataclasses.asdict(st)), flush=True)
 
 
@@ -525,15 +530,20 @@ class _Helper:
         )
 
     def send(
-        self, scene: Scene, engine: str | None, first: Sequence[str], held: Sequence[str] = ()
+        self,
+        scene: Scene,
+        engine: str | None,
+        first: Sequence[str],
+        held: dict[str, str] | None = None,
     ) -> None:
         """The job: compile the stages named in ``first`` now, then ``engine``'s plant after
         :meth:`go` (None: no plant); ``held``: compile locks (:mod:`analytic.kernel.
-        compile_lock`) it takes at once and keeps until the last of ``first`` is compiled."""
+        compile_lock`) it takes at once, each kept until the stage (of ``first``, or the engine)
+        it maps to is compiled."""
         import pickle
 
         self.engine, self.first = engine, list(first)
-        data = pickle.dumps((scene, engine, self.first, tuple(held)))
+        data = pickle.dumps((scene, engine, self.first, dict(held or {})))
         try:
             self.proc.stdin.write(b"%d\n" % len(data) + data)
             self.proc.stdin.flush()
@@ -561,11 +571,14 @@ class _Helper:
     def result(self) -> StageTime:
         import json
 
-        self.proc.stdin = None  # closed by go(); communicate() would flush it
-        out, err = self.proc.communicate()
+        # read through the same buffered pipe as next(): a line the helper wrote early may
+        # already sit in its buffer (communicate() would read past it, from the descriptor)
+        line = self.proc.stdout.readline()
+        err = b"" if line.strip() else self.proc.stderr.read()
+        self.proc.wait()
         try:
-            return StageTime(**json.loads(out.decode().strip().splitlines()[-1]))
-        except (ValueError, IndexError, TypeError):
+            return StageTime(**json.loads(line.decode()))
+        except (ValueError, TypeError):
             why = (err.decode(errors="replace").strip().splitlines() or ["no output"])[-1]
             title = TITLES[self.engine] if self.engine else TITLES["system"]
             return StageTime(title, 0.0, "helper process", f"helper failed: {why}")
@@ -714,8 +727,12 @@ class _Warmup:
         )
         rates_here = split and ANALYTIC in rest and not deferred
         beside = ["the kernel's stages 1-6"] if split else []
+        # with Pinocchio too, its stage is the helper's last job, also while the plants start
+        pin_beside = deferred and PINOCCHIO in rest
         if deferred:
-            beside += ["the analytic plant's rates and right-hand side, while the plants start"]
+            beside += ["the analytic plant's rates and right-hand side"]
+            beside += ["the Pinocchio stage"] if pin_beside else []
+            beside[-1] += ", while the plants start"
         elif split and ANALYTIC in rest:
             beside += ["the analytic plant's right-hand side"]
         beside += ["the MuJoCo plant's first interval"] if engine_beside else []
@@ -724,10 +741,14 @@ class _Warmup:
             f"compiling the fast kernels ({how}; ~{EXPECTED_COLD_S} s): {', '.join(names)}{where}"
         )
         if concurrent:
-            if deferred:  # locked at once: the analytic plant's run waits for the helper's result
+            if deferred:  # locked at once: the plants' runs wait for the helper's results
                 from analytic.kernel import compile_lock
 
-                helper.send(scene, None, ["system", "aux", "rhs"], held=[compile_lock.RHS])
+                held = {compile_lock.RHS: "rhs"}
+                if pin_beside:
+                    held[compile_lock.PINOCCHIO] = PINOCCHIO
+                engine = PINOCCHIO if pin_beside else None
+                helper.send(scene, engine, ["system", "aux", "rhs"], held=held)
             else:
                 # the right-hand side embeds the rates: they are compiled here first, long before
                 # the helper is done with stages 1-6 (were they not on disk, it would compile them)
@@ -747,6 +768,9 @@ class _Warmup:
             if MUJOCO in cold:
                 report(_timed(TITLES["native"], lambda: compile_native(scene)))
             report(helper.next())  # stages 1-6
+            if pin_beside:  # the kernel's halves are on disk: the Pinocchio stage may start
+                helper.go()
+                rest.remove(PINOCCHIO)
             if not deferred:
                 while helper.first:
                     report(helper.next())
@@ -762,9 +786,14 @@ class _Warmup:
             report(helper.result())
         total = time.perf_counter() - self.t0
         if deferred:
+            which = (
+                "the analytic plant's and the Pinocchio stage"
+                if pin_beside
+                else ("the analytic plant's")
+            )
             self.say(
-                f"  kernels ready in {total:.1f} s but the analytic plant's (still compiling in "
-                "the helper process; its run waits for them)"
+                f"  kernels ready in {total:.1f} s but {which} (still compiling in the helper "
+                "process; the runs that need them wait)"
             )
         else:
             self.say(f"  kernels ready in {total:.1f} s")
@@ -777,6 +806,8 @@ class _Warmup:
             return
         while self.helper.first:
             self.report(self.helper.next(), after_run=True)
+        if self.helper.engine is not None:
+            self.report(self.helper.result(), after_run=True)
         self._stamp()
 
     def _stamp(self) -> None:

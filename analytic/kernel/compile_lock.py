@@ -30,6 +30,9 @@ except ImportError:  # pragma: no cover - not POSIX
 
 RHS = "compiled-rhs"
 """The analytic plant's compiled right-hand side (:func:`analytic.compiled_stepping.prepare`)."""
+PINOCCHIO = "pinocchio-stage"
+"""The Pinocchio plant's compiled stage and copy (:meth:`mj_bridge.pinocchio_plant.
+PinocchioDynamics.compile`)."""
 
 _held: dict[str, IO[bytes]] = {}
 """The locks this process holds. A process forked meanwhile (a worker of
