@@ -29,7 +29,8 @@ would otherwise print nothing while it compiles and then sit at its first percen
    Around a run of both the MuJoCo and the analytic plant (:func:`warming`, what ``tumble
    validate`` uses) the analytic plant's own stages are left to the helper instead: it compiles
    the rates and the right-hand side after stages 1-6 while the plants already run, holding their
-   compile lock (:mod:`analytic.kernel.compile_lock`) so that the analytic plant waits for them.
+   compile lock (:mod:`analytic.kernel.compile_lock`) so that the analytic plant waits for them;
+   with Pinocchio too, the helper then compiles the Pinocchio stage, holding its lock likewise.
 
    numba holds the GIL while it compiles, so threads would not overlap; a second process does, and
    it leaves its result in the on-disk cache, where this process loads it. Used when two CPUs are
