@@ -28,13 +28,15 @@ def _make(deps: int):
         """
         if deps < 0:  # never true: ties numba's cache key to the kernel's sources
             return
-        _rates(q, qd, tau, rod, fC, a, d, m, mu0, m_T, out)
+        rates(q, qd, tau, rod, fC, a, d, m, mu0, m_T, out)
 
     return aux_rates
 
 
 @inline
-def _rates(q, qd, tau, rod, fC, a, d, m, mu0, m_T, out):  # pragma: no cover - compiled
+def rates(q, qd, tau, rod, fC, a, d, m, mu0, m_T, out):  # pragma: no cover - compiled
+    """:func:`aux_rates`'s body, pasted into compiled callers (the analytic plant's right-hand
+    side, :mod:`analytic.fast_rhs`), which then need no separately compiled function."""
     u0, u1, u2, u3 = q[3], q[4], q[5], q[6]
     v0, v1, v2, v3 = qd[3], qd[4], qd[5], qd[6]
     w0, w1, w2 = omega(u0, u1, u2, u3, v0, v1, v2, v3)  # ω = H(u) u̇, Eqs. (12)-(13)

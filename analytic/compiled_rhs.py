@@ -1,6 +1,7 @@
 """The right-hand side of the compiled loop (:mod:`analytic.compiled_stepping`): a numba ``cfunc``
 with the C signature CyRK's solver calls, ``void(double* dy, double t, double* y, double* args)``,
-around :func:`analytic.fast_rhs.rhs_into`.
+doing what :func:`analytic.fast_rhs.rhs_into` does (its body, :func:`analytic.fast_rhs.rhs_body`,
+pasted in, so no other compiled function is linked into it).
 
 It needs numba (imported here at module level); :mod:`analytic.compiled_stepping` imports this module
 only when numba is installed.
@@ -27,7 +28,7 @@ import numpy as np
 from numba import carray, types
 from numba.extending import intrinsic
 
-from analytic import fast_rhs
+from analytic.fast_rhs import rhs_body
 from analytic.kernel.entry import Solver
 from analytic.kernel.jit import LeanCompiler
 from analytic.kernel.paste import flatten
@@ -69,12 +70,6 @@ def _i64_at(typingctx, address):
     return sig, codegen
 
 
-_RHS_GAUSS = fast_rhs.rhs_as(Solver.GAUSS)
-_RHS_MINV2 = fast_rhs.rhs_as(Solver.MINV2)
-_RHS_ANY = fast_rhs.rhs_as(Solver.ANY)
-_GAUSS, _MINV2 = int(Solver.GAUSS), int(Solver.MINV2)
-
-
 def _make(deps: int, solver: int):
     """The ``cfunc`` body, closing over ``deps`` and ``solver`` (see :func:`make`)."""
 
@@ -102,13 +97,8 @@ def _make(deps: int, solver: int):
             fp = carray(_f64_at(np.int64(a[A_FP])), (np.int64(a[A_NFP]),))
             ip = carray(_i64_at(np.int64(a[A_IP])), (np.int64(a[A_NIP]),))
             work = carray(_f64_at(np.int64(a[A_WORK])), (np.int64(a[A_NWORK]),))
-            # `solver` is a constant of the closure: numba drops the other two branches
-            if solver == _GAUSS:
-                status = _RHS_GAUSS(t, y, fp, ip, work, dy)
-            elif solver == _MINV2:
-                status = _RHS_MINV2(t, y, fp, ip, work, dy)
-            else:
-                status = _RHS_ANY(t, y, fp, ip, work, dy)
+            # pasted; `solver` is a constant of the closure: numba keeps only that solve
+            status = rhs_body(solver, t, y, fp, ip, work, dy)
             if status == 0:  # the kernel's STATUS_OK
                 return
             ctx[C_STATUS] = status

@@ -23,8 +23,9 @@ import math
 import numpy as np
 
 from analytic import aux_rates as _aux
+from analytic.aux_rates import rates
 from analytic.kernel.entry import Solver, evaluate_as, solver_of
-from analytic.kernel.jit import HAVE_NUMBA, KERNEL_SOURCES, jit, source_fingerprint
+from analytic.kernel.jit import HAVE_NUMBA, KERNEL_SOURCES, inline, jit, source_fingerprint
 from analytic.kernel.layout import (
     F_MBR,
     F_MU0,
@@ -43,6 +44,47 @@ from analytic.kernel.system import tail
 STATUS_NONFINITE = 3
 
 
+@inline
+def rhs_body(solver, t, y, fp, ip, work, out):  # pragma: no cover - compiled
+    """:func:`rhs_into`'s work, pasted into it and into the stepping loop's C callback
+    (:mod:`analytic.compiled_rhs`); ``solver`` (a :class:`Solver` value) is a constant of each
+    caller, so numba keeps only that solve."""
+    n = ip[I_N]
+    kp = ip[I_KP]
+    nq = n + 7
+    q = y[:nq]
+    qd = y[nq : 2 * nq]
+    status = evaluate_as(solver, t, q, qd, fp, ip, work)  # only this solve is compiled in
+    if status != STATUS_OK:
+        return status
+    for i in range(nq):
+        out[i] = qd[i]
+        out[nq + i] = work[i]
+    tau = work[2 * nq : 2 * nq + 3]  # control torque, then + the given torque (Remark 2)
+    if ip[I_TORQ]:
+        ct = math.cos(fp[F_TFREQ] * t)
+        for r in range(3):
+            tau[r] = tau[r] + (fp[F_TC + r] + fp[F_TA + r] * ct)
+    o_m, _pe, _kl, _kn, _l, _lam, _al, _be, o_a, o_d, end = tail(n, kp)
+    rates(
+        q,
+        qd,
+        tau,
+        work[nq + 7 : 2 * nq],  # rod forces Q^C_p
+        work[nq : nq + 3],  # force at C Q^C_R
+        fp[o_a:o_d],
+        fp[o_d:end],
+        fp[o_m : o_m + n],
+        fp[F_MU0],
+        fp[F_MBR] + fp[F_MU0],  # m_T = m_BR + μ0, as TumblingModel.m_T
+        out[2 * nq :],
+    )
+    for i in range(out.shape[0]):
+        if not math.isfinite(out[i]):
+            return STATUS_NONFINITE
+    return STATUS_OK
+
+
 def _make(deps: int, solver: int):
     """``rhs_into`` closing over ``deps`` (the source fingerprint of the kernel and of
     :mod:`analytic.aux_rates`, which it embeds; see :func:`analytic.kernel.jit.jit_entry`) and the
@@ -57,40 +99,7 @@ def _make(deps: int, solver: int):
         """
         if deps < 0:  # never true: ties numba's cache key to the sources this embeds
             return STATUS_UNSUPPORTED
-        n = ip[I_N]
-        kp = ip[I_KP]
-        nq = n + 7
-        q = y[:nq]
-        qd = y[nq : 2 * nq]
-        status = evaluate_as(solver, t, q, qd, fp, ip, work)  # only this solve is compiled in
-        if status != STATUS_OK:
-            return status
-        for i in range(nq):
-            out[i] = qd[i]
-            out[nq + i] = work[i]
-        tau = work[2 * nq : 2 * nq + 3]  # control torque, then + the given torque (Remark 2)
-        if ip[I_TORQ]:
-            ct = math.cos(fp[F_TFREQ] * t)
-            for r in range(3):
-                tau[r] = tau[r] + (fp[F_TC + r] + fp[F_TA + r] * ct)
-        o_m, _pe, _kl, _kn, _l, _lam, _al, _be, o_a, o_d, end = tail(n, kp)
-        _aux.aux_rates(
-            q,
-            qd,
-            tau,
-            work[nq + 7 : 2 * nq],  # rod forces Q^C_p
-            work[nq : nq + 3],  # force at C Q^C_R
-            fp[o_a:o_d],
-            fp[o_d:end],
-            fp[o_m : o_m + n],
-            fp[F_MU0],
-            fp[F_MBR] + fp[F_MU0],  # m_T = m_BR + μ0, as TumblingModel.m_T
-            out[2 * nq :],
-        )
-        for i in range(out.shape[0]):
-            if not math.isfinite(out[i]):
-                return STATUS_NONFINITE
-        return STATUS_OK
+        return rhs_body(solver, t, y, fp, ip, work, out)
 
     return rhs_into
 

@@ -54,6 +54,7 @@ import numpy as np
 
 from analytic import aux_rates as _aux
 from analytic.assemble import N_AUX, assemble
+from analytic.aux_rates import rates
 from analytic.effects import Effect
 from analytic.fast import FastModel
 from analytic.kernel import compile_lock
@@ -255,7 +256,7 @@ def _make_stage(deps: int, solver: int):
             ydot[7 + i] = y[nq + 6 + i]
         # work and impulses (analytic.aux_rates; a, d follow the mass-track arrays in fp)
         o_m, _pe, _kl, _kn, _l, _lam, _al, _be, o_a, o_d, end = tail(n, kp)
-        _aux.aux_rates(
+        rates(
             work[o_q : o_q + nq],
             work[o_qd : o_qd + nq],
             work[o_tt : o_tt + 3],

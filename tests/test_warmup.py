@@ -414,7 +414,7 @@ def test_a_helper_result_written_before_the_last_stage_is_read_is_not_lost():
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
     )
-    helper.first, helper.engine = ["aux"], warmup.PINOCCHIO
+    helper.first, helper.engine = ["rhs"], warmup.PINOCCHIO
     try:
         helper.proc.wait(timeout=60)  # both lines are in the pipe before the first is read
         time.sleep(0.1)

@@ -19,16 +19,15 @@ would otherwise print nothing while it compiles and then sit at its first percen
    * the analytic kernel's two halves (:mod:`analytic.kernel.halves`) at the same time: stages
      1-6 in a *helper process*, the scene's solve here;
    * beside them, what calls the halves by address and so compiles without them
-     (:mod:`analytic.kernel.abi`): here the analytic plant's work and impulse rates (before the
-     solve) and the MuJoCo native callback (after it); in the helper, after stages 1-6, the
-     analytic plant's compiled right-hand side (it embeds the rates, on disk by then); then the
-     kernel's entry point, here;
+     (:mod:`analytic.kernel.abi`): here the MuJoCo native callback (after the solve); in the
+     helper, after stages 1-6, the analytic plant's compiled right-hand side (its work and
+     impulse rates pasted in); then the kernel's entry point, here;
    * then each plant for one output interval (the MuJoCo plant in the helper), which finds
      everything on disk and compiles whatever else its settings need.
 
    Around a run of both the MuJoCo and the analytic plant (:func:`warming`, what ``tumble
    validate`` uses) the analytic plant's own stages are left to the helper instead: it compiles
-   the rates and the right-hand side after stages 1-6 while the plants already run, holding their
+   the right-hand side after stages 1-6 while the plants already run, holding its
    compile lock (:mod:`analytic.kernel.compile_lock`) so that the analytic plant waits for them;
    with Pinocchio too, the helper then compiles the Pinocchio stage, holding its lock likewise.
 
@@ -83,7 +82,6 @@ ENTRY_MODULES: dict[str, tuple[str, ...]] = {
 TITLES = {
     "system": "the analytic kernel's stages 1-6 (analytic.kernel.system)",
     "solve": "the analytic kernel's solve (analytic.kernel)",
-    "aux": "the analytic plant's work and impulse rates (analytic.aux_rates)",
     "rhs": "the analytic plant's compiled right-hand side (analytic.compiled_rhs)",
     "native": "the MuJoCo native controller callback (mj_bridge.native)",
     "kernel": "the analytic kernel (analytic.fast)",
@@ -394,15 +392,6 @@ def compile_kernel_half(scene: Scene, half: str) -> None:
     fast.compile_half(scene, half)
 
 
-def compile_aux_rates(scene: Scene) -> None:
-    """The analytic plant's work and impulse rates (:func:`analytic.aux_rates.compile_for`),
-    which its right-hand side embeds but which do not embed the kernel."""
-    from analytic import aux_rates, fast
-
-    if fast.available():
-        aux_rates.compile_for(scene.n)
-
-
 def compile_rhs(scene: Scene) -> None:
     """The analytic plant's compiled right-hand side (the stepping loop's C callback and the
     function it calls, :func:`analytic.compiled_stepping.prepare`) without running it: it calls
@@ -450,7 +439,6 @@ def _timed(title: str, fn: Callable[[], None], where: str = "here") -> StageTime
 
 
 HELPER_STAGES: dict[str, Callable[[Scene], None]] = {
-    "aux": compile_aux_rates,
     "system": lambda scene: compile_kernel_half(scene, "system"),
     "rhs": compile_rhs,
 }
@@ -638,8 +626,7 @@ def warming(
 ) -> Iterator[WarmupResult]:
     """:func:`warm_up` around the run that needs it: with ``overlap``, when the MuJoCo and the
     analytic plant both run, the body starts as soon as the MuJoCo plant's kernels are compiled,
-    while the helper process still compiles the analytic plant's work and impulse rates and its
-    right-hand side (about a third of the whole; the MuJoCo plant's run takes longer than the
+    while the helper process still compiles the analytic plant's right-hand side (about a third of the whole; the MuJoCo plant's run takes longer than the
     analytic plant's). The helper holds that kernel's compile lock
     (:mod:`analytic.kernel.compile_lock`), so the analytic plant's run waits for it and loads it
     from disk rather than compiling it again. On leaving, the helper's last stages are reported
@@ -726,12 +713,11 @@ class _Warmup:
             else "numba has no writable cache directory here (set NUMBA_CACHE_DIR), so every run "
             "compiles them"
         )
-        rates_here = split and ANALYTIC in rest and not deferred
         beside = ["the kernel's stages 1-6"] if split else []
         # with Pinocchio too, its stage is the helper's last job, also while the plants start
         pin_beside = deferred and PINOCCHIO in rest
         if deferred:
-            beside += ["the analytic plant's rates and right-hand side"]
+            beside += ["the analytic plant's right-hand side"]
             beside += ["the Pinocchio stage"] if pin_beside else []
             beside[-1] += ", while the plants start"
         elif split and ANALYTIC in rest:
@@ -749,22 +735,16 @@ class _Warmup:
                 if pin_beside:
                     held[compile_lock.PINOCCHIO] = PINOCCHIO
                 engine = PINOCCHIO if pin_beside else None
-                helper.send(scene, engine, ["system", "aux", "rhs"], held=held)
+                helper.send(scene, engine, ["system", "rhs"], held=held)
             else:
-                # the right-hand side embeds the rates: they are compiled here first, long before
-                # the helper is done with stages 1-6 (were they not on disk, it would compile them)
-                first = ["system", "rhs"] if rates_here else ["system"]
+                first = ["system", "rhs"] if split and ANALYTIC in rest else ["system"]
                 helper.send(scene, MUJOCO if engine_beside else None, first if split else [])
             if engine_beside:
                 rest.remove(MUJOCO)
         if split:
             # Here the solve and the MuJoCo native callback (it calls the kernel's halves by
-            # address, so it compiles without them), and before them the work and impulse rates
-            # unless the helper takes them; meanwhile the helper compiles stages 1-6, then the
-            # analytic plant's right-hand side (also calling the halves by address): measured,
-            # the two sides then take about as long.
-            if rates_here:
-                report(_timed(TITLES["aux"], lambda: compile_aux_rates(scene)))
+            # address, so it compiles without them); meanwhile the helper compiles stages 1-6,
+            # then the analytic plant's right-hand side (also calling the halves by address).
             report(_timed(TITLES["solve"], lambda: compile_kernel_half(scene, "solve")))
             if MUJOCO in cold:
                 report(_timed(TITLES["native"], lambda: compile_native(scene)))
