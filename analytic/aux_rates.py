@@ -66,17 +66,6 @@ def rates(q, qd, tau, rod, fC, a, d, m, mu0, m_T, out):  # pragma: no cover - co
 aux_rates = jit_entry(_make)
 
 
-def compile_for(n: int) -> None:
-    """Compile :func:`aux_rates` (or load it from numba's cache) for ``n`` masses, with the
-    argument types the compiled right-hand side passes, without running it: a first run compiles
-    it while another process compiles part of the kernel (:mod:`validation.warmup`)."""
-    import numba
-
-    v = np.empty(3)
-    args = (np.empty(n + 7), np.empty(n + 7), v, np.empty(n), v, v, v, np.empty(n), 1.0, 1.0)
-    aux_rates.compile(tuple(numba.typeof(a) for a in (*args, np.empty(7))))
-
-
 def aux_rates_reference(q, qd, tau, rod, fC, a, d, m, mu0, m_T) -> np.ndarray:
     """The same rates with numpy's vector operations (for tests)."""
     from analytic.kinematics import S, omega_of
