@@ -344,20 +344,19 @@ def stamp_warm(key: str) -> None:
 
 def kernel_halves_state(scene: Scene) -> list[CacheState] | None:
     """What numba's disk cache holds for the two halves of the kernel ``scene`` evaluates
-    (:mod:`analytic.kernel.halves`: stages 1-6 and the scene's solve), read without compiling;
-    None without numba. Imports only the kernel."""
-    try:
-        from analytic.kernel import halves
-    except ImportError:  # pragma: no cover - numba is a dependency
-        return None
-    if halves.SYSTEM is None:  # pragma: no cover - without numba nothing is compiled
-        return None
-    from analytic.effects import Weighting
+    (:mod:`analytic.kernel.halves`: stages 1-6 and the solve its :class:`analytic.fast.FastModel`
+    uses), read without compiling; None when the kernel does not serve the scene (numba absent,
+    or a weighting it does not compile). Imports only the analytic side."""
+    from analytic import fast
+    from analytic.kernel.entry import Solver
 
-    minv2_solve = scene.controlled and scene.control.weighting is Weighting.M_INV2
-    return [
-        cache_state(halves.callback(h, minv2_solve)) for h in (halves.KernelHalf.SYSTEM, "solve")
-    ]
+    fm = fast.FastModel(scene)  # ip untouched: no half compiled
+    if not fm.compiled:
+        return None
+    from analytic.kernel import halves
+
+    minv2_solve = fm.solver is Solver.MINV2
+    return [cache_state(halves.callback(h, minv2_solve)) for h in halves.KernelHalf]
 
 
 def cache_writable(engines: Sequence[str]) -> bool:
@@ -448,9 +447,10 @@ HELPER_STAGES: dict[str, Callable[[Scene], None]] = {
 def _helper_main() -> None:  # pragma: no cover - runs in the helper process
     """The helper process: import the kernel's modules, read ``(scene, engine, first, held)``
     (pickled) from stdin (an empty line: nothing to do), take the compile locks named in
-    ``held``, compile each stage named in ``first`` (:data:`HELPER_STAGES`) at once, printing each
-    one's time as one JSON line (the locks are let go as the last stage ends); then, for an engine, wait for the ``go`` line (what the engine's plant embeds is on
-    disk by then), run its plant for one interval (:func:`compile_plant`) and print its time."""
+    ``held`` (lock name -> the stage after which it is let go), compile each stage named in
+    ``first`` (:data:`HELPER_STAGES`) at once, printing each one's time as one JSON line; then,
+    for an engine, wait for the ``go`` line (what the engine's plant embeds is on disk by then),
+    run its plant for one interval (:func:`compile_plant`) and print its time."""
     import json
     import pickle
     import signal
@@ -626,8 +626,9 @@ def warming(
 ) -> Iterator[WarmupResult]:
     """:func:`warm_up` around the run that needs it: with ``overlap``, when the MuJoCo and the
     analytic plant both run, the body starts as soon as the MuJoCo plant's kernels are compiled,
-    while the helper process still compiles the analytic plant's right-hand side (about a third of the whole; the MuJoCo plant's run takes longer than the
-    analytic plant's). The helper holds that kernel's compile lock
+    while the helper process still compiles the analytic plant's right-hand side (about a third
+    of the whole; the MuJoCo plant's run takes longer than the analytic plant's) and, with
+    Pinocchio, its stage. The helper holds that kernel's compile lock
     (:mod:`analytic.kernel.compile_lock`), so the analytic plant's run waits for it and loads it
     from disk rather than compiling it again. On leaving, the helper's last stages are reported
     (waited for when the body ended normally, stopped otherwise)."""
@@ -767,11 +768,7 @@ class _Warmup:
             report(helper.result())
         total = time.perf_counter() - self.t0
         if deferred:
-            which = (
-                "the analytic plant's and the Pinocchio stage"
-                if pin_beside
-                else ("the analytic plant's")
-            )
+            which = "the analytic plant's" + (" and the Pinocchio stage" if pin_beside else "")
             self.say(
                 f"  kernels ready in {total:.1f} s but {which} (still compiling in the helper "
                 "process; the runs that need them wait)"
