@@ -515,3 +515,47 @@ def test_the_lean_pipeline_compiles_the_same_arithmetic_as_numbas_default():
             assert gauss.evaluate(0.3, q, qd, fm.fp, fm.ip, lean) == STATUS_OK
             assert gauss.evaluate(0.3, q, qd, fm.fp, ip_default, dflt) == STATUS_OK
             np.testing.assert_array_equal(lean, dflt)
+
+
+def test_remembered_scalar_call_types_are_numbas_own_and_only_inside_a_lean_compile():
+    """``jit.scalar_call_types_remembered`` (every ``LeanCompiler`` compile) answers a scalar
+    operation's signature with what numba's own resolution gives, and leaves numba as it found
+    it afterwards, also when the compile fails."""
+    import operator
+
+    import numba
+    from numba.core import types
+    from numba.core.registry import cpu_target
+    from numba.core.types.functions import BaseFunction
+
+    from analytic.kernel import jit as kjit
+
+    original = BaseFunction.get_call_type
+    ctx = cpu_target.typing_context
+    ctx.refresh()
+    cases = [
+        (op, args)
+        for op in (operator.add, operator.mul, operator.truediv, operator.lt, operator.eq)
+        for args in (
+            (types.float64, types.float64),
+            (types.int64, types.float64),
+            (types.IntegerLiteral(2), types.float64),
+            (types.boolean, types.boolean),
+            (types.int64, types.int64),
+        )
+    ]
+    expected = [ctx.resolve_value_type(op).get_call_type(ctx, args, {}) for op, args in cases]
+    with kjit.scalar_call_types_remembered():
+        assert BaseFunction.get_call_type is not original
+        for _ in range(2):  # the second round comes from the memo
+            got = [ctx.resolve_value_type(op).get_call_type(ctx, a, {}) for op, a in cases]
+            assert got == expected
+    assert BaseFunction.get_call_type is original and not kjit._scalar_calls
+
+    @numba.njit(pipeline_class=kjit.LeanCompiler)
+    def untypable(x):  # pragma: no cover - never compiles
+        return x + "a"
+
+    with pytest.raises(numba.core.errors.TypingError):
+        untypable(1.0)
+    assert BaseFunction.get_call_type is original and not kjit._scalar_calls

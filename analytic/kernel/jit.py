@@ -32,6 +32,7 @@ first call), also said once.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import inspect
 import os
@@ -101,6 +102,59 @@ if HAVE_NUMBA:
     and comprehensions, ``literally``/``literal_unroll``, SSA's phi nodes (no SSA, below), the
     rewrites into fused array expressions, and a check of features it does not use."""
 
+    try:  # where numba resolves the signature of a call to a typed function (numba 0.68)
+        from numba.core.types.functions import BaseFunction as _BaseFunction
+
+        _RESOLVE = _BaseFunction.get_call_type
+    except (ImportError, AttributeError):  # pragma: no cover - another numba: no memo
+        _BaseFunction = _RESOLVE = None
+
+    _SCALAR_TYPES = (numba.types.Number, numba.types.Boolean)
+    _scalar_calls: dict = {}
+    _compiles_open = 0
+
+    def _remembered_call_type(self, context, args, kws):
+        """``BaseFunction.get_call_type`` remembering what it found for scalar arguments."""
+        if kws or not all(isinstance(a, _SCALAR_TYPES) for a in args):
+            return _RESOLVE(self, context, args, kws)
+        key = (self, id(context), tuple(args))
+        sig = _scalar_calls.get(key)
+        if sig is None:
+            sig = _RESOLVE(self, context, args, kws)
+            if sig is not None:
+                _scalar_calls[key] = sig
+        return sig
+
+    @contextlib.contextmanager
+    def scalar_call_types_remembered():
+        """Inside the block (a compile, which holds numba's global compiler lock), numba's
+        resolution of a call to a typed function (an operator, ``math.sqrt``...) whose arguments
+        are all scalars is looked up once per function type and argument types, and remembered
+        until the outermost such block ends.
+
+        Why: numba resolves the signature of every scalar operation by trying each template that
+        may apply (numpy's ufunc rules first, which reject scalars only after matching a ufunc
+        loop), once while typing each statement, again for each typing round, and once more
+        while lowering it. On the kernel's halves that was a quarter of the Python work of a
+        first compile (numba 0.68). For scalar arguments the answer depends only on the
+        function type and the argument types (literal values included, they are part of a
+        literal type), so remembering it changes no signature; the signature found first is
+        the one numba would find again, with the same implementation key recorded."""
+        global _compiles_open
+        if _RESOLVE is None:
+            yield
+            return
+        _compiles_open += 1
+        if _compiles_open == 1:
+            _BaseFunction.get_call_type = _remembered_call_type
+        try:
+            yield
+        finally:
+            _compiles_open -= 1
+            if _compiles_open == 0:
+                _BaseFunction.get_call_type = _RESOLVE
+                _scalar_calls.clear()
+
     class LeanCompiler(CompilerBase):
         """numba's nopython pipeline (``DefaultPassBuilder``) without :data:`LEAN_DROPPED` and
         without SSA reconstruction, passed as numba's documented ``pipeline_class``.
@@ -113,7 +167,10 @@ if HAVE_NUMBA:
         compares every output bit for bit).
 
         Without SSA a variable has one type in a function: code compiled this way must not reuse
-        a name for values of two types (numba says so at compile time, never silently)."""
+        a name for values of two types (numba says so at compile time, never silently).
+
+        Each compile runs inside :func:`scalar_call_types_remembered` (numba's resolution of
+        scalar operations looked up once per compile instead of at every statement)."""
 
         def define_pipelines(self):
             self.state.flags.enable_ssa = False
@@ -124,6 +181,10 @@ if HAVE_NUMBA:
                     pm.add_pass(pass_class, description)
             pm.finalize()
             return [pm]
+
+        def _compile_core(self):
+            with scalar_call_types_remembered():
+                return super()._compile_core()
 
 else:  # pragma: no cover
     LeanCompiler = None
