@@ -113,6 +113,30 @@ stage = _compiled(Solver.ANY)
 """The compiled stage for any scene (embeds both solves; compiled on first call)."""
 
 
+def argument_types() -> tuple:
+    """numba's types of the stage's arguments as both of its callers pass them: the native
+    callback (:mod:`mj_bridge.native`, contiguous ``carray`` views of MuJoCo's and the kernel's
+    buffers) and the Python callback (:class:`mj_bridge.stages.Stages`, contiguous numpy arrays):
+    ``t`` float64, fifteen 1-d C-contiguous arrays (``tq_ids``, ``f_ids`` and ``ip`` int64, the
+    rest float64) with ``inv_gear`` and ``w`` float64 in their places."""
+    from numba import types
+
+    f, F = types.float64, types.Array(types.float64, 1, "C")
+    ints = types.Array(types.int64, 1, "C")
+    # t, qpos, qvel, ctrl, tq_ids, f_ids, fp, ip, out, q, qd, tau_g, geo, inv_gear, w, acc
+    return (f, F, F, F, ints, ints, F, ints, F, F, F, F, F, f, f, F)
+
+
+def compile_for(solver: Solver) -> None:
+    """Compile (or load from numba's disk cache) the stage embedding ``solver`` for
+    :func:`argument_types`, without running it: what the native callback then links, and the
+    Python callback calls (a first run compiles it in a second process meanwhile)."""
+    if not HAVE_NUMBA:
+        return
+    fn = {Solver.GAUSS: stage_gauss, Solver.MINV2: stage_minv2}.get(Solver(solver), stage)
+    fn.compile(argument_types())
+
+
 def stage_for(ip: np.ndarray):
     """The compiled stage for the packed scene ``ip``, embedding only the solve it needs (same
     call and numbers as :data:`stage`)."""

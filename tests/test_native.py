@@ -384,3 +384,20 @@ def test_a_read_only_install_caches_in_the_user_cache_dir(tmp_path):
     assert not list(tree.rglob("*.nbi")), "the read-only package was written to"
     assert first["hits"] == 0 and second["hits"] >= 1, "not loaded from the user cache directory"
     assert second["ydot"] == first["ydot"]
+
+
+def test_the_stage_compiled_ahead_is_the_one_both_callbacks_use():
+    """A first run compiles the MuJoCo stage in a helper process ahead of the native callback
+    (``fast_stage.compile_for``, for ``fast_stage.argument_types()``); the callback links that
+    stage and the Python callback calls it, so both must pass exactly those types: a run through
+    either adds no second compiled signature."""
+    from analytic.kernel.entry import Solver
+    from mj_bridge import fast_stage
+
+    fast_stage.compile_for(Solver.GAUSS)
+    want = [fast_stage.argument_types()]
+    assert fast_stage.stage_gauss.signatures == want
+    sc = paper_scene("paper_example1_controlled")
+    simulate(sc, t_end=0.05, native_callback=False)
+    simulate(sc, t_end=0.05)  # links the stage into the native callback, verified against Python
+    assert fast_stage.stage_gauss.signatures == want

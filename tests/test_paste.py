@@ -16,7 +16,7 @@ import numba
 import numpy as np
 
 from analytic import fast
-from analytic.kernel import gauss, halves, minv2, paste, system
+from analytic.kernel import gauss, halves, kinematics, minv2, paste, system
 from analytic.kernel.abi import SOLVE_SIG, SYSTEM_SIG
 from analytic.kernel.entry import Solver, solver_of
 from analytic.kernel.jit import inline
@@ -99,6 +99,21 @@ def test_pasted_code_reads_module_numbers_as_constants():
     assert not names & {"STEP", "WS_LA"}
     assert "_rebinds" not in names and "_stage" not in names  # pasted, not called
     assert "_first_at_least" in names  # inside a comparison: left to numba's own inlining
+
+
+def _calls_through_a_module(u):
+    s = kinematics.rotation(u[0], u[1], u[2], u[3])  # an inline function of another module
+    return s[0] * s[4] - s[8]
+
+
+def test_an_inline_function_called_through_its_module_is_pasted():
+    """``gauss.join(...)`` (how ``entry.evaluate_as`` calls a solve) is pasted like a call of a
+    global name: numba's own inlining of it would run its front end again in every caller."""
+    pasted = paste.flatten(_calls_through_a_module)
+    assert not {"kinematics", "rotation"} & set(pasted.__code__.co_names)  # pasted, not called
+    u = np.array([0.9, 0.1, -0.3, 0.2])
+    want = numba.njit(_calls_through_a_module)(u)
+    assert numba.njit(pasted)(u) == want and pasted(u) == want
 
 
 def _scaler(k):

@@ -18,7 +18,7 @@ from pathlib import Path
 import pytest
 
 from tests import tolerances as tol
-from validation import warmup
+from validation import warmup, workers
 from validation.progress import Progress, StageProgress, Status
 from validation.scenes import resolve_scene
 from validation.warmup import CacheState, cache_state, engine_is_cold
@@ -98,7 +98,7 @@ def test_warm_up_is_silent_when_every_kernel_is_cached():
 
 STAMP_PROBE = """
 import json, sys
-from validation import warmup
+from validation import warmup, workers
 from validation.scenes import resolve_scene
 
 res = warmup.warm_up(resolve_scene("paper_example1_controlled"), ["analytic", "mujoco"])
@@ -305,7 +305,7 @@ def _cold_probe(env: dict[str, str], every_engine: bool = False) -> dict:
 
 COLD_PROBE = """
 import json, sys
-from validation import warmup
+from validation import warmup, workers
 from validation.scenes import DEFAULT_VALIDATE_SCENE, resolve_scene
 
 got = {"halves": [s.value for s in warmup.kernel_halves_state(resolve_scene(DEFAULT_VALIDATE_SCENE))]}
@@ -326,7 +326,7 @@ import numpy as np
 from analytic import load_scene
 from analytic.fast import FastModel
 from analytic.kernel import halves
-from validation import warmup
+from validation import warmup, workers
 
 sc = load_scene(sys.argv[1])
 warmup.compile_rhs(sc)  # the analytic plant's compiled right-hand side
@@ -361,9 +361,13 @@ def test_the_kernels_callers_compile_before_its_halves(tmp_path):
 
 
 def test_a_helper_without_a_job_ends_quietly():
-    """The helper starts before numba's cache is checked; when the check finds nothing to do it
-    gets an empty job (or is stopped) and ends without output or error."""
-    helper = warmup._Helper()
+    """A spawned helper starts before numba's cache is checked; when the check finds nothing to
+    do it gets an empty job (or is stopped) and ends without output or error. A forked one is
+    only made with its job: never given one, there is nothing to stop."""
+    unborn = warmup._Helper(fork=True)
+    unborn.stop()
+    assert unborn.proc is None
+    helper = warmup._Helper(fork=False)
     try:
         helper.proc.stdin.write(b"\n")
         helper.proc.stdin.close()
@@ -384,7 +388,7 @@ def test_the_compiling_helper_imports_this_copy_not_the_working_directorys(tmp_p
     (fake / "__init__.py").write_text("raise ImportError('the working directory copy')\n")
     monkeypatch.chdir(tmp_path)
     sc = resolve_scene("paper_example1_controlled")
-    helper = warmup._Helper()
+    helper = warmup._Helper(fork=False)
     try:
         helper.send(sc, "analytic", [])
         helper.go()
@@ -392,6 +396,31 @@ def test_the_compiling_helper_imports_this_copy_not_the_working_directorys(tmp_p
     finally:
         helper.stop()
     assert st.error == "", st.error
+
+
+@pytest.mark.skipif(not workers.can_fork(), reason="forks only where validation.workers does")
+def test_a_forked_helper_runs_its_job_and_ends_when_this_process_lets_go():
+    """Forked (the default where forking is safe), the helper runs the same job through pipes:
+    the engine's plant after ``go``, its time reported; without ``go`` (this process closed its
+    end: it stopped or died) it ends on its own instead of waiting forever."""
+    sc = resolve_scene("paper_example1_controlled")
+    helper = warmup._Helper()
+    assert helper.fork and helper.proc is None  # made with its job
+    try:
+        helper.send(sc, "analytic", [])
+        helper.go()
+        st = helper.result()
+    finally:
+        helper.stop()
+    assert st.error == "" and st.where == "helper process" and st.seconds > 0, st
+    orphan = warmup._Helper()
+    try:
+        orphan.send(sc, "analytic", [])
+        orphan.proc.stdin.close()  # no go line will ever come
+        assert orphan.proc.wait(timeout=120) == 0
+        assert orphan.result().error.startswith("helper failed")  # nothing was compiled
+    finally:
+        orphan.stop()
 
 
 def test_a_helper_result_written_before_the_last_stage_is_read_is_not_lost():

@@ -34,7 +34,11 @@ would otherwise print nothing while it compiles and then sit at its first percen
    numba holds the GIL while it compiles, so threads would not overlap; a second process does, and
    it leaves its result in the on-disk cache, where this process loads it. Used when two CPUs are
    free to this process and the cache is writable (otherwise everything is compiled here, in
-   order).
+   order). The helper is forked from this process once numba is set up here (it inherits
+   numba's registries and the imported kernel), or, where forking is not safe, spawned.
+
+   Every compile goes through :class:`analytic.kernel.jit.LeanCompiler`, which leaves out numba
+   passes the kernel does not need and resolves each scalar operation's type once per compile.
 
 A failure while warming up is never fatal: the plant's own run compiles what is missing and
 reports its own error.
@@ -83,6 +87,7 @@ TITLES = {
     "system": "the analytic kernel's stages 1-6 (analytic.kernel.system)",
     "solve": "the analytic kernel's solve (analytic.kernel)",
     "rhs": "the analytic plant's compiled right-hand side (analytic.compiled_rhs)",
+    "stage": "the MuJoCo plant's compiled stage (mj_bridge.fast_stage)",
     "native": "the MuJoCo native controller callback (mj_bridge.native)",
     "kernel": "the analytic kernel (analytic.fast)",
     ANALYTIC: "the analytic plant's right-hand side",
@@ -403,6 +408,20 @@ def compile_rhs(scene: Scene) -> None:
             compiled_stepping.prepare(int(fm.solver))
 
 
+def compile_stage(scene: Scene) -> None:
+    """The MuJoCo plant's compiled stage for the scene's solve (:func:`mj_bridge.fast_stage.
+    compile_for`), without running it: the native callback links it (compiled after it, it
+    finds it on disk) and the Python callback calls it."""
+    from analytic import fast
+
+    if fast.available():
+        fm = fast.FastModel(scene)  # ip untouched: no half compiled
+        if fm.compiled:
+            from mj_bridge import fast_stage
+
+            fast_stage.compile_for(fm.solver)
+
+
 def compile_native(scene: Scene) -> None:
     """The MuJoCo plant's native controller callback (:func:`mj_bridge.native.compiled`) for the
     scene's solve, without running it (it calls the kernel's halves by address)."""
@@ -438,6 +457,7 @@ def _timed(title: str, fn: Callable[[], None], where: str = "here") -> StageTime
 
 
 HELPER_STAGES: dict[str, Callable[[Scene], None]] = {
+    "stage": compile_stage,
     "system": lambda scene: compile_kernel_half(scene, "system"),
     "rhs": compile_rhs,
 }
@@ -445,13 +465,10 @@ HELPER_STAGES: dict[str, Callable[[Scene], None]] = {
 
 
 def _helper_main() -> None:  # pragma: no cover - runs in the helper process
-    """The helper process: import the kernel's modules, read ``(scene, engine, first, held)``
-    (pickled) from stdin (an empty line: nothing to do), take the compile locks named in
-    ``held`` (lock name -> the stage after which it is let go), compile each stage named in
-    ``first`` (:data:`HELPER_STAGES`) at once, printing each one's time as one JSON line; then,
-    for an engine, wait for the ``go`` line (what the engine's plant embeds is on disk by then),
-    run its plant for one interval (:func:`compile_plant`) and print its time."""
-    import json
+    """A spawned helper process (``python -c``): import the kernel's modules, read its job
+    (pickled ``(scene, engine, first, held)``, after a line with its size; an empty line: nothing
+    to do) from stdin, and run it (:func:`_run_job`): one JSON line per stage on stdout, the
+    ``go`` line read from stdin."""
     import pickle
     import signal
 
@@ -467,7 +484,39 @@ def _helper_main() -> None:  # pragma: no cover - runs in the helper process
     if not line.strip():  # no job: the cache was warm after all
         return
     size = int(line)
-    scene, engine, first, held = pickle.loads(sys.stdin.buffer.read(size))
+    job = pickle.loads(sys.stdin.buffer.read(size))
+    _run_job(job, sys.stdout.buffer, sys.stdin.buffer)
+
+
+def _forked_main(
+    job: tuple, fds: dict[str, int], parents: Sequence[int]
+) -> None:  # pragma: no cover
+    """A forked helper process: close its copies of the parent's pipe ends (so that the ``go``
+    pipe ends when the parent does), send stderr into its pipe, and run the job
+    (:func:`_run_job`)."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent stops it; no second traceback
+    for fd in parents:
+        os.close(fd)
+    os.dup2(fds["stderr"], 2)
+    with (
+        open(fds["stdout"], "wb", buffering=0) as out,
+        open(fds["stdin"], "rb") as inp,
+    ):
+        _run_job(job, out, inp)
+
+
+def _run_job(job: tuple, out: Any, inp: Any) -> None:  # pragma: no cover - in the helper
+    """The helper's job ``(scene, engine, first, held)``: take the compile locks named in
+    ``held`` (lock name -> the stage after which it is let go), compile each stage named in
+    ``first`` (:data:`HELPER_STAGES`) at once, writing each one's time as one JSON line to
+    ``out``; then, for an engine, wait for the ``go`` line on ``inp`` (what the engine's plant
+    embeds is on disk by then), run its plant for one interval (:func:`compile_plant`) and write
+    its time."""
+    import json
+
+    scene, engine, first, held = job
     from analytic.kernel import compile_lock
 
     for lock in held:  # before anything else: a plant that needs one waits for it
@@ -478,38 +527,83 @@ def _helper_main() -> None:  # pragma: no cover - runs in the helper process
             if until == name:
                 compile_lock.release(lock)
 
+    def say(st: StageTime) -> None:
+        out.write(json.dumps(dataclasses.asdict(st)).encode() + b"\n")
+        out.flush()
+
     for name in first:
-        st = _timed(TITLES[name], lambda name=name: HELPER_STAGES[name](scene), "helper process")
+        say(_timed(TITLES[name], lambda name=name: HELPER_STAGES[name](scene), "helper process"))
         compiled(name)
-        print(json.dumps(dataclasses.asdict(st)), flush=True)
     if engine is None:
         return
     _import_entries([engine])  # the imports overlap the parent's compiling
-    if sys.stdin.buffer.readline().strip() != b"go":
+    if inp.readline().strip() != b"go":
         return
-    st = _timed(TITLES[engine], lambda: compile_plant(scene, engine), where="helper process")
+    say(_timed(TITLES[engine], lambda: compile_plant(scene, engine), where="helper process"))
     compiled(engine)
-    print(json.dumps(dataclasses.asdict(st)), flush=True)
+
+
+def _numba_set_up() -> None:
+    """numba's compiler set up in this process before a helper is forked from it: its registries
+    of typing and lowering rules (numba's documented ``refresh``, done by the first compile of a
+    process, about half a second), which the helper then inherits instead of loading again."""
+    try:
+        from numba.core.registry import cpu_target
+
+        cpu_target.target_context.refresh()
+    except Exception:  # pragma: no cover - another numba: the first compile does it
+        pass
+
+
+class _ForkedProcess:
+    """The part of :class:`subprocess.Popen` a :class:`_Helper` uses, for a process forked with
+    :mod:`multiprocessing` (its pipes made here)."""
+
+    def __init__(self, process: Any, stdin: Any, stdout: Any, stderr: Any) -> None:
+        self.process, self.stdin, self.stdout, self.stderr = process, stdin, stdout, stderr
+
+    def poll(self) -> int | None:
+        return self.process.exitcode
+
+    def wait(self, timeout: float | None = None) -> int | None:
+        self.process.join(timeout)
+        return self.process.exitcode
+
+    def kill(self) -> None:
+        self.process.kill()
 
 
 class _Helper:
-    """A helper process (``python -c``, so no ``__main__`` of the caller is re-imported) that
-    compiles into numba's disk cache. Started before the cache is checked (its imports overlap
-    the check); :meth:`send` gives it its job: the stages named in ``first`` at once (:meth:`next`
-    waits for each in turn), then ``engine``'s plant after :meth:`go` (:meth:`result`)."""
+    """A helper process that compiles into numba's disk cache; :meth:`send` gives it its job: the
+    stages named in ``first`` at once (:meth:`next` waits for each in turn), then ``engine``'s
+    plant after :meth:`go` (:meth:`result`).
 
-    def __init__(self) -> None:
-        import subprocess
+    Forked from this process when :meth:`send` gives the job, where forking is safe
+    (:func:`validation.workers.can_fork`): numba is imported and set up here by then (the cache
+    check needs it, and this process compiles too), and the child inherits that instead of
+    starting an interpreter, importing and setting numba up again (about a CPU-second, on a
+    machine whose CPUs are all busy compiling). Elsewhere it is spawned at once (``python -c``, so
+    no ``__main__`` of the caller is re-imported), its imports overlapping the cache check."""
+
+    def __init__(self, fork: bool | None = None) -> None:
+        from validation import workers
 
         self.engine: str | None = None
         self.first: list[str] = []
+        self.fork = workers.can_fork() if fork is None else fork
+        self.proc: Any = None if self.fork else self._spawn()
+
+    @staticmethod
+    def _spawn() -> Any:
+        import subprocess
+
         code = "from validation.warmup import _helper_main; _helper_main()"
         env = dict(os.environ)  # this copy of the project first, wherever it was imported from
         root = str(Path(__file__).resolve().parents[1])
         env["PYTHONPATH"] = os.pathsep.join(p for p in (root, env.get("PYTHONPATH")) if p)
         # cwd: ``-c`` puts the working directory first on sys.path, and a source checkout there
         # (the README's ``pip install .`` in a clone) would be compiled instead of this copy.
-        self.proc = subprocess.Popen(
+        return subprocess.Popen(
             [sys.executable, "-c", code],
             env=env,
             cwd=root,
@@ -517,6 +611,30 @@ class _Helper:
             stdout=subprocess.PIPE,
             stderr=subprocess.PIPE,
         )
+
+    def _forked(self, job: tuple) -> _ForkedProcess:
+        import multiprocessing as mp
+
+        _numba_set_up()
+        pipes = {name: os.pipe() for name in ("stdin", "stdout", "stderr")}
+        child = {"stdin": pipes["stdin"][0], "stdout": pipes["stdout"][1]}
+        child["stderr"] = pipes["stderr"][1]
+        parent = [pipes["stdin"][1], pipes["stdout"][0], pipes["stderr"][0]]
+        for stream in (sys.stdout, sys.stderr):  # the child must not print this buffer again
+            try:
+                stream.flush()
+            except (OSError, ValueError, AttributeError):
+                pass
+        process = mp.get_context("fork").Process(
+            target=_forked_main, args=(job, child, parent), name="tumble-compile", daemon=True
+        )
+        try:
+            process.start()
+        finally:
+            for fd in child.values():
+                os.close(fd)
+        ends = (open(parent[0], "wb"), open(parent[1], "rb"), open(parent[2], "rb"))
+        return _ForkedProcess(process, *ends)  # stop() closes the ends
 
     def send(
         self,
@@ -531,8 +649,16 @@ class _Helper:
         it maps to is compiled."""
         import pickle
 
+        from validation import workers
+
         self.engine, self.first = engine, list(first)
-        data = pickle.dumps((scene, engine, self.first, dict(held or {})))
+        job = (scene, engine, self.first, dict(held or {}))
+        if self.fork and workers.can_fork():
+            self.proc = self._forked(job)
+            return
+        if self.proc is None:  # forking stopped being safe since (a thread started): spawned
+            self.fork, self.proc = False, self._spawn()
+        data = pickle.dumps(job)
         try:
             self.proc.stdin.write(b"%d\n" % len(data) + data)
             self.proc.stdin.flush()
@@ -573,6 +699,8 @@ class _Helper:
             return StageTime(title, 0.0, "helper process", f"helper failed: {why}")
 
     def stop(self) -> None:
+        if self.proc is None:  # a forked helper never given a job
+            return
         if self.proc.poll() is None:
             self.proc.kill()
             self.proc.wait(timeout=5)
@@ -714,7 +842,10 @@ class _Warmup:
             else "numba has no writable cache directory here (set NUMBA_CACHE_DIR), so every run "
             "compiles them"
         )
-        beside = ["the kernel's stages 1-6"] if split else []
+        # the MuJoCo stage first in the helper: the callback compiled here links it
+        mj_stage = ["stage"] if split and MUJOCO in cold else []
+        beside = ["the MuJoCo plant's stage"] if mj_stage else []
+        beside += ["the kernel's stages 1-6"] if split else []
         # with Pinocchio too, its stage is the helper's last job, also while the plants start
         pin_beside = deferred and PINOCCHIO in rest
         if deferred:
@@ -736,18 +867,20 @@ class _Warmup:
                 if pin_beside:
                     held[compile_lock.PINOCCHIO] = PINOCCHIO
                 engine = PINOCCHIO if pin_beside else None
-                helper.send(scene, engine, ["system", "rhs"], held=held)
+                helper.send(scene, engine, [*mj_stage, "system", "rhs"], held=held)
             else:
-                first = ["system", "rhs"] if split and ANALYTIC in rest else ["system"]
+                first = [*mj_stage, "system"] + (["rhs"] if ANALYTIC in rest else [])
                 helper.send(scene, MUJOCO if engine_beside else None, first if split else [])
             if engine_beside:
                 rest.remove(MUJOCO)
         if split:
-            # Here the solve and the MuJoCo native callback (it calls the kernel's halves by
-            # address, so it compiles without them); meanwhile the helper compiles stages 1-6,
-            # then the analytic plant's right-hand side (also calling the halves by address).
+            # Here the solve, then the MuJoCo native callback (it calls the kernel's halves by
+            # address, so it compiles without them, and links the MuJoCo stage, which the helper
+            # compiles meanwhile, first); the helper then compiles stages 1-6, then the analytic
+            # plant's right-hand side (also calling the halves by address).
             report(_timed(TITLES["solve"], lambda: compile_kernel_half(scene, "solve")))
-            if MUJOCO in cold:
+            if mj_stage:
+                report(helper.next())  # the MuJoCo stage: on disk for the callback to link
                 report(_timed(TITLES["native"], lambda: compile_native(scene)))
             report(helper.next())  # stages 1-6
             if pin_beside:  # the kernel's halves are on disk: the Pinocchio stage may start

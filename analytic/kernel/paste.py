@@ -6,7 +6,8 @@ helpers is copied at each level. On the kernel's halves that was the largest sin
 first compile (about a third of it, measured with numba 0.68). :func:`flatten` does the same
 pasting on the Python syntax tree instead, once, so numba compiles one plain function:
 
-* a call to an :func:`analytic.kernel.jit.inline` function that stands as a statement
+* a call to an :func:`analytic.kernel.jit.inline` function (a global name, or a module's
+  attribute: ``gauss.join(...)``) that stands as a statement
   (``stage(...)``), as the whole right-hand side of an assignment (``a, b = helper(...)``), as an
   ``if`` test (``if not helper(...)``) or as a returned value is
   replaced by the callee's body, its locals renamed apart, its parameters bound to the arguments
@@ -38,6 +39,7 @@ import itertools
 import linecache
 import operator
 import textwrap
+import types
 from collections.abc import Callable
 from typing import Any
 
@@ -262,6 +264,17 @@ class _Paster:
         self.globals[prefix + name] = value
         return prefix + name
 
+    def callee(self, func: ast.expr) -> Any:
+        """What a call's ``func`` names: a global (``stage(...)``) or a function of a module
+        the code imported (``gauss.join(...)``); None for anything else."""
+        if isinstance(func, ast.Name):
+            return self.globals.get(func.id)
+        if isinstance(func, ast.Attribute) and isinstance(func.value, ast.Name):
+            module = self.globals.get(func.value.id)
+            if isinstance(module, types.ModuleType):
+                return getattr(module, func.attr, None)
+        return None
+
     def expand(self, stmts: list[ast.stmt]) -> list[ast.stmt]:
         out: list[ast.stmt] = []
         for stmt in stmts:
@@ -275,11 +288,7 @@ class _Paster:
         expr = getattr(stmt, field, None) if isinstance(stmt, ast.If | ast.Return) else None
         if isinstance(expr, ast.UnaryOp) and isinstance(expr.op, ast.Not):
             holder, field, expr = expr, "operand", expr.operand
-        if not (
-            isinstance(expr, ast.Call)
-            and isinstance(expr.func, ast.Name)
-            and is_inline(self.globals.get(expr.func.id))
-        ):
+        if not (isinstance(expr, ast.Call) and is_inline(self.callee(expr.func))):
             return [stmt]
         name = f"_value{next(self.sites)}"
         setattr(holder, field, _at(ast.Name(name, ast.Load()), expr))
@@ -299,8 +308,8 @@ class _Paster:
             and isinstance(stmt.value, ast.Call)
         ):
             call, target = stmt.value, stmt.targets[0]
-        if call is not None and isinstance(call.func, ast.Name) and not call.keywords:
-            obj = self.globals.get(call.func.id)
+        if call is not None and not call.keywords:
+            obj = self.callee(call.func)
             if is_inline(obj) and not any(isinstance(a, ast.Starred) for a in call.args):
                 pasted = self.paste(obj.py_func, call.args, target, stmt)
                 if pasted is not None:
