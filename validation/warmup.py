@@ -62,10 +62,10 @@ if TYPE_CHECKING:
 
 ANALYTIC, MUJOCO, PINOCCHIO = "analytic", "mujoco", "pinocchio"
 
-EXPECTED_COLD_S = 8
+EXPECTED_COLD_S = 5
 """What the message announces: the compile time of every kernel on a 2-core machine, s (measured:
-kernels ready 4.8-7.5 s after the start for two plants, the analytic plant's last kernels done
-about 1 s later)."""
+kernels ready 2.6-4.2 s after the start for two plants, the analytic plant's last kernels done
+about 1.3 s later)."""
 
 ENGINE_MODULES: dict[str, tuple[str, ...]] = {
     ANALYTIC: ("analytic.",),
