@@ -387,15 +387,18 @@ def test_the_compiling_helper_imports_this_copy_not_the_working_directorys(tmp_p
     fake.mkdir()
     (fake / "__init__.py").write_text("raise ImportError('the working directory copy')\n")
     monkeypatch.chdir(tmp_path)
-    sc = resolve_scene("paper_example1_controlled")
-    helper = warmup._Helper(fork=False)
+    st = _plant_in(warmup._Helper(fork=False), resolve_scene("paper_example1_controlled"))
+    assert st.error == "", st.error
+
+
+def _plant_in(helper: warmup._Helper, sc) -> warmup.StageTime:
+    """The analytic plant's first interval compiled by ``helper`` (then stopped)."""
     try:
         helper.send(sc, "analytic", [])
         helper.go()
-        st = helper.result()
+        return helper.result()
     finally:
         helper.stop()
-    assert st.error == "", st.error
 
 
 @pytest.mark.skipif(not workers.can_fork(), reason="forks only where validation.workers does")
@@ -406,12 +409,7 @@ def test_a_forked_helper_runs_its_job_and_ends_when_this_process_lets_go():
     sc = resolve_scene("paper_example1_controlled")
     helper = warmup._Helper()
     assert helper.fork and helper.proc is None  # made with its job
-    try:
-        helper.send(sc, "analytic", [])
-        helper.go()
-        st = helper.result()
-    finally:
-        helper.stop()
+    st = _plant_in(helper, sc)
     assert st.error == "" and st.where == "helper process" and st.seconds > 0, st
     orphan = warmup._Helper()
     try:
