@@ -18,7 +18,7 @@ from pathlib import Path
 import pytest
 
 from tests import tolerances as tol
-from validation import warmup, workers
+from validation import warmup
 from validation.progress import Progress, StageProgress, Status
 from validation.scenes import resolve_scene
 from validation.warmup import CacheState, cache_state, engine_is_cold
@@ -98,7 +98,7 @@ def test_warm_up_is_silent_when_every_kernel_is_cached():
 
 STAMP_PROBE = """
 import json, sys
-from validation import warmup, workers
+from validation import warmup
 from validation.scenes import resolve_scene
 
 res = warmup.warm_up(resolve_scene("paper_example1_controlled"), ["analytic", "mujoco"])
@@ -305,7 +305,7 @@ def _cold_probe(env: dict[str, str], every_engine: bool = False) -> dict:
 
 COLD_PROBE = """
 import json, sys
-from validation import warmup, workers
+from validation import warmup
 from validation.scenes import DEFAULT_VALIDATE_SCENE, resolve_scene
 
 got = {"halves": [s.value for s in warmup.kernel_halves_state(resolve_scene(DEFAULT_VALIDATE_SCENE))]}
@@ -326,7 +326,7 @@ import numpy as np
 from analytic import load_scene
 from analytic.fast import FastModel
 from analytic.kernel import halves
-from validation import warmup, workers
+from validation import warmup
 
 sc = load_scene(sys.argv[1])
 warmup.compile_rhs(sc)  # the analytic plant's compiled right-hand side
@@ -401,24 +401,53 @@ def _plant_in(helper: warmup._Helper, sc) -> warmup.StageTime:
         helper.stop()
 
 
-@pytest.mark.skipif(not workers.can_fork(), reason="forks only where validation.workers does")
+FORKED_PROBE = """
+import dataclasses, json
+from validation import warmup, workers
+from validation.scenes import resolve_scene
+sc = resolve_scene("paper_example1_controlled")
+can = workers.can_fork()
+helper = warmup._Helper()
+made_late = helper.fork and helper.proc is None
+try:
+    helper.send(sc, "analytic", [])
+    forked = type(helper.proc).__name__ == "_ForkedProcess"
+    helper.go()
+    st = helper.result()
+finally:
+    helper.stop()
+orphan = warmup._Helper()
+try:
+    orphan.send(sc, "analytic", [])
+    orphan.proc.stdin.close()  # no go line will ever come
+    code = orphan.proc.wait(timeout=120)
+    late = orphan.result()
+finally:
+    orphan.stop()
+print(json.dumps([can, made_late, forked, dataclasses.asdict(st), code, late.error]))
+"""
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="forks only on Linux")
 def test_a_forked_helper_runs_its_job_and_ends_when_this_process_lets_go():
     """Forked (the default where forking is safe), the helper runs the same job through pipes:
     the engine's plant after ``go``, its time reported; without ``go`` (this process closed its
-    end: it stopped or died) it ends on its own instead of waiting forever."""
-    sc = resolve_scene("paper_example1_controlled")
-    helper = warmup._Helper()
-    assert helper.fork and helper.proc is None  # made with its job
-    st = _plant_in(helper, sc)
-    assert st.error == "" and st.where == "helper process" and st.seconds > 0, st
-    orphan = warmup._Helper()
-    try:
-        orphan.send(sc, "analytic", [])
-        orphan.proc.stdin.close()  # no go line will ever come
-        assert orphan.proc.wait(timeout=120) == 0
-        assert orphan.result().error.startswith("helper failed")  # nothing was compiled
-    finally:
-        orphan.stop()
+    end: it stopped or died) it ends on its own instead of waiting forever. In a new process:
+    this one may run threads (forking is then refused and the helper spawned)."""
+    proc = subprocess.run(
+        [sys.executable, "-c", FORKED_PROBE],
+        capture_output=True,
+        text=True,
+        env=_env(),
+        timeout=600,
+    )
+    assert proc.returncode == 0, proc.stderr
+    can, made_late, forked, st, code, late = json.loads(proc.stdout.splitlines()[-1])
+    if not can:
+        pytest.skip("forking is not safe here (validation.workers.can_fork)")
+    assert made_late and forked  # made with its job, by fork
+    assert st["error"] == "" and st["where"] == "helper process" and st["seconds"] > 0, st
+    assert code == 0 and late.startswith("helper failed")  # nothing was compiled
 
 
 def test_a_helper_result_written_before_the_last_stage_is_read_is_not_lost():
