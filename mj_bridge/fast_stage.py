@@ -117,7 +117,7 @@ def argument_types() -> tuple:
     """numba's types of the stage's arguments as both of its callers pass them: the native
     callback (:mod:`mj_bridge.native`, contiguous ``carray`` views of MuJoCo's and the kernel's
     buffers) and the Python callback (:class:`mj_bridge.stages.Stages`, contiguous numpy arrays):
-    ``t`` float64, fifteen 1-d C-contiguous arrays (``tq_ids``, ``f_ids`` and ``ip`` int64, the
+    ``t`` float64, thirteen 1-d C-contiguous arrays (``tq_ids``, ``f_ids`` and ``ip`` int64, the
     rest float64) with ``inv_gear`` and ``w`` float64 in their places."""
     from numba import types
 

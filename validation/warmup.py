@@ -19,9 +19,10 @@ would otherwise print nothing while it compiles and then sit at its first percen
    * the analytic kernel's two halves (:mod:`analytic.kernel.halves`) at the same time: stages
      1-6 in a *helper process*, the scene's solve here;
    * beside them, what calls the halves by address and so compiles without them
-     (:mod:`analytic.kernel.abi`): here the MuJoCo native callback (after the solve); in the
-     helper, after stages 1-6, the analytic plant's compiled right-hand side (its work and
-     impulse rates pasted in); then the kernel's entry point, here;
+     (:mod:`analytic.kernel.abi`): in the helper, before stages 1-6, the MuJoCo plant's stage
+     (:func:`compile_stage`), then here, after the solve, the MuJoCo native callback, which links
+     that stage from disk; in the helper, after stages 1-6, the analytic plant's compiled
+     right-hand side (its work and impulse rates pasted in); then the kernel's entry point, here;
    * then each plant for one output interval (the MuJoCo plant in the helper), which finds
      everything on disk and compiles whatever else its settings need.
 
