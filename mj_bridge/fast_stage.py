@@ -131,16 +131,19 @@ def compile_for(solver: Solver) -> None:
     """Compile (or load from numba's disk cache) the stage embedding ``solver`` for
     :func:`argument_types`, without running it: what the native callback then links, and the
     Python callback calls (a first run compiles it in a second process meanwhile)."""
-    if not HAVE_NUMBA:
-        return
-    fn = {Solver.GAUSS: stage_gauss, Solver.MINV2: stage_minv2}.get(Solver(solver), stage)
-    fn.compile(argument_types())
+    if HAVE_NUMBA:
+        _by_solver(Solver(solver)).compile(argument_types())
 
 
 def stage_for(ip: np.ndarray):
     """The compiled stage for the packed scene ``ip``, embedding only the solve it needs (same
     call and numbers as :data:`stage`)."""
-    return stage_minv2 if solver_of(ip) is Solver.MINV2 else stage_gauss
+    return _by_solver(solver_of(ip))
+
+
+def _by_solver(solver: Solver):
+    """The compiled stage embedding ``solver`` (:data:`stage` for ``Solver.ANY``)."""
+    return {Solver.GAUSS: stage_gauss, Solver.MINV2: stage_minv2}.get(solver, stage)
 
 
 def geometry(model) -> np.ndarray:

@@ -353,15 +353,14 @@ def kernel_halves_state(scene: Scene) -> list[CacheState] | None:
     (:mod:`analytic.kernel.halves`: stages 1-6 and the solve its :class:`analytic.fast.FastModel`
     uses), read without compiling; None when the kernel does not serve the scene (numba absent,
     or a weighting it does not compile). Imports only the analytic side."""
-    from analytic import fast
     from analytic.kernel.entry import Solver
 
-    fm = fast.FastModel(scene)  # ip untouched: no half compiled
-    if not fm.compiled:
+    solver = _compiled_solver(scene)
+    if solver is None:
         return None
     from analytic.kernel import halves
 
-    minv2_solve = fm.solver is Solver.MINV2
+    minv2_solve = solver is Solver.MINV2
     return [cache_state(halves.callback(h, minv2_solve)) for h in halves.KernelHalf]
 
 
@@ -397,43 +396,49 @@ def compile_kernel_half(scene: Scene, half: str) -> None:
     fast.compile_half(scene, half)
 
 
+def _compiled_solver(scene: Scene) -> Any:
+    """The solve (:class:`analytic.kernel.entry.Solver`) the scene's compiled kernel uses, read
+    from its :class:`analytic.fast.FastModel` without compiling anything (``ip`` untouched); None
+    when the kernel does not serve the scene (numba absent, or a weighting it does not compile)."""
+    from analytic import fast
+
+    if not fast.available():
+        return None
+    fm = fast.FastModel(scene)
+    return fm.solver if fm.compiled else None
+
+
 def compile_rhs(scene: Scene) -> None:
     """The analytic plant's compiled right-hand side (the stepping loop's C callback and the
     function it calls, :func:`analytic.compiled_stepping.prepare`) without running it: it calls
     the kernel's halves by address, so it compiles while they are still being compiled."""
-    from analytic import compiled_stepping, fast
+    solver = _compiled_solver(scene)
+    if solver is not None:
+        from analytic import compiled_stepping
 
-    if fast.available():
-        fm = fast.FastModel(scene)  # ip untouched: no half compiled
-        if fm.compiled:
-            compiled_stepping.prepare(int(fm.solver))
+        compiled_stepping.prepare(int(solver))
 
 
 def compile_stage(scene: Scene) -> None:
     """The MuJoCo plant's compiled stage for the scene's solve (:func:`mj_bridge.fast_stage.
     compile_for`), without running it: the native callback links it (compiled after it, it
     finds it on disk) and the Python callback calls it."""
-    from analytic import fast
+    solver = _compiled_solver(scene)
+    if solver is not None:
+        from mj_bridge import fast_stage
 
-    if fast.available():
-        fm = fast.FastModel(scene)  # ip untouched: no half compiled
-        if fm.compiled:
-            from mj_bridge import fast_stage
-
-            fast_stage.compile_for(fm.solver)
+        fast_stage.compile_for(solver)
 
 
 def compile_native(scene: Scene) -> None:
     """The MuJoCo plant's native controller callback (:func:`mj_bridge.native.compiled`) for the
     scene's solve, without running it (it calls the kernel's halves by address)."""
-    from analytic import fast
-
-    if fast.available():
-        fm = fast.FastModel(scene)  # ip untouched: no half compiled
+    solver = _compiled_solver(scene)
+    if solver is not None:
         from mj_bridge import native
 
-        if fm.compiled and native.available():
-            native.compiled(fm.solver)
+        if native.available():
+            native.compiled(solver)
 
 
 def compile_plant(scene: Scene, engine: str) -> None:
@@ -617,15 +622,12 @@ class _Helper:
         import multiprocessing as mp
 
         _numba_set_up()
-        pipes = {name: os.pipe() for name in ("stdin", "stdout", "stderr")}
-        child = {"stdin": pipes["stdin"][0], "stdout": pipes["stdout"][1]}
-        child["stderr"] = pipes["stderr"][1]
-        parent = [pipes["stdin"][1], pipes["stdout"][0], pipes["stderr"][0]]
-        for stream in (sys.stdout, sys.stderr):  # the child must not print this buffer again
-            try:
-                stream.flush()
-            except (OSError, ValueError, AttributeError):
-                pass
+        from validation.workers import flush_std_streams
+
+        (in_r, in_w), (out_r, out_w), (err_r, err_w) = os.pipe(), os.pipe(), os.pipe()
+        child = {"stdin": in_r, "stdout": out_w, "stderr": err_w}
+        parent = [in_w, out_r, err_r]
+        flush_std_streams()  # the child must not print this buffer again
         process = mp.get_context("fork").Process(
             target=_forked_main, args=(job, child, parent), name="tumble-compile", daemon=True
         )

@@ -305,6 +305,16 @@ def _ignore(_msg: Any) -> None:
     pass
 
 
+def flush_std_streams() -> None:
+    """Flush ``sys.stdout`` and ``sys.stderr`` before forking: else a child would print what this
+    process had buffered a second time (a closed or missing stream is left alone)."""
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except (OSError, ValueError, AttributeError):
+            pass
+
+
 def start(
     name: str,
     task: Callable[..., Any],
@@ -337,11 +347,7 @@ def start(
     ctx = mp.get_context("fork")
     conn, child_conn = ctx.Pipe(duplex=False)
     inbox_r, inbox_w = ctx.Pipe(duplex=False)
-    for stream in (sys.stdout, sys.stderr):  # a child must not print this process's buffer again
-        try:
-            stream.flush()
-        except (OSError, ValueError, AttributeError):
-            pass
+    flush_std_streams()  # a child must not print this process's buffer again
     _PARENT_ENDS[:] = [end for end in _PARENT_ENDS if not end.closed]
     _PARENT_ENDS.extend((conn, inbox_w))
     proc = ctx.Process(
@@ -424,6 +430,7 @@ __all__ = [
     "WorkerLost",
     "available_cpus",
     "can_fork",
+    "flush_std_streams",
     "idle_priority",
     "signals_deferred",
     "start",
