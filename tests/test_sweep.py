@@ -853,3 +853,105 @@ def test_python_m_validation_sweep_is_the_tumble_sweep_command_line():
     args = build_parser().parse_args(["sweep"])
     assert args.scene is None and args.t_end is None  # the defaults: DEFAULT_SCENE, 20 s
     assert sweep.DEFAULT_SCENE == SCENE and sweep.SweepConfig().t_end == 20.0
+
+
+def _poison_rotation(path: Path, delta: float = 1e-4) -> None:
+    """Rewrite the cache file at ``path`` with ``delta`` added to every rotation sample: the same
+    members, shapes and finiteness (and the stored digest left as it was)."""
+    with np.load(path, allow_pickle=False) as z:
+        members = {k: np.array(z[k]) for k in z.files}
+    members["R"] = members["R"] + delta
+    with open(path, "wb") as f:
+        np.savez(f, **members)
+
+
+def test_a_poisoned_reference_cache_file_fails_its_content_check(scene, tmp_path):
+    """A cache file whose rotation samples were shifted (still a well-formed, finite file of the
+    right key and shapes) is refused by its content check, said in one line, and recomputed."""
+    ex = _Inline()
+    good = reference.obtain_reference(scene, T_CACHE, ex, tmp_path)
+    path = Path(good.info["cache"]["path"])
+    _poison_rotation(path)
+    lines: list[str] = []
+    again = reference.obtain_reference(scene, T_CACHE, ex, tmp_path, say=lines.append)
+    assert ex.reference_runs == 4  # refused, recomputed
+    assert again.info["cache"]["status"] != "cached"
+    assert np.array_equal(again.samples.R, good.samples.R)  # the true samples, not the poisoned
+    said = [ln for ln in lines if "failed its content check" in ln]
+    assert len(said) == 1 and str(path) in said[0] and "recomputing" in said[0]
+    # replaced by a whole entry: the next sweep reads it, and it holds the true samples
+    final = reference.obtain_reference(scene, T_CACHE, ex, tmp_path)
+    assert final.info["cache"]["status"] == "cached" and ex.reference_runs == 4
+    assert np.array_equal(final.samples.R, good.samples.R)
+
+
+def _obtain_unblocked(scene, cache_dir: Path, path: Path, ex: Executor, lines: list[str]):
+    """``obtain_reference`` in a thread; should it block on the FIFO at ``path``, a writer is
+    opened there to release it and the test fails."""
+    import os
+    import threading
+
+    box: dict = {}
+
+    def work():
+        box["ref"] = reference.obtain_reference(scene, T_CACHE, ex, cache_dir, say=lines.append)
+
+    th = threading.Thread(target=work, daemon=True)
+    th.start()
+    th.join(120)
+    if th.is_alive():
+        fd = os.open(path, os.O_WRONLY | os.O_NONBLOCK)  # release the blocked reader
+        os.close(fd)
+        th.join(30)
+        pytest.fail(f"obtain_reference blocked on the FIFO at {path}")
+    return box["ref"]
+
+
+def test_a_fifo_at_the_reference_cache_path_is_not_read(scene, tmp_path):
+    """A FIFO at the cache file's name is not read (no hang): one line says so, the reference is
+    computed, and the FIFO, which the tool did not create, is left as it is (not stored)."""
+    import os
+    import stat
+
+    key = reference.cache_key(scene, T_CACHE)
+    path = reference.cache_path(tmp_path, key)
+    os.mkfifo(path)
+    ex, lines = _Inline(), []
+    ref = _obtain_unblocked(scene, tmp_path, path, ex, lines)
+    assert ex.reference_runs == 2 and ref.info["cache"]["status"].startswith("computed")
+    said = [ln for ln in lines if "FIFO" in ln]
+    assert len(said) == 1 and "not read" in said[0]
+    assert stat.S_ISFIFO(os.lstat(path).st_mode)
+    assert "not stored" in ref.info["cache"]["status"]
+    assert sum("not stored" in ln for ln in lines) == 1
+    # the next sweep does the same, again without blocking
+    _obtain_unblocked(scene, tmp_path, path, ex, [])
+    assert ex.reference_runs == 4
+
+
+def test_a_directory_or_link_at_the_reference_cache_path_is_left_alone(scene, tmp_path):
+    """A directory at the cache file's name is neither read nor replaced (the reference is computed
+    and not stored, said in one line); a symbolic link there is not followed."""
+    import os
+
+    key = reference.cache_key(scene, T_CACHE)
+    path = reference.cache_path(tmp_path, key)
+    path.mkdir()
+    (path / "user-file").write_text("kept")
+    ex, lines = _Inline(), []
+    ref = reference.obtain_reference(scene, T_CACHE, ex, tmp_path, say=lines.append)
+    assert ex.reference_runs == 2 and "not stored" in ref.info["cache"]["status"]
+    assert (path / "user-file").read_text() == "kept"
+    assert sum("directory" in ln and "not read" in ln for ln in lines) == 1
+    assert sum("not stored" in ln for ln in lines) == 1
+    # a link to a good entry elsewhere is not followed: it is computed here
+    elsewhere = tmp_path / "elsewhere"
+    reference.obtain_reference(scene, T_CACHE, ex, elsewhere)
+    linked = tmp_path / "linked"
+    linked.mkdir()
+    target = reference.cache_path(elsewhere, key)
+    os.symlink(target, reference.cache_path(linked, key))
+    runs = ex.reference_runs
+    via_link = reference.obtain_reference(scene, T_CACHE, ex, linked)
+    assert ex.reference_runs == runs + 2 and via_link.info["cache"]["status"] != "cached"
+    assert target.is_file()  # the link's target is untouched

@@ -13,8 +13,21 @@ the cache directory (:func:`default_cache_dir`), written atomically (:mod:`valid
 The key is a SHA-256 of the resolved scene (every field but its name, description and source
 path), the horizon, the reference's settings and the code that computes it (the source of
 ``analytic/`` and of the error measure, the versions of Python, numpy, scipy and numba). A file is
-used only when it loads (no pickles), carries the same key and holds finite samples on the
-expected output grid; anything else is refused, recomputed and overwritten.
+used only when it loads (no pickles), passes its content check, carries the same key and holds
+finite samples on the expected output grid; anything else is refused, recomputed and overwritten
+(atomically), with one line saying so.
+
+**The content check.** Each file carries a SHA-256 (:func:`content_digest`) over its arrays (each
+one's name, dtype, shape and bytes, in the fixed order of :data:`ARRAY_KEYS`) and its metadata
+(the key, the layout version and how the reference was computed). A file whose bytes were changed
+after it was written (a poisoned rotation sample, a flipped bit that leaves the zip readable) no
+longer matches and is recomputed, never used.
+
+**Never blocking.** A cache file is opened with ``O_NOFOLLOW | O_NONBLOCK`` and used only when the
+descriptor is a regular file: a FIFO, a device, a directory or a symbolic link at its name is not
+read (one line says so) and the reference is computed; the new entry is then stored only where
+:func:`validation.atomic.write_bytes` may write it, and otherwise not stored (one line says so):
+what sits at the name, which the tool did not create, is left as it is.
 """
 
 from __future__ import annotations
@@ -27,6 +40,7 @@ import json
 import math
 import os
 import platform
+import stat
 from collections.abc import Callable, Mapping
 from concurrent.futures import Executor
 from dataclasses import dataclass
@@ -48,14 +62,27 @@ from validation.sweep.metrics import RefSamples
 
 CACHE_ENV = "TUMBLE_CACHE_DIR"
 """Environment variable naming the cache directory (default: the user's cache directory)."""
-CACHE_FORMAT = 1
+CACHE_FORMAT = 2
 """Version of the cache file's layout; part of the key."""
+ARRAY_KEYS = ("t", "R", "u", "p", "scales")
+"""The sample arrays of a cache file, in the order :func:`content_digest` hashes them."""
+DIGEST_MEMBER = "sha256"
+"""The member of a cache file holding its :func:`content_digest` (hex)."""
 SCENE_LABELS = frozenset({"name", "description", "source"})
 """Fields of a scene that name it without changing its motion: left out of the key."""
 
 
 class CacheRefused(ValueError):
     """A cache file that is not a usable reference (unreadable, another key, bad samples)."""
+
+
+class ContentCheckFailed(CacheRefused):
+    """A cache file whose arrays or metadata do not match the SHA-256 it carries."""
+
+
+class NotRegularFile(CacheRefused):
+    """Something other than a regular file (a FIFO, a device, a directory, a symbolic link) sits
+    at a cache file's name: it is not read."""
 
 
 @dataclass(frozen=True)
@@ -236,33 +263,109 @@ def cache_path(cache_dir: str | Path, key: str) -> Path:
     return Path(cache_dir) / f"reference-{key}.npz"
 
 
+def content_digest(meta_json: str, arrays: Mapping[str, np.ndarray]) -> str:
+    """The hex SHA-256 a cache file carries: over ``meta_json`` (the metadata as stored, UTF-8)
+    and, for each name of :data:`ARRAY_KEYS` in that order, the name, the array's dtype
+    (``dtype.str``, byte order included), its shape and its bytes in C order."""
+    h = hashlib.sha256()
+    meta_bytes = meta_json.encode("utf-8")
+    h.update(b"meta %d\n" % len(meta_bytes) + meta_bytes)
+    for name in ARRAY_KEYS:
+        a = np.ascontiguousarray(arrays[name])
+        head = f"\n{name} {a.dtype.str} {list(a.shape)} {a.nbytes}\n"
+        h.update(head.encode("ascii"))
+        h.update(a.tobytes(order="C"))
+    return h.hexdigest()
+
+
 def _encode(ref: Reference, key: str) -> bytes:
-    meta = {"key": key, "format": CACHE_FORMAT, "info": dict(ref.info)}
+    meta_json = json.dumps({"key": key, "format": CACHE_FORMAT, "info": dict(ref.info)})
     s = ref.samples
+    arrays = {
+        "t": np.asarray(s.t, dtype=float),
+        "R": np.asarray(s.R, dtype=float),
+        "u": np.asarray(s.u, dtype=float),
+        "p": np.asarray(s.p, dtype=float),
+        "scales": np.array([s.R_scale, s.p_scale], dtype=float),
+    }
     buf = io.BytesIO()
     np.savez(
         buf,
-        meta=np.array(json.dumps(meta)),
-        t=s.t,
-        R=s.R,
-        u=s.u,
-        p=s.p,
-        scales=np.array([s.R_scale, s.p_scale]),
+        meta=np.array(meta_json),
+        **{DIGEST_MEMBER: np.array(content_digest(meta_json, arrays))},
+        **arrays,
     )
     return buf.getvalue()
 
 
-def load_cached(path: str | Path, key: str, times: np.ndarray) -> Reference:
-    """The reference stored at ``path``; :class:`CacheRefused` unless it is whole, carries ``key``
-    and holds finite samples at ``times`` (s, the expected output grid)."""
+def _open_regular(path: str | Path) -> int:
+    """A read-only descriptor of the regular file at ``path``, opened without following a
+    symbolic link and without blocking (a FIFO with no writer, a device).
+
+    Raises:
+        FileNotFoundError: nothing at ``path``.
+        NotRegularFile: a FIFO, device, directory or symbolic link at ``path``.
+        CacheRefused: any other failure to open it.
+    """
+    flags = os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_NONBLOCK", 0)
+    flags |= getattr(os, "O_CLOEXEC", 0)
     try:
-        with np.load(path, allow_pickle=False) as z:
-            arrays = {k: np.array(z[k]) for k in ("meta", "t", "R", "u", "p", "scales")}
-        meta = json.loads(str(arrays["meta"]))
+        fd = os.open(path, flags)
     except FileNotFoundError:
         raise
-    except Exception as exc:  # a damaged file fails in many ways (zip, CRC, json, missing member)
+    except OSError as exc:  # ELOOP: a symbolic link; EISDIR, ENXIO (a socket) ...
+        try:
+            kind = _kind(os.lstat(path).st_mode)
+        except OSError:
+            kind = "unopenable entry"
+        if kind != "regular file":
+            raise NotRegularFile(f"{path}: a {kind}, not a regular file") from exc
+        raise CacheRefused(f"{path}: cannot be opened ({exc.strerror or exc})") from exc
+    mode = os.fstat(fd).st_mode
+    if not stat.S_ISREG(mode):
+        os.close(fd)
+        raise NotRegularFile(f"{path}: a {_kind(mode)}, not a regular file")
+    return fd
+
+
+def _kind(mode: int) -> str:
+    """What a file mode describes, in words."""
+    kinds = (
+        (stat.S_ISREG, "regular file"),
+        (stat.S_ISDIR, "directory"),
+        (stat.S_ISLNK, "symbolic link"),
+        (stat.S_ISFIFO, "FIFO"),
+        (stat.S_ISCHR, "character device"),
+        (stat.S_ISBLK, "block device"),
+        (stat.S_ISSOCK, "socket"),
+    )
+    return next((word for test, word in kinds if test(mode)), "special file")
+
+
+def _read_members(path: str | Path) -> tuple[str, str, dict[str, np.ndarray]]:
+    """The metadata (JSON text), the stored digest and the arrays of the cache file at ``path``
+    (:func:`_open_regular`; no pickles)."""
+    fd = _open_regular(path)
+    try:
+        with os.fdopen(fd, "rb") as f, np.load(f, allow_pickle=False) as z:
+            members = {k: np.array(z[k]) for k in ("meta", DIGEST_MEMBER, *ARRAY_KEYS)}
+    except Exception as exc:  # a damaged file fails in many ways (zip, CRC, missing member)
         raise CacheRefused(f"{path}: unreadable ({type(exc).__name__}: {exc})") from exc
+    meta_json, digest = str(members.pop("meta")), str(members.pop(DIGEST_MEMBER))
+    return meta_json, digest, members
+
+
+def load_cached(path: str | Path, key: str, times: np.ndarray) -> Reference:
+    """The reference stored at ``path``; :class:`CacheRefused` unless it is a regular file
+    (:class:`NotRegularFile`), whole, matches the SHA-256 it carries (:class:`ContentCheckFailed`),
+    carries ``key`` and holds finite samples at ``times`` (s, the expected output grid)."""
+    meta_json, digest, arrays = _read_members(path)
+    if content_digest(meta_json, arrays) != digest:
+        raise ContentCheckFailed(f"{path}: its arrays or metadata do not match its SHA-256")
+    try:
+        meta = json.loads(meta_json)
+    except ValueError as exc:
+        raise CacheRefused(f"{path}: unreadable metadata ({exc})") from exc
     if not isinstance(meta, dict) or meta.get("key") != key:
         raise CacheRefused(f"{path}: stored for another scene, horizon or code version")
     t, R, u, p, scales = (arrays[k] for k in ("t", "R", "u", "p", "scales"))
@@ -308,6 +411,12 @@ def obtain_reference(
         ref = load_cached(path, key, times)
     except FileNotFoundError:
         cache["status"] = "computed (not in the cache)"
+    except ContentCheckFailed as exc:
+        cache["status"] = f"computed (cache file refused: {exc})"
+        say(f"  sweep reference cache entry {path} failed its content check; recomputing")
+    except NotRegularFile as exc:
+        cache["status"] = f"computed (cache file refused: {exc})"
+        say(f"  sweep reference cache entry {exc}; not read, recomputing")
     except CacheRefused as exc:
         cache["status"] = f"computed (cache file refused: {exc})"
         say(f"  reference cache refused, recomputing: {exc}")
@@ -318,19 +427,23 @@ def obtain_reference(
     ref = compute_reference(scene, t_end, executor)
     try:
         store_cached(path, key, ref, times)
-    except OSError as exc:  # a read-only or full cache directory: the sweep goes on without it
+    except OSError as exc:  # a read-only or full cache directory, a directory at the name
         cache["status"] += f"; not stored ({exc})"
+        say(f"  reference not stored in the cache: {exc}")
     return Reference(ref.samples, {**ref.info, "cache": cache})
 
 
 __all__ = [
     "CACHE_ENV",
     "CacheRefused",
+    "ContentCheckFailed",
+    "NotRegularFile",
     "Reference",
     "cache_key",
     "cache_path",
     "code_fingerprint",
     "compute_reference",
+    "content_digest",
     "default_cache_dir",
     "load_cached",
     "obtain_reference",
