@@ -20,6 +20,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
+import re
 import stat
 import tomllib
 import warnings
@@ -68,6 +69,12 @@ MAX_SCENE_BYTES = 1 << 20
 # The reference numpy model and MuJoCo's dense mass matrix hold (n+7)² doubles: 0.8 GB each at
 # n = 10⁴ (ten times the largest benchmarked n = 1000); a longer list is a mistake, not a scene.
 MAX_MASSES = 10_000
+# Lists and tables nested in one another: the deepest value of the format is four levels below the
+# document ([hard_case] checks, masses.inertia_body: a table, a list, a matrix, its rows). Python's
+# TOML parser recurses once per level of brackets (its RecursionError comes near 300-1000 levels),
+# and dotted keys build deeper tables without it (`a.a.a... = 1`), which every later walk of the
+# document (repr, copies, JSON) would recurse through: deeper than this is refused at load.
+MAX_SCENE_NESTING = 16
 # Every output sample holds the state, accelerations, control and invariants of each plant (about
 # 1 KB for the paper scenes, n + 7 ≤ 12): 10⁶ samples are ~1 GB per plant before the comparison,
 # figures and recording, and a hundred times the largest built-in grid (1000 s at 10 Hz).
@@ -692,8 +699,14 @@ def load_scene(path: str | Path) -> Scene:
         text = raw.decode("utf-8")
     except UnicodeDecodeError:
         raise ValueError(f"scene: not UTF-8 text (got {given!r})") from None
+    _check_text_nesting(text, given)
     try:
         data = tomllib.loads(text)
+    except RecursionError:  # (the scan above refuses such files first; kept as a safety net)
+        raise ValueError(
+            f"scene: nested deeper than {MAX_SCENE_NESTING} levels of lists and tables "
+            f"(in {given!r})"
+        ) from None
     except tomllib.TOMLDecodeError as exc:
         raise ValueError(f"scene: not valid TOML in {given!r} ({exc})") from None
     except ValueError as exc:  # e.g. an integer literal of more than 4300 digits
@@ -702,8 +715,77 @@ def load_scene(path: str | Path) -> Scene:
     return scene_from_dict(data, source=source)
 
 
+# TOML tokens that can hold a bracket which is not one: strings (multi-line ones first) and
+# comments; then the brackets themselves and newlines.
+_TOML_TOKENS = re.compile(
+    r'"""(?:\\.|[^\\])*?"""(?:"{1,2})?'
+    r"|'''[\s\S]*?'''(?:'{1,2})?"
+    r'|"(?:\\.|[^"\\\n])*"'
+    r"|'[^'\n]*'"
+    r"|#[^\n]*"
+    r"|[\[\]{}\n]"
+)
+_TOML_HEADER = re.compile(r"\s*\[\[?\s*([^\]]*?)\s*\]")
+
+
+def _check_text_nesting(text: str, given: str) -> None:
+    """Refuse TOML text whose arrays and inline tables nest deeper than :data:`MAX_SCENE_NESTING`,
+    before the parser (which recurses once per level) reads it; the message names the key (dotted,
+    under the last table header) and the line. Strings and comments are skipped; the scan is
+    linear in the text."""
+    depth, line, line_start, table, key = 0, 1, 0, "", ""
+    for tok in _TOML_TOKENS.finditer(text):
+        c = tok.group()
+        if c == "\n" or c[0] in "\"'#":
+            if "\n" in c:
+                line += c.count("\n")
+                line_start = tok.start() + c.rindex("\n") + 1
+            continue
+        if c in "[{":
+            if depth == 0:
+                head = text[line_start : tok.start()]
+                if not head.strip():  # a [table] header: its name is the table of what follows
+                    m = _TOML_HEADER.match(text, line_start)
+                    table, key = (m.group(1) if m else ""), ""
+                elif "=" in head:
+                    key = head.split("=", 1)[0].strip()
+            depth += 1
+            if depth > MAX_SCENE_NESTING:
+                dotted = ".".join(x for x in (table, key) if x) or "scene"
+                raise ValueError(
+                    f"{dotted}: nested deeper than {MAX_SCENE_NESTING} levels of lists and tables "
+                    f"(line {line} of {given!r})"
+                )
+        else:
+            depth = max(depth - 1, 0)
+
+
+def _check_nesting(data: Any, source: str = "") -> None:
+    """Refuse a document whose lists and tables nest deeper than :data:`MAX_SCENE_NESTING` below
+    it (dotted keys build deep tables without brackets), naming the dotted path of the first value
+    beyond the limit. Iterative, so a document of any depth (or one that holds itself) is walked
+    without recursion."""
+    stack: list[tuple[Any, str, int]] = [(data, "", 0)]
+    while stack:
+        node, path, depth = stack.pop()
+        if isinstance(node, Mapping):
+            children = ((f"{path}.{k}" if path else str(k), v) for k, v in node.items())
+        elif isinstance(node, list | tuple):
+            children = ((f"{path}[{i}]", v) for i, v in enumerate(node))
+        else:
+            continue
+        if depth > MAX_SCENE_NESTING:
+            where = f" (in {source!r})" if source else ""
+            raise ValueError(
+                f"{path or 'scene'}: nested deeper than {MAX_SCENE_NESTING} levels of lists and "
+                f"tables{where}"
+            )
+        stack.extend((v, p, depth + 1) for p, v in children)
+
+
 def scene_from_dict(data: Mapping[str, Any], source: str = "") -> Scene:
     """Validate a scene given as nested dicts (the parsed TOML)."""
+    _check_nesting(data, source)
     top = _Table(data, "")
 
     meta = top.table("scene")
