@@ -15,6 +15,7 @@ import errno
 import hashlib
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -172,7 +173,7 @@ def test_users_directory_named_like_an_output_is_not_deleted(tmp_path):
     d = tmp_path / "d"
     (d / "report.md").mkdir(parents=True)
     (d / "report.md" / "chapter.txt").write_bytes(VICTIM)
-    with pytest.raises(ValueError, match="report.md"):
+    with pytest.raises(ValueError, match=r"report\.md"):
         _fake_run(d)
     assert _tree(d) == {"report.md": "dir", "report.md/chapter.txt": VICTIM}
 
@@ -218,7 +219,7 @@ def test_output_edited_after_the_run_is_not_replaced(tmp_path):
     _fake_run(d)
     (d / "report.md").write_bytes(b"# run\nmy notes on it\n")
     before = _tree(d)
-    with pytest.raises(ValueError, match="report.md"):
+    with pytest.raises(ValueError, match=r"report\.md"):
         _fake_run(d)
     assert _tree(d) == before
 
@@ -231,7 +232,7 @@ def test_listed_name_of_another_kind_is_not_replaced(tmp_path):
     (d / "run.rrd").mkdir()
     (d / "run.rrd" / "keep.txt").write_bytes(VICTIM)
     before = _tree(d)
-    with pytest.raises(ValueError, match="run.rrd"):
+    with pytest.raises(ValueError, match=r"run\.rrd"):
         _fake_run(d)
     assert _tree(d) == before
 
@@ -261,7 +262,7 @@ def test_forged_manifest_does_not_prove_ownership(tmp_path, manifest):
     (d / MANIFEST).write_bytes(manifest)
     (d / "notes.txt").write_bytes(b"")
     before = _tree(d)
-    with pytest.raises(ValueError, match=MANIFEST):
+    with pytest.raises(ValueError, match=re.escape(MANIFEST)):
         _fake_run(d)
     assert _tree(d) == before
 
@@ -275,7 +276,7 @@ def test_manifest_that_is_a_symlink_does_not_prove_ownership(tmp_path):
     (d / "report.md").write_bytes(b"x")
     (d / MANIFEST).symlink_to(real / MANIFEST)
     before = _tree(d)
-    with pytest.raises(ValueError, match=MANIFEST):
+    with pytest.raises(ValueError, match=re.escape(MANIFEST)):
         _fake_run(d)
     assert _tree(d) == before
 

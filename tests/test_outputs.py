@@ -26,6 +26,7 @@ from validation.cli import EXIT_FAILED, EXIT_SIGINT, EXIT_SIGTERM, EXIT_USAGE, m
 from validation.outputs import (
     MANIFEST,
     SLUG_MAX_LEN,
+    STAGING_MARKER,
     OutputBusy,
     RunState,
     default_out_dir,
@@ -285,12 +286,19 @@ def test_foreign_directories_are_never_replaced(tmp_path):
 
 
 def test_stale_staging_of_a_killed_run_is_cleaned(tmp_path):
+    """A killed run's staging directory (it carries the marker with its run id) is removed; a
+    look-alike without the marker is the user's and stays."""
     out = tmp_path / "v"
     stale = tmp_path / ".v.20000101T000000Z-deadbeef.partial"
     stale.mkdir()
+    (stale / STAGING_MARKER).write_text("20000101T000000Z-deadbeef\n")
     (stale / "run.rrd").write_bytes(b"half")
+    lookalike = tmp_path / ".v.20000101T000000Z-0badf00d.partial"
+    lookalike.mkdir()
+    (lookalike / "run.rrd").write_bytes(b"mine")
     _fake_run(out, {"report.md": b"x"})
-    assert not stale.exists() and _leftovers(tmp_path) == []
+    assert not stale.exists()
+    assert (lookalike / "run.rrd").read_bytes() == b"mine"
 
 
 def test_outputs_are_created_0644(tmp_path):
