@@ -147,7 +147,13 @@ class Plant(abc.ABC):
                 f"settings: the {self.engine.value} plant takes {self.settings_type.__name__} "
                 f"(got {type(settings).__name__})"
             )
-        return self._simulate(scene, settings, t, progress)
+        try:
+            return self._simulate(scene, settings, t, progress)
+        except MemoryError as exc:  # numpy's and C++'s (bad_alloc) often carry no message
+            detail = f": {exc}" if str(exc) else ""
+            raise MemoryError(
+                f"out of memory ({self.label} with {scene.n:,} masses{detail})"
+            ) from None
 
 
 @dataclass(frozen=True)

@@ -346,6 +346,9 @@ class PinocchioDynamics:
     def __init__(
         self, scene: Scene, controller: ControllerSource | str = ControllerSource.ANALYTIC_FAST
     ):
+        from mj_bridge.plants import check_pinocchio_size
+
+        check_pinocchio_size(scene)  # before Pinocchio allocates its data (n³)
         self.pin = import_pinocchio()
         self.scene = scene
         self.controller = PinocchioSettings(controller=controller).controller
