@@ -26,6 +26,7 @@ import json  # noqa: E402
 import sys  # noqa: E402
 import warnings  # noqa: E402
 from pathlib import Path  # noqa: E402
+from typing import NoReturn  # noqa: E402
 
 from validation import interrupts  # noqa: E402
 
@@ -36,13 +37,27 @@ EXIT_SIGTERM = 143  # 128 + SIGTERM
 
 
 def _positive_float(s: str) -> float:
+    """A positive finite number given on the command line; ``ArgumentTypeError`` quoting it."""
     try:
         v = float(s)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {s!r}") from None
+        raise argparse.ArgumentTypeError(f"must be a number (got {s!r})") from None
     if not v > 0 or v != v or v == float("inf"):
-        raise argparse.ArgumentTypeError(f"must be a positive finite number: {s!r}")
+        raise argparse.ArgumentTypeError(f"must be a positive finite number (got {s!r})")
     return v
+
+
+class _OneLineParser(argparse.ArgumentParser):
+    """An argument parser whose refusals are one line, as every other bad input's: ``tumble
+    validate: error: --dt: must be a positive finite number (got '0')``, exit 2 (no usage block;
+    ``--help`` is unchanged). Sub-commands' parsers are of this class too (argparse makes them of
+    their parent's)."""
+
+    def error(self, message: str) -> NoReturn:
+        text = message.splitlines()[0] if message else "bad arguments"
+        if text.startswith("argument "):  # "argument --dt: ..." -> "--dt: ..."
+            text = text[len("argument ") :]
+        self.exit(EXIT_USAGE, f"{self.prog}: error: {text}\n")
 
 
 def _add_scene_arg(p: argparse.ArgumentParser, default: str, builtin: list[str]) -> None:
@@ -291,7 +306,7 @@ def build_parser() -> argparse.ArgumentParser:
     from validation.scenes import DEFAULT_SIMULATE_SCENE, builtin_names
     from validation.sweep import DEFAULT_SCENE as DEFAULT_SWEEP_SCENE
 
-    parser = argparse.ArgumentParser(
+    parser = _OneLineParser(
         prog="tumble",
         description="Cross-validation testbed for tumbling multibody dynamics: the Koganti-Udwadia "
         "analytic model and a MuJoCo twin under one closed-form controller.",
@@ -457,6 +472,14 @@ def user_warnings():
         yield
 
 
+def _out_of_memory(exc: MemoryError) -> str:
+    """One line for a ``MemoryError``: ``out of memory (...)`` (its own message may be empty)."""
+    text = str(exc).splitlines()[0] if str(exc) else ""
+    if text.startswith("out of memory"):
+        return text
+    return f"out of memory ({text})" if text else "out of memory"
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run one ``tumble`` command; returns the exit status (see the module docstring)."""
     with interrupts.handled():
@@ -468,6 +491,9 @@ def main(argv: list[str] | None = None) -> int:
         except ValueError as exc:  # bad input (also OutputBusy: another run holds the directory)
             print(f"tumble: error: {exc}", file=sys.stderr)
             return EXIT_USAGE
+        except MemoryError as exc:  # often without a message: one line saying what it is
+            print(f"tumble: error: {_out_of_memory(exc)}", file=sys.stderr)
+            return EXIT_FAILED
         except OSError as exc:
             from validation.atomic import OutputError
 
