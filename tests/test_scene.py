@@ -543,3 +543,121 @@ def test_axis_angle_attitude_is_the_rotation_it_names_and_scipys_quaternion():
             np.testing.assert_allclose(S(u), rodrigues @ ref, atol=1e-14)
             want = Rotation.from_rotvec(axis * angle) * Rotation.from_matrix(ref)
             np.testing.assert_allclose(u, want.as_quat(scalar_first=True), atol=1e-14)
+
+
+# ------------------------------------------------------------------------------------------------
+# Hostile values (hypothesis): nesting of any depth and finite numbers whose products overflow
+# ------------------------------------------------------------------------------------------------
+
+from hypothesis import HealthCheck, given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+_CONTROLLED = S.builtin_scene_path("paper_example1_controlled").read_text(encoding="utf-8")
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(
+    depth=st.integers(S.MAX_SCENE_NESTING + 1, 4000),
+    how=st.sampled_from(["array", "inline_table", "dotted", "header"]),
+    where=st.sampled_from(["top", "thresholds", "hard_case", "masses"]),
+)
+def test_nesting_of_any_depth_is_one_named_value_error(tmp_path, depth, how, where):
+    """Lists, inline tables, dotted keys or headers nested beyond the bound, anywhere: a one-line
+    ValueError naming the file or the key, never a RecursionError."""
+    if how == "array":
+        value = "[" * depth + "]" * depth
+    elif how == "inline_table":
+        value = "{ k = " * depth + "1" + " }" * depth
+    else:
+        value = None
+    key = ".".join(["k"] * depth)
+    if how == "dotted":
+        line = f"{key} = 1"
+    elif how == "header":
+        line = f"[{where}.{key}]" if where != "top" else f"[{key}]"
+    else:
+        line = f"x = {value}"
+    if where == "top" or how == "header":
+        text = line + "\n" + _CONTROLLED if how != "header" else _CONTROLLED + "\n" + line + "\n"
+    else:
+        text = _CONTROLLED + f"\n[{where}.deep]\n{line}\n"
+    path = tmp_path / "deep.toml"
+    path.write_text(text, encoding="utf-8")
+    with pytest.raises(ValueError) as exc:
+        load_scene(path)
+    msg = str(exc.value)
+    assert "nested deeper than" in msg and "\n" not in msg, msg
+
+
+_NUMERIC = [
+    ("initial", "omega"),
+    ("initial", "Rdot"),
+    ("initial", "R"),
+    ("initial", "p"),
+    ("initial", "pdot"),
+    ("rod", "offset"),
+    ("masses", "p_e"),
+    ("springs", "k_linear"),
+    ("springs", "k_cubic"),
+    ("gravity", "vector"),
+    ("control.omega", "b"),
+    ("control.omega", "sigma"),
+    ("control.omega", "gamma"),
+    ("control.masses", "l"),
+    ("control.masses", "lambda"),
+    ("control.masses", "alpha"),
+    ("control.masses", "beta"),
+    ("stabilization", "delta1"),
+    ("stabilization", "delta2"),
+]
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    field=st.sampled_from(_NUMERIC),
+    exponent=st.integers(40, 308),
+    mantissa=st.floats(1.0, 1.79),
+    sign=st.sampled_from([1.0, -1.0]),
+    entry=st.integers(0, 2),
+)
+def test_huge_finite_values_load_with_finite_initial_quantities_or_are_named(
+    field, exponent, mantissa, sign, entry
+):
+    """A finite value up to 1.79e308 in any numeric field: either refused by a one-line ValueError
+    naming a field, or loaded with every derived initial quantity finite (so no plant meets a
+    non-finite initial state)."""
+    data = tomllib.loads(_CONTROLLED)
+    table = data
+    for part in field[0].split("."):
+        table = table.setdefault(part, {})
+    big = sign * mantissa * 10.0**exponent if exponent < 308 else sign * min(mantissa, 1.79) * 1e308
+    old = table.get(field[1])
+    if isinstance(old, list):
+        new = list(old)
+        new[entry % len(new)] = big
+        table[field[1]] = new
+    else:
+        table[field[1]] = big
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        try:
+            sc = scene_from_dict(data)
+        except ValueError as exc:
+            msg = str(exc)
+            assert "\n" not in msg and msg.split(":")[0].split("[")[0] in _FIELD_NAMES, msg
+            return
+    with np.errstate(all="ignore"):
+        quantities = S._derived_quantities(sc, S._initial_fields(sc))
+    assert all(np.all(np.isfinite(v)) for _, v in quantities.values())
+    assert np.all(np.isfinite(sc.initial.q0())) and np.all(np.isfinite(sc.initial.qdot0()))
+
+
+_FIELD_NAMES = {f"{t}.{k}" for t, k in _NUMERIC} | {
+    "output.t_end",
+    "output.rate",
+    "initial.attitude.quaternion",
+    "rod.axis",
+    "body.mass",
+    "body.inertia",
+    "masses.mass",
+}
