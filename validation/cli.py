@@ -149,7 +149,7 @@ def cmd_validate(args: argparse.Namespace) -> int:
                 figure_formats=args.figure_format,
             )
         finally:
-            progress.close(walls=res.wall_times if res is not None else None)
+            progress.close(walls=res.wall_times if res is not None else None, stopped=res is None)
     n_fail = sum(1 for c in res.checks if not c.passed)
     verdict = "PASS" if res.passed else "FAIL"
     print(f"{verdict}: {len(res.checks) - n_fail}/{len(res.checks)} checks passed for {scene.name}")
@@ -165,18 +165,23 @@ def cmd_validate(args: argparse.Namespace) -> int:
     for v in res.verdicts:
         if v.kind is not VerdictKind.AGREE:
             print(f"  referee: {v.text}")
-    print(f"report: {res.out_dir / 'report.md'}  recording: {res.out_dir / 'run.rrd'}")
+    named = [f"{what}: {res.files[name]}" for what, name in _CLOSING_FILES if name in res.files]
+    print("  ".join(named))
     return 0 if res.passed else EXIT_FAILED
+
+
+_CLOSING_FILES = (("report", "report.md"), ("recording", "run.rrd"))
+"""The files ``tumble validate``'s closing line names, each only when the run wrote it."""
 
 
 def _checked_plants(scene, args: argparse.Namespace) -> list:
     """The input checks of :func:`validation.validate.run_validation` (bad input is refused before
     anything is compiled); returns the chosen plants."""
     from analytic.trajectory import Engine
-    from mj_bridge.plants import installed_plants, parse_plants, plant
-    from validation.preflight import check_validation_inputs
+    from mj_bridge.plants import plant
+    from validation.preflight import check_validation_inputs, validation_plants
 
-    chosen = parse_plants(args.plants) if args.plants is not None else installed_plants()
+    chosen = validation_plants(args.plants)
     mujoco = Engine.MUJOCO in chosen
     check_validation_inputs(
         scene, integrator=args.integrator, dt=args.dt, t_end=args.t_end, mujoco=mujoco

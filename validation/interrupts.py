@@ -48,7 +48,27 @@ def _keeping_interrupts(previous):
             return
         previous(unraisable)
 
+    hook.keeps_interrupts = True
     return hook
+
+
+def keep_swallowed() -> None:
+    """For the rest of this process, keep an interrupt a C caller swallowed for
+    :func:`raise_pending` (a worker process, :mod:`validation.workers`; :func:`handled` does it
+    for a block of the main process)."""
+    if not getattr(sys.unraisablehook, "keeps_interrupts", False):
+        sys.unraisablehook = _keeping_interrupts(sys.unraisablehook)
+
+
+def note_sigterm() -> None:
+    """Record that SIGTERM arrived (a handler other than this module's caught it)."""
+    global _sigterm
+    _sigterm = True
+
+
+def interrupt_name() -> str:
+    """``SIGTERM`` or ``Ctrl-C``: what stopped the run, for a report."""
+    return "SIGTERM" if _sigterm else "Ctrl-C"
 
 
 def raise_pending() -> None:

@@ -3,14 +3,17 @@
 :func:`check_validation_inputs` refuses, with a ``ValueError`` naming the field, what would
 otherwise be found only after the analytic plant has run (or after both have): a bad or unknown
 ``[thresholds]`` entry, a horizon or MuJoCo time step that does not fit the output grid, an
-integrator MuJoCo does not have, a run too long to hold.
+integrator MuJoCo does not have, a run too long to hold. :func:`validation_plants` refuses a
+choice of plants that leaves nothing to compare (one plant, or one plant named twice).
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
 from analytic.scene import Scene
+from analytic.trajectory import Engine
 from validation.thresholds import thresholds_for
 
 
@@ -39,4 +42,30 @@ def check_validation_inputs(
     plan_steps(scene, integrator, dt, t_end)  # MuJoCo's steps on that grid
 
 
-__all__ = ["check_validation_inputs"]
+def validation_plants(plants: Sequence[Engine | str] | str | None) -> tuple[Engine, ...]:
+    """The plants a validation runs, in report order: every installed one when ``plants`` is
+    None, else those named (engine names, or ``"analytic,mujoco"``).
+
+    Raises:
+        ValueError: naming ``plants`` and the value: an unknown or missing plant, a plant named
+            twice, or fewer than two (a validation compares plants with each other).
+    """
+    from mj_bridge.plants import installed_plants, parse_plants, plant
+
+    if plants is None:
+        return installed_plants()
+    text = plants if isinstance(plants, str) else ",".join(str(getattr(p, "value", p)) for p in plants)
+    named = [plant(n.strip()).engine for n in text.split(",") if n.strip()]
+    twice = sorted({e.value for e in named if named.count(e) > 1})
+    if twice:
+        raise ValueError(f"plants: {', '.join(twice)} named twice (got {text!r})")
+    chosen = parse_plants(text)
+    if len(chosen) < 2:
+        raise ValueError(
+            f"plants: a validation compares at least two plants (got {text!r}; "
+            "e.g. analytic,mujoco)"
+        )
+    return chosen
+
+
+__all__ = ["check_validation_inputs", "validation_plants"]

@@ -116,17 +116,25 @@ class StageProgress:
         """The stage reported last (None before any report)."""
         return self._last
 
-    def close(self, walls: Mapping[str, float] | None = None) -> None:
-        """End the display; not on a terminal, one line with each stage's wall time: ``walls``
-        where given (the stages' own measurements: stages in worker processes report through
-        pipes read in bursts, so first-to-last report can badly understate them), else from
-        each stage's first to its last report."""
+    def close(self, walls: Mapping[str, float] | None = None, stopped: bool = False) -> None:
+        """End the display; not on a terminal, one line: each stage's wall time, ``walls`` where
+        given (the stages' own measurements: stages in worker processes report through pipes
+        read in bursts, so first-to-last report can badly understate them), else from each
+        stage's first to its last report; but when the run ``stopped`` (an interrupt, a full
+        disk) or a stage fell short of the horizon, the simulated time each stage reached
+        instead of a wall time."""
         self.bar.close()
-        if walls:
-            self.walls.update({s: float(w) for s, w in walls.items() if s in self.walls})
         if self.walls and not self.tty:
-            times = ", ".join(f"{s} {w:.3g} s" for s, w in self.walls.items())
-            self.stream.write(f"{PREFIX}{self.label}: stages done ({times})\n")
+            short = any(t < self.t_end for t in self._reached.values())
+            if not (stopped or short):
+                if walls:
+                    self.walls.update({s: float(w) for s, w in walls.items() if s in self.walls})
+                times = ", ".join(f"{s} {w:.3g} s" for s, w in self.walls.items())
+                line = f"stages done ({times})"
+            else:
+                reached = ", ".join(f"{s} t = {t:.6g} s" for s, t in self._reached.items())
+                line = f"stages stopped (reached: {reached})"
+            self.stream.write(f"{PREFIX}{self.label}: {line}\n")
             self.stream.flush()
         self.walls = {}
         self._started = {}

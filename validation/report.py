@@ -2,7 +2,10 @@
 
 Every file is written atomically (a temporary file in the same directory, then :func:`os.replace`),
 so an interrupted run never leaves a half-written report. A failed run still writes what it has;
-its verdict is ``FAILED`` and the reason is stated first.
+its verdict is ``FAILED`` and the reason is stated first; a run a signal stopped is
+``INTERRUPTED``, said the same way (:class:`RunVerdict`). A file that cannot be written (a full
+disk) is an :class:`validation.atomic.OutputError`, never a verdict. Every string a scene or an
+error message brings into ``report.md`` is escaped to literal text on one line (:func:`_md`).
 
 The figures are drawn by :mod:`validation.figures` (``errors``, ``tracking``, ``invariants``,
 ``control``), written in each format asked for (PNG by default; SVG or PDF for papers) and
@@ -15,12 +18,15 @@ the summaries' ``max_abs`` of a signed rod force is its largest ``|F_i|``, not i
 
 from __future__ import annotations
 
+import errno
 import json
 import math
 import platform
+import re
 import sys
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from enum import StrEnum
 from importlib import metadata
 from pathlib import Path
 from typing import Any
@@ -28,7 +34,7 @@ from typing import Any
 import numpy as np
 
 from analytic.trajectory import Trajectory
-from validation.atomic import write_bytes
+from validation.atomic import OutputError, write_bytes
 from validation.compare import Comparison, Series
 from validation.figures import (
     DEFAULT_FORMATS,
@@ -45,9 +51,48 @@ from validation.provenance import FileKind, dumps, provenance
 from validation.referee import Verdict, summary_lines
 from validation.summary import check_sentence, max_abs
 
+
+class RunVerdict(StrEnum):
+    """A run's verdict, the first word of ``report.md`` after the scene's name and
+    ``report.json``'s ``verdict``: PASSED only when every check passed and nothing failed or was
+    left out (a plant, a figure, the recording); INTERRUPTED when a signal stopped the run."""
+
+    PASSED = "PASSED"
+    FAILED = "FAILED"
+    INTERRUPTED = "INTERRUPTED"
+
+    @classmethod
+    def of(cls, cmp: Comparison | None, failure: str, interrupted: bool = False) -> RunVerdict:
+        if interrupted:
+            return cls.INTERRUPTED
+        return cls.PASSED if cmp is not None and cmp.passed and not failure else cls.FAILED
+
+
+def _stopped(verdict: RunVerdict) -> str:
+    """How the failure line of ``report.md`` opens: ``The run failed`` / ``was interrupted``."""
+    return "was interrupted" if verdict is RunVerdict.INTERRUPTED else "failed"
+
+
 # ----------------------------------------------------------------------------------------------
 # Atomic writes
 # ----------------------------------------------------------------------------------------------
+
+
+WRITE_FAILURES = frozenset(
+    getattr(errno, name)
+    for name in ("ENOSPC", "EDQUOT", "EIO", "EROFS", "EFBIG", "ENFILE", "EMFILE", "EACCES", "EPERM")
+    if hasattr(errno, name)
+)
+"""The ``errno`` values of a filesystem that refuses a write (full, over quota, failing,
+read-only, too many files open, no permission)."""
+
+
+def is_write_failure(exc: BaseException) -> bool:
+    """Whether ``exc`` is the filesystem refusing a write (:data:`WRITE_FAILURES`, or an
+    :class:`validation.atomic.OutputError`), as opposed to a bug."""
+    return isinstance(exc, OutputError) or (
+        isinstance(exc, OSError) and exc.errno in WRITE_FAILURES
+    )
 
 
 def write_atomic(path: str | Path, data: bytes | str) -> Path:
@@ -104,9 +149,51 @@ def _short(info: Mapping[str, Any], longest: int = 20) -> dict[str, Any]:
 # ----------------------------------------------------------------------------------------------
 
 
-def _cell(text: str) -> str:
-    """Markdown table cell: a literal ``|`` would end the cell."""
-    return str(text).replace("|", "\\|")
+_MD_ESCAPES = str.maketrans(
+    {
+        "&": "&amp;",
+        "<": "&lt;",
+        ">": "&gt;",
+        "\\": "\\\\",
+        "`": "\\`",
+        "*": "\\*",
+        "[": "\\[",
+        "]": "\\]",
+        "|": "\\|",
+        "\n": " ",
+        "\r": " ",
+        "\t": " ",
+        "\v": " ",
+        "\f": " ",
+        "\x85": " ",
+        "\u2028": " ",
+        "\u2029": " ",
+    }
+)
+_MD_LINE_START = ("#", "-", "+", "=", ">", "~")
+
+
+def _md(text: Any) -> str:
+    """``text`` as literal Markdown on one line, safe in a table cell or after a list marker: HTML
+    special characters as entities (no tag or comment can open), the characters that make code,
+    emphasis, links or table cells backslash-escaped, every line break a space, and a leading
+    block marker (``#`` heading, ``-`` list, ``>`` quote ...) escaped. For every string a scene
+    or an error message brings into ``report.md``."""
+    out = str(text).translate(_MD_ESCAPES)
+    if out.startswith(_MD_LINE_START):
+        return "\\" + out
+    return re.sub(r"^(\d+)([.)])", r"\1\\\2", out)  # "1." would start a numbered list
+
+
+def _cell(text: Any) -> str:
+    """A Markdown table cell's text (:func:`_md`: a literal ``|`` would end the cell)."""
+    return _md(text)
+
+
+def _fenced_json(meta: Mapping[str, Any]) -> str:
+    """``meta`` as indented JSON for a fenced code block: a backtick (which could close the fence)
+    is written as its JSON escape ``\\u0060``, so the block ends where the report ends it."""
+    return json.dumps(_jsonable(meta), indent=2).replace("`", "\\u0060")
 
 
 def _fmt(x: float) -> str:
@@ -125,18 +212,21 @@ def _referee_lines(verdicts: Sequence[Verdict], meta: Mapping[str, Any]) -> list
     lines = ["## Referee", ""]
     plants = meta.get("plants", [])
     if plants:
-        lines += ["Plants: " + "; ".join(p["settings"] for p in plants) + ".", ""]
-    lines += [f"- {t}" for t in summary_lines(verdicts)]
+        lines += ["Plants: " + "; ".join(_md(p["settings"]) for p in plants) + ".", ""]
+    lines += [f"- {_md(t)}" for t in summary_lines(verdicts)]
     pairs = list(verdicts[0].values)
     lines += [
         "",
-        "| quantity | " + " | ".join(pairs) + " | threshold | unit | verdict |",
+        "| quantity | " + " | ".join(_cell(p) for p in pairs) + " | threshold | unit | verdict |",
         "|---|" + "---|" * (len(pairs) + 3),
     ]
     for v in verdicts:
         cells = " | ".join(_fmt(v.values.get(p, math.nan)) for p in pairs)
         who = f"{v.kind.value}: {v.outlier}" if v.outlier else v.kind.value
-        lines.append(f"| {v.quantity} | {cells} | {_fmt(v.threshold)} | {v.unit} | {who} |")
+        lines.append(
+            f"| {_cell(v.quantity)} | {cells} | {_fmt(v.threshold)} | {_cell(v.unit)} | "
+            f"{_cell(who)} |"
+        )
     lines += [
         "",
         "Values are each pair's maximum over time (relative for the forces). A plant is the "
@@ -212,7 +302,7 @@ def _figure_lines(figures: Sequence[FigureEntry]) -> list[str]:
     for f in figures:
         if not f.files:
             lines += [
-                f"*No {f.name} figure.* {f.caption}",
+                f"*No {_md(f.name)} figure.* {_md(f.caption)}",
                 "",
             ]
             continue
@@ -222,7 +312,7 @@ def _figure_lines(figures: Sequence[FigureEntry]) -> list[str]:
         lines += [
             f"![Figure {number}: {f.name}]({shown})",
             "",
-            f"*Figure {number} (`{shown}`).* {f.caption}"
+            f"*Figure {number} (`{shown}`).* {_md(f.caption)}"
             + (f" Also as {', '.join(f'[{x}]({x})' for x in also)}." if also else ""),
             "",
         ]
@@ -231,7 +321,7 @@ def _figure_lines(figures: Sequence[FigureEntry]) -> list[str]:
 
 def render_markdown(
     cmp: Comparison | None,
-    verdict: str,
+    verdict: RunVerdict | str,
     failure: str,
     figures: Sequence[FigureEntry],
     meta: Mapping[str, Any],
@@ -240,9 +330,10 @@ def render_markdown(
     """The text of ``report.md``: the verdict first, then the referee, checks, summaries,
     figures with their captions, thresholds and the run's metadata."""
     scene = meta.get("scene", {}).get("name", cmp.scene if cmp else "?")
-    lines = [f"# {scene}: {verdict}", ""]
+    verdict = RunVerdict(getattr(verdict, "value", verdict))
+    lines = [f"# {_md(scene)}: {verdict.value}", ""]
     if failure:
-        lines += [f"**The run failed:** {failure}", ""]
+        lines += [f"**The run {_stopped(verdict)}:** {_md(failure)}", ""]
     if cmp is not None:
         bad = cmp.failed_checks
         total = len(cmp.checks)
@@ -251,7 +342,7 @@ def render_markdown(
             lines.append(f"- {_cell(check_sentence(c))}")
         lines.append("")
         for n in cmp.notes:
-            lines.append(f"> {n}")
+            lines.append(f"> {_md(n)}")
         if cmp.notes:
             lines.append("")
         lines += _referee_lines(verdicts, meta)
@@ -263,7 +354,7 @@ def render_markdown(
         ]
         for c in cmp.checks:
             lines.append(
-                f"| {c.label} | {_fmt(c.value)} | {_fmt(c.threshold)} | {c.unit} | "
+                f"| {_cell(c.label)} | {_fmt(c.value)} | {_fmt(c.threshold)} | {_cell(c.unit)} | "
                 f"{'pass' if c.passed else '**FAIL**'} | {_fmt(c.t_max)} |"
             )
         lines += [
@@ -282,7 +373,7 @@ def render_markdown(
             m = SeriesSummary.of(s)
             lines.append(
                 f"| {_cell(s.label)} | {s.subject.value} | {_fmt(m.max_abs)} | "
-                f"{_fmt(m.t_max_abs)} | {_fmt(m.rms)} | {_fmt(m.final)} | {s.unit} |"
+                f"{_fmt(m.t_max_abs)} | {_fmt(m.rms)} | {_fmt(m.final)} | {_cell(s.unit)} |"
             )
         lines += [
             "",
@@ -298,10 +389,11 @@ def render_markdown(
         for th in cmp.thresholds.values():
             kind = " (relative)" if th.relative else ""
             lines.append(
-                f"| {th.name} | {th.value:g}{kind} | {th.unit} | {th.source} | {_cell(th.reason)} |"
+                f"| {_cell(th.name)} | {th.value:g}{kind} | {_cell(th.unit)} | {_cell(th.source)} | "
+                f"{_cell(th.reason)} |"
             )
         lines.append("")
-    lines += ["## Run", "", "```json", json.dumps(_jsonable(meta), indent=2), "```", ""]
+    lines += ["## Run", "", "```json", _fenced_json(meta), "```", ""]
     return "\n".join(lines)
 
 
@@ -317,12 +409,15 @@ def _pairwise(cmp: Comparison | None) -> dict[str, dict[str, float]]:
 @dataclass(frozen=True)
 class ReportFiles:
     """Paths written by :func:`write_report` (figures only those that were drawn, in every format
-    asked for) and every figure's entry (captions, including the figures not drawn)."""
+    asked for), every figure's entry (captions, including the figures not drawn), and the
+    verdict and failure the report states (a figure not drawn included)."""
 
     markdown: Path
     json: Path
     figures: tuple[Path, ...]
     entries: tuple[FigureEntry, ...] = ()
+    verdict: RunVerdict = RunVerdict.FAILED
+    failure: str = ""
 
 
 def draw_figures(
@@ -334,7 +429,10 @@ def draw_figures(
     names: Sequence[str] = FIGURES,
 ) -> tuple[list[Path], list[FigureEntry], list[str]]:
     """Draw every figure and write each drawn one in every format into ``out``; a figure that
-    fails to draw is named in the returned errors, it does not cost the report.
+    fails to draw is named in the returned errors (the report is still written, the run FAILED).
+    A file that cannot be written, or a drawing stopped by the filesystem (``ENOSPC``, ``EIO``
+    ... while matplotlib renders), raises :class:`validation.atomic.OutputError`: a figure
+    missing for want of disk is not a verdict.
 
     ``names``: which of :data:`validation.figures.FIGURES` to draw (all by default; workers
     share them). Returns the files written, every figure's entry (with its caption) and the
@@ -357,8 +455,13 @@ def draw_figures(
         try:
             drawing: Drawing = make()
             blobs = {f: drawing.render(f) for f in formats} if drawing.drawn else {}
-        except Exception as exc:  # a figure must not cost the report
-            errors.append(f"{name}: {type(exc).__name__}: {exc}")
+        except OSError as exc:
+            if not is_write_failure(exc):
+                errors.append(f"{name}: {type(exc).__name__}: {exc}".splitlines()[0])
+                continue
+            raise OutputError(out / f"{name}.{formats[0].value}", exc) from exc
+        except Exception as exc:  # a drawing bug: said in the report, the run FAILED
+            errors.append(f"{name}: {type(exc).__name__}: {exc}".splitlines()[0])
             continue
         written = [write_atomic(out / f"{name}.{f.value}", b) for f, b in blobs.items()]
         paths += written
@@ -376,6 +479,7 @@ def write_report(
     formats: Sequence[FigureFormat | str] = DEFAULT_FORMATS,
     scene: Any = None,
     figures: tuple[Sequence[Path], Sequence[FigureEntry], Sequence[str]] | None = None,
+    interrupted: bool = False,
 ) -> ReportFiles:
     """Write ``report.md``, ``report.json`` and the figures into ``out_dir`` (atomically).
 
@@ -391,15 +495,19 @@ def write_report(
         scene: the resolved scene, dumped whole into ``report.json``'s provenance block
             (:mod:`validation.provenance`; None when the run has none).
         figures: what :func:`draw_figures` returned for this run when it was drawn already (in
-            a worker, :mod:`validation.validate`); None draws them here.
+            a worker, :mod:`validation.validate`); None draws them here. A figure that could
+            not be drawn makes the run FAILED (its error joins ``failure``).
+        interrupted: a signal stopped the run: the verdict is INTERRUPTED (``failure`` says
+            where it stopped).
+
+    Raises:
+        OutputError: a file could not be written (a full disk ...): no verdict is given.
     """
     fmts = tuple(dict.fromkeys(_format(f) for f in formats))
     if not fmts:
         raise ValueError("figure_format: at least one format is needed (got none)")
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    passed = cmp is not None and cmp.passed and not failure
-    verdict = "PASSED" if passed else "FAILED"
     ctx = FigureContext.from_meta(meta, cmp.scene if cmp is not None else "")
     if figures is None:
         figures = draw_figures(out, cmp, plants, ctx, fmts)
@@ -407,14 +515,16 @@ def write_report(
     meta = dict(meta)
     if fig_errors:
         meta["figure_errors"] = fig_errors
-    doc = _report_doc(cmp, plants, meta, failure, verdicts, entries)
+        failure = "; ".join([*([failure] if failure else []), *(f"figure {e}" for e in fig_errors)])
+    verdict = RunVerdict.of(cmp, failure, interrupted)
+    doc = _report_doc(cmp, plants, meta, failure, verdicts, entries, verdict)
     js = write_atomic(
         out / "report.json", dumps({"provenance": provenance(FileKind.REPORT, scene), **doc})
     )
     md = write_atomic(
         out / "report.md", render_markdown(cmp, verdict, failure, entries, meta, verdicts)
     )
-    return ReportFiles(md, js, tuple(figs), tuple(entries))
+    return ReportFiles(md, js, tuple(figs), tuple(entries), verdict, failure)
 
 
 def _format(f: FigureFormat | str) -> FigureFormat:
@@ -432,13 +542,15 @@ def _report_doc(
     failure: str,
     verdicts: Sequence[Verdict],
     figures: Sequence[FigureEntry],
+    verdict: RunVerdict,
 ) -> dict[str, Any]:
     """The content of ``report.json`` (every field is built here, in one place)."""
-    passed = cmp is not None and cmp.passed and not failure
+    passed = verdict is RunVerdict.PASSED
     comparison = cmp.to_dict() if cmp is not None else {"checks": [], "notes": []}
     comparison["summaries"] = summaries(cmp)  # largest magnitudes (max_abs), not signed maxima
     return {
-        "verdict": "PASSED" if passed else "FAILED",
+        "verdict": verdict.value,
+        "interrupted": verdict is RunVerdict.INTERRUPTED,
         **comparison,
         "passed": passed,  # cmp.to_dict() has its own; the failure overrides
         "failure": failure,
@@ -476,11 +588,13 @@ __all__ = [
     "FIGURES",
     "FigureEntry",
     "ReportFiles",
+    "RunVerdict",
     "SeriesSummary",
     "figure_control",
     "figure_errors",
     "figure_invariants",
     "figure_tracking",
+    "is_write_failure",
     "render_markdown",
     "summaries",
     "versions",

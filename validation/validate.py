@@ -32,11 +32,17 @@ from validation.figures import (
     FigureFormat,
     parse_formats,
 )
-from validation.interrupts import raise_pending
+from validation.interrupts import interrupt_name, raise_pending
 from validation.outputs import OutputRun, output_run
-from validation.preflight import check_validation_inputs
+from validation.preflight import check_validation_inputs, validation_plants
 from validation.referee import Verdict, referee
-from validation.report import draw_figures, versions, write_report
+from validation.report import (
+    RunVerdict,
+    draw_figures,
+    is_write_failure,
+    versions,
+    write_report,
+)
 
 SCENES = Path(__file__).resolve().parent / "scenes"
 DEFAULT_SCENE = "paper_example1_controlled"
@@ -153,7 +159,8 @@ def run_validation(
         t_end: horizon, s (default the scene's ``[output] t_end``).
         progress: optional ``progress(stage, t)`` callback, stage the plant's name (a one-argument
             callable hears the analytic plant only).
-        plants: which plants (engine names, or ``"analytic,mujoco"``); default every installed
+        plants: which plants (engine names, or ``"analytic,mujoco"``), at least two, each named
+            once (:func:`validation.preflight.validation_plants`); default every installed
             plant (:func:`mj_bridge.plants.installed_plants`). With three, the referee names the
             plant that disagrees with the two that agree (:mod:`validation.referee`).
         figure_formats: the figures' file formats, PNG by default (``("png", "svg")`` adds SVG
@@ -170,17 +177,15 @@ def run_validation(
         ValueError: bad input (scene, plants, integrator, dt, t_end, out_dir), before any plant
             runs.
         OutputBusy: another run is writing into ``out_dir``.
-        OutputError: the files could not be written; ``out_dir`` keeps its previous contents.
+        OutputError: the files could not be written (a full disk, in any stage: the report,
+            a figure, the recording, in a worker too); ``out_dir`` keeps its previous contents
+            and no verdict is given. Also when a file the result names is not found whole in
+            the committed directory.
     """
-    from mj_bridge.plants import installed_plants, parse_plants, plant
+    from mj_bridge.plants import plant
 
     sc = _scene(scene)
-    if plants is None:
-        chosen = installed_plants()
-    elif isinstance(plants, str):
-        chosen = parse_plants(plants)
-    else:
-        chosen = parse_plants(",".join(str(getattr(p, "value", p)) for p in plants))
+    chosen = validation_plants(plants)
     check_validation_inputs(  # before any plant runs
         sc, integrator=integrator, dt=dt, t_end=t_end, mujoco=Engine.MUJOCO in chosen
     )
@@ -197,7 +202,33 @@ def run_validation(
         res = _validate_into(run, sc, runs, horizon, progress, formats, concurrent)
     files = {name: run.final(name) for name in res.files}
     files["manifest.json"] = run.final("manifest.json")
+    _check_committed(run.target, files)
     return dataclasses.replace(res, out_dir=run.target, files=files)
+
+
+def _check_committed(target: Path, files: dict[str, Path]) -> None:
+    """Every file the result names is in the committed directory, whole: listed in its
+    ``manifest.json`` with the size found there (the verdict is given only then).
+
+    Raises:
+        OutputError: a file is missing or not the size its manifest records.
+    """
+    import json
+
+    try:
+        listed = json.loads((target / "manifest.json").read_text(encoding="utf-8"))["files"]
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        raise OutputError(target / "manifest.json", f"not readable after the commit ({exc})") from exc
+    for name, path in files.items():
+        if name == "manifest.json":
+            continue
+        try:
+            size = path.stat().st_size
+        except OSError as exc:
+            raise OutputError(path, f"missing after the commit ({exc.strerror})") from exc
+        recorded = (listed.get(name) or {}).get("bytes")
+        if recorded != size:
+            raise OutputError(path, f"{size} bytes after the commit, the manifest says {recorded}")
 
 
 def _throttled(report: Callable[[float], None], horizon: float, every_s: float = 0.1):
@@ -252,8 +283,10 @@ def _evidence_task(share: Sequence[str], rec_args, fig_args, *, report) -> dict[
     if RECORDING in share and rec_args is not None:
         try:
             done["recording"] = _recording_task(*rec_args, report=report)
-        except Exception as exc:  # said in the report; the figures are still drawn
-            done["recording_error"] = exc.reason if isinstance(exc, OutputError) else _one_line(exc)
+        except Exception as exc:  # a bug: said in the report (FAILED); the figures are still drawn
+            if is_write_failure(exc):
+                raise _as_output_error(exc, rec_args[0]) from exc
+            done["recording_error"] = _one_line(exc)
     names = [n for n in share if n != RECORDING]
     if names:
         t0 = time.perf_counter()
@@ -262,15 +295,27 @@ def _evidence_task(share: Sequence[str], rec_args, fig_args, *, report) -> dict[
     return done
 
 
+def _as_output_error(exc: BaseException, path: Path) -> OutputError:
+    """``exc`` (a filesystem's refusal to write, :func:`validation.report.is_write_failure`) as
+    the :class:`OutputError` it means: the run's set cannot be completed."""
+    return exc if isinstance(exc, OutputError) else OutputError(path, exc)
+
+
 def _import_rerun() -> None:
     import rerun.blueprint  # noqa: F401
 
     import validation.recording  # noqa: F401  (scipy.spatial)
 
 
+def _prepare_rerun_and_figures() -> None:
+    _import_rerun()
+    _prepare_figures()
+
+
 def _prepare_figures() -> None:
     """matplotlib imported and one throw-away figure drawn (:func:`validation.figures.prepare_drawing`):
-    the evidence workers forked next inherit the fonts and caches their first figure needs."""
+    the fonts and caches the first figure needs are loaded (in an evidence worker, before it is
+    given its inputs)."""
     from validation.figures import prepare_drawing
 
     try:
@@ -287,15 +332,20 @@ def _run_plants(
     fork: bool,
     walls: dict[str, float],
     failures: list[str],
-    on_started: Callable[[], None] | None = None,
+    redone: list[str],
+    on_started: Callable[[Sequence[workers.Job]], None] | None = None,
 ) -> tuple[list[Trajectory], bool]:
     """Every plant's run, side by side in workers where ``fork`` (no more at a time than there are
     CPUs), else one after the other here. Returns the trajectories (in ``runs``' order) and
-    whether the run was interrupted; each plant's own wall time goes into ``walls``.
-    ``on_started()`` runs once, here, as soon as every plant has started."""
+    whether the run was interrupted; each plant's own wall time goes into ``walls``, a plant
+    whose worker was lost is redone here (said in ``redone``). ``on_started(jobs)`` runs once,
+    here, as soon as every plant has started (``jobs``: those running in workers).
+
+    An interrupt (Ctrl-C, SIGTERM) stops every plant at once (the workers are told,
+    :func:`validation.workers.wait`), starts no further one, and keeps what each reached."""
     slots = workers.available_cpus() if fork else 1
     queue = list(enumerate(runs))
-    running: list[tuple[int, Any, workers.Job]] = []
+    running: list[tuple[int, Any, Any, workers.Job]] = []
     done: dict[int, Trajectory] = {}
     interrupted = False
     try:
@@ -307,24 +357,26 @@ def _run_plants(
                 job = workers.start(
                     name, _plant_task, pl, settings, sc, horizon, on_message=report, fork=fork
                 )
-                running.append((k, pl, job))
+                running.append((k, pl, settings, job))
             if on_started is not None and not queue:  # every plant has started
                 on_started, then = None, on_started
                 try:
-                    then()
-                except KeyboardInterrupt:  # the plants heard it too: collect what they reached
+                    then([job for *_, job in running if job.forked])
+                except KeyboardInterrupt:  # the plants were told: collect what they reached
                     interrupted = True
-            if interrupted:  # Ctrl-C stops the run, it does not start the next plant
+            if interrupted:  # an interrupt stops the run, it does not start the next plant
                 failures += [f"{pl.label} plant: not run (interrupted)" for _, (pl, _) in queue]
                 queue = []
-            if all(job.forked for _, _, job in running):
-                interrupted |= workers.wait([job for _, _, job in running], first=True)
-                finished = [r for r in running if r[2].done]
+            if all(job.forked for *_, job in running):
+                jobs = [job for *_, job in running]
+                interrupted |= workers.wait(jobs, first=not interrupted, interrupted=interrupted)
+                finished = [r for r in running if r[3].done]
             else:  # a plant that runs here
-                finished = [next(r for r in running if not r[2].forked)]
-            for k, pl, job in finished:
-                running.remove((k, pl, job))
-                tr = _plant_outcome(pl, job, walls, failures)
+                finished = [next(r for r in running if not r[3].forked)]
+            for k, pl, settings, job in finished:
+                running.remove((k, pl, settings, job))
+                redo = _redo_plant(pl, settings, sc, horizon, progress)
+                tr = _plant_outcome(pl, job, walls, failures, redo, redone)
                 interrupted |= job.interrupted
                 if tr is None:
                     continue
@@ -333,19 +385,46 @@ def _run_plants(
                 if tr.status is not RunStatus.OK:
                     failures.append(f"{pl.engine.value} plant stopped early: {tr.message}")
     except BaseException:
-        workers.stop([job for _, _, job in running])
+        workers.stop([job for *_, job in running])
         raise
     return [done[k] for k in sorted(done)], interrupted
 
 
+def _redo_plant(
+    pl: Any, settings: Any, sc: Scene, horizon: float, progress: Progress | None
+) -> Callable[[], tuple[Any, float]]:
+    """The plant's run done here (its worker was lost): ``() -> (trajectory, wall)``."""
+    report = _stage_progress(progress, pl.engine.value) or _drop
+    return lambda: _plant_task(pl, settings, sc, horizon, report=report)
+
+
+def _drop(_msg: Any) -> None:
+    pass
+
+
 def _plant_outcome(
-    pl: Any, job: workers.Job, walls: dict[str, float], failures: list[str]
+    pl: Any,
+    job: workers.Job,
+    walls: dict[str, float],
+    failures: list[str],
+    redo: Callable[[], tuple[Any, float]],
+    redone: list[str],
 ) -> Trajectory | None:
-    """The plant's trajectory (its wall time into ``walls``), or None with the failure said."""
+    """The plant's trajectory (its wall time into ``walls``), or None with the failure said. A
+    plant whose worker was lost (killed, ``kill -9``; not by an interrupt) is run again here,
+    and ``redone`` says so."""
     try:
-        tr, wall = job.result()
+        try:
+            tr, wall = job.result()
+        except workers.WorkerLost as exc:
+            if job.interrupted:
+                raise KeyboardInterrupt(str(exc)) from None
+            redone.append(f"{pl.label} plant: {exc}; run again in the main process")
+            tr, wall = redo()
     except ValueError:
         raise  # the caller's input, not a failed run
+    except OutputError:
+        raise  # a file that could not be written: no verdict
     except workers.WorkerError as exc:
         if exc.kind == "ValueError":
             raise ValueError(exc.message) from None
@@ -362,18 +441,16 @@ def _plant_outcome(
     return tr
 
 
-def _worker_result(job: workers.Job, redo: Callable[[], Any], redo_interrupted: bool) -> Any:
-    """A worker's result; when its worker was lost, ``redo()`` does it here, and when it was
-    interrupted, too if ``redo_interrupted`` (the Ctrl-C that stopped the plants reached it while it
-    prepared: the partial run's evidence is still written), else the interrupt goes on."""
+def _worker_result(job: workers.Job, redo: Callable[[], Any], redone: list[str]) -> Any:
+    """An evidence worker's result; when its worker was lost, ``redo()`` does it here (said in
+    ``redone``). A file it could not write is an :class:`OutputError`; an interrupt goes on."""
     try:
         return job.result()
-    except workers.WorkerLost:
+    except workers.WorkerLost as exc:
+        if job.interrupted:
+            raise KeyboardInterrupt(str(exc)) from None
+        redone.append(f"{exc}; made again in the main process")
         return redo()
-    except KeyboardInterrupt:
-        if redo_interrupted:
-            return redo()
-        raise
     except workers.WorkerError as exc:
         raise RuntimeError(str(exc)) from None
 
@@ -445,29 +522,38 @@ def _validate_into(
     side in workers, and two more workers import rerun and matplotlib meanwhile, then write the
     recording and draw the figures side by side; the files are those of a run one stage after
     the other.
+
+    An interrupt (Ctrl-C, SIGTERM) at any stage stops every worker at once; the report of what
+    was reached is written, INTERRUPTED (no figures, no recording), and the interrupt raised
+    after it. A file that cannot be written raises :class:`OutputError` (no verdict, no files).
     """
     out = run.path
     walls: dict[str, float] = {}
     failures: list[str] = []
+    redone: list[str] = []
     t_all = time.perf_counter()
     fork = concurrent and workers.can_fork()
     jobs: list[workers.Job] = []
+    trajectories: list[Trajectory] = []
+    cmp: Comparison | None = None
+    verdicts: tuple[Verdict, ...] = ()
+    names = {pl.engine.value: pl.describe(settings) for pl, settings in runs}
+    interrupted = False
 
-    def start_evidence() -> None:
-        """Once every plant runs: matplotlib imported and its fonts and caches loaded by one
-        throw-away figure (the workers forked next inherit them, so it is done once) and
-        scipy.linalg (for the comparison) imported here at idle priority, then
-        the two evidence workers, one importing rerun meanwhile, also at idle priority: the
-        plants keep the CPUs."""
+    def start_evidence(plant_jobs: Sequence[workers.Job] = ()) -> None:
+        """Once every plant runs: scipy.linalg (for the comparison) imported here, then the two
+        evidence workers, each importing matplotlib (and loading its fonts and caches by one
+        throw-away figure) and one rerun meanwhile, at idle priority: the plants keep the CPUs.
+        This process stays at its own priority, so a signal is heard at once: it tells the
+        plants, and is raised once the import is whole."""
         if fork:
-            with workers.signals_deferred(), workers.idle_priority():
-                _prepare_figures()
+            with workers.signals_held(on_signal=lambda: workers.interrupt(plant_jobs)):
                 import scipy.linalg  # noqa: F401  (the comparison's exponentials, next)
         jobs[:] = [
             workers.start(
                 f"evidence {k + 1}",
                 _evidence_task,
-                prepare=_import_rerun if RECORDING in share else None,
+                prepare=_prepare_rerun_and_figures if RECORDING in share else _prepare_figures,
                 later=True,
                 idle_until_given=True,  # the plants keep the CPUs
                 fork=fork,
@@ -476,72 +562,52 @@ def _validate_into(
         ]
 
     try:
-        names = {pl.engine.value: pl.describe(settings) for pl, settings in runs}
         trajectories, interrupted = _run_plants(
-            runs, sc, horizon, progress, fork, walls, failures, on_started=start_evidence
+            runs,
+            sc,
+            horizon,
+            progress,
+            fork,
+            walls,
+            failures,
+            redone,
+            on_started=start_evidence,
         )
-        if not jobs:
-            start_evidence()
-        cmp: Comparison | None = None
-        verdicts: tuple[Verdict, ...] = ()
         if trajectories and trajectories[0].t.size:
-            try:
-                t0 = time.perf_counter()
-                cmp = compare_plants(trajectories, sc, t_end=horizon)
-                walls["compare"] = time.perf_counter() - t0
-                verdicts = referee(cmp, names)
-            except Exception as exc:
-                failures.append(f"comparison: {_one_line(exc)}")
-                traceback.print_exc()
-        meta = _meta(run, sc, runs, names, horizon, verdicts)
-        ctx = FigureContext.from_meta(meta, cmp.scene if cmp is not None else "")
-        rec_args = (out / RECORDING, sc, trajectories, cmp, run.run_id) if trajectories else None
-        fig_args = (out, cmp, trajectories, ctx, formats)
-        # The worker without a recording first: the other may still be importing rerun, and a
-        # pipe blocks until its reader reads.
-        by_readiness = sorted(
-            zip(jobs, EVIDENCE_SHARES, strict=True), key=lambda js: RECORDING in js[1]
-        )
-        for job, share in by_readiness:
-            job.give(share, rec_args, fig_args)
-        if workers.wait(jobs):  # Ctrl-C while the evidence is written stops the run, as here
-            raise KeyboardInterrupt
+            cmp, verdicts = _compare(trajectories, sc, horizon, names, walls, failures)
+    except KeyboardInterrupt:
+        interrupted = True
     except BaseException:
         workers.stop(jobs)
         raise
-
+    meta = _meta(run, sc, runs, names, horizon, verdicts)
     files: dict[str, Path] = {}
-    paths: list[Path] = []
-    entries: dict[str, Any] = {}
-    fig_errors: list[str] = []
-    walls["figures"] = 0.0
-    for job, share in zip(jobs, EVIDENCE_SHARES, strict=True):
+    drawn: tuple[list[Path], list[Any], list[str]] = ([], [], [])
+    if not interrupted:
         try:
-            done = _worker_result(
-                job,
-                lambda share=share: _evidence_task(share, rec_args, fig_args, report=None),
-                redo_interrupted=interrupted,
-            )
-        except Exception as exc:  # the evidence must not cost the report
-            fig_errors.append(f"{', '.join(share)}: {_one_line(exc)}")
-            continue
-        if "recording" in done:
-            rinfo, walls["recording"] = done["recording"]
-            files[RECORDING] = rinfo.path
-        if "recording_error" in done:
-            failures.append(f"recording: {done['recording_error']}")
-        if "figures" in done:
-            (got_paths, got_entries, got_errors), wall = done["figures"]
-            paths += got_paths
-            entries.update({e.name: e for e in got_entries})
-            fig_errors += got_errors
-            walls["figures"] += wall
-    drawn = (paths, [entries[n] for n in FIGURES if n in entries], fig_errors)
+            if not jobs:
+                start_evidence()
+            drawn = _evidence(jobs, run, sc, trajectories, cmp, meta, formats, walls)
+            files.update(drawn[3])
+            failures += drawn[4]
+            redone += drawn[5]
+            drawn = drawn[:3]
+        except KeyboardInterrupt:
+            interrupted = True
+        finally:
+            workers.stop(jobs)
+    else:
+        workers.stop(jobs)
+    if interrupted:
+        failures.insert(0, _interrupted_sentence(trajectories, runs))
+        meta["evidence"] = "no figures and no recording: the run was interrupted"
+    if redone:
+        meta["redone"] = list(redone)
     failure = "; ".join(failures)
-    passed = cmp is not None and cmp.passed and not failure and len(trajectories) == len(runs) >= 2
     if len(runs) < 2 and not failure:
         failure = "only one plant: nothing to compare it with"
-        passed = False
+    if len(trajectories) < len(runs) and not failure:
+        failure = "a plant has no trajectory"
     walls["total"] = time.perf_counter() - t_all
     meta["wall_times_s"] = dict(walls)
     t0 = time.perf_counter()
@@ -555,25 +621,132 @@ def _validate_into(
         formats=formats,
         scene=sc,
         figures=drawn,
+        interrupted=interrupted,
     )
     walls["report"] = time.perf_counter() - t0
+    files = {n: p for n, p in files.items() if n != RECORDING or not interrupted}
     files.update({"report.md": rep.markdown, "report.json": rep.json})
     files.update({f.name: f for f in rep.figures})
-    if failure:
-        run.mark_failed(failure)
+    _keep_only(out, files)
+    if rep.failure:
+        run.mark_failed(rep.failure)
     if interrupted:
         raise KeyboardInterrupt  # the partial set is committed, marked interrupted
     return ValidationResult(
         scene=sc.name,
         out_dir=out,
-        passed=bool(passed),
+        passed=rep.verdict is RunVerdict.PASSED,
         checks=cmp.checks if cmp is not None else (),
         comparison=cmp,
-        failure=failure,
+        failure=rep.failure,
         files=files,
         wall_times=walls,
         verdicts=verdicts,
     )
+
+
+def _compare(
+    trajectories: Sequence[Trajectory],
+    sc: Scene,
+    horizon: float,
+    names: dict[str, str],
+    walls: dict[str, float],
+    failures: list[str],
+) -> tuple[Comparison | None, tuple[Verdict, ...]]:
+    """Every pair compared and the referee's rulings; a comparison that raises is a failure
+    said in the report (an interrupt goes on)."""
+    try:
+        t0 = time.perf_counter()
+        cmp = compare_plants(trajectories, sc, t_end=horizon)
+        walls["compare"] = time.perf_counter() - t0
+        return cmp, tuple(referee(cmp, names))
+    except Exception as exc:
+        failures.append(f"comparison: {_one_line(exc)}")
+        traceback.print_exc()
+        return None, ()
+
+
+def _evidence(
+    jobs: Sequence[workers.Job],
+    run: OutputRun,
+    sc: Scene,
+    trajectories: Sequence[Trajectory],
+    cmp: Comparison | None,
+    meta: dict[str, Any],
+    formats: Sequence[FigureFormat],
+    walls: dict[str, float],
+) -> tuple:
+    """The recording and the figures, by the evidence ``jobs`` (in workers or here):
+    ``(paths, entries, figure errors, files, failures, redone)``. A worker that was lost is
+    redone here; a file that could not be written raises :class:`OutputError`; a recording or
+    figure that could not be made is an error the report states (the run FAILED)."""
+    out = run.path
+    ctx = FigureContext.from_meta(meta, cmp.scene if cmp is not None else "")
+    rec_args = (out / RECORDING, sc, trajectories, cmp, run.run_id) if trajectories else None
+    fig_args = (out, cmp, trajectories, ctx, formats)
+    # The worker without a recording first: the other may still be importing rerun, and a
+    # pipe blocks until its reader reads.
+    by_readiness = sorted(zip(jobs, EVIDENCE_SHARES, strict=True), key=lambda js: RECORDING in js[1])
+    for job, share in by_readiness:
+        job.give(share, rec_args, fig_args)
+    if workers.wait(jobs):  # an interrupt while the evidence is made stops the run
+        raise KeyboardInterrupt
+    files: dict[str, Path] = {}
+    paths: list[Path] = []
+    entries: dict[str, Any] = {}
+    fig_errors: list[str] = []
+    failures: list[str] = []
+    redone: list[str] = []
+    walls["figures"] = 0.0
+    for job, share in zip(jobs, EVIDENCE_SHARES, strict=True):
+        try:
+            done = _worker_result(
+                job,
+                lambda share=share: _evidence_task(share, rec_args, fig_args, report=None),
+                redone,
+            )
+        except OutputError:
+            raise
+        except Exception as exc:  # a bug: said in the report, the run FAILED
+            fig_errors.append(f"{', '.join(share)}: {_one_line(exc)}")
+            continue
+        if "recording" in done:
+            rinfo, walls["recording"] = done["recording"]
+            files[RECORDING] = rinfo.path
+        if "recording_error" in done:
+            failures.append(f"recording: {done['recording_error']}")
+        if "figures" in done:
+            (got_paths, got_entries, got_errors), wall = done["figures"]
+            paths += got_paths
+            entries.update({e.name: e for e in got_entries})
+            fig_errors += got_errors
+            walls["figures"] += wall
+    if trajectories and RECORDING not in files and not failures:
+        failures.append("recording: not written")
+    ordered = [entries[n] for n in FIGURES if n in entries]
+    return paths, ordered, fig_errors, files, failures, redone
+
+
+def _interrupted_sentence(trajectories: Sequence[Trajectory], runs: Sequence[tuple[Any, Any]]) -> str:
+    """``interrupted by SIGTERM: analytic reached t = 3.2 s, mujoco t = 1.1 s, pinocchio not run``."""
+    reached = {tr.engine: float(tr.t[-1]) if tr.t.size else 0.0 for tr in trajectories}
+    parts = [
+        f"{pl.engine.value} reached t = {reached[pl.engine]:.6g} s"
+        if pl.engine in reached
+        else f"{pl.engine.value} has no trajectory"
+        for pl, _ in runs
+    ]
+    return f"interrupted by {interrupt_name()}: " + ", ".join(parts)
+
+
+def _keep_only(out: Path, files: dict[str, Path]) -> None:
+    """Remove from the staging directory ``out`` (this run's own, created for it) every file
+    the report does not name (a figure drawn before an interrupt stopped the others, a
+    recording left out): the committed set is what the report names, nothing more."""
+    named = {p.name for p in files.values()}
+    for p in out.iterdir():
+        if not p.name.startswith(".") and p.is_file() and p.name not in named:
+            p.unlink(missing_ok=True)
 
 
 __all__ = [

@@ -9,8 +9,12 @@ elsewhere, and whenever forking is not safe, each runs here, in order, with the 
   inputs exist (``prepare`` runs at once: a child imports matplotlib or rerun while the plants run)
   and be given them later with :meth:`Job.give`.
 * :func:`wait` collects jobs, forwarding each child's messages (a plant's progress) as they come.
-* A job whose child dies, or cannot deliver its result, raises :class:`WorkerLost`; the caller then
-  does that stage here (nothing is lost to a worker).
+* A job whose child dies (killed, ``kill -9``), or cannot deliver its result, raises
+  :class:`WorkerLost`; the caller then does that stage here and says so in its report
+  (:mod:`validation.validate`: a plant, the figures, the recording), so nothing is lost to a
+  worker.
+* A file the child could not write (a full disk) comes back as the same
+  :class:`validation.atomic.OutputError`, never as a stage's ordinary error.
 
 Forking is used only where it is safe and useful: the ``fork`` start method exists (Linux; macOS
 frameworks are not fork-safe), this process runs one thread (a fork copies only the calling thread,
@@ -19,6 +23,11 @@ this process. ``TUMBLE_WORKERS=0`` in the environment turns workers off (everyth
 
 A child's exception comes back as :class:`WorkerError` (its type name and first line); a Ctrl-C
 that reaches a child ends its task the way it would end here (a plant returns its partial run).
+A child honours the first SIGINT or SIGTERM and ignores the ones after it (a terminal's Ctrl-C and
+the parent's forwarded one arrive together; an interrupt compiled code swallows is kept and raised
+at the task's next progress report, :mod:`validation.interrupts`). When this process is
+interrupted, :func:`wait` tells every running child at once and gives them
+:data:`INTERRUPT_GRACE_S` to send what they reached; a child that has not by then is ended.
 """
 
 from __future__ import annotations
@@ -42,10 +51,10 @@ POLL_S = 0.05
 LOST_GRACE_S = 5.0
 """How long a child whose process has ended, or which was interrupted, may take to deliver, s."""
 
-FORWARD_AFTER_S = 1.0
-"""After a Ctrl-C (or SIGTERM) here, children that have not delivered within this many seconds
-are sent SIGINT themselves: a terminal's Ctrl-C reaches them directly, a signal sent to this
-process alone does not."""
+INTERRUPT_GRACE_S = 1.0
+"""After a Ctrl-C (or SIGTERM) here, how long the children (told at once: a terminal's Ctrl-C
+reaches them directly, a signal sent to this process alone does not) may take to send their
+partial results, s; then they are ended, and their stages reported as interrupted."""
 
 Report = Callable[[Any], None]
 """``report(message)``: what a task calls to send a message (a plant's progress) to the parent."""
@@ -133,21 +142,46 @@ def idle_priority():
         _set_idle(False)
 
 
+def normal_priority() -> None:
+    """This process back at the policy the command started with (out of :func:`idle_priority`)."""
+    _set_idle(False)
+
+
 @contextlib.contextmanager
-def signals_deferred():
-    """SIGINT and SIGTERM held back inside the block and delivered when it ends: an import cut by
-    Ctrl-C half way leaves a module half made (matplotlib then fails on its next import), so a
-    preparing import finishes first and the interrupt is raised after it."""
-    held = {signal.SIGINT, signal.SIGTERM}
+def signals_held(on_signal: Callable[[], None] | None = None):
+    """SIGINT and SIGTERM do not cut the block: an import cut by Ctrl-C half way leaves a module
+    half made (matplotlib then fails on its next import), so a preparing import finishes first
+    and the interrupt (:class:`validation.interrupts.Terminated` for SIGTERM) is raised after it.
+
+    The signal is not blocked, only noted: ``on_signal()`` runs as soon as it arrives (telling the
+    plants' workers to stop, leaving idle priority), so the job stops promptly even while this
+    process prepares at idle priority. Main thread only; elsewhere the block runs as it is."""
+    from validation import interrupts
+
+    caught: list[int] = []
+
+    def note(signum, frame) -> None:
+        first = not caught
+        caught.append(signum)
+        if signum == signal.SIGTERM:
+            interrupts.note_sigterm()
+        if first and on_signal is not None:
+            with contextlib.suppress(Exception):
+                on_signal()
+
+    held = (signal.SIGINT, signal.SIGTERM)
     try:
-        signal.pthread_sigmask(signal.SIG_BLOCK, held)
-    except (AttributeError, OSError, ValueError):  # no signal masks here: nothing is deferred
+        previous = {sig: signal.signal(sig, note) for sig in held}
+    except ValueError:  # not the main thread: no handlers to set
         yield
         return
     try:
         yield
     finally:
-        signal.pthread_sigmask(signal.SIG_UNBLOCK, held)
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+    if caught:
+        raise interrupts.Terminated() if signal.SIGTERM in caught else KeyboardInterrupt()
 
 
 _PARENT_ENDS: list[Any] = []
@@ -165,9 +199,45 @@ def _close_parent_ends() -> None:  # pragma: no cover - in a child
     _PARENT_ENDS.clear()
 
 
+def _first_interrupt_only(signum, frame):  # pragma: no cover - in a child
+    """A child's SIGINT/SIGTERM handler: the first one interrupts the task, the later ones are
+    ignored (the partial result is being sent)."""
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, signal.SIG_IGN)
+    raise KeyboardInterrupt("interrupted")
+
+
+def _child_signals() -> None:  # pragma: no cover - in a child
+    """The child's signal handling (module docstring): the first interrupt counts, once, and one
+    that compiled code swallows is kept for the task's next progress report."""
+    from validation.interrupts import keep_swallowed
+
+    keep_swallowed()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, _first_interrupt_only)
+
+
+def _send_error(conn, exc: BaseException) -> None:  # pragma: no cover - in a child
+    """Send the task's exception: an interrupt as interrupted, a file that could not be written
+    as an ``OutputError`` (path and reason), anything else by its type name and first line."""
+    from validation.atomic import OutputError
+
+    if isinstance(exc, KeyboardInterrupt):
+        msg = ("err", type(exc).__name__, _one_line(exc) or "interrupted", True)
+    elif isinstance(exc, OutputError):
+        msg = ("output", str(exc.path), exc.reason, exc.errno)
+    else:
+        msg = ("err", type(exc).__name__, _one_line(exc), False)
+    try:
+        conn.send(msg)
+    except Exception:  # the parent is gone
+        pass
+
+
 def _child(conn, inbox, prepare, task, args, idle: bool) -> None:  # pragma: no cover - in a child
     """The worker process: prepare, wait for the inputs if they come later, run, send back."""
     _close_parent_ends()
+    _child_signals()
     try:
         if idle:
             _set_idle(True)
@@ -180,18 +250,11 @@ def _child(conn, inbox, prepare, task, args, idle: bool) -> None:  # pragma: no 
         if idle:
             _set_idle(False)
         out = task(*args, report=lambda msg: conn.send(("msg", msg)))
-        signal.signal(signal.SIGINT, signal.SIG_IGN)  # a late Ctrl-C must not lose the result
+        for sig in (signal.SIGINT, signal.SIGTERM):  # a late interrupt must not lose the result
+            signal.signal(sig, signal.SIG_IGN)
         conn.send(("ok", out))
-    except KeyboardInterrupt as exc:  # Ctrl-C (or SIGTERM turned into one) before a result
-        try:
-            conn.send(("err", type(exc).__name__, _one_line(exc) or "interrupted", True))
-        except OSError:  # the parent is gone
-            pass
-    except BaseException as exc:
-        try:
-            conn.send(("err", type(exc).__name__, _one_line(exc), False))
-        except Exception:
-            pass
+    except BaseException as exc:  # an interrupt before a result, or the task's error
+        _send_error(conn, exc)
     finally:
         try:
             conn.close()
@@ -277,6 +340,7 @@ class Job:
         Raises:
             WorkerLost: the child ended without a result (the caller does the stage itself).
             WorkerError: the task raised in the child.
+            OutputError: the task could not write a file (a full disk ...), in the child too.
             KeyboardInterrupt: the task was interrupted in the child before it had a result.
         """
         if not self.forked:
@@ -293,6 +357,11 @@ class Job:
         kind = self.outcome[0]
         if kind == "ok":
             return self.outcome[1]
+        if kind == "output":
+            from validation.atomic import OutputError
+
+            _, path, reason, code = self.outcome
+            raise OutputError(path, OSError(code, reason))
         if kind == "err":
             _, name, message, interrupted = self.outcome
             if interrupted:
@@ -365,29 +434,29 @@ def start(
     return job
 
 
-def wait(jobs: Sequence[Job], first: bool = False) -> bool:
+def wait(jobs: Sequence[Job], first: bool = False, interrupted: bool = False) -> bool:
     """Collect the forked ``jobs`` until each has its outcome (``first``: until one more has),
     forwarding their messages. In-process jobs are left for :meth:`Job.result`.
 
-    Returns whether a Ctrl-C reached this process meanwhile. It does not stop the collecting: the
-    children got the same Ctrl-C and send their partial results, which are kept for up to
-    :data:`LOST_GRACE_S` (a second Ctrl-C stops waiting and is raised).
+    Returns whether a Ctrl-C (or SIGTERM) reached this process meanwhile (``interrupted``: it
+    had already). It does not stop the collecting: every running child is told at once
+    (:func:`interrupt`) and sends its partial result, kept if it comes within
+    :data:`INTERRUPT_GRACE_S`; a child that has not sent by then is ended and its job marked
+    interrupted (a second Ctrl-C stops waiting and is raised).
     """
     from multiprocessing.connection import wait as mp_wait
 
-    interrupted = False
-    deadline = forward_at = None
+    deadline = None
     pending = [j for j in jobs if j.forked and not j.done]
+    if interrupted:
+        interrupt(pending)
+        deadline = time.monotonic() + INTERRUPT_GRACE_S
     while pending:
-        if forward_at is not None and time.monotonic() >= forward_at:
-            forward_at = None
-            for j in pending:
-                if j.process.is_alive():
-                    os.kill(j.process.pid, signal.SIGINT)
         if deadline is not None and time.monotonic() >= deadline:
             for j in pending:
                 j.interrupted = True
                 j._finish(("lost", "interrupted before it sent a result"))
+            stop(pending)
             break
         try:
             mp_wait([j.conn for j in pending] + [j.process.sentinel for j in pending], POLL_S)
@@ -401,11 +470,11 @@ def wait(jobs: Sequence[Job], first: bool = False) -> bool:
                             ("lost", f"the worker process ended (exit {code}) without a result")
                         )
         except KeyboardInterrupt:
-            if interrupted:
+            if deadline is not None:
                 raise
             interrupted = True
-            forward_at = time.monotonic() + FORWARD_AFTER_S
-            deadline = time.monotonic() + LOST_GRACE_S
+            interrupt(pending)
+            deadline = time.monotonic() + INTERRUPT_GRACE_S
         still = [j for j in pending if not j.done]
         if first and len(still) < len(pending):
             break
@@ -413,14 +482,34 @@ def wait(jobs: Sequence[Job], first: bool = False) -> bool:
     return interrupted
 
 
-def stop(jobs: Sequence[Job]) -> None:
-    """End the children of ``jobs`` that are still running (after an error in the parent)."""
+def interrupt(jobs: Sequence[Job]) -> None:
+    """Send SIGINT to the running children of ``jobs``: each ends its task as a Ctrl-C would
+    (a plant sends the run it reached); a child told twice ignores the second."""
     for j in jobs:
-        if j.forked and not j.done:
-            j.cancel()
+        if j.forked and not j.done and j.process.is_alive():
+            with contextlib.suppress(OSError):
+                os.kill(j.process.pid, signal.SIGINT)
+
+
+STOP_GRACE_S = 0.5
+"""How long :func:`stop` lets a child end on SIGTERM before it is killed, s."""
+
+
+def stop(jobs: Sequence[Job]) -> None:
+    """End the children of ``jobs`` that are still running (after an error or an interrupt in
+    the parent): SIGTERM, then SIGKILL after :data:`STOP_GRACE_S`; each is reaped."""
+    for j in jobs:
+        if j.forked and (not j.done or j.process.is_alive()):
+            if not j.done:
+                j.cancel()
             if j.process.is_alive():
                 j.process.terminate()
-            j.process.join(timeout=LOST_GRACE_S)
+    for j in jobs:
+        if j.forked:
+            j.process.join(timeout=STOP_GRACE_S)
+            if j.process.is_alive():
+                j.process.kill()
+                j.process.join(timeout=STOP_GRACE_S)
 
 
 __all__ = [
@@ -432,7 +521,9 @@ __all__ = [
     "can_fork",
     "flush_std_streams",
     "idle_priority",
-    "signals_deferred",
+    "interrupt",
+    "normal_priority",
+    "signals_held",
     "start",
     "stop",
     "wait",
