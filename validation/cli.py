@@ -535,6 +535,9 @@ def run(argv: list[str] | None = None) -> None:
     (measured on the default ``validate``). Code that calls ``tumble`` in-process uses
     :func:`main`, which returns the status instead."""
     status = main(argv)
+    numba_cache = sys.modules.get("analytic.kernel.cache_check")
+    if numba_cache is not None:  # what Python's teardown would do: the cache's manifest kept
+        numba_cache.finish()
     for stream in (sys.stdout, sys.stderr):
         try:
             stream.flush()

@@ -320,7 +320,9 @@ def _stamped_keys() -> list[str]:
 
     path = _stamp_path()
     try:
-        keys = json.loads(path.read_text(encoding="utf-8"))["warm_keys"] if path else []
+        from analytic.kernel.cache_check import read_regular  # never blocks (a FIFO there)
+
+        keys = json.loads(read_regular(path, 1 << 20))["warm_keys"] if path else []
     except (OSError, ValueError, KeyError, TypeError):
         return []
     return [k for k in keys if isinstance(k, str)] if isinstance(keys, list) else []
@@ -340,6 +342,9 @@ def stamp_warm(key: str) -> None:
     path = _stamp_path()
     if path is None:
         return
+    from analytic.kernel import cache_check
+
+    cache_check.record()  # the kernels on disk now are the ones numba wrote: their hashes kept
     kept = [k for k in _stamped_keys() if k != key][-(STAMP_KEYS_KEPT - 1) :]
     keys = [*kept, key]
     try:
@@ -767,7 +772,10 @@ def warming(
     engines = [e for e in (ANALYTIC, MUJOCO, PINOCCHIO) if e in engines]
     t0 = time.perf_counter()
     key = warm_key(engines, scene)
-    if is_stamped_warm(key):  # checked before: nothing imports numba here
+    from analytic.kernel import cache_check
+
+    cache_check.ensure_checked()  # numba's cache files against their hashes (no numba import)
+    if is_stamped_warm(key) and not cache_check.removed_any():  # nothing imports numba here
         yield WarmupResult()
         return
     if concurrent is None:

@@ -43,6 +43,7 @@ from types import ModuleType
 
 import numpy as np
 
+from analytic.kernel import cache_check
 from analytic.kernel.cache_dir import APP_NAME, PACKAGE_DIR, kernel_cache_dir
 from analytic.kernel.layout import WS_LEN
 from analytic.kernel.paste import flatten
@@ -72,6 +73,7 @@ def _configure_cache_dir() -> str | None:
 
 
 _CACHE_NOTE = _configure_cache_dir()
+cache_check.ensure_checked()  # numba's cache files against their hashes, before any kernel exists
 
 try:  # numba is optional: without it analytic.fast falls back to the numpy model
     import numba
