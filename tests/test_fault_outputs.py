@@ -421,6 +421,19 @@ def test_mount_point_found_without_mounting(tmp_path, monkeypatch):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["o"]
 
 
+def test_lost_and_found_of_a_mounted_filesystem_is_left_alone(tmp_path, monkeypatch):
+    """A mount point holding only the filesystem's lost+found -> the run goes in beside it, and
+    lost+found and its contents are kept through a second run."""
+    out = tmp_path / "o"
+    (out / "lost+found").mkdir(parents=True)
+    (out / "lost+found" / "#1234").write_bytes(VICTIM)
+    monkeypatch.setattr(outputs_mod, "_is_mount_point", lambda p: Path(p) == out)
+    _fake_run(out, {"report.md": b"one"})
+    _fake_run(out, {"report.md": b"two"})
+    assert sorted(p.name for p in out.iterdir()) == ["lost+found", MANIFEST, "report.md"]
+    assert (out / "lost+found" / "#1234").read_bytes() == VICTIM
+
+
 def test_rename_refused_with_ebusy_falls_back_to_per_file(tmp_path, monkeypatch):
     """The directory swap refused with EBUSY (a mount point not found up front) -> the run is
     still put there, file by file; the previous run's files are replaced."""

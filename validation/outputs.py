@@ -45,7 +45,8 @@ Three rules hold for every command that writes a directory (``validate``, ``simu
      set is never mistaken for a complete run and the next run refuses the directory until the
      user clears it. On a mount point the staging directory and the lock live inside ``DIR``
      (``.tumble.<run id>.partial``, ``.tumble.lock``), since the parent of a volume may not be
-     writable.
+     writable; these and the filesystem's own ``lost+found`` directory are not counted as the
+     user's entries there (a per-file commit deletes only files the previous manifest lists).
 """
 
 from __future__ import annotations
@@ -133,6 +134,7 @@ the message ("remove it or choose another output directory")."""
 
 _IN_MOUNT_LOCK = ".tumble.lock"
 _IN_MOUNT_PREFIX = ".tumble."
+_LOST_FOUND = "lost+found"
 
 
 class RunState(enum.Enum):
@@ -511,10 +513,13 @@ class _Place:
         return m[1] if m else None
 
     def is_own_entry(self, entry: os.DirEntry) -> bool:
-        """Inside a mount point: whether ``entry`` is the lock (a regular file) or a staging
-        directory of a tumble run (a live one, or a leftover that is provably ours)."""
+        """Inside a mount point: whether ``entry`` is the filesystem's ``lost+found`` directory,
+        the lock (a regular file) or a staging directory of a tumble run (a live one, or a
+        leftover that is provably ours). None of these is ever deleted by a commit there."""
         if not self.inside:
             return False
+        if entry.name == _LOST_FOUND:
+            return entry.is_dir(follow_symlinks=False)
         if entry.name == _IN_MOUNT_LOCK:
             return entry.is_file(follow_symlinks=False)
         rid = self.leftover_run_id(entry.name)
@@ -660,10 +665,10 @@ def _open_lock(target: Path, lock: Path) -> tuple[int, bool]:
         _check_lock_file(target, lock, st)
         try:
             fd = os.open(lock, os.O_RDONLY | base)
-        except FileNotFoundError:
-            continue
-        except OSError:
-            continue  # replaced meanwhile (by a link: ELOOP): look again
+        except OSError as exc:
+            if exc.errno in (errno.ENOENT, errno.ELOOP):
+                continue  # removed, or replaced by a link, meanwhile: look again
+            raise OutputError(lock, exc) from exc
         fst = os.fstat(fd)
         if os.path.samestat(fst, st):
             try:
@@ -718,11 +723,19 @@ def _lock(target: Path, lock: Path) -> Iterator[None]:
 
 
 def _lock_pid(fd: int) -> str:
+    """The pid written in a held lock file, or "?" (unreadable, or no such process: a lock file
+    a killed run left, reused as it was)."""
     try:
         text = os.pread(fd, 32, 0).decode("ascii").strip()
-    except (OSError, UnicodeDecodeError):
+        pid = int(text)
+        os.kill(pid, 0)
+    except ProcessLookupError:
         return "?"
-    return text if text.isdigit() else "?"
+    except PermissionError:
+        return text  # alive, another user's
+    except (OSError, UnicodeDecodeError, ValueError):
+        return "?"
+    return text
 
 
 # ---------------------------------------------------------------------------------------------
