@@ -334,6 +334,8 @@ def render_markdown(
     lines = [f"# {_md(scene)}: {verdict.value}", ""]
     if failure:
         lines += [f"**The run {_stopped(verdict)}:** {_md(failure)}", ""]
+    for again in meta.get("redone", ()):
+        lines += [f"**Redone:** {_md(again)}", ""]
     if cmp is not None:
         bad = cmp.failed_checks
         total = len(cmp.checks)
