@@ -65,8 +65,9 @@ MIN_FREE_INODES = 64
 LOCK_WAIT_S = 10.0
 """How long to wait for another process's manifest lock before going on without it (s)."""
 ENV_MARK = "TUMBLE_NUMBA_CACHE_CHECKED"
-"""Set by a process that checked the cache to ``<pid>:<mode>`` (:class:`Mode`); a process whose
-parent is ``<pid>`` trusts that check instead of repeating it."""
+"""Set by a process that checked the cache to ``<pid>:<mode>:<cache root>`` (:class:`Mode`); a
+process whose parent is ``<pid>`` and whose cache root is the same trusts that check instead of
+repeating it."""
 PROJECT_PACKAGES = ("analytic", "mj_bridge")
 """The packages whose modules define cached kernels."""
 SUFFIXES = (".nbi", ".nbc")
@@ -390,9 +391,13 @@ def write_manifest(path: Path, files: dict[str, str]) -> None:
 
 
 def room_short(lay: Layout) -> str:
-    """Why numba could not save its cache in ``lay``'s root ("" when there is room)."""
+    """Why numba could not save its cache in ``lay``'s root ("" when there is room); a root not
+    made yet is judged by the filesystem of its nearest existing parent."""
+    where = lay.root
+    while not where.exists() and where.parent != where:
+        where = where.parent
     try:
-        st = os.statvfs(lay.root)
+        st = os.statvfs(where)
     except OSError:
         return ""
     free = st.f_bavail * st.f_frsize
@@ -444,10 +449,9 @@ def check(lay: Layout) -> CheckResult:
                 bad[group].append(path)
         undeletable = [g for g, paths in bad.items() if not _delete_kernel(paths)]
     if bad and known is None:
-        lines.append(
-            f"numba cache in {lay.root}: {why}; its {len(bad)} compiled kernels were deleted and "
-            "will be recompiled"
-        )
+        n = len(bad)
+        what = "compiled kernel was" if n == 1 else "compiled kernels were"
+        lines.append(f"numba cache in {lay.root}: {why}; its {n} {what} deleted, to be recompiled")
     else:
         for group in sorted(bad):
             lines.append(
@@ -514,11 +518,22 @@ def _say(line: str) -> None:
     warnings.warn(line, NumbaCacheWarning, stacklevel=3)
 
 
+def _cache_root() -> str:
+    """The cache root of this process as :data:`ENV_MARK` names it ("" for none)."""
+    root = kernel_cache_dir()
+    return str(root) if root is not None else ""
+
+
+def _mark(mode: Mode) -> None:
+    os.environ[ENV_MARK] = f"{os.getpid()}:{mode.value}:{_cache_root()}"
+
+
 def _parent_checked() -> Mode | None:
-    """The mode of the check the parent process made (:data:`ENV_MARK`), None when it made
-    none."""
-    pid, _, mode = os.environ.get(ENV_MARK, "").partition(":")
-    if pid != str(os.getppid()):
+    """The mode of the check the parent process made of this process's cache root
+    (:data:`ENV_MARK`), None when it made none."""
+    pid, _, rest = os.environ.get(ENV_MARK, "").partition(":")
+    mode, _, root = rest.partition(":")
+    if pid != str(os.getppid()) or root != _cache_root():
         return None
     try:
         return Mode(mode)
@@ -565,12 +580,12 @@ def ensure_checked() -> CheckResult | None:
     if inherited is not None:
         _state.mode = inherited
         _state.layout = layout() if inherited is Mode.CACHE else None
-        os.environ[ENV_MARK] = f"{os.getpid()}:{inherited.value}"
+        _mark(inherited)
         return None
     lay = layout()
     if lay is None:
         _state.mode = Mode.NONE
-        os.environ[ENV_MARK] = f"{os.getpid()}:{Mode.NONE.value}"
+        _mark(Mode.NONE)
         return None
     result = check(lay)
     for line in result.lines:
@@ -578,7 +593,7 @@ def ensure_checked() -> CheckResult | None:
     _state.layout, _state.result = lay, result
     if result.problems:
         _use_private_dir("; ".join(result.problems))
-    os.environ[ENV_MARK] = f"{os.getpid()}:{_state.mode.value}"
+    _mark(_state.mode)
     atexit.register(finish)
     return result
 
