@@ -12,6 +12,7 @@ with one line saying so; nothing at a cache path can make the tool block. Read a
   check its parent made);
 * a FIFO among the cache files, or at the warm stamp -> never opened; the cache is left alone and
   the kernels compiled in a private directory for the run;
+* a FIFO or a symbolic link at a compile lock -> not opened, the kernel compiled without the lock;
 * a full cache disk -> the kernels are compiled and used, one line says the cache could not be
   written, the full disk is not touched.
 
@@ -268,6 +269,24 @@ def test_fifo_among_numba_cache_files_is_never_opened(tmp_path):
     finally:
         warmup._stamp_path = original
     assert stamp.is_fifo()
+
+
+def test_fifo_or_link_at_a_compile_lock_is_not_opened(tmp_path, monkeypatch):
+    """A FIFO or a symbolic link at a kernel's compile lock in the cache directory -> nothing
+    blocks or is created through the link; the kernel is compiled without the lock."""
+    from analytic.kernel import compile_lock
+
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+    fifo = tmp_path / f"tumble-compiling-{compile_lock.RHS}.lock"
+    os.mkfifo(fifo)
+    assert _unblocked(lambda: compile_lock.hold(compile_lock.RHS), fifo) is False
+    assert fifo.is_fifo()
+    target = tmp_path / "elsewhere" / "victim"
+    link = tmp_path / f"tumble-compiling-{compile_lock.PINOCCHIO}.lock"
+    link.symlink_to(target)
+    with compile_lock.compiling(compile_lock.PINOCCHIO):
+        pass
+    assert link.is_symlink() and not target.exists()
 
 
 FULL_DISK = textwrap.dedent(

@@ -18,6 +18,7 @@ from __future__ import annotations
 import contextlib
 import os
 import re
+import stat
 from collections.abc import Iterator
 from typing import IO
 
@@ -60,11 +61,17 @@ def _open(name: str) -> IO[bytes] | None:
     where = kernel_cache_dir()
     if where is None:
         return None
+    flags = os.O_WRONLY | os.O_CREAT | os.O_APPEND | getattr(os, "O_CLOEXEC", 0)
+    flags |= getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_NONBLOCK", 0)  # never a link, a FIFO
     try:
         os.makedirs(where, exist_ok=True)
-        return open(where / f"tumble-compiling-{name}.lock", "ab")  # kept open while held
+        fd = os.open(where / f"tumble-compiling-{name}.lock", flags, 0o644)
     except OSError:
         return None
+    if not stat.S_ISREG(os.fstat(fd).st_mode):  # a FIFO or device there: nothing locked
+        os.close(fd)
+        return None
+    return open(fd, "ab")  # kept open while held
 
 
 def hold(name: str) -> bool:
