@@ -1045,7 +1045,10 @@ def output_run(target: str | Path, command: str, run_id: str | None = None) -> I
 
 def _unchanged(err: BaseException, target: Path) -> OutputError:
     """The one line a user reads when a run's files could not be written."""
-    path, reason = (err.path, err.reason) if isinstance(err, OutputError) else (target, err)
+    if isinstance(err, OutputError):
+        path, reason = err.path, err.reason
+    else:
+        path, reason = target, (getattr(err, "strerror", None) or err)
     kept = (
         f"{target} keeps its previous contents, unchanged"
         if _lstat(target) is not None
