@@ -243,6 +243,19 @@ def test_listed_name_of_another_kind_is_not_replaced(tmp_path):
     assert _tree(d) == before
 
 
+def test_file_added_while_the_run_goes_on_is_kept(tmp_path):
+    """The user saves a file into the run directory while a new run is writing -> the new run is
+    not put in (one OutputError), the user's file and the previous run are kept."""
+    d = tmp_path / "d"
+    _fake_run(d, {"report.md": b"one"})
+    with pytest.raises(OutputError, match="changed during the run"):
+        with output_run(d, "test") as run:
+            write_bytes(run.path / "report.md", b"two")
+            (d / "notes.txt").write_bytes(VICTIM)
+    assert (d / "notes.txt").read_bytes() == VICTIM and (d / "report.md").read_bytes() == b"one"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["d"]
+
+
 @pytest.mark.parametrize(
     "manifest",
     [

@@ -544,6 +544,12 @@ def _check_target_kind(target: Path, st: os.stat_result) -> None:
         raise NotOurs(f"{target}: exists and is not a directory")
 
 
+def _beside(target: Path, mode: CommitMode) -> _Place:
+    """Lock and staging as hidden siblings of ``target``: ``.<name>.lock``, ``.<name>.<id>.partial``."""
+    prefix = f".{target.name}."
+    return _Place(target, mode, target.with_name(f"{prefix}lock"), target.parent, prefix, False)
+
+
 def _place(target: Path) -> _Place:
     """Decide, before anything runs, where the lock and staging go and how the files go in.
 
@@ -551,10 +557,8 @@ def _place(target: Path) -> _Place:
         NotOurs: the target is a link, not a directory, or holds the working directory.
     """
     st = _lstat(target)
-    sibling = f".{target.name}."
     if st is None:
-        return _Place(target, CommitMode.SWAP, target.with_name(f"{sibling}lock"),
-                      target.parent, sibling, inside=False)  # fmt: skip
+        return _beside(target, CommitMode.SWAP)
     _check_target_kind(target, st)
     cwd = _cwd_relation(target)
     if cwd is _Cwd.INSIDE:
@@ -562,24 +566,22 @@ def _place(target: Path) -> _Place:
             f"{target}: holds the working directory {os.getcwd()}; choose another output directory"
         )
     if _is_mount_point(target):
-        return _Place(target, CommitMode.IN_PLACE, target / _IN_MOUNT_LOCK,
-                      target, _IN_MOUNT_PREFIX, inside=True)  # fmt: skip
-    mode = CommitMode.IN_PLACE if cwd is _Cwd.IS_TARGET else CommitMode.SWAP
-    return _Place(target, mode, target.with_name(f"{sibling}lock"),
-                  target.parent, sibling, inside=False)  # fmt: skip
+        lock = target / _IN_MOUNT_LOCK
+        return _Place(target, CommitMode.IN_PLACE, lock, target, _IN_MOUNT_PREFIX, True)
+    return _beside(target, CommitMode.IN_PLACE if cwd is _Cwd.IS_TARGET else CommitMode.SWAP)
 
 
 def _clean_leftovers(place: _Place) -> None:
     """Remove staging/old directories that killed runs left (we hold the lock): only real
     directories named like ours that :func:`_is_our_leftover` proves; anything else stays."""
-    with contextlib.suppress(OSError), os.scandir(place.staging_parent) as it:
-        leftovers = [
-            Path(e.path)
-            for e in it
-            if (rid := place.leftover_run_id(e.name)) and _is_our_leftover(Path(e.path), rid)
-        ]
-    for p in leftovers:
-        shutil.rmtree(p, ignore_errors=True)  # never follows links inside (fd-based on Linux)
+    try:
+        with os.scandir(place.staging_parent) as it:
+            named = [(Path(e.path), place.leftover_run_id(e.name)) for e in it]
+    except OSError:
+        return
+    for path, rid in named:
+        if rid is not None and _is_our_leftover(path, rid):
+            shutil.rmtree(path, ignore_errors=True)  # never follows a link (fd-based on Linux)
 
 
 def _make_staging(place: _Place, run_id: str) -> Path:
@@ -1088,14 +1090,14 @@ def _commit(run: OutputRun, place: _Place) -> None:
     Raises:
         OSError: nothing at the target was changed (or :class:`_HalfCommitted`).
     """
+    try:  # again: the user may have put something there while the run went on
+        previous = place.prove_target()
+    except NotOurs as exc:
+        raise OutputError(run.target, f"it changed during the run ({exc})") from None
     _drop_hidden(run.path)
     write_text(run.path / MANIFEST, json.dumps(run._manifest(), indent=2) + "\n")
     with os.scandir(run.path) as it:
         names = sorted(e.name for e in it)
-    try:
-        previous = place.prove_target()
-    except NotOurs as exc:
-        raise OutputError(run.target, f"it changed during the run ({exc})") from None
     if place.mode is CommitMode.SWAP:
         try:
             _commit_swap(run.path, run.target, previous)
