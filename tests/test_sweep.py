@@ -872,8 +872,9 @@ def test_a_poisoned_reference_cache_file_fails_its_content_check(scene, tmp_path
     good = reference.obtain_reference(scene, T_CACHE, ex, tmp_path)
     path = Path(good.info["cache"]["path"])
     _poison_rotation(path)
-    lines: list[str] = []
-    again = reference.obtain_reference(scene, T_CACHE, ex, tmp_path, say=lines.append)
+    with pytest.warns(reference.ReferenceCacheWarning) as record:
+        again = reference.obtain_reference(scene, T_CACHE, ex, tmp_path)
+    lines = [str(w.message) for w in record]
     assert ex.reference_runs == 4  # refused, recomputed
     assert again.info["cache"]["status"] != "cached"
     assert np.array_equal(again.samples.R, good.samples.R)  # the true samples, not the poisoned
@@ -886,15 +887,19 @@ def test_a_poisoned_reference_cache_file_fails_its_content_check(scene, tmp_path
 
 
 def _obtain_unblocked(scene, cache_dir: Path, path: Path, ex: Executor, lines: list[str]):
-    """``obtain_reference`` in a thread; should it block on the FIFO at ``path``, a writer is
-    opened there to release it and the test fails."""
+    """``obtain_reference`` in a thread (its one-line warnings into ``lines``); should it block on
+    the FIFO at ``path``, a writer is opened there to release it and the test fails."""
     import os
     import threading
+    import warnings
 
     box: dict = {}
 
     def work():
-        box["ref"] = reference.obtain_reference(scene, T_CACHE, ex, cache_dir, say=lines.append)
+        with warnings.catch_warnings(record=True) as record:
+            warnings.simplefilter("always")
+            box["ref"] = reference.obtain_reference(scene, T_CACHE, ex, cache_dir)
+        lines.extend(str(w.message) for w in record)
 
     th = threading.Thread(target=work, daemon=True)
     th.start()
@@ -938,8 +943,10 @@ def test_a_directory_or_link_at_the_reference_cache_path_is_left_alone(scene, tm
     path = reference.cache_path(tmp_path, key)
     path.mkdir()
     (path / "user-file").write_text("kept")
-    ex, lines = _Inline(), []
-    ref = reference.obtain_reference(scene, T_CACHE, ex, tmp_path, say=lines.append)
+    ex = _Inline()
+    with pytest.warns(reference.ReferenceCacheWarning) as record:
+        ref = reference.obtain_reference(scene, T_CACHE, ex, tmp_path)
+    lines = [str(w.message) for w in record]
     assert ex.reference_runs == 2 and "not stored" in ref.info["cache"]["status"]
     assert (path / "user-file").read_text() == "kept"
     assert sum("directory" in ln and "not read" in ln for ln in lines) == 1
@@ -952,6 +959,7 @@ def test_a_directory_or_link_at_the_reference_cache_path_is_left_alone(scene, tm
     target = reference.cache_path(elsewhere, key)
     os.symlink(target, reference.cache_path(linked, key))
     runs = ex.reference_runs
-    via_link = reference.obtain_reference(scene, T_CACHE, ex, linked)
+    with pytest.warns(reference.ReferenceCacheWarning):
+        via_link = reference.obtain_reference(scene, T_CACHE, ex, linked)
     assert ex.reference_runs == runs + 2 and via_link.info["cache"]["status"] != "cached"
     assert target.is_file()  # the link's target is untouched

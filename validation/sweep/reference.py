@@ -41,6 +41,7 @@ import math
 import os
 import platform
 import stat
+import warnings
 from collections.abc import Callable, Mapping
 from concurrent.futures import Executor
 from dataclasses import dataclass
@@ -74,6 +75,16 @@ SCENE_LABELS = frozenset({"name", "description", "source"})
 
 class CacheRefused(ValueError):
     """A cache file that is not a usable reference (unreadable, another key, bad samples)."""
+
+
+class ReferenceCacheWarning(UserWarning):
+    """One line about the reference cache: an entry not used (its content check failed, or not a
+    regular file) or a reference that could not be stored. Shown by ``tumble`` whatever its
+    progress output."""
+
+
+def _warn(line: str) -> None:
+    warnings.warn(line, ReferenceCacheWarning, stacklevel=3)
 
 
 class ContentCheckFailed(CacheRefused):
@@ -413,10 +424,10 @@ def obtain_reference(
         cache["status"] = "computed (not in the cache)"
     except ContentCheckFailed as exc:
         cache["status"] = f"computed (cache file refused: {exc})"
-        say(f"  sweep reference cache entry {path} failed its content check; recomputing")
+        _warn(f"sweep reference cache entry {path} failed its content check; recomputing")
     except NotRegularFile as exc:
         cache["status"] = f"computed (cache file refused: {exc})"
-        say(f"  sweep reference cache entry {exc}; not read, recomputing")
+        _warn(f"sweep reference cache entry {exc}; not read, recomputing")
     except CacheRefused as exc:
         cache["status"] = f"computed (cache file refused: {exc})"
         say(f"  reference cache refused, recomputing: {exc}")
@@ -429,7 +440,7 @@ def obtain_reference(
         store_cached(path, key, ref, times)
     except OSError as exc:  # a read-only or full cache directory, a directory at the name
         cache["status"] += f"; not stored ({exc})"
-        say(f"  reference not stored in the cache: {exc}")
+        _warn(f"sweep reference not stored in the cache: {exc}")
     return Reference(ref.samples, {**ref.info, "cache": cache})
 
 
@@ -439,6 +450,7 @@ __all__ = [
     "ContentCheckFailed",
     "NotRegularFile",
     "Reference",
+    "ReferenceCacheWarning",
     "cache_key",
     "cache_path",
     "code_fingerprint",
