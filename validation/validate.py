@@ -4,8 +4,14 @@
 (the scene's integrator and time step, overridable) and, when installed, the Pinocchio referee, all
 driven by the analytic controller; :func:`validation.compare.compare_plants`; then ``report.md``,
 ``report.json``, the figures (PNG, and SVG or PDF on request) and ``run.rrd`` in ``out_dir``. A run
-that fails (an engine error, a plant stopping early, MuJoCo's bridge missing) still writes what it
-has, marked FAILED. The teaching demo is :mod:`validation.demo`.
+that fails (an engine error, a plant stopping early, MuJoCo's bridge missing, a figure or the
+recording that could not be made) still writes what it has, marked FAILED; one a signal stops
+(Ctrl-C, SIGTERM, at any stage) writes the report of what it reached, marked INTERRUPTED, without
+figures or recording. The verdict is PASSED only when every check passed and every file the report
+names is in the committed directory, whole (:func:`_check_committed`); a file that cannot be
+written (a full disk, in this process or a worker) is an :class:`OutputError`: no verdict, the
+previous contents of ``out_dir`` kept. A stage whose worker process was lost (killed) is done
+again here, and the report says so. The teaching demo is :mod:`validation.demo`.
 """
 
 from __future__ import annotations
@@ -75,7 +81,8 @@ class ValidationResult:
     Attributes:
         scene: scene name.
         out_dir: where the files are.
-        passed: every check passed and nothing failed.
+        passed: every check passed, nothing failed, and every file of ``files`` is whole in
+            ``out_dir`` (the report's verdict is PASSED).
         checks: every check (empty if no comparison could be made).
         comparison: the comparison (None if no analytic trajectory exists).
         failure: why the run failed ("" if it did not).
