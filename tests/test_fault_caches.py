@@ -394,7 +394,6 @@ def test_swapped_kernel_data_files_are_recompiled_not_loaded(tmp_path):
         assert sum(source in ln for ln in lines) == 1, (source, lines)
 
 
-@pytest.mark.slow
 def test_full_tmpfs_numba_cache_dir_still_passes(tmp_path):
     """``NUMBA_CACHE_DIR`` on a real full filesystem (a 300 kB tmpfs, cold) -> the run passes, one
     line says the cache could not be written, and the filesystem is left as it was."""
