@@ -212,11 +212,13 @@ def _tumble(*args: str, env: dict | None = None, **kw) -> subprocess.CompletedPr
 
 
 def test_full_disk_on_a_real_tiny_filesystem(previous, tmp_path):
-    """A tmpfs with room for the previous run and a few hundred KB more -> exit 1, one line, the
-    previous run unchanged, nothing left beside it (TUMBLE_WORKERS=0 and with workers)."""
-    used = sum(p.stat().st_size for p in previous.iterdir())
+    """A tmpfs with room for the previous run and a new report, not for a figure -> exit 1, one
+    line, the previous run unchanged, nothing left beside it (TUMBLE_WORKERS=0 and workers)."""
+    kb = {p.name: -(-p.stat().st_size // 4096) * 4 for p in previous.iterdir()}  # tmpfs pages
+    report_kb = kb["report.json"] + kb["report.md"] + kb["manifest.json"]
+    assert min(kb[n] for n in kb if n.endswith(".png")) > report_kb + 64
     mnt = tmp_path / "mnt"
-    _mount_tmpfs(mnt, used // 1024 + 300)
+    _mount_tmpfs(mnt, sum(kb.values()) + report_kb + 64)
     try:
         shutil.copytree(previous, mnt / "v")
         before = _snapshot(mnt / "v")
