@@ -9,8 +9,8 @@ what the tool does about it:
 * a full disk while a figure, its rendering, or the recording is written, here or in a worker,
   or on a real tiny filesystem -> OutputError, the previous run unchanged;
 * a figure or the recording that cannot be made (a bug) -> FAILED, the file not named;
-* SIGTERM while the plants run (in workers or here) -> the job stops within seconds, exit 143,
-  report.md INTERRUPTED;
+* SIGTERM while the plants run (in workers or here), Ctrl-C while a plant runs or while the
+  report is written -> the job stops within seconds, exit 143, report.md INTERRUPTED;
 * a plant worker killed (``kill -9``) -> the plant is redone here, and the report says so;
 * a choice of plants with nothing to compare -> refused before any plant runs;
 * hostile strings in a scene -> literal text in report.md, its structure intact.
@@ -295,6 +295,28 @@ def test_a_plant_interrupted_part_way_makes_the_report_interrupted(tmp_path):
     man = json.loads((out / "manifest.json").read_text())
     assert man["state"] == "interrupted"
     assert set(man["files"]) | {"manifest.json"} == {p.name for p in out.iterdir()}
+
+
+def test_ctrl_c_while_the_report_is_written_makes_it_interrupted(tmp_path, monkeypatch):
+    """Ctrl-C arriving while a passing run's report is written -> the report is written again,
+    INTERRUPTED first, and the set is committed interrupted (never PASSED in an interrupted set)."""
+    real = V.write_report
+    calls = []
+
+    def write_report(*a, **k):
+        calls.append(k.get("interrupted"))
+        if len(calls) == 1:
+            os.kill(os.getpid(), signal.SIGINT)
+        return real(*a, **k)
+
+    monkeypatch.setattr(V, "write_report", write_report)
+    out = tmp_path / "v"
+    with pytest.raises(KeyboardInterrupt):
+        V.run_validation(SCENE, out, t_end=T_END, concurrent=False)
+    assert calls == [False, True]
+    assert (out / "report.md").read_text().splitlines()[0] == f"# {SCENE}: INTERRUPTED"
+    assert json.loads((out / "report.json").read_text())["passed"] is False
+    assert json.loads((out / "manifest.json").read_text())["state"] == "interrupted"
 
 
 @pytest.mark.parametrize("workers_switch", ["1", "0"], ids=["workers", "one-process"])

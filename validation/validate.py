@@ -589,25 +589,27 @@ def _validate_into(
         raise
     meta = _meta(run, sc, runs, names, horizon, verdicts)
     files: dict[str, Path] = {}
-    drawn: tuple[list[Path], list[Any], list[str]] = ([], [], [])
+    drawn: Sequence[list] = ([], [], [])
+    evidence: tuple = ()
     if not interrupted:
         try:
             if not jobs:
                 start_evidence()
-            drawn = _evidence(jobs, run, sc, trajectories, cmp, meta, formats, walls)
-            files.update(drawn[3])
-            failures += drawn[4]
-            redone += drawn[5]
-            drawn = drawn[:3]
+            evidence = _evidence(jobs, run, sc, trajectories, cmp, meta, formats, walls)
         except KeyboardInterrupt:
             interrupted = True
         finally:
             workers.stop(jobs)
     else:
         workers.stop(jobs)
-    if interrupted:
+    if interrupted:  # the evidence of an interrupted run is left out, whatever was made
         failures.insert(0, _interrupted_sentence(trajectories, runs))
         meta["evidence"] = "no figures and no recording: the run was interrupted"
+    elif evidence:
+        *drawn, made, evidence_failures, evidence_redone = evidence
+        files.update(made)
+        failures += evidence_failures
+        redone += evidence_redone
     if redone:
         meta["redone"] = list(redone)
     failure = "; ".join(failures)
@@ -618,25 +620,35 @@ def _validate_into(
     walls["total"] = time.perf_counter() - t_all
     meta["wall_times_s"] = dict(walls)
     t0 = time.perf_counter()
-    rep = write_report(
-        out,
-        cmp,
-        trajectories,
-        meta,
-        failure=failure,
-        verdicts=verdicts,
-        formats=formats,
-        scene=sc,
-        figures=drawn,
-        interrupted=interrupted,
-    )
+
+    def report(failure: str, interrupted: bool) -> Any:
+        return write_report(
+            out,
+            cmp,
+            trajectories,
+            meta,
+            failure=failure,
+            verdicts=verdicts,
+            formats=formats,
+            scene=sc,
+            figures=drawn,
+            interrupted=interrupted,
+        )
+
+    # A signal while the report is written is not allowed to leave a report that says PASSED in
+    # a set marked interrupted: the report is written again, INTERRUPTED.
+    with workers.signals_held(raise_after=False) as caught:
+        rep = report(failure, interrupted)
+        files.update({"report.md": rep.markdown, "report.json": rep.json})
+        files.update({f.name: f for f in rep.figures})
+        _keep_only(out, files)
+        if caught and not interrupted:
+            interrupted = True
+            said = f"interrupted by {interrupt_name()} as the report was written"
+            rep = report("; ".join([said, *([failure] if failure else [])]), interrupted)
+        if rep.failure:
+            run.mark_failed(rep.failure)
     walls["report"] = time.perf_counter() - t0
-    files = {n: p for n, p in files.items() if n != RECORDING or not interrupted}
-    files.update({"report.md": rep.markdown, "report.json": rep.json})
-    files.update({f.name: f for f in rep.figures})
-    _keep_only(out, files)
-    if rep.failure:
-        run.mark_failed(rep.failure)
     if interrupted:
         raise KeyboardInterrupt  # the partial set is committed, marked interrupted
     return ValidationResult(

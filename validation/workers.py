@@ -148,14 +148,16 @@ def normal_priority() -> None:
 
 
 @contextlib.contextmanager
-def signals_held(on_signal: Callable[[], None] | None = None):
+def signals_held(on_signal: Callable[[], None] | None = None, raise_after: bool = True):
     """SIGINT and SIGTERM do not cut the block: an import cut by Ctrl-C half way leaves a module
     half made (matplotlib then fails on its next import), so a preparing import finishes first
-    and the interrupt (:class:`validation.interrupts.Terminated` for SIGTERM) is raised after it.
+    and the interrupt (:class:`validation.interrupts.Terminated` for SIGTERM) is raised after it
+    (unless not ``raise_after``: the caller reads the list the block is given, the signals
+    caught so far, and acts on it itself).
 
     The signal is not blocked, only noted: ``on_signal()`` runs as soon as it arrives (telling the
-    plants' workers to stop, leaving idle priority), so the job stops promptly even while this
-    process prepares at idle priority. Main thread only; elsewhere the block runs as it is."""
+    plants' workers to stop), so the job stops promptly. Main thread only; elsewhere the block
+    runs as it is."""
     from validation import interrupts
 
     caught: list[int] = []
@@ -173,14 +175,14 @@ def signals_held(on_signal: Callable[[], None] | None = None):
     try:
         previous = {sig: signal.signal(sig, note) for sig in held}
     except ValueError:  # not the main thread: no handlers to set
-        yield
+        yield caught
         return
     try:
-        yield
+        yield caught
     finally:
         for sig, handler in previous.items():
             signal.signal(sig, handler)
-    if caught:
+    if caught and raise_after:
         raise interrupts.Terminated() if signal.SIGTERM in caught else KeyboardInterrupt()
 
 
