@@ -6,8 +6,8 @@ driven by the analytic controller; :func:`validation.compare.compare_plants`; th
 ``report.json``, the figures (PNG, and SVG or PDF on request) and ``run.rrd`` in ``out_dir``. A run
 that fails (an engine error, a plant stopping early, MuJoCo's bridge missing, a figure or the
 recording that could not be made) still writes what it has, marked FAILED; one a signal stops
-(Ctrl-C, SIGTERM, at any stage) writes the report of what it reached, marked INTERRUPTED, without
-figures or recording. The verdict is PASSED only when every check passed and every file the report
+(Ctrl-C, SIGTERM, at any stage) writes the report of how far each plant got, marked INTERRUPTED,
+without comparison, figures or recording. The verdict is PASSED only when every check passed and every file the report
 names is in the committed directory, whole (:func:`_check_committed`); a file that cannot be
 written (a full disk, in this process or a worker) is an :class:`OutputError`: no verdict, the
 previous contents of ``out_dir`` kept. A stage whose worker process was lost (killed) is done
@@ -530,9 +530,9 @@ def _validate_into(
     recording and draw the figures side by side; the files are those of a run one stage after
     the other.
 
-    An interrupt (Ctrl-C, SIGTERM) at any stage stops every worker at once; the report of what
-    was reached is written, INTERRUPTED (no figures, no recording), and the interrupt raised
-    after it. A file that cannot be written raises :class:`OutputError` (no verdict, no files).
+    An interrupt (Ctrl-C, SIGTERM) at any stage stops every worker at once; the report of how far
+    each plant got is written, INTERRUPTED (no comparison of a partial run, no figures, no
+    recording: the stop is prompt whatever the horizon), and the interrupt raised after it. A file that cannot be written raises :class:`OutputError` (no verdict, no files).
     """
     out = run.path
     walls: dict[str, float] = {}
@@ -580,7 +580,7 @@ def _validate_into(
             redone,
             on_started=start_evidence,
         )
-        if trajectories and trajectories[0].t.size:
+        if trajectories and trajectories[0].t.size and not interrupted:
             cmp, verdicts = _compare(trajectories, sc, horizon, names, walls, failures)
     except KeyboardInterrupt:
         interrupted = True
@@ -604,7 +604,7 @@ def _validate_into(
         workers.stop(jobs)
     if interrupted:  # the evidence of an interrupted run is left out, whatever was made
         failures.insert(0, _interrupted_sentence(trajectories, runs))
-        meta["evidence"] = "no figures and no recording: the run was interrupted"
+        meta["evidence"] = "no comparison, figures or recording: the run was interrupted"
     elif evidence:
         *drawn, made, evidence_failures, evidence_redone = evidence
         files.update(made)
