@@ -443,19 +443,19 @@ def test_hostile_scene_strings_are_literal_text_in_report_md(tmp_path):
     assert doc["thresholds"]["attitude"]["reason"].startswith(HOSTILE[0])  # kept verbatim there
 
 
-def test_a_file_missing_after_the_commit_gives_no_verdict(tmp_path):
+def test_a_file_missing_after_the_commit_gives_no_verdict(previous):
     """A file the result names missing, or not the size its manifest records, after the commit
     -> OutputError (the command says it in one line and exits 1), never PASS."""
-    (tmp_path / "report.md").write_text("# x: PASSED\n")
-    manifest = {"files": {"report.md": {"bytes": 12}, "run.rrd": {"bytes": 5}}}
-    (tmp_path / "manifest.json").write_text(json.dumps(manifest))
-    files = {"report.md": tmp_path / "report.md", "manifest.json": tmp_path / "manifest.json"}
-    V._check_committed(tmp_path, files)  # whole: no complaint
+    files = {p.name: p for p in previous.iterdir()}  # a committed run, as its result names it
+    V._check_committed(previous, files)  # whole: no complaint
+    rrd = files.pop("run.rrd")
+    rrd.unlink()
     with pytest.raises(OutputError, match="missing after the commit"):
-        V._check_committed(tmp_path, {**files, "run.rrd": tmp_path / "run.rrd"})
-    (tmp_path / "report.md").write_text("# x: PASSED, and more\n")
-    with pytest.raises(OutputError, match="the manifest says 12"):
-        V._check_committed(tmp_path, files)
+        V._check_committed(previous, {**files, "run.rrd": rrd})
+    size = files["report.md"].stat().st_size
+    files["report.md"].write_text("# x: PASSED, and more\n")
+    with pytest.raises(OutputError, match=f"the manifest says {size}"):
+        V._check_committed(previous, files)
 
 
 def test_report_md_escaping_keeps_one_literal_line():

@@ -215,16 +215,18 @@ def run_validation(
 
 def _check_committed(target: Path, files: dict[str, Path]) -> None:
     """Every file the result names is in the committed directory, whole: listed in its
-    ``manifest.json`` with the size found there (the verdict is given only then).
+    ``manifest.json`` (:func:`validation.outputs.parse_manifest`) with the size found there (the
+    verdict is given only then).
 
     Raises:
-        OutputError: a file is missing or not the size its manifest records.
+        OutputError: the manifest is not readable, or a file is missing or not the size its
+            manifest records.
     """
-    import json
+    from validation.outputs import parse_manifest
 
     try:
-        listed = json.loads((target / "manifest.json").read_text(encoding="utf-8"))["files"]
-    except (OSError, ValueError, KeyError, TypeError) as exc:
+        listed = parse_manifest((target / "manifest.json").read_bytes())
+    except (OSError, ValueError) as exc:
         raise OutputError(target / "manifest.json", f"not readable after the commit ({exc})") from exc
     for name, path in files.items():
         if name == "manifest.json":
@@ -233,7 +235,7 @@ def _check_committed(target: Path, files: dict[str, Path]) -> None:
             size = path.stat().st_size
         except OSError as exc:
             raise OutputError(path, f"missing after the commit ({exc.strerror})") from exc
-        recorded = (listed.get(name) or {}).get("bytes")
+        recorded = listed[name].bytes if name in listed else None
         if recorded != size:
             raise OutputError(path, f"{size} bytes after the commit, the manifest says {recorded}")
 
