@@ -45,6 +45,19 @@ REPO = Path(__file__).resolve().parents[1]
 ENOSPC = OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
 
 
+def _report_schema():
+    """report.json's JSON Schema, with the schemas it refers to."""
+    jsonschema = pytest.importorskip("jsonschema")
+    from referencing import Registry, Resource
+
+    from validation import provenance as pv
+
+    docs = [json.loads(p.read_text()) for p in pv.SCHEMA_DIR.glob("*.schema.json")]
+    registry = Registry().with_resources((d["$id"], Resource.from_contents(d)) for d in docs)
+    schema = json.loads(pv.schema_path("report").read_text())
+    return jsonschema.Draft202012Validator(schema, registry=registry)
+
+
 def _snapshot(d: Path) -> dict[str, bytes]:
     """Every entry of ``d`` (hidden ones too) with its bytes: what must not change."""
     return {p.name: p.read_bytes() for p in sorted(d.iterdir()) if p.is_file()}
@@ -292,6 +305,7 @@ def test_a_plant_interrupted_part_way_makes_the_report_interrupted(tmp_path):
     assert lines[2].startswith("**The run was interrupted:**") and "analytic reached t =" in lines[2]
     doc = json.loads((out / "report.json").read_text())
     assert doc["verdict"] == "INTERRUPTED" and doc["passed"] is False and doc["interrupted"]
+    _report_schema().validate(doc)  # an interrupted report is still a report.json
     man = json.loads((out / "manifest.json").read_text())
     assert man["state"] == "interrupted"
     assert set(man["files"]) | {"manifest.json"} == {p.name for p in out.iterdir()}
