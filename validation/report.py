@@ -552,7 +552,6 @@ def _report_doc(
     comparison["summaries"] = summaries(cmp)  # largest magnitudes (max_abs), not signed maxima
     return {
         "verdict": verdict.value,
-        "interrupted": verdict is RunVerdict.INTERRUPTED,
         **comparison,
         "passed": passed,  # cmp.to_dict() has its own; the failure overrides
         "failure": failure,
