@@ -447,6 +447,16 @@ class Scene:
 _VECTOR_KINDS = (Kind.VECTOR3, Kind.VECTOR4, Kind.VECTOR_N, Kind.VECTOR_N1, Kind.VECTOR_K)
 
 
+class SceneText(str):
+    """Text a scene file gives (its name, description, a threshold's reason), kept verbatim.
+
+    A plain ``str`` in every respect; the JSON writers (``validation.provenance``) carry it as it
+    is, where text the code writes itself may not be a placeholder such as ``"unknown"`` or
+    ``"nan"``: a scene's description may well read "unknown"."""
+
+    verbatim_text = True
+
+
 class _Table:
     """A TOML table being read: tracks its dotted path and which keys were consumed.
 
@@ -523,7 +533,7 @@ class _Table:
         v = self.raw(key, default, kinds=(Kind.STRING,))
         if not isinstance(v, str):
             raise ValueError(f"{self.name(key)}: must be a string (got {_show(v)})")
-        return v
+        return SceneText(v)
 
     def boolean(self, key: str, default: Any = ...) -> bool:
         v = self.raw(key, default, kinds=(Kind.BOOLEAN,))

@@ -83,7 +83,7 @@ from analytic.scene import OutputSettings, Scene
 from analytic.stepping import NonFinite, step_and_sample
 from analytic.trajectory import Engine, RunStatus, Trajectory
 from mj_bridge.pinocchio_model import build_model, import_pinocchio
-from mj_bridge.pinocchio_settings import PinocchioSettings
+from mj_bridge.pinocchio_settings import PinocchioSettings, check_pinocchio_size
 from mj_bridge.stages import ControllerSource
 from model_xml.coordinates import (
     paper_to_pinocchio_plant,
@@ -346,8 +346,6 @@ class PinocchioDynamics:
     def __init__(
         self, scene: Scene, controller: ControllerSource | str = ControllerSource.ANALYTIC_FAST
     ):
-        from mj_bridge.plants import check_pinocchio_size
-
         check_pinocchio_size(scene)  # before Pinocchio allocates its data (n³)
         self.pin = import_pinocchio()
         self.scene = scene

@@ -389,7 +389,7 @@ def test_swapped_kernel_data_files_are_recompiled_not_loaded(tmp_path):
     second = _validate(cache, tmp_path / "o2")
     assert second.returncode == 0, second.stderr[-2000:]
     assert (tmp_path / "o2" / "report.md").read_text().startswith("# paper_example1_controlled: P")
-    lines = [ln for ln in second.stderr.splitlines() if "failed its content check" in ln]
+    lines = [ln for ln in second.stderr.splitlines() if "differs from its recorded SHA-256" in ln]
     for source in ("kernel/system.py", "kernel/gauss.py", "mj_bridge/native.py"):
         assert sum(source in ln for ln in lines) == 1, (source, lines)
 

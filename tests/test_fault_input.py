@@ -217,6 +217,21 @@ def test_pinocchio_refuses_more_masses_than_it_holds_up_front():
         PinocchioDynamics(sc)
 
 
+def test_default_plants_leave_out_a_plant_that_cannot_run_the_scene(monkeypatch):
+    """A scene beyond Pinocchio's size with the default plants -> the others run, one warning and
+    the report's referee note say why Pinocchio is left out."""
+    from mj_bridge.plants import PINOCCHIO_MAX_MASSES, PinocchioPlant
+    from validation.preflight import validation_plants
+    from validation.validate import _referee_note
+
+    monkeypatch.setattr(PinocchioPlant, "unavailable", classmethod(lambda cls: ""))  # installed
+    sc = chain_scene(PINOCCHIO_MAX_MASSES + 1)
+    with pytest.warns(UserWarning, match=r"^pinocchio plant left out: masses\.mass: "):
+        chosen = validation_plants(None, sc)
+    assert chosen == (Engine.ANALYTIC, Engine.MUJOCO)
+    assert _referee_note(sc).startswith("the referee (Pinocchio) cannot run this scene: masses.mass")
+
+
 def test_a_plant_out_of_memory_says_so_in_one_line(monkeypatch):
     """A MemoryError without a message inside a plant -> MemoryError "out of memory (plant, n)"."""
     from mj_bridge.plants import plant

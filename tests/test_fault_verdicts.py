@@ -457,6 +457,23 @@ def test_hostile_scene_strings_are_literal_text_in_report_md(tmp_path):
     assert doc["thresholds"]["attitude"]["reason"].startswith(HOSTILE[0])  # kept verbatim there
 
 
+@pytest.mark.parametrize("placeholder", ["unknown", "nan", "None", "<an image>"])
+def test_scene_text_that_reads_like_a_placeholder_is_written_as_it_is(tmp_path, placeholder):
+    """A scene whose description or threshold reason reads "unknown", "nan" or "<...>" (words the
+    JSON writers refuse from the code itself) -> the run completes and report.json carries the
+    text verbatim."""
+    text = builtin_scene_path(SCENE).read_text()
+    line = f"description = {json.dumps(placeholder)}"
+    text = re.sub(r'(?m)^description = ".*"$', lambda _m: line, text, count=1)
+    scene = tmp_path / "s.toml"
+    scene.write_text(f'{text}\n[thresholds]\nattitude = {{ value = 1, reason = "{placeholder}" }}\n')
+    res = V.run_validation(scene, tmp_path / "v", t_end=T_END, concurrent=False)
+    assert res.passed
+    doc = json.loads((tmp_path / "v" / "report.json").read_text())
+    assert doc["provenance"]["scene"]["description"] == placeholder
+    assert doc["thresholds"]["attitude"]["reason"].startswith(f"{placeholder} (default")
+
+
 def test_a_file_missing_after_the_commit_gives_no_verdict(previous):
     """A file the result names missing, or not the size its manifest records, after the commit
     -> OutputError (the command says it in one line and exits 1), never PASS."""

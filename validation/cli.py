@@ -181,7 +181,7 @@ def _checked_plants(scene, args: argparse.Namespace) -> list:
     from mj_bridge.plants import plant
     from validation.preflight import check_validation_inputs, validation_plants
 
-    chosen = validation_plants(args.plants)
+    chosen = validation_plants(args.plants, scene)
     mujoco = Engine.MUJOCO in chosen
     check_validation_inputs(
         scene, integrator=args.integrator, dt=args.dt, t_end=args.t_end, mujoco=mujoco

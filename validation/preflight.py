@@ -9,6 +9,7 @@ choice of plants that leaves nothing to compare (one plant, or one plant named t
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 from typing import Any
 
@@ -42,9 +43,13 @@ def check_validation_inputs(
     plan_steps(scene, integrator, dt, t_end)  # MuJoCo's steps on that grid
 
 
-def validation_plants(plants: Sequence[Engine | str] | str | None) -> tuple[Engine, ...]:
-    """The plants a validation runs, in report order: every installed one when ``plants`` is
-    None, else those named (engine names, or ``"analytic,mujoco"``).
+def validation_plants(
+    plants: Sequence[Engine | str] | str | None, scene: Scene | None = None
+) -> tuple[Engine, ...]:
+    """The plants a validation runs, in report order: when ``plants`` is None, every installed one
+    that can run ``scene`` (a plant whose ``check_scene`` refuses it, such as Pinocchio beyond its
+    mass limit, is left out with one warning naming why); else those named (engine names, or
+    ``"analytic,mujoco"``), which must each accept the scene (checked by the caller).
 
     Raises:
         ValueError: naming ``plants`` and the value: an unknown or missing plant, a plant named
@@ -53,7 +58,24 @@ def validation_plants(plants: Sequence[Engine | str] | str | None) -> tuple[Engi
     from mj_bridge.plants import installed_plants, parse_plants, plant
 
     if plants is None:
-        return installed_plants()
+        installed = installed_plants()
+        if scene is None:
+            return installed
+        from mj_bridge.plants import plants_for_scene
+
+        chosen = plants_for_scene(scene, installed)
+        for e in installed:
+            if e not in chosen:
+                try:
+                    plant(e).check_scene(scene)
+                except ValueError as exc:
+                    warnings.warn(f"{e.value} plant left out: {exc}", stacklevel=2)
+        if len(chosen) < 2:
+            raise ValueError(
+                f"plants: fewer than two of the installed plants can run {scene.name!r} "
+                f"({', '.join(e.value for e in chosen) or 'none'}); nothing to compare"
+            )
+        return chosen
     text = plants if isinstance(plants, str) else ",".join(str(getattr(p, "value", p)) for p in plants)
     named = [plant(n.strip()).engine for n in text.split(",") if n.strip()]
     twice = sorted({e.value for e in named if named.count(e) > 1})

@@ -186,6 +186,8 @@ def to_json_value(x: Any, where: str = "$") -> Any:
         value = x.value  # a declared value (a shape kind "none"), never a placeholder
         return value if isinstance(value, str) else to_json_value(value, where)
     if isinstance(x, str):
+        if getattr(x, "verbatim_text", False):  # a scene file's own text (analytic.scene.SceneText)
+            return str(x)
         if _PLACEHOLDER.fullmatch(x):
             raise PlaceholderError(
                 f"{where}: the placeholder string {x!r} stands for a value; write the number, "

@@ -23,9 +23,14 @@ the plugin's cost on a pytest run that collects no scene.
 
 from __future__ import annotations
 
+import errno
 import fnmatch
+import hashlib
+import hmac
 import os
 import re
+import secrets
+import stat
 import sys
 from collections.abc import Iterator
 from pathlib import Path
@@ -103,6 +108,18 @@ def _matches_ini(config: pytest.Config, path: Path) -> bool:
     return False
 
 
+def _read_head(path: Path, limit: int) -> bytes:
+    """At most ``limit`` bytes of the regular file at ``path``: opened without blocking (a FIFO
+    or a device), ``OSError`` for anything that is not a regular file."""
+    fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0))
+    try:
+        if not stat.S_ISREG(os.fstat(fd).st_mode):
+            raise OSError(errno.EINVAL, "not a regular file", str(path))
+        return os.read(fd, limit)
+    finally:
+        os.close(fd)
+
+
 def pytest_collect_file(file_path: Path, parent: pytest.Collector) -> SceneFile | None:
     if file_path.suffix != ".toml":
         return None
@@ -112,13 +129,54 @@ def pytest_collect_file(file_path: Path, parent: pytest.Collector) -> SceneFile 
         return None
     if named and not listed:
         try:
-            with open(file_path, "rb") as f:
-                head = f.read(1 << 20)
-        except OSError:
+            head = _read_head(file_path, 1 << 20)
+        except OSError:  # also a FIFO or device named test_*.toml: never opened to block
             return None
         if not _SCENE_TABLE.search(head):
             return None  # a test_*.toml that is not a scene: not ours
     return SceneFile.from_parent(parent, path=file_path)
+
+
+_SHARE_KEY = "tumble_share_key"
+"""The ``workerinput`` entry that carries the session's secret for shared runs (hex)."""
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_configure_node(node: Any) -> None:
+    """pytest-xdist, in the controller: every worker of this session gets one random secret, with
+    which the runs they share are signed (:func:`_store_signed`)."""
+    key = node.config.stash.get(_SHARE_SECRET, None)
+    if key is None:
+        key = node.config.stash[_SHARE_SECRET] = secrets.token_hex(32)
+    node.workerinput[_SHARE_KEY] = key
+
+
+_SHARE_SECRET = pytest.StashKey[str]()
+
+
+def _store_signed(store: Path, secret: bytes, data: bytes) -> None:
+    """``data`` at ``store`` behind its HMAC-SHA256 under ``secret`` (a temporary file, renamed)."""
+    tmp = store.with_suffix(f".{os.getpid()}.tmp")
+    tmp.write_bytes(hmac.new(secret, data, hashlib.sha256).digest() + data)
+    os.replace(tmp, store)
+
+
+def _load_signed(store: Path, secret: bytes) -> Any:
+    """The run another worker of this session stored at ``store``, or None when there is none, it
+    is not a regular file, or its signature does not match (never unpickled then: a pickle
+    planted by anyone without the session's secret is not trusted)."""
+    import pickle
+
+    if not secret:
+        return None
+    try:
+        blob = _read_head(store, 1 << 30)
+    except OSError:
+        return None
+    mac, data = blob[:32], blob[32:]
+    if len(mac) < 32 or not hmac.compare_digest(mac, hmac.new(secret, data, hashlib.sha256).digest()):
+        return None
+    return pickle.loads(data)
 
 
 class SceneFile(pytest.File):
@@ -303,7 +361,10 @@ class _Session:
         """The run of the scene file ``path`` on the session's plants (ValidationResult, or the
         one-line reason it could not run)."""
         plants = self.plants()
-        content = path.read_bytes()
+        try:
+            content = _read_head(path, 1 << 20)
+        except OSError as exc:  # not a regular file (a FIFO is never opened to block)
+            return f"ValueError: scene: cannot read {str(path)!r} ({exc.strerror or exc})"
         return self.run(content, plants, None, path=path, scene=None)
 
     def run(
@@ -334,17 +395,15 @@ class _Session:
             import fcntl
         except ImportError:  # pragma: no cover - not POSIX: each worker runs what it is given
             return self._run(key, *args)
+        secret = bytes.fromhex(self.config.workerinput.get(_SHARE_KEY, ""))
         with open(shared / f"{key}.lock", "wb") as lock:
             fcntl.flock(lock, fcntl.LOCK_EX)
             try:
-                if store.exists():
-                    with open(store, "rb") as f:
-                        return pickle.load(f)
+                shared_res = _load_signed(store, secret)
+                if shared_res is not None:
+                    return shared_res
                 res = self._run(key, *args)
-                tmp = store.with_suffix(f".{os.getpid()}.tmp")
-                with open(tmp, "wb") as f:
-                    pickle.dump(res, f)
-                os.replace(tmp, store)
+                _store_signed(store, secret, pickle.dumps(res))
                 return res
             finally:
                 fcntl.flock(lock, fcntl.LOCK_UN)

@@ -192,7 +192,7 @@ def run_validation(
     from mj_bridge.plants import plant
 
     sc = _scene(scene)
-    chosen = validation_plants(plants)
+    chosen = validation_plants(plants, sc)
     check_validation_inputs(  # before any plant runs
         sc, integrator=integrator, dt=dt, t_end=t_end, mujoco=Engine.MUJOCO in chosen
     )
@@ -464,6 +464,22 @@ def _worker_result(job: workers.Job, redo: Callable[[], Any], redone: list[str])
         raise RuntimeError(str(exc)) from None
 
 
+def _referee_note(sc: Scene) -> str:
+    """Why a run of fewer than three plants has no referee: Pinocchio not installed, unable to
+    run this scene (its reason), or not chosen."""
+    from mj_bridge.plants import PinocchioPlant
+
+    if PinocchioPlant.unavailable():
+        return (
+            "the referee (Pinocchio) is not installed: pip install 'pin>=4.1' (the [pinocchio] extra)"
+        )
+    try:
+        PinocchioPlant().check_scene(sc)
+    except ValueError as exc:
+        return f"the referee (Pinocchio) cannot run this scene: {exc}"
+    return "the referee needs three plants"
+
+
 def _meta(
     run: OutputRun,
     sc: Scene,
@@ -473,18 +489,8 @@ def _meta(
     verdicts: Sequence[Verdict],
 ) -> dict[str, Any]:
     """The run's metadata for the report (the wall times are added when they are known)."""
-    from mj_bridge.plants import PinocchioPlant
-
     mj = next((st for pl, st in runs if pl.engine is Engine.MUJOCO), None)
-    referee_note = (
-        ""
-        if len(runs) >= 3
-        else (
-            "the referee (Pinocchio) is not installed: pip install 'pin>=4.1' (the [pinocchio] extra)"
-            if PinocchioPlant.unavailable()
-            else "the referee needs three plants"
-        )
-    )
+    referee_note = "" if len(runs) >= 3 else _referee_note(sc)
     return {
         "run_id": run.run_id,
         "scene": {

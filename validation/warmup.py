@@ -320,7 +320,7 @@ def _stamped_keys() -> list[str]:
 
     path = _stamp_path()
     try:
-        from analytic.kernel.cache_check import read_regular  # never blocks (a FIFO there)
+        from analytic.safe_files import read_regular  # never blocks (a FIFO there)
 
         keys = json.loads(read_regular(path, 1 << 20))["warm_keys"] if path else []
     except (OSError, ValueError, KeyError, TypeError):

@@ -34,13 +34,11 @@ from __future__ import annotations
 import atexit
 import contextlib
 import enum
-import errno
 import hashlib
 import json
 import os
 import shutil
 import stat
-import sys
 import tempfile
 import time
 import uuid
@@ -50,6 +48,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from analytic.kernel.cache_dir import kernel_cache_dir
+from analytic.safe_files import file_kind, open_regular, read_regular
 
 MANIFEST_NAME = "tumble-numba-manifest.json"
 """The manifest's file, in :func:`analytic.kernel.cache_dir.kernel_cache_dir`."""
@@ -135,52 +134,6 @@ class _Scan:
 # ----------------------------------------------------------------------------------------------
 # Files
 # ----------------------------------------------------------------------------------------------
-
-
-def _kind(mode: int) -> str:
-    for test, word in (
-        (stat.S_ISREG, "regular file"),
-        (stat.S_ISDIR, "directory"),
-        (stat.S_ISLNK, "symbolic link"),
-        (stat.S_ISFIFO, "FIFO"),
-        (stat.S_ISCHR, "character device"),
-        (stat.S_ISBLK, "block device"),
-        (stat.S_ISSOCK, "socket"),
-    ):
-        if test(mode):
-            return word
-    return "special file"
-
-
-@contextlib.contextmanager
-def open_regular(path: str | Path) -> Iterator[int]:
-    """A read-only descriptor of the regular file at ``path``: never follows a symbolic link, never
-    blocks (a FIFO, a device); ``OSError`` (``EINVAL`` for something that is not a regular file)
-    otherwise."""
-    flags = os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_NONBLOCK", 0)
-    fd = os.open(path, flags | getattr(os, "O_CLOEXEC", 0))
-    try:
-        mode = os.fstat(fd).st_mode
-        if not stat.S_ISREG(mode):
-            raise OSError(errno.EINVAL, f"a {_kind(mode)}, not a regular file", str(path))
-        yield fd
-    finally:
-        os.close(fd)
-
-
-def read_regular(path: str | Path, limit: int) -> bytes:
-    """The bytes of the regular file at ``path`` (:func:`open_regular`); ``OSError`` when it is
-    not one or holds more than ``limit`` bytes."""
-    with open_regular(path) as fd:
-        if os.fstat(fd).st_size > limit:
-            raise OSError(errno.EFBIG, f"larger than {limit} bytes", str(path))
-        chunks, total = [], 0
-        while chunk := os.read(fd, 1 << 20):
-            chunks.append(chunk)
-            total += len(chunk)
-            if total > limit:
-                raise OSError(errno.EFBIG, f"larger than {limit} bytes", str(path))
-    return b"".join(chunks)
 
 
 def file_digest(path: str | Path) -> tuple[str, int]:
@@ -336,7 +289,7 @@ def scan(lay: Layout) -> _Scan:
             if stat.S_ISREG(mode):
                 found.regular[path] = str(Path(d) / group)
             else:
-                found.irregular.append((path, _kind(mode)))
+                found.irregular.append((path, file_kind(mode)))
     return found
 
 
@@ -433,6 +386,7 @@ def check(lay: Layout) -> CheckResult:
         found = scan(lay)
         known, why = load_manifest(lay.manifest) if found.regular else ({}, "")
         bad: dict[str, list[Path]] = {}
+        differs: set[str] = set()  # kernels with a recorded file whose digest changed
         nbytes = 0
         for path, group in found.regular.items():
             try:
@@ -444,6 +398,8 @@ def check(lay: Layout) -> CheckResult:
             nbytes += size
             if known is None or known.get(str(path)) != digest:
                 bad.setdefault(group, [])
+                if known is not None and str(path) in known:
+                    differs.add(group)
         for path, group in found.regular.items():
             if group in bad:
                 bad[group].append(path)
@@ -454,9 +410,14 @@ def check(lay: Layout) -> CheckResult:
         lines.append(f"numba cache in {lay.root}: {why}; its {n} {what} deleted, to be recompiled")
     else:
         for group in sorted(bad):
+            what = (
+                "differs from its recorded SHA-256 (damaged or replaced)"
+                if group in differs
+                else "was not recorded by a finished run"
+            )
             lines.append(
-                f"numba cache of {source_of(group, lay)} ({Path(group).name}) failed its content "
-                "check; deleted, it will be recompiled"
+                f"numba cache of {source_of(group, lay)} ({Path(group).name}) {what}; "
+                "deleted, it will be recompiled"
             )
     problems = [f"{p} is a {kind}" for p, kind in found.irregular]
     problems += [f"{g} could not be deleted" for g in undeletable]
@@ -547,9 +508,6 @@ def _use_private_dir(why: str) -> None:
     d = Path(tempfile.mkdtemp(prefix="tumble-numba-"))
     os.environ["NUMBA_CACHE_DIR"] = str(d)
     _state.private_dir, _state.mode = d, Mode.PRIVATE
-    numba_config = sys.modules.get("numba.core.config")
-    if numba_config is not None:  # pragma: no cover - numba imported before the kernel
-        numba_config.CACHE_DIR = str(d)
     _say(
         f"numba's cache could not be written or trusted as it is ({why}); the kernels are "
         "compiled for this run only and the cache is left as it is"
@@ -624,7 +582,6 @@ __all__ = [
     "kernel_name",
     "layout",
     "load_manifest",
-    "read_regular",
     "record",
     "removed_any",
     "scan",

@@ -12,7 +12,11 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from analytic.safe_files import read_regular
 from validation.sweep.rows import BOOL_COLUMNS, COLUMNS, FLOAT_COLUMNS, INT_COLUMNS
+
+MAX_CSV_BYTES = 64 << 20
+"""Largest ``sweep.csv`` read back (bytes): a sweep writes a few kB; far above any real one."""
 
 
 def _cell(v: Any) -> str:
@@ -36,9 +40,12 @@ def to_csv(runs: Sequence[Mapping[str, Any]]) -> str:
 
 
 def read_csv(path: str | Path) -> list[dict[str, Any]]:
-    """Rows of ``sweep.csv`` with their types restored (empty cells -> None)."""
+    """Rows of ``sweep.csv`` with their types restored (empty cells -> None); the file is read
+    as a regular file of at most :data:`MAX_CSV_BYTES` (:func:`analytic.safe_files.read_regular`:
+    a FIFO or device there is an ``OSError``, never a wait)."""
     rows = []
-    with open(path, newline="", encoding="utf-8") as f:
+    text = read_regular(path, MAX_CSV_BYTES).decode("utf-8")
+    with io.StringIO(text, newline="") as f:
         for raw in csv.DictReader(f):
             row: dict[str, Any] = {}
             for k, v in raw.items():

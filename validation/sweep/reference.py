@@ -40,7 +40,6 @@ import json
 import math
 import os
 import platform
-import stat
 import warnings
 from collections.abc import Callable, Mapping
 from concurrent.futures import Executor
@@ -50,6 +49,7 @@ from typing import Any
 
 import numpy as np
 
+from analytic import safe_files
 from analytic.scene import Scene, SolverSettings
 from validation.atomic import write_bytes
 from validation.sweep import metrics
@@ -310,47 +310,23 @@ def _encode(ref: Reference, key: str) -> bytes:
 
 
 def _open_regular(path: str | Path) -> int:
-    """A read-only descriptor of the regular file at ``path``, opened without following a
-    symbolic link and without blocking (a FIFO with no writer, a device).
+    """A read-only descriptor of the regular file at ``path``
+    (:func:`analytic.safe_files.open_regular`: no link followed, never blocking).
 
     Raises:
         FileNotFoundError: nothing at ``path``.
         NotRegularFile: a FIFO, device, directory or symbolic link at ``path``.
         CacheRefused: any other failure to open it.
     """
-    flags = os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_NONBLOCK", 0)
-    flags |= getattr(os, "O_CLOEXEC", 0)
     try:
-        fd = os.open(path, flags)
+        with safe_files.open_regular(path) as fd:
+            return os.dup(fd)
     except FileNotFoundError:
         raise
-    except OSError as exc:  # ELOOP: a symbolic link; EISDIR, ENXIO (a socket) ...
-        try:
-            kind = _kind(os.lstat(path).st_mode)
-        except OSError:
-            kind = "unopenable entry"
-        if kind != "regular file":
-            raise NotRegularFile(f"{path}: a {kind}, not a regular file") from exc
+    except safe_files.NotRegularFile as exc:
+        raise NotRegularFile(str(exc)) from exc
+    except OSError as exc:
         raise CacheRefused(f"{path}: cannot be opened ({exc.strerror or exc})") from exc
-    mode = os.fstat(fd).st_mode
-    if not stat.S_ISREG(mode):
-        os.close(fd)
-        raise NotRegularFile(f"{path}: a {_kind(mode)}, not a regular file")
-    return fd
-
-
-def _kind(mode: int) -> str:
-    """What a file mode describes, in words."""
-    kinds = (
-        (stat.S_ISREG, "regular file"),
-        (stat.S_ISDIR, "directory"),
-        (stat.S_ISLNK, "symbolic link"),
-        (stat.S_ISFIFO, "FIFO"),
-        (stat.S_ISCHR, "character device"),
-        (stat.S_ISBLK, "block device"),
-        (stat.S_ISSOCK, "socket"),
-    )
-    return next((word for test, word in kinds if test(mode)), "special file")
 
 
 def _read_members(path: str | Path) -> tuple[str, str, dict[str, np.ndarray]]:
