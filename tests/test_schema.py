@@ -357,3 +357,172 @@ def test_hard_cases_json_validates(tmp_path):
     path = tmp_path / "h" / "hard_cases.json"
     needs_block(path, "validation/hard_cases.py (write_table)")
     check_file(path, FileKind.HARD_CASES)
+
+
+# ----------------------------------------------------------------------------------------------
+# Which code ran: the build record, the checkout, the working directory's checkout
+# ----------------------------------------------------------------------------------------------
+
+HEX_A = "a" * 40
+HEX_B = "b" * 40
+
+
+def _git(cwd: Path, *args: str) -> str:
+    done = subprocess.run(
+        ["git", "-C", str(cwd), "-c", "user.email=t@example.org", "-c", "user.name=t", *args],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    return done.stdout.strip()
+
+
+def _project_checkout(at: Path) -> str:
+    """A minimal git repository that looks like a tumbling-testbed checkout; returns its HEAD."""
+    (at / "validation").mkdir(parents=True)
+    (at / "validation" / "provenance.py").write_text("# placeholder\n")
+    (at / "pyproject.toml").write_text('[project]\nname = "tumbling-testbed"\n')
+    _git(at, "init", "-q")
+    _git(at, "add", "-A")
+    _git(at, "commit", "-qm", "first")
+    return _git(at, "rev-parse", "HEAD")
+
+
+def test_build_node_and_commit_prefixes():
+    """setuptools-scm's node is ``g`` + hex (abbreviated after a tag, full without one)."""
+    assert pv.parse_build_node("g1a2b3c4") == "1a2b3c4"
+    assert pv.parse_build_node("G" + HEX_A) is None  # not a node setuptools-scm writes
+    assert pv.parse_build_node(HEX_A) == HEX_A
+    assert pv.parse_build_node(None) is None
+    assert pv.parse_build_node("gxyz") is None
+    assert pv.same_commit("1a2b3c4", "1a2b3c4" + "0" * 33)
+    assert not pv.same_commit("1a2b3c5", "1a2b3c4" + "0" * 33)
+    assert not pv.same_commit(None, HEX_A)
+
+
+def test_build_info_reads_the_build_record(monkeypatch):
+    """The record the build writes (the template in pyproject.toml) is read back; none, None."""
+    import types
+
+    fake = types.ModuleType("validation._version")
+    fake.version = "0.1.1.dev3+g" + HEX_A[:9]
+    fake.build_node = "g" + HEX_A
+    fake.build_dirty = True
+    monkeypatch.setitem(sys.modules, "validation._version", fake)
+    assert pv.build_info() == pv.BuildInfo(fake.version, HEX_A, True)
+    monkeypatch.setitem(sys.modules, "validation._version", None)  # import fails
+    assert pv.build_info() is None
+
+
+def test_working_checkout_is_only_the_projects(tmp_path):
+    """The working directory's checkout is recorded when it is tumbling-testbed's, not a user's
+    project that uses the package."""
+    head = _project_checkout(tmp_path / "ours")
+    assert pv.working_checkout(tmp_path / "ours" / "validation") == (
+        (tmp_path / "ours").resolve(),
+        head,
+    )
+    other = tmp_path / "theirs"
+    other.mkdir()
+    (other / "pyproject.toml").write_text('[project]\nname = "someone-else"\n')
+    _git(other, "init", "-q")
+    _git(other, "add", "-A")
+    _git(other, "commit", "-qm", "x")
+    assert pv.working_checkout(other) is None
+    assert pv.working_checkout(tmp_path) is None  # no repository at all
+
+
+@pytest.mark.parametrize(
+    ("here", "build", "work", "source", "commit", "differs"),
+    [
+        # an installed package, run outside any checkout: the build record names the code
+        (None, pv.BuildInfo("v", HEX_A, False), None, "installed", HEX_A, False),
+        # an installed package run inside a checkout at the commit it was built from
+        (None, pv.BuildInfo("v", HEX_A[:9], False), HEX_A, "installed", HEX_A[:9], False),
+        # ... inside a checkout that has moved on: both are reported
+        (None, pv.BuildInfo("v", HEX_A, False), HEX_B, "installed", HEX_A, True),
+        # the packages imported from a checkout: its HEAD, whatever a stale record says
+        (HEX_B, pv.BuildInfo("v", HEX_A, False), HEX_B, "checkout", HEX_B, False),
+        # an install without a record, outside a checkout: unknown, said as such
+        (None, None, None, "unidentified", None, False),
+    ],
+)
+def test_code_origin_names_the_code_that_ran(
+    monkeypatch, here, build, work, source, commit, differs
+):
+    monkeypatch.setattr(pv, "build_info", lambda: build)
+    monkeypatch.setattr(pv, "git_commit", lambda root=None, timeout=0: here)
+    monkeypatch.setattr(pv, "is_dirty", lambda root, timeout=0: False)
+    monkeypatch.setattr(pv, "working_checkout", lambda cwd=None, timeout=0: work and (ROOT, work))
+    origin = pv.code_origin()
+    assert (origin.source.value, origin.commit, origin.differs) == (source, commit, differs)
+    block = provenance("bench", origin=origin)
+    assert block["git_commit"] == commit and block["code_source"] == source
+    assert block["build_commit"] == (build.commit if build else None)
+    assert block["working_checkout_commit"] == work
+    reg = _registry()
+    schema = reg.contents("urn:tumbling-testbed:schema:provenance")
+    Draft202012Validator(schema, registry=reg).validate(json.loads(dumps(block)))
+    words = origin.sentence()
+    assert (commit or "unknown") in words
+    assert ("another commit" in words) == differs
+    if differs:
+        assert work in words
+
+
+@pytest.mark.slow
+def test_installed_package_knows_its_commit(tmp_path):
+    """Built and installed as the README says (``pip install .``, not editable, from a git
+    checkout) into a fresh venv: the provenance names the commit built from, outside the checkout
+    and inside it, and both commits once the checkout has moved on."""
+    src = tmp_path / "src"
+    files = subprocess.run(
+        ["git", "-C", str(ROOT), "ls-files", "-z", "--cached", "--others", "--exclude-standard"],
+        capture_output=True,
+        check=True,
+    ).stdout.split(b"\0")
+    for name in filter(None, (f.decode() for f in files)):
+        if (ROOT / name).is_file():
+            (src / name).parent.mkdir(parents=True, exist_ok=True)
+            (src / name).write_bytes((ROOT / name).read_bytes())
+    _git(src, "init", "-q")
+    _git(src, "add", "-A")
+    _git(src, "commit", "-qm", "snapshot")
+    built = _git(src, "rev-parse", "HEAD")
+    venv = tmp_path / "venv"
+    subprocess.run([sys.executable, "-m", "venv", "--without-pip", str(venv)], check=True)
+    py = venv / "bin" / "python"
+    done = subprocess.run(
+        [sys.executable, "-m", "pip", "--python", str(py), "install", "-q", "--no-deps", str(src)],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    if done.returncode != 0 and "No matching distribution" in done.stdout + done.stderr:
+        pytest.skip(f"the build backend could not be fetched: {done.stderr[-300:]}")
+    assert done.returncode == 0, done.stderr
+    probe = (
+        "import json; from validation.provenance import provenance; "
+        "b = provenance('bench'); print(json.dumps({k: b[k] for k in "
+        "('project_version', 'git_commit', 'code_source', 'build_commit', "
+        "'working_checkout_commit')}))"
+    )
+
+    def block(cwd: Path) -> dict:
+        out = subprocess.run(
+            [str(py), "-I", "-c", probe], cwd=cwd, capture_output=True, text=True, check=True
+        )
+        return json.loads(out.stdout)
+
+    outside = block(tmp_path)
+    assert outside["git_commit"] == built and outside["build_commit"] == built
+    assert outside["code_source"] == "installed" and outside["working_checkout_commit"] is None
+    node = outside["project_version"].partition("+g")[2]  # 0.1.1.dev1+g<abbreviated commit>
+    assert len(node) >= 7 and built.startswith(node)
+    assert block(src)["working_checkout_commit"] == built
+    (src / "moved.txt").write_text("the checkout moves on\n")
+    _git(src, "add", "moved.txt")
+    _git(src, "commit", "-qm", "moved on")
+    moved = block(src)
+    assert moved["git_commit"] == built
+    assert moved["working_checkout_commit"] == _git(src, "rev-parse", "HEAD") != built

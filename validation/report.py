@@ -47,7 +47,7 @@ from validation.figures import (
     figure_invariants,
     figure_tracking,
 )
-from validation.provenance import FileKind, dumps, provenance
+from validation.provenance import FileKind, code_origin, dumps, provenance
 from validation.referee import Verdict, summary_lines
 from validation.summary import check_sentence, max_abs
 
@@ -326,9 +326,11 @@ def render_markdown(
     figures: Sequence[FigureEntry],
     meta: Mapping[str, Any],
     verdicts: Sequence[Verdict] = (),
+    code: str = "",
 ) -> str:
     """The text of ``report.md``: the verdict first, then the referee, checks, summaries,
-    figures with their captions, thresholds and the run's metadata."""
+    figures with their captions, thresholds and the run's metadata (after ``code``, the sentence
+    naming the code that ran, :meth:`validation.provenance.CodeOrigin.sentence`)."""
     scene = meta.get("scene", {}).get("name", cmp.scene if cmp else "?")
     verdict = RunVerdict(getattr(verdict, "value", verdict))
     lines = [f"# {_md(scene)}: {verdict.value}", ""]
@@ -395,7 +397,10 @@ def render_markdown(
                 f"{_cell(th.reason)} |"
             )
         lines.append("")
-    lines += ["## Run", "", "```json", _fenced_json(meta), "```", ""]
+    lines += ["## Run", ""]
+    if code:
+        lines += [_md(code), ""]
+    lines += ["```json", _fenced_json(meta), "```", ""]
     return "\n".join(lines)
 
 
@@ -520,11 +525,12 @@ def write_report(
         failure = "; ".join([*([failure] if failure else []), *(f"figure {e}" for e in fig_errors)])
     verdict = RunVerdict.of(cmp, failure, interrupted)
     doc = _report_doc(cmp, plants, meta, failure, verdicts, entries, verdict)
-    js = write_atomic(
-        out / "report.json", dumps({"provenance": provenance(FileKind.REPORT, scene), **doc})
-    )
+    origin = code_origin()
+    block = provenance(FileKind.REPORT, scene, origin=origin)
+    js = write_atomic(out / "report.json", dumps({"provenance": block, **doc}))
     md = write_atomic(
-        out / "report.md", render_markdown(cmp, verdict, failure, entries, meta, verdicts)
+        out / "report.md",
+        render_markdown(cmp, verdict, failure, entries, meta, verdicts, origin.sentence()),
     )
     return ReportFiles(md, js, tuple(figs), tuple(entries), verdict, failure)
 
