@@ -18,12 +18,14 @@ example of every table, ``analytic/scenes/spacecraft_slosh.toml`` one of a syste
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import math
 import os
 import re
 import stat
 import tomllib
 import warnings
+from collections import deque
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -48,6 +50,7 @@ from analytic.scene_keys import (
     Key,
     Kind,
     Need,
+    declared_keys,
     generic_table,
     key_spec,
 )
@@ -59,7 +62,17 @@ QUAT_REFUSE_TOL = 1e-3
 # A reference-frame matrix may be rounded (the paper prints Eq. 63 to 4 digits, orthogonal to ~1e-4);
 # it is replaced by the nearest rotation, and refused when further than this from orthogonal.
 ROTATION_REFUSE_TOL = 1e-2
+# The rod axis a: a printed axis is rounded (Example 1's a has |a| = 0.99997); a norm within
+# AXIS_REFUSE_TOL of 1 is normalised, with a one-line warning naming the norm when it is off 1 by
+# more than AXIS_NORMALISE_TOL (round-off of a unit vector written with every digit, ~1e-16, is
+# below it, so a normalised axis written back loads unchanged and without a warning); further off
+# it is refused.
 AXIS_REFUSE_TOL = 1e-3
+AXIS_NORMALISE_TOL = 1e-12
+# A rotation matrix orthonormal to this (max |MᵀM − I|, det > 0) is kept as given; otherwise the
+# nearest rotation is taken. Round-off of a rotation written with every digit is ~1e-16, so a
+# loaded matrix written back loads unchanged.
+ROTATION_EXACT_TOL = 1e-12
 
 # --- Sizes that can be held -------------------------------------------------------------------
 # A scene file is a page of numbers: the largest built-in one (hard/many_masses, 200 masses) is
@@ -545,11 +558,59 @@ class _Table:
         return as_enum(kind, self.raw(key, default, kinds=(Kind.CHOICE,)), self.name(key))
 
     def finish(self) -> None:
+        """Refuse a key given here that the loader did not read: one not allowed in this case
+        (the declaration's ``when``: ``box_center`` without a box), else an unknown one."""
         extra = sorted(set(self.data) - self.used)
-        if extra:
-            raise ValueError(
-                f"{self.name(extra[0])}: unknown key (got {_show(self.data[extra[0]])})"
-            )
+        if not extra:
+            return
+        key = extra[0]
+        got = _show(self.data[key])
+        try:
+            spec = key_spec(self.schema, key)
+        except LookupError:
+            message = _unknown_key_message(self.name(key), key, self.data[key], self.schema)
+            raise ValueError(message) from None
+        raise ValueError(
+            f"{self.name(key)}: not used here: {spec.when or 'not allowed'} (got {got})"
+        )
+
+
+def _unknown_key_message(dotted: str, key: Any, value: Any, schema: str) -> str:
+    """``dotted: unknown key (did you mean 'lambda'?; ...) (got ...)``: the closest declared name
+    at that level (:func:`difflib.get_close_matches`), and every declared name there."""
+    names = declared_keys(schema) or ()
+    close = difflib.get_close_matches(str(key), names, n=1)
+    hint = f"did you mean {close[0]!r}? " if close else ""
+    where = f" in [{schema}]" if schema else ""
+    known = f"known{where}: {', '.join(names)}"
+    if isinstance(value, Mapping):  # its content is not the point: its name is
+        return f"{dotted}: unknown table ({hint}{known}) (got a table of {len(value)} keys)"
+    return f"{dotted}: unknown key ({hint}{known}) (got {_show(value)})"
+
+
+def _refuse_unknown_keys(data: Mapping[str, Any]) -> None:
+    """Refuse, before anything is read, a table or key that is not declared at its level
+    (:data:`analytic.scene_keys.KEYS`), naming it and the closest declared name: a misspelt
+    ``[mass]`` or ``lamda`` is named as such, never reported as the missing or mis-sized key it
+    leaves behind. Tables are walked level by level in the document's order; a verbatim table
+    (``[hard_case]``) and the names of ``[thresholds]`` are checked by the layers that own them;
+    a value of the wrong type is left to the reader that names it."""
+    queue: deque[tuple[Mapping[str, Any], str, str]] = deque([(data, "", "")])
+    while queue:
+        node, path, schema = queue.popleft()
+        names = declared_keys(schema)
+        for key, value in node.items():
+            dotted = f"{path}.{key}" if path else str(key)
+            if names is not None and key not in names:
+                raise ValueError(_unknown_key_message(dotted, key, value, schema))
+            if not isinstance(value, Mapping):
+                continue
+            try:
+                sub = generic_table(schema, key)
+            except LookupError:  # a verbatim table's own content
+                continue
+            if key_spec(schema, key).kind in (Kind.TABLE, Kind.NUMBER_OR_VALUE_TABLE):
+                queue.append((value, dotted, sub))
 
 
 def as_enum(kind: type, value: Any, name: str) -> Any:
@@ -616,25 +677,39 @@ def _as_matrix(v: Any, name: str, rows: int, cols: int) -> np.ndarray:
 
 
 def _unit(v: np.ndarray, name: str) -> np.ndarray:
+    """A unit vector given with its norm within :data:`AXIS_REFUSE_TOL` of 1: kept as given
+    within :data:`AXIS_NORMALISE_TOL`, else normalised with one warning naming the norm (a printed
+    axis is rounded: Example 1's a has |a| = 0.99997); refused further off."""
     nrm = float(np.linalg.norm(v))
     if nrm == 0.0:
         raise ValueError(f"{name}: must be a nonzero vector (got {v.tolist()!r})")
     if abs(nrm - 1.0) > AXIS_REFUSE_TOL:
-        raise ValueError(f"{name}: must be a unit vector (got norm {nrm!r} for {v.tolist()!r})")
-    # Printed axes are rounded (Example 1's a has |a| = 0.99997): normalised silently.
+        raise ValueError(
+            f"{name}: must be a unit vector, norm within {AXIS_REFUSE_TOL:g} of 1 "
+            f"(got norm {nrm!r} for {v.tolist()!r})"
+        )
+    if abs(nrm - 1.0) <= AXIS_NORMALISE_TOL:
+        return _frozen(v)
+    warnings.warn(
+        f"{name}: norm {nrm:.6g} normalised to 1 (got {v.tolist()!r})", UserWarning, stacklevel=5
+    )
     return _frozen(v / nrm)
 
 
 def _direction(v: np.ndarray, name: str) -> np.ndarray:
-    """Any nonzero vector, scaled to unit length (rotation axes)."""
+    """Any nonzero vector, scaled to unit length (rotation axes); kept as given when its norm is
+    within :data:`AXIS_NORMALISE_TOL` of 1."""
     nrm = float(np.linalg.norm(v))
     if nrm == 0.0:
         raise ValueError(f"{name}: must be a nonzero vector (got {v.tolist()!r})")
-    return _frozen(v / nrm)
+    return _frozen(v if abs(nrm - 1.0) <= AXIS_NORMALISE_TOL else v / nrm)
 
 
 def _nearest_rotation(m: np.ndarray, name: str) -> np.ndarray:
-    """The rotation nearest ``m`` (polar decomposition); refuses a matrix far from one."""
+    """The rotation nearest ``m`` (polar decomposition); refuses a matrix far from one. A matrix
+    orthonormal within :data:`ROTATION_EXACT_TOL` is kept as given."""
+    if np.max(np.abs(m.T @ m - np.eye(3))) <= ROTATION_EXACT_TOL and np.linalg.det(m) > 0:
+        return np.array(m, dtype=float)
     U, s, Vt = np.linalg.svd(m)
     if np.max(np.abs(s - 1.0)) > ROTATION_REFUSE_TOL or np.linalg.det(m) <= 0:
         raise ValueError(f"{name}: must be a rotation matrix (singular values {s.tolist()!r})")
@@ -797,6 +872,9 @@ def _check_nesting(data: Any, source: str = "") -> None:
 def scene_from_dict(data: Mapping[str, Any], source: str = "") -> Scene:
     """Validate a scene given as nested dicts (the parsed TOML)."""
     _check_nesting(data, source)
+    if not isinstance(data, Mapping):
+        raise ValueError(f"scene: must be a table (got {_show(data)})")
+    _refuse_unknown_keys(data)
     top = _Table(data, "")
 
     meta = top.table("scene")
@@ -830,7 +908,7 @@ def scene_from_dict(data: Mapping[str, Any], source: str = "") -> Scene:
         gravity = g_tab.vector("vector", 3)
         g_tab.finish()
 
-    initial = _parse_initial(top.table("initial"), n)
+    initial = _parse_initial(top.table_or_empty("initial"), n)
 
     s_tab = top.table_or_empty("stabilization")
     stab = Stabilization(
@@ -1127,9 +1205,14 @@ def _parse_initial(t: _Table, n: int) -> InitialState:
     omega = t.vector("omega", 3)
     p = t.vector("p", n) if n else t.vector("p", 0, _frozen(np.zeros(0)))
     pdot = t.vector("pdot", n, _frozen(np.zeros(n)))
-    u = _parse_attitude(t.table("attitude"))
+    attitude = t.table("attitude")
+    u = IDENTITY_QUATERNION if attitude is None else _parse_attitude(attitude)
     t.finish()
     return InitialState(R=R, Rdot=Rdot, u=u, omega=omega, p=p, pdot=pdot)
+
+
+IDENTITY_QUATERNION = _frozen([1.0, 0.0, 0.0, 0.0])
+"""``u(0)`` when ``[initial.attitude]`` is absent: body axes along XYZ."""
 
 
 def _parse_attitude(t: _Table) -> np.ndarray:
@@ -1451,7 +1534,14 @@ def _derived_quantities(
     g = v["gravity.vector"]
     m_T = m_BR + float(np.sum(m))
     gb = Sm.T @ g
-    grav_fields = ("gravity.vector", "body.mass", "masses.mass", "initial.R", "initial.p", "rod.offset")
+    grav_fields = (
+        "gravity.vector",
+        "body.mass",
+        "masses.mass",
+        "initial.R",
+        "initial.p",
+        "rod.offset",
+    )
     u_grav = -m_T * (g @ v["initial.R"]) - float(np.sum(m * (rho @ gb)))
     out["gravitational energy"] = (grav_fields, np.array([u_grav]))
     f_grav_rod = m * (a @ gb)

@@ -39,13 +39,13 @@ class Kind(StrEnum):
     NUMBER = "number"
     VECTOR3 = "list of 3 numbers"
     VECTOR4 = "list of 4 numbers"
-    VECTOR_N = "list of n numbers"
-    VECTOR_N1 = "list of n + 1 numbers"
-    VECTOR_K = "list of k numbers"
+    VECTOR_N = "list of n numbers, one per mass"
+    VECTOR_N1 = "list of n + 1 numbers, one per spring"
+    VECTOR_K = "list of k numbers, one per controlled mass (in the order of `indices`)"
     MATRIX3 = "3×3 matrix (list of 3 rows)"
-    MATRIX_K = "k×k matrix (list of k rows)"
-    MATRICES_N = "list of n 3×3 matrices"
-    INDICES = "list of 1-based integers"
+    MATRIX_K = "k×k matrix (list of k rows), k = the number of `components`"
+    MATRICES_N = "list of n 3×3 matrices, one per mass"
+    INDICES = "list of distinct 1-based integers"
     CHOICE = "string, one of the choices"
     CHOICES = "list of strings, each one of the choices"
     NUMBER_OR_VALUE_TABLE = "number, or table { value, reason }"
@@ -310,7 +310,8 @@ KEYS: tuple[Key, ...] = (
         "",
         "The unit vector `a` along the rod, body axes; positions `p` count along it from O'.",
         _R,
-        bounds="unit length within {AXIS_REFUSE_TOL} (then normalised)",
+        bounds="unit length within {AXIS_REFUSE_TOL}; one off 1 by more than "
+        "{AXIS_NORMALISE_TOL} is normalised with a one-line warning naming its norm",
     ),
     Key(
         "rod",
@@ -435,7 +436,16 @@ KEYS: tuple[Key, ...] = (
     ),
     Key("gravity", "vector", Kind.VECTOR3, "m/s²", "The acceleration of gravity, inertial.", _R),
     # ---- [initial] -----------------------------------------------------------------------------
-    Key("", "initial", Kind.TABLE, "", "The state at t = 0 in the paper's coordinates.", _R),
+    Key(
+        "",
+        "initial",
+        Kind.TABLE,
+        "",
+        "The state at t = 0 in the paper's coordinates, `q(0) = [R, u, p]` and `q̇(0)` (Eq. 44).",
+        _C,
+        default_text="at rest at the origin, identity attitude (only without masses)",
+        when="required when n > 0 (for `p`)",
+    ),
     Key("initial", "R", Kind.VECTOR3, "m", "Position of C, inertial.", default=[0.0, 0.0, 0.0]),
     Key(
         "initial",
@@ -458,7 +468,7 @@ KEYS: tuple[Key, ...] = (
         "p",
         Kind.VECTOR_N,
         "m",
-        "Mass positions along `a` from O'.",
+        "Mass positions `p_i(0)` along `a` from O' (the `p` of `q`, Eq. 44).",
         _C,
         when="required when n > 0",
     ),
@@ -475,8 +485,8 @@ KEYS: tuple[Key, ...] = (
         "attitude",
         Kind.TABLE,
         "",
-        "The attitude `u(0)`: a quaternion, or an axis and an angle.",
-        _R,
+        "The attitude `u(0)` (Eq. 44): a quaternion, or an axis and an angle.",
+        default_text="identity: `quaternion = [1, 0, 0, 0]` (body axes along XYZ)",
     ),
     # ---- [initial.attitude] --------------------------------------------------------------------
     Key(
@@ -610,11 +620,18 @@ KEYS: tuple[Key, ...] = (
         "b",
         Kind.VECTOR3,
         "rad/s",
-        "Amplitudes `b_i` for x, y, z (all three given; only `components` are enforced). With "
-        "`sigma = 0` a constant rate.",
+        "Amplitudes `b_i` of `ω̄_i(t) = b_i cos(σ_i t)` for x, y, z (Eq. 76; all three given, "
+        "only `components` are enforced). With `sigma = 0` a constant rate.",
         _R,
     ),
-    Key("control.omega", "sigma", Kind.VECTOR3, "rad/s", "Frequencies `σ_i` for x, y, z.", _R),
+    Key(
+        "control.omega",
+        "sigma",
+        Kind.VECTOR3,
+        "rad/s",
+        "Angular frequencies `σ_i` of `ω̄_i(t) = b_i cos(σ_i t)` for x, y, z (Eq. 76).",
+        _R,
+    ),
     Key(
         "control.omega",
         "gamma",
@@ -646,14 +663,31 @@ KEYS: tuple[Key, ...] = (
         default_text="all masses",
         bounds="distinct, in 1..n",
     ),
-    Key("control.masses", "l", Kind.VECTOR_K, "m", "Amplitudes `l_i` about `p_e,i`.", _R),
-    Key("control.masses", "lambda", Kind.VECTOR_K, "rad/s", "Frequencies `λ_i`.", _R),
+    Key(
+        "control.masses",
+        "l",
+        Kind.VECTOR_K,
+        "m",
+        "Amplitudes `l_i` of the required motion `p̄_i(t) = p_e,i + l_i cos(λ_i t)` about the rest "
+        "position `p_e,i` (Eq. 75).",
+        _R,
+    ),
+    Key(
+        "control.masses",
+        "lambda",
+        Kind.VECTOR_K,
+        "rad/s",
+        "Angular frequencies `λ_i` of the required motion (Eq. 75); 0 holds the mass at "
+        "`p_e,i + l_i`.",
+        _R,
+    ),
     Key(
         "control.masses",
         "alpha",
         Kind.VECTOR_K,
         "1/s",
-        "Damping gains `α_i` of the error dynamics.",
+        "Damping gains `α_i` of the error dynamics `ë_i + α_i ė_i + β_i e_i = 0` (Eq. 78), "
+        "`e_i = p_i − p̄_i`.",
         _R,
         bounds="> 0",
     ),
@@ -662,7 +696,8 @@ KEYS: tuple[Key, ...] = (
         "beta",
         Kind.VECTOR_K,
         "1/s²",
-        "Stiffness gains `β_i` of the error dynamics.",
+        "Stiffness gains `β_i` of the error dynamics (Eq. 78): with `α_i² ≥ 4β_i` the error "
+        "decays without oscillating.",
         _R,
         bounds="> 0",
     ),
@@ -873,6 +908,20 @@ def key_spec(table: str, key: str) -> Key:
     raise LookupError(f"scene key {table + '.' if table else ''}{key} is not declared in KEYS")
 
 
+VERBATIM_TABLES: frozenset[str] = frozenset({"hard_case"})
+"""Tables kept verbatim for a later layer: their keys are not declared here (the hard-case suite
+declares and checks ``[hard_case]``)."""
+
+
+def declared_keys(table: str) -> tuple[str, ...] | None:
+    """The keys and sub-tables declared in ``table`` (generic name, ``""`` for the document), in
+    the order of the reference; None for a table whose keys are not declared here (a verbatim
+    table, or one of any names such as ``[thresholds]``)."""
+    if table in VERBATIM_TABLES or table in _WILDCARDS:
+        return None
+    return tuple(k.key for k in KEYS if k.table == table)
+
+
 def generic_table(table: str, key: str) -> str:
     """The generic name of the sub-table ``key`` of ``table`` (``thresholds.<name>``)."""
     spec = key_spec(table, key)
@@ -920,9 +969,11 @@ __all__ = [
     "KEY_INDEX",
     "NO_DEFAULT",
     "TABLES",
+    "VERBATIM_TABLES",
     "Key",
     "Kind",
     "Need",
+    "declared_keys",
     "generic_table",
     "key_spec",
 ]

@@ -25,7 +25,8 @@ GENERATOR = "python -m validation scene-reference > docs/scene-format.md"
 
 MINIMAL_SCENE = """\
 # A 100 kg body spinning at 0.5 rad/s about its z axis, one 5 kg mass on a spring to each end
-# of a rod along x that passes 0.1 m from C. Every key not given takes its default.
+# of a rod along x that passes 0.1 m from C. Every key not given takes its default (here: the
+# attitude is the identity, body axes along XYZ; no gravity effect; DOP853, MuJoCo RK4).
 [scene]
 name = "my_body"
 effects = ["springs.linear"]
@@ -49,15 +50,13 @@ k_linear = [200.0, 200.0]        # N/m: near wall - m1 - far wall
 omega = [0.0, 0.0, 0.5]          # rad/s, body axes
 p = [0.6]                        # m: 0.1 m off its rest position
 
-[initial.attitude]
-quaternion = [1.0, 0.0, 0.0, 0.0]  # w first: body axes along XYZ
-
 [output]
 t_end = 2.0                      # s
 """
 
 
 LIMIT_NAMES = (
+    "AXIS_NORMALISE_TOL",
     "AXIS_REFUSE_TOL",
     "MAX_INERTIA",
     "MAX_MASS",
@@ -223,14 +222,23 @@ def _limits() -> list[str]:
         "- `rod.axis` off unit length by more than {AXIS_REFUSE_TOL}, a quaternion off by more "
         "than {QUAT_REFUSE_TOL} (without `allow_off_manifold`), a rotation matrix further than "
         "{ROTATION_REFUSE_TOL} from orthogonal;",
+        "- an unknown table or key, first, before any other check: named, with the closest "
+        "declared name at its level (`control.masses.lamda: unknown key (did you mean 'lambda'? "
+        "known in [control.masses]: indices, l, lambda, alpha, beta) (got [6.28])`; a misspelt "
+        "`[mass]` is named as such, not reported as the masses it leaves out);",
+        "- a key given where it does not apply (`body.shape.box_center` without a box: `not used "
+        "here`);",
         "- an effect listed without its data (`springs.k_cubic: required by effect "
-        "springs.cubic`), an unknown key or table, a wrong type.",
+        "springs.cubic`), a wrong type.",
         "",
         "It warns (one line each, and loads the scene) about:",
         "",
         "- data given for an effect that is not listed (`[external_torque]` without the effect "
         "`external_torque`): ignored;",
         "- a quaternion whose norm is off 1 by more than {QUAT_NORMALISE_TOL}: normalised;",
+        "- a `rod.axis` whose norm is off 1 by more than {AXIS_NORMALISE_TOL} (a printed, rounded "
+        "axis): normalised, the warning naming its norm (`rod.axis: norm 0.999971 normalised to "
+        "1`);",
         "- a `masses.p_e` or `initial.p` beyond the drawn rod (`body.shape.rod_start`, "
         "`rod_length`): the drawing is a picture only, the masses slide on an unbounded line.",
         "",
@@ -326,11 +334,22 @@ def render() -> str:
         "## Built-in scenes",
         "",
         *_builtins(),
+        "## The resolved scene",
+        "",
+        "`tumble validate` writes `scene.toml` beside its report: the scene as it ran, in this "
+        "format, every default filled in (the attitude as its quaternion, the masses' own inertia "
+        "as `inertia_body`); `tumble validate OUT/scene.toml` runs the same scene again. The "
+        "`provenance.scene` block of `report.json` holds the same tables (1-based indices, "
+        "`lambda`). From Python: `analytic.scene_dump.scene_to_toml(scene)`.",
+        "",
         "## Keys, table by table",
         "",
         "*required*: the scene is refused without it; *optional*: the default applies when it "
-        "is absent; otherwise the column says when the key is required or allowed. An unknown "
-        "key or table is refused.",
+        "is absent; otherwise the column says when the key is required or allowed. Every key not "
+        "given takes its default; an unknown key or table is refused, by name. A list's length "
+        "is in its type: *n* is the number of masses (the length of `masses.mass`), *k* the "
+        "number of controlled masses (`control.masses.indices`, all n by default) or axes "
+        "(`control.omega.components`).",
         "",
         *_tables(),
         "## What the loader refuses and warns about",
