@@ -20,11 +20,13 @@ from dataclasses import dataclass
 from enum import StrEnum
 from pathlib import Path
 
+import numpy as np
+
 from analytic.effects import CONTROL_EFFECTS, Effect
 from analytic.scene import Scene
 from analytic.trajectory import RunStatus, Trajectory
 from validation.atomic import write_text
-from validation.compare import Comparison, compare
+from validation.compare import Comparison, Subject, compare
 from validation.outputs import OutputRun, output_run
 from validation.recording import atomic_stream, log_run, narrative_for
 from validation.scenes import resolve_scene
@@ -46,25 +48,68 @@ class Plot(StrEnum):
     OMEGA = "omega"
     MASS_POSITIONS = "mass_positions"
     TRACKING = "tracking"
-    INVARIANTS = "invariants"
+    INVARIANTS = "drifts"  # the demo's own: relative drifts, one colour per quantity
     ERRORS = "errors"
     TORQUE = "control/torque"
     ROD_FORCES = "control/rod_forces"
 
 
 PLOT_NAMES = {
-    Plot.OMEGA: "angular velocity ω, body axes (rad/s); grey: the requirement ω̄",
-    Plot.MASS_POSITIONS: "mass positions p_i on the rod (m); grey: the requirements p̄_i",
+    Plot.OMEGA: "angular velocity ω, body axes (rad/s)",
+    Plot.MASS_POSITIONS: "mass positions p_i on the rod (m)",
     Plot.TRACKING: "log10 tracking errors",
-    Plot.INVARIANTS: "log10 drift of each balance (P, L, E) and of |uᵀu − 1|",
+    Plot.INVARIANTS: "log10 relative drift of each balance (P, L, E) and |uᵀu − 1|",
     Plot.ERRORS: "log10 |analytic − MuJoCo|",
     Plot.TORQUE: "control torque τ, body axes (N·m)",
     Plot.ROD_FORCES: "rod forces F_i (N)",
 }
 CONTROL_PLOTS = frozenset({Plot.TORQUE, Plot.ROD_FORCES, Plot.TRACKING})
-REQUIREMENT_RGBA = (150, 150, 150, 255)
-ANALYTIC_RGBA = ((31, 119, 180, 255), (44, 160, 44, 255), (214, 39, 40, 255))
-WITH_RGBA, WITHOUT_RGBA = (31, 119, 180, 255), (255, 127, 14, 255)
+LOG_PLOTS = frozenset({Plot.TRACKING, Plot.INVARIANTS, Plot.ERRORS})
+"""The plots whose values are log10 of a magnitude (exact zeros left out)."""
+
+
+@dataclass(frozen=True)
+class Hue:
+    """A colour of the demo's own curves, with the name its text calls it by."""
+
+    name: str
+    rgba: tuple[int, int, int, int]
+
+    @property
+    def mpl(self) -> tuple[float, float, float, float]:
+        """The colour as matplotlib takes it (components in [0, 1])."""
+        return tuple(c / 255 for c in self.rgba)
+
+
+# The demo's colours, in one place, for the recording and the figures alike. None of them is a
+# plant's (blue analytic, orange MuJoCo, green Pinocchio: validation/rrd_style.py) or a pair's.
+SERIES_HUES = (
+    Hue("cyan", (23, 190, 207, 255)),
+    Hue("olive", (188, 189, 34, 255)),
+    Hue("pink", (227, 119, 194, 255)),
+    Hue("violet", (120, 94, 240, 255)),
+    Hue("teal", (0, 128, 128, 255)),
+)
+"""Component j of ω, mass i's position, quantity j of the drift plot: ``SERIES_HUES[j]``."""
+REQUIREMENT_HUE = Hue("grey", (150, 150, 150, 255))
+"""The requirements ω̄ and p̄_i, and the thresholds of the drift plot."""
+WITH_HUE, WITHOUT_HUE = Hue("teal", (0, 128, 128, 255)), Hue("magenta", (220, 38, 127, 255))
+"""The two runs of a step with an effect switched off: with the effect, and without it."""
+OTHER_PLANT_LIGHTEN = 0.45
+"""In the drift plot, a plant other than the analytic one is its quantity's colour this far
+toward white (and dashed in the figure); the legend names the plant."""
+DRIFT_QUANTITIES = (
+    ("linear_momentum", "P"),
+    ("angular_momentum", "L"),
+    ("energy", "E"),
+    ("quat_norm", "|uᵀu − 1|"),
+)
+"""The drift plot's quantities (the comparison's series names) and their symbols, in colour
+order: quantity j is drawn in ``SERIES_HUES[j]``."""
+DRIFT_KEY = ", ".join(
+    f"{sym} {hue.name}" for (_, sym), hue in zip(DRIFT_QUANTITIES, SERIES_HUES, strict=False)
+)
+"""The drift plot's colours in words: ``P cyan, L olive, …``."""
 
 
 @dataclass(frozen=True)
@@ -106,6 +151,8 @@ class DemoResult:
     wall_times: dict[str, float]
     comparisons: tuple[Comparison, ...] = ()
     """Per step, the analytic plant against the MuJoCo ghost (empty without MuJoCo)."""
+    figures: tuple[Path, ...] = ()
+    """Per step, its figure (``{prefix}.png``): the tab's plots, for reading without a viewer."""
 
     def __fspath__(self) -> str:
         return str(self.out_dir)
@@ -132,7 +179,8 @@ of mass of BR alone (the trail), wobbles about the parabola as the heavy masses 
             "bends under gravity;",
             "the drift plot (the key plot): every balance holds to the integration error, about "
             "twelve decades below the size of what it balances, all the way: nothing but the "
-            "integrator disturbs them;",
+            f"integrator disturbs them (one colour per quantity: {DRIFT_KEY}; MuJoCo's lighter; "
+            f"{REQUIREMENT_HUE.name}: the thresholds);",
             "ω: the rates change although no torque acts — the body is asymmetric (Euler's "
             "equations) and the sliding masses shift its inertia;",
             "the analytic − MuJoCo plot: the two engines agree to round-off and integration error.",
@@ -206,13 +254,15 @@ The spring potential of Eq. (38) is
     U_s = Σ ½ k_l,i Δ_i² + ¼ k_n,i Δ_i⁴,   Δ_i = extension of spring i
 
 This step runs step 1's scene with `springs.cubic` switched off (`scene.with_effects(...)`): the
-masses' oscillation about `p_e` changes (plot *mass positions*: blue with, orange without the
+masses' oscillation about `p_e` changes (plot *mass positions*: """
+        + f"{WITH_HUE.name} with, {WITHOUT_HUE.name} without"
+        + """ the
 cubic term), and with it the body's tumble. Energy is still conserved — the switched-off term is
 removed from the model and from the energy alike.""",
         look_at=(
-            "the mass positions (the key plot): with the cubic term (blue) the springs stiffen at "
-            "large extension, so the masses turn back a little sooner and oscillate a little "
-            "faster than without it (orange);",
+            f"the mass positions (the key plot): with the cubic term ({WITH_HUE.name}) the "
+            "springs stiffen at large extension, so the masses turn back a little sooner and "
+            f"oscillate a little faster than without it ({WITHOUT_HUE.name});",
             "the drift plot: the balances hold as well as in step 1 — removing a term from the "
             "model removes it from the energy too;",
             "the analytic − MuJoCo plot: MuJoCo runs the same reduced scene and still agrees.",
@@ -298,7 +348,11 @@ def write_demo(
     with output_run(out_dir, "demo") as run:
         res = _demo_into(run, t_end, rtol, mujoco)
     return dataclasses.replace(
-        res, out_dir=run.target, rrd=run.final(res.rrd.name), markdown=run.final(res.markdown.name)
+        res,
+        out_dir=run.target,
+        rrd=run.final(res.rrd.name),
+        markdown=run.final(res.markdown.name),
+        figures=tuple(run.final(f.name) for f in res.figures),
     )
 
 
@@ -346,7 +400,10 @@ def step_layout(
 
     p0 = f"/{step.prefix}"
     plots = step_plots(step, scene, two_plants)
-    views = [rrb.TimeSeriesView(origin=f"{p0}/plots/{p.value}", name=PLOT_NAMES[p]) for p in plots]
+    views = [
+        rrb.TimeSeriesView(origin=f"{p0}/plots/{p.value}", name=plot_title(p, step, scene))
+        for p in plots
+    ]
     rest = len(views) - 1
     right = rrb.Vertical(*views, row_shares=[2 * rest] + [1] * rest) if rest else views[0]
     names = ("analytic", "mujoco") if two_plants else ("analytic",)
@@ -365,78 +422,405 @@ def _narrative(step: DemoStep) -> str:
     return f"{step.narrative}\n\n**What to look at**\n\n{look}" if look else step.narrative
 
 
-def _log_series(rec, path: str, t, values, names, colors) -> None:
-    """Scalars ``values`` (N, k) under ``path``, one named, coloured line per column."""
-    import numpy as np
-    import rerun as rr
+@dataclass(frozen=True)
+class StepRun:
+    """One step's runs.
 
-    v = np.asarray(values, float).reshape(len(t), -1)
-    rec.log(path, rr.SeriesLines(names=list(names), colors=list(colors)), static=True)
-    rec.send_columns(
-        path,
-        indexes=[rr.TimeColumn("sim_time", duration=t)],
-        columns=rr.Scalars.columns(scalars=np.ravel(v)).partition([v.shape[1]] * v.shape[0]),
-    )
+    Attributes:
+        step: the step.
+        scene: the scene it ran (:func:`step_scene`).
+        plants: the analytic run, then the MuJoCo ghost when it ran; on the output grid.
+        comparison: the analytic run against the ghost (or alone), under the report's thresholds.
+        baseline: for a step with an effect switched off, the analytic run of the full scene.
+    """
+
+    step: DemoStep
+    scene: Scene
+    plants: tuple[Trajectory, ...]
+    comparison: Comparison
+    baseline: Trajectory | None = None
+
+    @property
+    def two_plants(self) -> bool:
+        return len(self.plants) > 1
 
 
-def _log_step_plots(rec, step: DemoStep, tr: Trajectory, baseline: Trajectory | None) -> None:
-    """The demo's own plots of one step: ω with ω̄, the mass positions with p̄ (or, with an
-    effect switched off, with and without it). The requirements are ``ω − e_ω`` and ``p − e_p``."""
-    p0 = f"/{step.prefix}/plots"
-    axes = "xyz"
-    _log_series(
-        rec, f"{p0}/omega/analytic", tr.t, tr.omega, [f"ω_{a}" for a in axes], ANALYTIC_RGBA
-    )
+@dataclass(frozen=True)
+class Curves:
+    """Curves of one plot on one time axis: one entity of the recording, one legend entry each.
+
+    Attributes:
+        entity: the entity path below the plot's origin (``analytic``, ``energy/mujoco``).
+        t: sample times, s, shape (N,).
+        values: shape (N, k): physical values, or log10 of magnitudes in a :data:`LOG_PLOTS` plot.
+        names: the k legend names.
+        colors: the k colours, RGBA.
+        dashed: drawn dashed in the figure (a requirement, a threshold, another plant).
+    """
+
+    entity: str
+    t: np.ndarray
+    values: np.ndarray
+    names: tuple[str, ...]
+    colors: tuple[tuple[int, int, int, int], ...]
+    dashed: bool = False
+
+
+DEMO_PLOTS = frozenset({Plot.OMEGA, Plot.MASS_POSITIONS, Plot.INVARIANTS})
+"""The plots the demo logs itself; the others are :func:`validation.recording.log_run`'s, drawn
+in the figures with the same names and colours."""
+
+
+def plot_title(plot: Plot, step: DemoStep, scene: Scene) -> str:
+    """A plot's title, naming the colours of what it draws and nothing it does not draw: the
+    requirements only when the scene has them, the runs with and without a switched-off effect."""
+    title = PLOT_NAMES[plot]
+    grey = REQUIREMENT_HUE.name
+    if plot is Plot.OMEGA and Effect.CONTROL_OMEGA in scene.effects:
+        return f"{title}; {grey}: the requirement ω̄"
+    if plot is Plot.MASS_POSITIONS and step.switched_off:
+        off = ", ".join(sorted(e.value for e in step.switched_off))
+        return f"{title}; {WITH_HUE.name}: with {off}, {WITHOUT_HUE.name}: without"
+    if plot is Plot.MASS_POSITIONS and Effect.CONTROL_MASSES in scene.effects:
+        return f"{title}; {grey}: the requirements p̄_i"
+    if plot is Plot.INVARIANTS:
+        return f"{title}; {grey}: thresholds"
+    return title
+
+
+def _lighter(rgba: tuple[int, int, int, int]) -> tuple[int, int, int, int]:
+    """``rgba`` :data:`OTHER_PLANT_LIGHTEN` of the way toward white."""
+    f = OTHER_PLANT_LIGHTEN
+    r, g, b, a = rgba
+    return (round(r + (255 - r) * f), round(g + (255 - g) * f), round(b + (255 - b) * f), a)
+
+
+def _omega_curves(run: StepRun) -> tuple[Curves, ...]:
+    """ω of the analytic run, a hue per component; the requirement ``ω − e_ω`` in grey."""
+    tr, axes = run.plants[0], "xyz"
+    out = [
+        Curves(
+            "analytic",
+            tr.t,
+            tr.omega,
+            tuple(f"ω_{a}" for a in axes),
+            tuple(SERIES_HUES[j].rgba for j in range(3)),
+        )
+    ]
     tk = tr.tracking
     if tk.omega_components:
-        _log_series(
-            rec,
-            f"{p0}/omega/requirement",
-            tr.t,
-            tr.omega[:, list(tk.omega_components)] - tk.e_omega,
-            [f"ω̄_{axes[c]}" for c in tk.omega_components],
-            [REQUIREMENT_RGBA] * len(tk.omega_components),
-        )
-    if not tr.n:
-        return
-    if step.switched_off and baseline is not None:  # with and without the effect, one plot
-        for label, run, rgba in (("with", baseline, WITH_RGBA), ("without", tr, WITHOUT_RGBA)):
-            off = ", ".join(sorted(e.value for e in step.switched_off))
-            _log_series(
-                rec,
-                f"{p0}/mass_positions/{label}",
-                run.t,
-                run.p,
-                [f"p_{i + 1} {label} {off}" for i in range(run.n)],
-                [rgba] * run.n,
+        comps = tk.omega_components
+        out.append(
+            Curves(
+                "requirement",
+                tr.t,
+                tr.omega[:, list(comps)] - tk.e_omega,
+                tuple(f"ω̄_{axes[c]}" for c in comps),
+                (REQUIREMENT_HUE.rgba,) * len(comps),
+                dashed=True,
             )
-        return
-    _log_series(
-        rec,
-        f"{p0}/mass_positions/analytic",
-        tr.t,
-        tr.p,
-        [f"p_{i + 1}" for i in range(tr.n)],
-        [ANALYTIC_RGBA[i % 3] for i in range(tr.n)],
-    )
-    if tk.mass_indices:
-        _log_series(
-            rec,
-            f"{p0}/mass_positions/requirement",
+        )
+    return tuple(out)
+
+
+def _mass_curves(run: StepRun) -> tuple[Curves, ...]:
+    """The mass positions: with an effect switched off, the runs with and without it in their
+    two hues; otherwise a hue per mass and the requirements ``p − e_p`` in grey."""
+    tr = run.plants[0]
+    if not tr.n:
+        return ()
+    if run.step.switched_off:
+        if run.baseline is None:
+            raise ValueError(f"step {run.step.prefix}: baseline: the full scene's run is missing")
+        off = ", ".join(sorted(e.value for e in run.step.switched_off))
+        return tuple(
+            Curves(
+                label,
+                r.t,
+                r.p,
+                tuple(f"p_{i + 1} {label} {off}" for i in range(r.n)),
+                (hue.rgba,) * r.n,
+            )
+            for label, r, hue in (("with", run.baseline, WITH_HUE), ("without", tr, WITHOUT_HUE))
+        )
+    out = [
+        Curves(
+            "analytic",
             tr.t,
-            tr.p[:, list(tk.mass_indices)] - tk.e_p,
-            [f"p̄_{i + 1}" for i in tk.mass_indices],
-            [REQUIREMENT_RGBA] * len(tk.mass_indices),
+            tr.p,
+            tuple(f"p_{i + 1}" for i in range(tr.n)),
+            tuple(SERIES_HUES[i % len(SERIES_HUES)].rgba for i in range(tr.n)),
+        )
+    ]
+    tk = tr.tracking
+    if tk.mass_indices:
+        out.append(
+            Curves(
+                "requirement",
+                tr.t,
+                tr.p[:, list(tk.mass_indices)] - tk.e_p,
+                tuple(f"p̄_{i + 1}" for i in tk.mass_indices),
+                (REQUIREMENT_HUE.rgba,) * len(tk.mass_indices),
+                dashed=True,
+            )
+        )
+    return tuple(out)
+
+
+def _drift_curves(run: StepRun) -> tuple[Curves, ...]:
+    """log10 of each plant's drift of each balance, divided by its check's scale (relative, as
+    checked), and of the quaternion norm error: a hue per quantity, other plants lighter; one
+    grey line per distinct threshold, naming the quantities it bounds."""
+    from validation.rrd_style import log10_nonzero
+
+    cmp = run.comparison
+    series = {s.key: s for s in cmp.series}
+    checks = {c.series: c for c in cmp.checks if c.series}
+    out: list[Curves] = []
+    bounds: dict[float, list[tuple[str, str]]] = {}
+    for (name, sym), hue in zip(DRIFT_QUANTITIES, SERIES_HUES, strict=False):
+        for k, tr in enumerate(run.plants):
+            plant = tr.engine.value
+            s = series.get(f"{plant}.{name}")
+            if s is None:
+                continue
+            c = checks.get(s.key)
+            rel = s.values / c.scale if c is not None and c.scale > 0 else s.values
+            t, v = log10_nonzero(s.t, rel)
+            rgba = hue.rgba if k == 0 else _lighter(hue.rgba)
+            out.append(
+                Curves(f"{name}/{plant}", t, v[:, None], (f"{sym}, {plant}",), (rgba,), k > 0)
+            )
+            if c is not None and c.threshold > 0 and (name, sym) not in bounds.get(c.threshold, []):
+                bounds.setdefault(c.threshold, []).append((name, sym))
+    t_span = np.array([cmp.t[0], cmp.t[-1]]) if cmp.t.size else np.zeros(0)
+    for bound, quantities in bounds.items():
+        syms = ", ".join(sym for _, sym in quantities)
+        out.append(
+            Curves(
+                "threshold/" + "_".join(n for n, _ in quantities),
+                t_span,
+                np.full((t_span.size, 1), np.log10(bound)),
+                (f"threshold {bound:g} of {syms}",),
+                (REQUIREMENT_HUE.rgba,),
+                dashed=True,
+            )
+        )
+    return tuple(out)
+
+
+def _comparison_curves(run: StepRun, group) -> tuple[Curves, ...]:
+    """The comparison's series of ``group`` (tracking errors, differences) as log10, in their
+    plant's (or pair's) shades as :func:`validation.rrd_plots.log_plots` draws them, each with
+    its unit; one grey line per threshold."""
+    from validation.rrd_style import log10_nonzero, plant_color, shade, slug, unit_text
+
+    cmp = run.comparison
+    checks = {c.series: c for c in cmp.checks if c.series}
+    names_by_unit: dict[str, list[str]] = {}
+    out: list[Curves] = []
+    bounds: dict[str, tuple[float, str]] = {}
+    for s in cmp.series:
+        if s.group is not group or not s.t.size:
+            continue
+        names = names_by_unit.setdefault(s.unit, [])
+        if s.name not in names:
+            names.append(s.name)
+        who = s.subject.slug if s.subject.is_pair else s.subject.value
+        t, v = log10_nonzero(s.t, s.values)
+        color = shade(plant_color(s.subject.value), names.index(s.name))
+        label = f"{s.subject.value}: {s.label}{unit_text(s.unit)}"
+        other = s.subject not in (Subject.ANALYTIC, Subject.BOTH)  # drawn over them: dashed
+        entity = f"{slug(s.unit)}/{s.name}/{who}"
+        out.append(Curves(entity, t, v[:, None], (label,), (color,), dashed=other))
+        c = checks.get(s.key)
+        if t.size and c is not None and c.threshold * c.scale > 0 and s.name not in bounds:
+            bounds[s.name] = (c.threshold * c.scale, s.unit)
+    span = np.array([cmp.t[0], cmp.t[-1]]) if cmp.t.size else np.zeros(0)
+    for name, (bound, unit) in bounds.items():
+        out.append(
+            Curves(
+                f"threshold/{name}",
+                span,
+                np.full((span.size, 1), np.log10(bound)),
+                (f"threshold of {name}{unit_text(unit)}",),
+                (REQUIREMENT_HUE.rgba,),
+                dashed=True,
+            )
+        )
+    return tuple(out)
+
+
+def _force_curves(run: StepRun, torque: bool) -> tuple[Curves, ...]:
+    """Each plant's control torque (body axes) or rod forces, in its shades."""
+    from validation.rrd_style import plant_color, shade
+
+    out = []
+    for k, tr in enumerate(run.plants):
+        name = tr.engine.value
+        values, comps = (
+            (tr.torque, ["τ_x", "τ_y", "τ_z"])
+            if torque
+            else (tr.rod_forces, [f"F_{i + 1}" for i in range(tr.n)])
+        )
+        colors = tuple(shade(plant_color(name), j) for j in range(len(comps)))
+        out.append(Curves(name, tr.t, values, tuple(f"{name} {c}" for c in comps), colors, k > 0))
+    return tuple(out)
+
+
+def step_curves(run: StepRun, plot: Plot) -> tuple[Curves, ...]:
+    """What ``plot`` of ``run``'s tab draws: the recording's curves (logged by the demo for
+    :data:`DEMO_PLOTS`) and the figure's, one list for both."""
+    from validation.compare import Group
+
+    if plot is Plot.OMEGA:
+        return _omega_curves(run)
+    if plot is Plot.MASS_POSITIONS:
+        return _mass_curves(run)
+    if plot is Plot.INVARIANTS:
+        return _drift_curves(run)
+    if plot is Plot.TRACKING:
+        return _comparison_curves(run, Group.TRACKING)
+    if plot is Plot.ERRORS:
+        return _comparison_curves(run, Group.DIFFERENCE)
+    return _force_curves(run, torque=plot is Plot.TORQUE)
+
+
+def _log_curves(rec, origin: str, curves: Sequence[Curves]) -> None:
+    """Each :class:`Curves` as scalars under ``origin/entity``, one named, coloured line per
+    column (nothing for an empty one)."""
+    import rerun as rr
+
+    for c in curves:
+        if not c.t.size:
+            continue
+        v = np.asarray(c.values, float).reshape(len(c.t), -1)
+        path = f"{origin}/{c.entity}"
+        rec.log(path, rr.SeriesLines(names=list(c.names), colors=list(c.colors)), static=True)
+        rec.send_columns(
+            path,
+            indexes=[rr.TimeColumn("sim_time", duration=c.t)],
+            columns=rr.Scalars.columns(scalars=np.ravel(v)).partition([v.shape[1]] * v.shape[0]),
         )
 
 
-def _demo_into(run: OutputRun, t_end: float, rtol: float, mujoco: bool) -> DemoResult:
-    """:func:`write_demo`'s work, writing into the staging directory ``run.path``."""
-    import rerun.blueprint as rrb
+def log_step(rec, run: StepRun) -> None:
+    """Log one step into the recording ``rec`` under its prefix: the run (bodies, plots, the
+    narrative; :func:`validation.recording.log_run`) and the demo's own plots."""
+    log_run(
+        rec,
+        run.scene,
+        list(run.plants),
+        run.comparison,
+        narrative=_narrative(run.step),
+        prefix=run.step.prefix,
+    )
+    for plot in (Plot.OMEGA, Plot.MASS_POSITIONS, Plot.INVARIANTS):
+        _log_curves(rec, f"/{run.step.prefix}/plots/{plot.value}", step_curves(run, plot))
 
+
+FIGURE_DPI = 150  # pixels per inch of a step's PNG
+FIGURE_WIDTH_IN = 11.0  # in: the panels and, right of them, their legends
+FIGURE_ROW_IN = 1.9  # in: the height of a plot (the key plot has two)
+FIGURE_LEGEND_IN = 3.4  # in: room right of the panels for the legends
+FIGURE_GAP_IN = 0.45  # in: between panels, for the lower one's title
+
+
+def step_figure(run: StepRun):
+    """The figure of one step (a :class:`validation.figures.Drawing`): its tab's plots in the
+    tab's order, the key plot first with twice the height, each titled as in the recording, every
+    curve named in a legend beside its panel."""
+    from matplotlib.figure import Figure
+
+    from validation.figures import Drawing
+
+    plots = step_plots(run.step, run.scene, run.two_plants)
+    ratios = [2.0] + [1.0] * (len(plots) - 1)
+    top, bottom = 0.75, 0.55
+    height = FIGURE_ROW_IN * sum(ratios) + top + bottom + FIGURE_GAP_IN * (len(plots) - 1)
+    fig = Figure(figsize=(FIGURE_WIDTH_IN, height), dpi=FIGURE_DPI)
+    axes = fig.subplots(
+        len(plots),
+        1,
+        sharex=True,
+        squeeze=False,
+        gridspec_kw={
+            "height_ratios": ratios,
+            "left": 0.85 / FIGURE_WIDTH_IN,
+            "right": 1.0 - FIGURE_LEGEND_IN / FIGURE_WIDTH_IN,
+            "top": 1.0 - top / height,
+            "bottom": bottom / height,
+            "hspace": FIGURE_GAP_IN / (FIGURE_ROW_IN * sum(ratios) / len(plots)),
+        },
+    )[:, 0]
+    fig.suptitle(run.step.title, fontsize=12, x=0.85 / FIGURE_WIDTH_IN, ha="left")
+    titles = []
+    for ax, plot in zip(axes, plots, strict=True):
+        titles.append(plot_title(plot, run.step, run.scene))
+        _draw_panel(ax, plot, step_curves(run, plot), titles[-1])
+    axes[-1].set_xlabel("t (s)")
+    return Drawing(run.step.prefix, f"{run.step.title}: " + "; ".join(titles) + ".", fig)
+
+
+def _draw_panel(ax, plot: Plot, curves: Sequence[Curves], title: str) -> None:
+    """One plot of a step's figure: every column of every :class:`Curves`, with its name."""
+    for c in curves:
+        if not c.t.size:
+            continue
+        v = np.asarray(c.values, float).reshape(len(c.t), -1)
+        for j, name in enumerate(c.names):
+            rgba = tuple(x / 255 for x in c.colors[j])
+            ax.plot(
+                c.t, v[:, j], color=rgba, linestyle="--" if c.dashed else "-", lw=1.2, label=name
+            )
+    ax.set_title(title, fontsize=9, loc="left")
+    ax.set_ylabel("log10" if plot in LOG_PLOTS else _scale_lines(ax))
+    ax.grid(True, alpha=0.3)
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=7, frameon=False)
+
+
+def _scale_lines(ax) -> str:
+    """Divide a linear panel's lines by a power of ten (a multiple of three) when their values
+    reach 1e4, so no offset text sits on the title; the factor, as the y label (``× 1e9``)."""
+    peak = max(
+        (np.nanmax(np.abs(ln.get_ydata())) for ln in ax.lines if len(ln.get_ydata())), default=0.0
+    )
+    if not (np.isfinite(peak) and peak >= 1e4):
+        return ""
+    e = 3 * int(np.floor(np.log10(peak) / 3))
+    for ln in ax.lines:
+        ln.set_ydata(np.asarray(ln.get_ydata(), float) / 10.0**e)
+    ax.relim()
+    ax.autoscale_view()
+    return f"× 1e{e}"
+
+
+def write_step_figures(out: Path, runs: Sequence[StepRun]) -> tuple[Path, ...]:
+    """Each step's figure as ``{prefix}.png`` in ``out``, written atomically; their paths."""
+    from validation.atomic import write_bytes
+    from validation.figures import FigureFormat
+
+    return tuple(
+        write_bytes(out / f"{r.step.prefix}.png", step_figure(r).render(FigureFormat.PNG))
+        for r in runs
+    )
+
+
+def run_steps(
+    t_end: float = DEMO_T_END,
+    rtol: float = DEMO_RTOL,
+    mujoco: bool = True,
+    steps: Sequence[DemoStep] = STEPS,
+) -> tuple[tuple[StepRun, ...], dict[str, float]]:
+    """Run every step on the analytic plant (DOP853 at ``rtol``) and, with ``mujoco`` (and the
+    twin importable), on MuJoCo under the same controller, and compare them; for a step with an
+    effect switched off, also the full scene (an earlier step's run when there is one).
+
+    Returns the runs, in step order, and the wall time of each run, s. A run that fails raises
+    RuntimeError naming the step."""
     from analytic.simulate import simulate
 
-    out = run.path
     mj_simulate = None
     if mujoco:
         try:
@@ -444,66 +828,90 @@ def _demo_into(run: OutputRun, t_end: float, rtol: float, mujoco: bool) -> DemoR
         except ImportError:  # pragma: no cover - the twin is part of the package
             mj_simulate = None
     walls: dict[str, float] = {}
-    runs: list[tuple[DemoStep, Scene, Trajectory]] = []
-    ghosts: list[Trajectory] = []
-    for step in STEPS:
+    runs: list[StepRun] = []
+    for step in steps:
         sc = step_scene(step)
         t0 = time.perf_counter()
         tr = simulate(sc, t_end=t_end, rtol=rtol).raise_if_interrupted()
         walls[step.prefix] = time.perf_counter() - t0
         if tr.status is not RunStatus.OK:
             raise RuntimeError(f"demo step {step.title!r} failed: {tr.message}")
-        runs.append((step, sc, tr))
+        plants = [tr]
         if mj_simulate is not None:
             t0 = time.perf_counter()
             tm = mj_simulate(sc, t_end=t_end).raise_if_interrupted()
             walls[f"{step.prefix}_mujoco"] = time.perf_counter() - t0
             if tm.status is not RunStatus.OK:
                 raise RuntimeError(f"demo step {step.title!r} failed on MuJoCo: {tm.message}")
-            ghosts.append(tm)
-    two = len(ghosts) == len(runs)
-    cmps = [
-        compare(tr, ghosts[i] if two else None, sc, t_end=t_end)
-        for i, (_, sc, tr) in enumerate(runs)
-    ]
+            plants.append(tm)
+        cmp = compare(tr, plants[1] if len(plants) > 1 else None, sc, t_end=t_end)
+        base = _baseline(step, runs, t_end, rtol, walls) if step.switched_off else None
+        runs.append(StepRun(step, sc, tuple(plants), cmp, base))
+    return tuple(runs), walls
+
+
+def _baseline(
+    step: DemoStep, runs: Sequence[StepRun], t_end: float, rtol: float, walls: dict[str, float]
+) -> Trajectory:
+    """The analytic run of ``step``'s scene with every effect: an earlier step's, or run now."""
+    from analytic.simulate import simulate
+
+    earlier = next(
+        (r for r in runs if r.step.scene == step.scene and not r.step.switched_off), None
+    )
+    if earlier is not None:
+        return earlier.plants[0]
+    t0 = time.perf_counter()
+    tr = simulate(resolve_scene(step.scene), t_end=t_end, rtol=rtol).raise_if_interrupted()
+    walls[f"{step.prefix}_baseline"] = time.perf_counter() - t0
+    if tr.status is not RunStatus.OK:
+        raise RuntimeError(f"demo step {step.title!r}: the full scene failed: {tr.message}")
+    return tr
+
+
+def _demo_into(run: OutputRun, t_end: float, rtol: float, mujoco: bool) -> DemoResult:
+    """:func:`write_demo`'s work, writing into the staging directory ``run.path``."""
+    import rerun.blueprint as rrb
+
+    out = run.path
+    runs, walls = run_steps(t_end, rtol, mujoco)
+    two = all(r.two_plants for r in runs)
 
     path = out / "demo.rrd"
     t0 = time.perf_counter()
-    tabs = [
-        step_layout(s, sc, two, cmps[i], [tr, ghosts[i]] if two else [tr])
-        for i, (s, sc, tr) in enumerate(runs)
-    ]
+    tabs = [step_layout(r.step, r.scene, two, r.comparison, r.plants) for r in runs]
     bp = rrb.Blueprint(rrb.Tabs(*tabs), rrb.TimePanel(state="expanded"))
     with atomic_stream(path, "tumble_demo", blueprint=bp, recording_id=run.run_id) as rec:
-        for i, (step, sc, tr) in enumerate(runs):
-            plants = [tr, ghosts[i]] if two else [tr]
-            log_run(rec, sc, plants, cmps[i], narrative=_narrative(step), prefix=step.prefix)
-            _log_step_plots(rec, step, tr, _baseline(step, runs))
+        for r in runs:
+            log_step(rec, r)
     walls["recording"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    figures = write_step_figures(out, runs)
+    walls["figures"] = time.perf_counter() - t0
     mdp = write_text(
         out / "demo.md",
         demo_markdown(
-            runs,
+            [(r.step, r.scene, r.plants[0]) for r in runs],
             t_end,
             rtol,
             two,
             shown=run.final(path.name),
             bodies=[
-                narrative_for(sc, [tr, ghosts[i]] if two else [tr], cmps[i], step.narrative, None)
-                for i, (step, sc, tr) in enumerate(runs)
+                narrative_for(r.scene, list(r.plants), r.comparison, r.step.narrative, None)
+                for r in runs
             ],
+            figures=[f.name for f in figures],
         ),
     )
     return DemoResult(
-        out, path, mdp, tuple(s for s, _, _ in runs), walls, tuple(cmps) if two else ()
+        out,
+        path,
+        mdp,
+        tuple(r.step for r in runs),
+        walls,
+        tuple(r.comparison for r in runs) if two else (),
+        figures,
     )
-
-
-def _baseline(step: DemoStep, runs: list[tuple[DemoStep, Scene, Trajectory]]) -> Trajectory | None:
-    """For a step with an effect switched off, the run of the same scene with every effect."""
-    if not step.switched_off:
-        return None
-    return next((tr for s, _, tr in runs if s.scene == step.scene and not s.switched_off), None)
 
 
 def demo_markdown(
@@ -513,11 +921,13 @@ def demo_markdown(
     two_plants: bool,
     shown: Path | str = "demo.rrd",
     bodies: list[str] | None = None,
+    figures: Sequence[str] | None = None,
 ) -> str:
     """The text of ``demo.md``: goals, how to open the recording, the steps with what to look
     at, exercises, and the paper. ``bodies[i]``, when given, is step i's text as its recording
     shows it (:func:`validation.recording.narrative_for`: the narrative with the arrow scales,
-    colours and exaggeration factors)."""
+    colours and exaggeration factors); ``figures[i]``, when given, the file name of step i's
+    figure (:func:`step_figure`), embedded in its section."""
     ghost = (
         "; the MuJoCo twin under the same controller as an orange wireframe over the analytic "
         "body, and beside it with its difference exaggerated, RK4 at the scene's timestep, its "
@@ -546,7 +956,13 @@ def demo_markdown(
         "(green arrow: ω; purple: the control torque τ; the line: the path of C) above the "
         "step's text; on the right the step's key plot on top, with two thirds of the height, and "
         "the others below. Errors and drifts are plotted as log10 (Rerun has no log axis; an "
-        "exact zero is not plotted).",
+        "exact zero is not plotted)."
+        + (
+            " Each step's plots are also drawn as a figure in its section below, for reading "
+            "without the viewer."
+            if figures
+            else ""
+        ),
         "",
         "# The four steps",
         "",
@@ -556,7 +972,10 @@ def demo_markdown(
         body = (bodies[i] if bodies else step.narrative).split("\n\n", 1)[1]
         plots = step_plots(step, sc, two_plants)
         md += [f"## {step.title}", "", body, ""]
-        md += [f"**Key plot:** {PLOT_NAMES[plots[0]]}.", ""] if plots else []
+        md += [f"**Key plot:** {plot_title(plots[0], step, sc)}.", ""] if plots else []
+        if figures:
+            alt = f"{step.title}: " + "; ".join(plot_title(p, step, sc) for p in plots)
+            md += [f"![{alt}]({figures[i]})", ""]
         if step.look_at:
             md += ["**What to look at:**", "", *[f"- {x}" for x in step.look_at], ""]
         if not is_controlled(sc):
@@ -578,14 +997,27 @@ __all__ = [
     "DEMO_RTOL",
     "DEMO_T_END",
     "PAPER",
+    "REQUIREMENT_HUE",
+    "SERIES_HUES",
     "STEPS",
+    "WITHOUT_HUE",
+    "WITH_HUE",
+    "Curves",
     "DemoResult",
     "DemoStep",
+    "Hue",
     "Plot",
+    "StepRun",
     "demo_markdown",
     "is_controlled",
+    "log_step",
+    "plot_title",
+    "run_steps",
+    "step_curves",
+    "step_figure",
     "step_layout",
     "step_plots",
     "step_scene",
     "write_demo",
+    "write_step_figures",
 ]
