@@ -555,7 +555,9 @@ from hypothesis import strategies as st  # noqa: E402
 _CONTROLLED = S.builtin_scene_path("paper_example1_controlled").read_text(encoding="utf-8")
 
 
-@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(
+    max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
 @given(
     depth=st.integers(S.MAX_SCENE_NESTING + 1, 4000),
     how=st.sampled_from(["array", "inline_table", "dotted", "header"]),
@@ -661,3 +663,182 @@ _FIELD_NAMES = {f"{t}.{k}" for t, k in _NUMERIC} | {
     "body.inertia",
     "masses.mass",
 }
+
+
+# ------------------------------------------------------------------------------------------------
+# Writing a scene without guessing: unknown names first, every optional key optional
+# ------------------------------------------------------------------------------------------------
+
+
+def _drop(raw: dict, dotted: str) -> None:
+    *head, last = dotted.split(".")
+    node = raw
+    for key in head:
+        node = node[key]
+    node.pop(last)
+
+
+def _rename(raw: dict, dotted: str, new: str) -> None:
+    *head, last = dotted.split(".")
+    node = raw
+    for key in head:
+        node = node[key]
+    node[new] = node.pop(last)
+
+
+TYPOS = [
+    # (scene, dotted key to misspell, the misspelling, the message's start)
+    ("paper_example1", "masses", "mass", "mass: unknown table (did you mean 'masses'?"),
+    ("paper_example1_controlled", "control.masses.lambda", "lamda",
+     "control.masses.lamda: unknown key (did you mean 'lambda'?"),
+    ("paper_example1", "initial.attitude", "atitude",
+     "initial.atitude: unknown table (did you mean 'attitude'?"),
+    ("paper_example2", "springs.k_cubic", "k_cubik",
+     "springs.k_cubik: unknown key (did you mean 'k_cubic'?"),
+    ("paper_example1", "solver", "solvers", "solvers: unknown table (did you mean 'solver'?"),
+    ("paper_example1", "body.shape.box_half_sizes", "box_halfsizes",
+     "body.shape.box_halfsizes: unknown key (did you mean 'box_half_sizes'?"),
+    ("paper_example1_controlled", "thresholds", "treshold",
+     "treshold: unknown table (did you mean 'thresholds'?"),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("name", "key", "typo", "message"), TYPOS)
+def test_a_misspelt_table_or_key_is_named_first_with_the_closest_declared_name(
+    name, key, typo, message
+):
+    """A misspelling is the error reported, whatever else it leaves missing or mis-sized: without
+    [masses] the springs would have the wrong length, without lambda it would be missing."""
+    raw = _raw(name)
+    if key == "thresholds":
+        raw["thresholds"] = {"position_C": 1e-6}
+    _rename(raw, key, typo)
+    with pytest.raises(ValueError) as exc:
+        scene_from_dict(raw)
+    assert str(exc.value).startswith(message), str(exc.value)
+
+
+def test_an_unknown_name_without_a_close_one_lists_the_declared_ones():
+    raw = _raw("paper_example1")
+    raw["rod"]["zzz"] = 1.0
+    with pytest.raises(
+        ValueError, match=r"^rod\.zzz: unknown key \(known in \[rod\]: axis, offset\)"
+    ):
+        scene_from_dict(raw)
+
+
+def test_a_key_given_where_it_does_not_apply_says_when_it_does():
+    raw = _raw("paper_example2")  # a hollow cylinder: no box
+    raw["body"]["shape"]["box_center"] = [0.0, 0.0, 0.0]
+    with pytest.raises(
+        ValueError, match=r'^body\.shape\.box_center: not used here: only with kind = "box_and_rod"'
+    ):
+        scene_from_dict(raw)
+
+
+def _full_scene() -> dict:
+    """Example 1 under control with every optional key of its tables that has a declared default
+    written at that default (so that leaving the key out must load the same scene)."""
+    from analytic.scene_keys import KEYS, NO_DEFAULT, Kind, Need
+
+    raw = _raw("paper_example1_controlled")
+    raw["stabilization"] = {}
+    raw["control"]["masses"]["indices"] = [1, 2]
+    for k in KEYS:
+        if k.need is not Need.OPTIONAL or k.default is NO_DEFAULT or k.kind is Kind.TABLE:
+            continue
+        node = raw
+        for part in k.table.split(".") if k.table else []:
+            node = node.get(part) if isinstance(node, dict) else None
+        if isinstance(node, dict):
+            node[k.key] = copy.deepcopy(k.default)
+    return raw
+
+
+# Leaving out a table of optional data also leaves out what only it describes: the effects whose
+# data it holds (the loader's own list) and, for [masses], the masses' state and requirement.
+_MASS_DATA = ("initial.p", "initial.pdot", "springs", "control.masses")
+
+
+def _without(raw: dict, dotted: str) -> dict:
+    raw = copy.deepcopy(raw)
+    _drop(raw, dotted)
+    gone = [dotted, *(_MASS_DATA if dotted == "masses" else ())]
+    for extra in gone[1:]:
+        _drop(raw, extra)
+    if "effects" not in raw.get("scene", {}):
+        return raw
+    raw["scene"]["effects"] = [
+        e
+        for e in raw["scene"]["effects"]
+        if not any(
+            d == g or d.startswith(g + ".")
+            for d, eff in S._EFFECT_DATA
+            if eff.value == e
+            for g in gone
+        )
+    ]
+    return raw
+
+
+def test_every_optional_key_can_be_left_out_and_takes_its_declared_default():
+    """From the declarations: a scene without any one optional key loads, and when the key has a
+    declared default the scene is the one that gives it; a scene without a required key is refused
+    naming it."""
+    from analytic.scene_keys import KEYS, NO_DEFAULT, Need
+    from tests.test_scene_roundtrip import _differences
+
+    full = _full_scene()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        reference = scene_from_dict(full)
+        checked = 0
+        for k in KEYS:
+            if "<" in k.dotted or k.table == "hard_case":
+                continue
+            node = full
+            for part in k.dotted.split("."):
+                node = node.get(part) if isinstance(node, dict) else None
+            if node is None:
+                continue  # not in this scene (a conditional table, another shape's key)
+            if k.need is Need.REQUIRED:
+                with pytest.raises(ValueError) as exc:
+                    scene_from_dict(_without(full, k.dotted))
+                assert str(exc.value).startswith(k.dotted + ":"), str(exc.value)
+            elif k.need is Need.OPTIONAL:
+                sc = scene_from_dict(_without(full, k.dotted))
+                if k.default is not NO_DEFAULT:
+                    assert _differences(reference, sc) == [], k.dotted
+            checked += 1
+    assert checked > 30
+
+
+def test_a_scene_needs_no_attitude_and_without_masses_no_initial_state():
+    raw = {
+        "scene": {"name": "x", "effects": []},
+        "body": {"mass": 2.0, "inertia": [1.0, 2.0, 2.5]},
+        "rod": {"axis": [1.0, 0.0, 0.0], "offset": [0.0, 0.0, 0.0]},
+    }
+    sc = scene_from_dict(raw)
+    np.testing.assert_array_equal(sc.initial.u, [1.0, 0.0, 0.0, 0.0])
+    for name in ("R", "Rdot", "omega"):
+        np.testing.assert_array_equal(getattr(sc.initial, name), np.zeros(3))
+    raw["masses"] = {"mass": [1.0], "p_e": [0.0]}
+    with pytest.raises(ValueError, match=r"^initial\.p: missing required key"):
+        scene_from_dict(raw)
+
+
+def test_a_rounded_rod_axis_is_normalised_with_one_warning_naming_its_norm():
+    raw = _raw("paper_example2")
+    raw["rod"]["axis"] = [0.9997, 0.0, 0.0]
+    with pytest.warns(UserWarning, match=r"^rod\.axis: norm 0\.9997 normalised to 1") as rec:
+        sc = scene_from_dict(raw)
+    assert len([w for w in rec if "rod.axis" in str(w.message)]) == 1
+    np.testing.assert_allclose(sc.rod.axis, [1.0, 0.0, 0.0], rtol=0, atol=1e-15)
+    raw["rod"]["axis"] = [1.002, 0.0, 0.0]
+    with pytest.raises(ValueError, match=r"^rod\.axis: must be a unit vector.*got norm 1\.002"):
+        scene_from_dict(raw)
+    raw["rod"]["axis"] = [0.6, 0.8, 0.0]  # a unit vector: no warning
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        scene_from_dict(raw)
