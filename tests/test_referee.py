@@ -57,7 +57,8 @@ P_AM, P_AP, P_MP = Subject.BOTH, Subject.ANALYTIC_PINOCCHIO, Subject.MUJOCO_PINO
 def test_outlier_is_the_plant_outside_the_closest_pair():
     v = rule("position_C", _checks({P_AM: 1.8e-8, P_AP: 9e-12, P_MP: 1.8e-8}), {"mujoco": "MJ"})
     assert v.kind is VerdictKind.OUTLIER and v.outlier == "mujoco"
-    assert "MJ is the outlier" in v.text and "agree to 9e-12 m" in v.text
+    assert "MJ is the outlier" in v.text
+    assert "agree below the noise floor 1e-09 m (9e-12 m)" in v.text  # 9e-12 counts as the floor
 
 
 def test_outlier_needs_the_separation():
@@ -231,3 +232,84 @@ def test_validate_with_three_plants_checks_every_pair(tmp_path):
     doc = json.loads((tmp_path / "v" / "report.json").read_text())
     assert set(doc["pairwise"]["position_C"]) == {s.value for s in pairs}
     assert len(doc["referee"]) == 8
+
+
+# ---------------------------------------------------------------------------------------------
+# Every verdict follows from the rule as the report prints it
+# ---------------------------------------------------------------------------------------------
+
+
+def _printed_rule(text: str) -> tuple[float, float]:
+    """The noise fraction and the separation, read from the report's printed rule."""
+    import re
+
+    fraction = re.search(r"the noise floor, ([0-9.e+-]+) × the threshold", text)
+    separation = re.search(r"d2 ≥ ([0-9.e+-]+) × max\(d1, noise floor\)", text)
+    assert fraction and separation, text
+    return float(fraction.group(1)), float(separation.group(1))
+
+
+def _derive(values: list[float], passed: list[bool], floor: float, k: float) -> str:
+    """The verdict of the printed rule, applied by hand to one row."""
+    d1, d2, d3 = sorted(values)
+    if d3 <= floor:
+        return "agree"
+    if d2 >= k * max(d1, floor):
+        return "outlier"
+    return "agree" if all(passed) else "all disagree"
+
+
+def test_every_verdict_is_derivable_from_the_printed_rule(tmp_path):
+    """The report's table and its printed rule give back every verdict: rows drawn over every
+    clause (all below the floor with large ratios, as measured for the attitude; outliers with the
+    closest pair below or above the floor; three similar values inside and over the threshold)."""
+    from validation.compare import Comparison
+    from validation.report import render_markdown
+    from validation.thresholds import thresholds_for
+
+    rng = np.random.default_rng(7)
+    th = 1e-6
+    rows = [
+        [3.1e-11, 3.1e-11, 2.0e-12],  # 15x apart, below the floor (the measured attitude)
+        [5e-12, 3e-8, 3.1e-8],  # outlier, closest pair below the floor
+        [1e-8, 2e-7, 3e-7],  # outlier, closest pair above the floor
+        [1e-7, 3e-7, 5e-7],  # no outlier, inside the threshold
+        [2e-6, 5e-6, 9e-6],  # no outlier, over it
+    ]
+    rows += [list(10.0 ** rng.uniform(-13, -5, 3)) for _ in range(40)]
+    verdicts = []
+    for vals in rows:
+        checks = _checks(dict(zip((P_AM, P_AP, P_MP), vals, strict=True)), th)
+        verdicts.append(dataclasses.replace(rule("position_C", checks), quantity="position_C"))
+    cmp = Comparison("s", np.zeros(1), (), (), (), thresholds_for())
+    md = render_markdown(cmp, "PASSED", "", [], {}, verdicts)
+    fraction, k = _printed_rule(md)
+    section = md.split("## Referee", 1)[1].split("\n## ", 1)[0]
+    table = [ln for ln in section.splitlines() if ln.startswith("| position_C |")]
+    assert len(table) == len(rows)
+    for line, vals, v in zip(table, rows, verdicts, strict=True):
+        cells = [c.strip() for c in line.strip("|").split("|")]
+        printed_vals = [float(c) for c in cells[1:4]]
+        threshold, floor = float(cells[4]), float(cells[5])
+        assert floor == pytest.approx(fraction * threshold, rel=1e-3)
+        assert printed_vals == pytest.approx(vals, rel=1e-3)
+        kind = cells[7].split(":")[0]
+        assert kind == _derive(vals, [x <= threshold for x in vals], fraction * threshold, k)
+        assert kind == v.kind.value
+        if v.clause.value == "below noise floor":  # the sentence relies on the floor: it says so
+            assert "below the noise floor" in v.text
+
+
+def test_the_measured_attitude_row_says_it_relies_on_the_floor():
+    """Attitude at Example 1's settings: analytic 3.1e-11 rad from both others, MuJoCo-Pinocchio
+    2.0e-12 rad (15x apart): agreement by the noise floor, said in the sentence with its value."""
+    th = 1e-6
+    checks = {
+        s: Check("attitude", s, v, th, "rad", True, "test")
+        for s, v in {P_AM: 3.139e-11, P_AP: 3.134e-11, P_MP: 2.030e-12}.items()
+    }
+    v = rule("attitude", checks)
+    assert v.kind is VerdictKind.AGREE
+    floor = REFEREE_NOISE_FRACTION * th
+    assert v.floor == pytest.approx(floor)
+    assert f"below the noise floor {floor:.2g} rad" in v.text

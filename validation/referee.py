@@ -3,17 +3,22 @@
 For each difference quantity (position of C, attitude, rod positions, velocities, angular velocity,
 control torque, rod forces) the three pairwise checks of :func:`validation.compare.compare_plants`
 give three values ``d1 ≤ d2 ≤ d3`` (each the check's value: a maximum over time, relative for the
-forces), in the threshold's unit. With ``floor = REFEREE_NOISE_FRACTION × threshold`` and
-``k = REFEREE_SEPARATION`` (both in :mod:`validation.thresholds`, with their reasons):
+forces), in the threshold's unit. With the quantity's **noise floor**
+``floor = REFEREE_NOISE_FRACTION × threshold`` and ``k = REFEREE_SEPARATION`` (both in
+:mod:`validation.thresholds`, with their reasons), the whole rule is (:class:`Clause`):
 
-* ``d3 ≤ floor``: all three agree (``AGREE``), far inside the threshold;
-* ``d2 ≥ k · max(d1, floor)``: the plant outside the closest pair is the **outlier** (``OUTLIER``):
-  its distances to the other two are ``d2``, ``d3``; the other two agree to ``d1``;
-* otherwise no single plant stands out: ``AGREE`` when every pair passes its threshold, else
-  ``DISAGREE`` (all three disagree; the report says so).
+1. ``d3 ≤ floor``: all three agree (``AGREE``): every distance is integration and round-off noise,
+   a thousand times inside the threshold, and their ratios decide nothing;
+2. ``d2 ≥ k · max(d1, floor)``: the plant outside the closest pair is the **outlier**
+   (``OUTLIER``): its distances to the other two are ``d2``, ``d3``; the other two agree to ``d1``
+   (a ``d1`` below the floor counts as the floor);
+3. otherwise no single plant stands out: ``AGREE`` when every pair passes its threshold, else
+   ``DISAGREE`` (all three disagree; the report says so).
 
-With fewer than three plants no verdict can be given: a disagreement between two plants cannot be
-attributed to either.
+Each verdict records the clause that decided it and the floor, and its sentence names them, so
+every verdict can be re-derived from the rule as :func:`rule_text` prints it under the report's
+table. With fewer than three plants no verdict can be given: a disagreement between two plants
+cannot be attributed to either.
 """
 
 from __future__ import annotations
@@ -50,6 +55,36 @@ class VerdictKind(StrEnum):
     DISAGREE = "all disagree"
 
 
+class Clause(StrEnum):
+    """The clause of the rule (module docstring) that decided a verdict."""
+
+    BELOW_FLOOR = "below noise floor"  # 1: d3 <= floor
+    SEPARATED = "separated"  # 2: d2 >= k max(d1, floor)
+    WITHIN_THRESHOLD = "within threshold"  # 3: no outlier, every pair passes
+    OVER_THRESHOLD = "over threshold"  # 3: no outlier, some pair fails
+
+
+def noise_floor(threshold: float) -> float:
+    """The referee's noise floor of a quantity with this threshold (same unit)."""
+    return REFEREE_NOISE_FRACTION * threshold
+
+
+def rule_text() -> str:
+    """The whole rule in words, with its constants, as the report prints it under the table."""
+    return (
+        "The rule, for each row's three values d1 ≤ d2 ≤ d3 (each pair's maximum over time; "
+        "relative for the forces): "
+        f"(1) all three agree when d3 ≤ the noise floor, {REFEREE_NOISE_FRACTION:g} × the "
+        "threshold (column *noise floor*): distances a thousand times inside the threshold are "
+        "integration and round-off noise, and their ratios decide nothing; "
+        f"(2) else the plant outside the closest pair is the outlier when "
+        f"d2 ≥ {REFEREE_SEPARATION:g} × max(d1, noise floor); "
+        "(3) else no plant stands out: they agree when every pair passes its threshold, and all "
+        "three disagree otherwise "
+        "(`validation.thresholds.REFEREE_NOISE_FRACTION`, `REFEREE_SEPARATION`)."
+    )
+
+
 @dataclass(frozen=True)
 class Verdict:
     """The referee's ruling on one quantity.
@@ -62,6 +97,8 @@ class Verdict:
         values: pair subject (``analytic vs mujoco``) -> the check's value.
         unit: unit of the values and the threshold.
         threshold: the quantity's threshold.
+        clause: the clause of the rule that decided it (None: not recorded).
+        floor: the quantity's noise floor (:func:`noise_floor`), in ``unit``.
     """
 
     quantity: str
@@ -71,6 +108,8 @@ class Verdict:
     values: Mapping[str, float] = field(default_factory=dict)
     unit: str = ""
     threshold: float = math.nan
+    clause: Clause | None = None
+    floor: float = math.nan
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -81,6 +120,8 @@ class Verdict:
             "values": dict(self.values),
             "unit": self.unit,
             "threshold": self.threshold,
+            "noise_floor": self.floor,
+            "clause": self.clause.value if self.clause else None,
         }
 
 
@@ -119,7 +160,7 @@ def rule(
     (p1, c1), (_, c2), (_, c3) = items
     d1, d2, d3 = size(c1), size(c2), size(c3)
     unit, threshold = c1.unit, c1.threshold
-    floor = REFEREE_NOISE_FRACTION * threshold
+    floor = noise_floor(threshold)
     values = {p.value: checks[p].value for p in sorted(checks, key=list(Subject).index)}
     label = LABELS.get(quantity, quantity)
     plants = {e for p, _ in items for e in p.plants}
@@ -129,47 +170,44 @@ def rule(
     def nm(e: str) -> str:
         return names.get(e, e)
 
-    if d3 <= floor:
+    def verdict(kind: VerdictKind, clause: Clause, text: str, outlier: str = "") -> Verdict:
         return Verdict(
-            quantity,
+            quantity, kind, outlier, f"{label}: {text}", values, unit, threshold, clause, floor
+        )
+
+    if d3 <= floor:
+        return verdict(
             VerdictKind.AGREE,
-            "",
-            f"{label}: all three agree to {_fmt(d3, unit)}",
-            values,
-            unit,
-            threshold,
+            Clause.BELOW_FLOOR,
+            f"all three agree: every distance is below the noise floor {_fmt(floor, unit)} "
+            f"(largest {_fmt(d3, unit)})",
         )
     if d2 >= REFEREE_SEPARATION * max(d1, floor):
-        return Verdict(
-            quantity,
+        closest = (
+            f"agree to {_fmt(d1, unit)}"
+            if d1 >= floor
+            else f"agree below the noise floor {_fmt(floor, unit)} ({_fmt(d1, unit)})"
+        )
+        return verdict(
             VerdictKind.OUTLIER,
+            Clause.SEPARATED,
+            f"{nm(x)} is the outlier, {_span(d2, d3, unit)} from the others; "
+            f"{nm(y)} and {nm(z)} {closest}",
             x,
-            f"{label}: {nm(x)} is the outlier, {_span(d2, d3, unit)} from the others; "
-            f"{nm(y)} and {nm(z)} agree to {_fmt(d1, unit)}",
-            values,
-            unit,
-            threshold,
         )
     if all(c.passed for c in (c1, c2, c3)):
-        return Verdict(
-            quantity,
+        return verdict(
             VerdictKind.AGREE,
-            "",
-            f"{label}: no outlier; the three agree within their threshold "
-            f"(largest difference {_fmt(d3, unit)}, threshold {_fmt(threshold, unit)})",
-            values,
-            unit,
-            threshold,
+            Clause.WITHIN_THRESHOLD,
+            f"no outlier (the distances are within {REFEREE_SEPARATION:g}× of each other); the "
+            f"three agree within their threshold (largest difference {_fmt(d3, unit)}, "
+            f"threshold {_fmt(threshold, unit)})",
         )
-    return Verdict(
-        quantity,
+    return verdict(
         VerdictKind.DISAGREE,
-        "",
-        f"{label}: all three disagree ({_fmt(d1, unit)} to {_fmt(d3, unit)}, threshold "
+        Clause.OVER_THRESHOLD,
+        f"all three disagree ({_fmt(d1, unit)} to {_fmt(d3, unit)}, threshold "
         f"{_fmt(threshold, unit)}); no two plants confirm each other",
-        values,
-        unit,
-        threshold,
     )
 
 
@@ -192,4 +230,14 @@ def summary_lines(verdicts: Sequence[Verdict]) -> list[str]:
     return [v.text for v in sorted(verdicts, key=lambda v: order[v.kind])]
 
 
-__all__ = ["QUANTITIES", "Verdict", "VerdictKind", "referee", "rule", "summary_lines"]
+__all__ = [
+    "QUANTITIES",
+    "Clause",
+    "Verdict",
+    "VerdictKind",
+    "noise_floor",
+    "referee",
+    "rule",
+    "rule_text",
+    "summary_lines",
+]

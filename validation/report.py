@@ -48,7 +48,7 @@ from validation.figures import (
     figure_tracking,
 )
 from validation.provenance import FileKind, code_origin, dumps, provenance
-from validation.referee import Verdict, summary_lines
+from validation.referee import Verdict, rule_text, summary_lines
 from validation.summary import check_sentence, max_abs
 
 
@@ -217,23 +217,20 @@ def _referee_lines(verdicts: Sequence[Verdict], meta: Mapping[str, Any]) -> list
     pairs = list(verdicts[0].values)
     lines += [
         "",
-        "| quantity | " + " | ".join(_cell(p) for p in pairs) + " | threshold | unit | verdict |",
-        "|---|" + "---|" * (len(pairs) + 3),
+        "| quantity | "
+        + " | ".join(_cell(p) for p in pairs)
+        + " | threshold | noise floor | unit | verdict | decided by |",
+        "|---|" + "---|" * (len(pairs) + 5),
     ]
     for v in verdicts:
         cells = " | ".join(_fmt(v.values.get(p, math.nan)) for p in pairs)
         who = f"{v.kind.value}: {v.outlier}" if v.outlier else v.kind.value
+        by = v.clause.value if v.clause else "–"
         lines.append(
-            f"| {_cell(v.quantity)} | {cells} | {_fmt(v.threshold)} | {_cell(v.unit)} | "
-            f"{_cell(who)} |"
+            f"| {_cell(v.quantity)} | {cells} | {_fmt(v.threshold)} | {_fmt(v.floor)} | "
+            f"{_cell(v.unit)} | {_cell(who)} | {_cell(by)} |"
         )
-    lines += [
-        "",
-        "Values are each pair's maximum over time (relative for the forces). A plant is the "
-        "outlier when its distances to the other two exceed theirs to each other tenfold "
-        "(`validation.thresholds.REFEREE_SEPARATION`).",
-        "",
-    ]
+    lines += ["", rule_text(), ""]
     return lines
 
 
