@@ -384,6 +384,23 @@ def test_a_killed_plant_worker_is_redone_here(tmp_path):
     assert any("exit -9" in r for r in doc["run"]["redone"])
 
 
+def test_a_plant_raising_value_error_part_way_fails_the_run_and_keeps_it(tmp_path, monkeypatch):
+    """An engine raising ValueError after the plants started (bad input was refused before) ->
+    the run is FAILED, naming the plant and the error; its files are kept, marked failed (not
+    discarded as bad input)."""
+    from mj_bridge.plants import MujocoPlant
+
+    def engine_error(self, scene, settings, t_end, progress):
+        raise ValueError("All components of the initial state `y0` must be finite.")
+
+    monkeypatch.setattr(MujocoPlant, "_simulate", engine_error)
+    res = V.run_validation(SCENE, tmp_path / "v", t_end=T_END, concurrent=False)
+    assert not res.passed and "MuJoCo plant: ValueError: All components" in res.failure
+    assert (tmp_path / "v" / "report.md").read_text().startswith(f"# {SCENE}: FAILED")
+    manifest = json.loads((tmp_path / "v" / "manifest.json").read_text())
+    assert manifest["state"] == "failed"
+
+
 @pytest.mark.parametrize("plants", ["analytic", "analytic,analytic", "mujoco,analytic,mujoco"])
 def test_plants_with_nothing_to_compare_are_refused_up_front(tmp_path, monkeypatch, plants):
     """One plant, or a plant named twice -> ValueError naming plants and the value before any

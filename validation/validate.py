@@ -430,13 +430,12 @@ def _plant_outcome(
                 raise KeyboardInterrupt(str(exc)) from None
             redone.append(f"{pl.label} plant: {exc}; run again in the main process")
             tr, wall = redo()
-    except ValueError:
-        raise  # the caller's input, not a failed run
     except OutputError:
         raise  # a file that could not be written: no verdict
     except workers.WorkerError as exc:
-        if exc.kind == "ValueError":
-            raise ValueError(exc.message) from None
+        # Bad input was refused before any plant started (run_validation's checks): whatever a
+        # plant raises now, a ValueError from deep in an engine included, is that plant failing,
+        # and the run keeps what it has, marked failed.
         failures.append(f"{pl.label} plant: {exc}")
         return None
     except KeyboardInterrupt:
