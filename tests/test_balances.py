@@ -137,3 +137,40 @@ def test_compiled_aux_rates_equal_the_vector_formulas():
         aux_rates(*args, mu0, m_T, out)
         ref = aux_rates_reference(*args, mu0, m_T)
         np.testing.assert_allclose(out, ref, rtol=1e-13, atol=1e-13 * np.max(np.abs(ref)))
+
+
+def test_simulate_summary_and_validate_checks_give_one_number():
+    """One definition per balance: for the same run, ``tumble simulate``'s summary (drift figures
+    and the printed table) and ``tumble validate``'s checks give the same relative balances; and
+    that number is the largest residual norm over the balanced quantity's scale, computed here from
+    the invariants directly."""
+    from analytic.invariants import Balance
+    from validation.compare import compare
+    from validation.scenes import resolve_scene
+    from validation.summary import DRIFT_KEYS, summary_table
+    from validation.thresholds import DEFAULTS
+
+    scene = resolve_scene("paper_example1_controlled")
+    tr = simulate(scene, rtol=1e-10, atol=1e-10, t_end=1.0)
+    drift = drift_figures(tr)
+    checks = {c.name: c for c in compare(tr, None, scene).checks if c.subject.value == "analytic"}
+    table = summary_table(tr)
+    iv = tr.invariants
+    residual = {
+        Balance.LINEAR_MOMENTUM: iv.linear_momentum - iv.linear_momentum_expected,
+        Balance.ANGULAR_MOMENTUM: iv.angular_momentum - iv.angular_momentum[0] - iv.angular_impulse,
+        Balance.ENERGY: (iv.energy - iv.energy[0] - iv.work)[:, None],
+    }
+    scale = {
+        Balance.LINEAR_MOMENTUM: np.linalg.norm(iv.linear_momentum, axis=1).max(),
+        Balance.ANGULAR_MOMENTUM: max(
+            np.linalg.norm(iv.angular_momentum, axis=1).max(),
+            np.linalg.norm(iv.angular_impulse, axis=1).max(),
+        ),
+        Balance.ENERGY: max(np.abs(iv.energy).max(), np.abs(iv.work).max()),
+    }
+    for b, key in DRIFT_KEYS.items():
+        assert drift[key] == checks[b.value].value, b  # the same number, not merely close
+        expected = np.linalg.norm(residual[b], axis=1).max() / max(scale[b], DEFAULTS[b].floor)
+        assert drift[key] == pytest.approx(expected, rel=1e-12), b
+        assert f"{key:<32} {checks[b.value].value:.3e}" in table

@@ -12,8 +12,10 @@ import math
 
 import numpy as np
 
+from analytic.invariants import Balance, relative_balance
 from analytic.trajectory import Trajectory
 from validation.compare import Check
+from validation.thresholds import DEFAULTS
 
 COMPLETED = "completed"
 """The name of the check that a run reached its horizon (value: time reached, threshold: the
@@ -54,29 +56,30 @@ def check_sentence(check: Check, reason: bool = True) -> str:
     )
 
 
-def _rel(x: np.ndarray, scale: float) -> float:
-    return float(np.max(np.abs(x)) / scale) if scale > 0 else float(np.max(np.abs(x)))
+DRIFT_KEYS = {
+    Balance.ANGULAR_MOMENTUM: "angular_momentum_balance_rel",
+    Balance.ENERGY: "energy_balance_rel",
+    Balance.LINEAR_MOMENTUM: "linear_momentum_balance_rel",
+}
+"""Each balance's key in :func:`drift_figures`; the value is the one ``tumble validate`` checks
+under the balance's threshold name (``analytic.angular_momentum`` ...)."""
 
 
 def drift_figures(tr: Trajectory) -> dict[str, float]:
-    """Relative drifts of the invariants' balances (max over the run) and the norm error.
+    """The norm error and the invariants' balances (max over the run), relative: exactly the
+    values of ``tumble validate``'s checks of the same run, by the one definition
+    :func:`analytic.invariants.relative_balance` (the largest residual norm divided by
+    ``max(scale, floor)``, the scale that of the balanced quantity, the floor its threshold's in
+    :mod:`validation.thresholds`).
 
-    Scales: angular momentum by max(|L|, |∫Sτ dt|); energy by max(|E|, |W|, kinetic scale);
-    linear momentum by max|P|.
+    Returns:
+        ``quat_norm_error_max`` (max |uᵀu − 1|) and, per balance, its :data:`DRIFT_KEYS` key.
     """
     iv = tr.invariants
-    L_scale = max(
-        float(np.max(np.linalg.norm(iv.angular_momentum, axis=1))),
-        float(np.max(np.linalg.norm(iv.angular_impulse, axis=1))),
-    )
-    E_scale = max(float(np.max(np.abs(iv.energy))), float(np.max(np.abs(iv.work))))
-    P_scale = float(np.max(np.linalg.norm(iv.linear_momentum, axis=1)))
-    return {
-        "quat_norm_error_max": float(np.max(np.abs(iv.quat_norm_error))),
-        "angular_momentum_balance_rel": _rel(iv.angular_momentum_balance(), L_scale),
-        "energy_balance_rel": _rel(iv.energy_balance(), E_scale),
-        "linear_momentum_balance_rel": _rel(iv.linear_momentum_balance(), P_scale),
-    }
+    out = {"quat_norm_error_max": float(np.max(np.abs(iv.quat_norm_error)))}
+    for b, key in DRIFT_KEYS.items():
+        out[key] = relative_balance(iv, b, DEFAULTS[b.value].floor)
+    return out
 
 
 def summary_table(tr: Trajectory) -> str:
@@ -90,7 +93,10 @@ def summary_table(tr: Trajectory) -> str:
         if k in tr.info:
             v = tr.info[k]
             lines.append(f"  {k:<34} {v:.4g}" if isinstance(v, float) else f"  {k:<34} {v}")
-    lines.append("  invariants (max over the run)")
+    lines.append(
+        "  invariants (max over the run; balances relative to the balanced quantity, "
+        "as tumble validate checks them)"
+    )
     for k, v in drift_figures(tr).items():
         lines.append(f"    {k:<32} {v:.3e}")
     if "max_quat_norm_error_at_steps" in tr.info:
