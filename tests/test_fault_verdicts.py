@@ -487,7 +487,7 @@ def test_scene_text_that_reads_like_a_placeholder_is_written_as_it_is(tmp_path, 
     res = V.run_validation(scene, tmp_path / "v", t_end=T_END, concurrent=False)
     assert res.passed
     doc = json.loads((tmp_path / "v" / "report.json").read_text())
-    assert doc["provenance"]["scene"]["description"] == placeholder
+    assert doc["provenance"]["scene"]["scene"]["description"] == placeholder
     assert doc["thresholds"]["attitude"]["reason"].startswith(f"{placeholder} (default")
 
 

@@ -63,8 +63,8 @@ class FileKind(enum.StrEnum):
 
 
 SCHEMA_VERSIONS: dict[FileKind, int] = {
-    FileKind.REPORT: 1,
-    FileKind.SWEEP: 1,
+    FileKind.REPORT: 2,  # 2: provenance.scene in the scene file's conventions (scene.toml's tables)
+    FileKind.SWEEP: 2,  # 2: the same
     FileKind.HARD_CASES: 1,
     FileKind.BENCH: 1,
 }
