@@ -416,7 +416,7 @@ def step_layout(
     return rrb.Horizontal(left, right, column_shares=[1, 1], name=step.title)
 
 
-def _narrative(step: DemoStep) -> str:
+def step_narrative(step: DemoStep) -> str:
     """The text beside the body: the story, then what to look at."""
     look = "\n".join(f"* {x}" for x in step.look_at)
     return f"{step.narrative}\n\n**What to look at**\n\n{look}" if look else step.narrative
@@ -712,7 +712,7 @@ def log_step(rec, run: StepRun) -> None:
         run.scene,
         list(run.plants),
         run.comparison,
-        narrative=_narrative(run.step),
+        narrative=step_narrative(run.step),
         prefix=run.step.prefix,
     )
     for plot in (Plot.OMEGA, Plot.MASS_POSITIONS, Plot.INVARIANTS):
