@@ -102,7 +102,7 @@ DRIFT_QUANTITIES = (
     ("linear_momentum", "P"),
     ("angular_momentum", "L"),
     ("energy", "E"),
-    ("quat_norm", "|uᵀu − 1|"),
+    ("quat_norm", "|u·u − 1|"),  # no superscript: the viewer's fonts lack ᵀ
 )
 """The drift plot's quantities (the comparison's series names) and their symbols, in colour
 order: quantity j is drawn in ``SERIES_HUES[j]``."""
