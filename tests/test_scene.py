@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import json
 import math
 import tomllib
 import warnings
@@ -842,3 +843,35 @@ def test_a_rounded_rod_axis_is_normalised_with_one_warning_naming_its_norm():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         scene_from_dict(raw)
+
+
+# ------------------------------------------------------------------------------------------------
+# One default scene for every command
+# ------------------------------------------------------------------------------------------------
+
+
+def test_every_command_defaults_to_the_one_default_scene():
+    from validation import scenes, sweep, validate
+    from validation.cli import build_parser
+
+    assert scenes.DEFAULT_SCENE == "paper_example1_controlled"  # controlled: tracking to show
+    assert sweep.DEFAULT_SCENE is scenes.DEFAULT_SCENE
+    assert validate.DEFAULT_SCENE is scenes.DEFAULT_SCENE
+    sub = next(a for a in build_parser()._actions if a.dest == "command")
+    for command in ("simulate", "validate", "export-mjcf", "sweep"):
+        text = " ".join(sub.choices[command].format_help().split())
+        assert f"(default: {scenes.DEFAULT_SCENE})" in text, command
+    assert resolve_scene(None).name == scenes.DEFAULT_SCENE
+
+
+def test_simulate_without_a_scene_prints_the_tracking_errors(tmp_path, capsys):
+    from validation.cli import main
+
+    out = tmp_path / "sim"
+    # (the numpy right-hand side: no compilation; the default scene is the point here)
+    assert main(["simulate", "--t-end", "0.05", "--backend", "numpy", "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "|e_omega|" in printed and "|e_p| (masses 1,2)" in printed
+    summary = json.loads((out / "summary.json").read_text(encoding="utf-8"))
+    assert summary["scene"] == "paper_example1_controlled"
+    assert len(summary["final_tracking_error"]["e_p"]) == 2  # both masses are controlled

@@ -76,10 +76,10 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     from validation.atomic import write_bytes, write_text
     from validation.outputs import default_out_dir, output_run
     from validation.progress import Progress
-    from validation.scenes import DEFAULT_SIMULATE_SCENE, resolve_scene
+    from validation.scenes import DEFAULT_SCENE, resolve_scene
     from validation.summary import drift_figures, summary_table
 
-    scene = resolve_scene(args.scene, DEFAULT_SIMULATE_SCENE)
+    scene = resolve_scene(args.scene, DEFAULT_SCENE)
     t_end = args.t_end or scene.output.t_end
     out = Path(args.out) if args.out else default_out_dir("simulate_", scene.name)
     with output_run(out, "simulate") as run:
@@ -124,10 +124,10 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 def cmd_validate(args: argparse.Namespace) -> int:
     from validation.outputs import default_out_dir
     from validation.progress import StageProgress, Status
-    from validation.scenes import DEFAULT_VALIDATE_SCENE, resolve_scene
+    from validation.scenes import DEFAULT_SCENE, resolve_scene
     from validation.validate import run_validation
 
-    scene = resolve_scene(args.scene, DEFAULT_VALIDATE_SCENE)
+    scene = resolve_scene(args.scene, DEFAULT_SCENE)
     out = Path(args.out) if args.out else default_out_dir("validate_", scene.name)
     t_end = args.t_end or scene.output.t_end
     from validation.warmup import warming
@@ -195,9 +195,9 @@ def cmd_export_mjcf(args: argparse.Namespace) -> int:
     from model_xml import to_mjcf
     from validation.atomic import write_text
     from validation.outputs import default_out_file
-    from validation.scenes import DEFAULT_SIMULATE_SCENE, resolve_scene
+    from validation.scenes import DEFAULT_SCENE, resolve_scene
 
-    scene = resolve_scene(args.scene, DEFAULT_SIMULATE_SCENE)
+    scene = resolve_scene(args.scene, DEFAULT_SCENE)
     out = Path(args.out) if args.out else default_out_file(scene.name, ".xml")
     if out.is_dir():
         raise ValueError(f"--out {out}: is a directory; give a file name")
@@ -248,8 +248,8 @@ def cmd_hard_cases(args: argparse.Namespace) -> int:
 
 def cmd_sweep(args: argparse.Namespace) -> int:
     from validation.outputs import default_out_dir
-    from validation.scenes import resolve_scene
-    from validation.sweep import DEFAULT_SCENE, run_sweep
+    from validation.scenes import DEFAULT_SCENE, resolve_scene
+    from validation.sweep import run_sweep
 
     scene = resolve_scene(args.scene, DEFAULT_SCENE)
     out = Path(args.out) if args.out else default_out_dir("sweep_", scene.name)
@@ -308,8 +308,7 @@ def _version() -> str:
 
 def build_parser() -> argparse.ArgumentParser:
     from analytic.effects import Backend, MjIntegrator, SolverMethod, Stepper
-    from validation.scenes import DEFAULT_SIMULATE_SCENE, builtin_names
-    from validation.sweep import DEFAULT_SCENE as DEFAULT_SWEEP_SCENE
+    from validation.scenes import DEFAULT_SCENE, builtin_names
 
     parser = _OneLineParser(
         prog="tumble",
@@ -327,7 +326,7 @@ def build_parser() -> argparse.ArgumentParser:
         "scene, overridable), write OUT/trajectory.npz and OUT/summary.json, and print the "
         "tracking errors at the end and the invariant drifts.",
     )
-    _add_scene_arg(p, DEFAULT_SIMULATE_SCENE, builtin_names())
+    _add_scene_arg(p, DEFAULT_SCENE, builtin_names())
     p.add_argument("--out", help="output directory (default: out/simulate_<scene slug>)")
     p.add_argument("--method", choices=[m.value for m in SolverMethod], help="scipy solver")
     p.add_argument("--rtol", type=_positive_float, help="relative tolerance")
@@ -356,9 +355,7 @@ def build_parser() -> argparse.ArgumentParser:
         "write OUT/report.md, OUT/report.json, figures and OUT/run.rrd. Exits 1 when a check "
         "fails.",
     )
-    from validation.scenes import DEFAULT_VALIDATE_SCENE
-
-    _add_scene_arg(p, DEFAULT_VALIDATE_SCENE, builtin_names())
+    _add_scene_arg(p, DEFAULT_SCENE, builtin_names())
     p.add_argument("--out", help="output directory (default: out/validate_<scene slug>)")
     p.add_argument(
         "--integrator",
@@ -384,7 +381,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="write the MJCF of a scene's MuJoCo twin (full precision)",
         description="Write the MuJoCo model generated from the scene (MjSpec) as MJCF text.",
     )
-    _add_scene_arg(p, DEFAULT_SIMULATE_SCENE, builtin_names())
+    _add_scene_arg(p, DEFAULT_SCENE, builtin_names())
     p.add_argument("--out", help="output file (default: out/<scene slug>.xml)")
     p.set_defaults(func=cmd_export_mjcf)
 
@@ -425,7 +422,7 @@ def build_parser() -> argparse.ArgumentParser:
         "work_precision.png and sweep.rrd; also the cost of each effect and the effect of the "
         "quaternion stabilisation (delta1, delta2).",
     )
-    _add_scene_arg(p, DEFAULT_SWEEP_SCENE, builtin_names())
+    _add_scene_arg(p, DEFAULT_SCENE, builtin_names())
     p.add_argument("--out", help="output directory (default: out/sweep_<scene slug>)")
     p.add_argument("--quick", action="store_true", help="a small grid (minutes, not tens)")
     p.add_argument("--t-end", type=_positive_float, help="horizon in seconds (default 20)")

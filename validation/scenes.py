@@ -20,8 +20,10 @@ SCENES_DIR = BUILTIN_DIR
 HARD_DIR = Path(__file__).resolve().parent / "scenes" / "hard"
 """The hard-case suite's scenes."""
 HARD_PREFIX = "hard/"
-DEFAULT_SIMULATE_SCENE = "paper_example1"
-DEFAULT_VALIDATE_SCENE = "paper_example1_controlled"
+DEFAULT_SCENE = "paper_example1_controlled"
+"""The scene of every command run without one (``simulate``, ``validate``, ``export-mjcf``,
+``sweep``, :func:`validation.run_validation`): Example 1 under control, so that the tracking errors
+and the control's checks have something to show."""
 
 
 def _hard_files() -> list[Path]:
@@ -58,7 +60,7 @@ def scene_path(name_or_path: str) -> Path:
     )
 
 
-def resolve_scene(name_or_path: str | None, default: str = DEFAULT_SIMULATE_SCENE) -> Scene:
+def resolve_scene(name_or_path: str | None, default: str = DEFAULT_SCENE) -> Scene:
     """Load a scene given by path or built-in name (``default`` when None).
 
     Everything in it is checked here, before any work: its fields by the loader, and the names

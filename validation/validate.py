@@ -27,9 +27,10 @@ from pathlib import Path
 from typing import Any
 
 from analytic.scene import Scene, load_scene
+from analytic.scene_dump import scene_to_toml
 from analytic.trajectory import Engine, RunStatus, Trajectory
 from validation import workers
-from validation.atomic import OutputError
+from validation.atomic import OutputError, write_text
 from validation.compare import Check, Comparison, compare_plants
 from validation.figures import (
     DEFAULT_FORMATS,
@@ -49,9 +50,9 @@ from validation.report import (
     versions,
     write_report,
 )
+from validation.scenes import DEFAULT_SCENE
 
 SCENES = Path(__file__).resolve().parent / "scenes"
-DEFAULT_SCENE = "paper_example1_controlled"
 
 Progress = Callable[[str, float], None] | Callable[[float], None]
 """``progress(stage, t)`` (stage ``analytic`` or ``mujoco``) or ``progress(t)``: t is the simulated
@@ -595,7 +596,8 @@ def _validate_into(
         workers.stop(jobs)
         raise
     meta = _meta(run, sc, runs, names, horizon, verdicts)
-    files: dict[str, Path] = {}
+    # the scene as it ran, in the scene file's conventions: `tumble validate OUT/scene.toml` reruns it
+    files: dict[str, Path] = {"scene.toml": write_text(out / "scene.toml", scene_to_toml(sc))}
     drawn: Sequence[list] = ([], [], [])
     evidence: tuple = ()
     if not interrupted:

@@ -14,8 +14,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-DEFAULT_SCENE = "paper_example1_controlled"
-"""The scene of every sweep entry point when none is given."""
+from validation.scenes import DEFAULT_SCENE  # the one default scene of every command
 
 PAPER_HORIZON_S = 20.0
 """The horizon of the paper's figures (Sec. V and VII: "a time duration of 20 s"), s."""
