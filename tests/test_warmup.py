@@ -306,9 +306,9 @@ def _cold_probe(env: dict[str, str], every_engine: bool = False) -> dict:
 COLD_PROBE = """
 import json, sys
 from validation import warmup
-from validation.scenes import DEFAULT_VALIDATE_SCENE, resolve_scene
+from validation.scenes import DEFAULT_SCENE, resolve_scene
 
-got = {"halves": [s.value for s in warmup.kernel_halves_state(resolve_scene(DEFAULT_VALIDATE_SCENE))]}
+got = {"halves": [s.value for s in warmup.kernel_halves_state(resolve_scene(DEFAULT_SCENE))]}
 if sys.argv[1]:
     from mj_bridge.plants import installed_plants
 
