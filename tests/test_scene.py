@@ -575,7 +575,7 @@ def test_nesting_of_any_depth_is_one_named_value_error(tmp_path, depth, how, whe
         value = None
     key = ".".join(["k"] * depth)
     if how == "dotted":
-        line = f"{key} = 1"
+        line = f"{key}.k = 1"  # depth tables, the last one holding k = 1
     elif how == "header":
         line = f"[{where}.{key}]" if where != "top" else f"[{key}]"
     else:
