@@ -10,6 +10,7 @@ import dataclasses
 import io
 import itertools
 import json
+import math
 import re
 import warnings
 
@@ -171,11 +172,15 @@ def test_control_figure_shows_the_other_plant_as_its_distance(run):
         assert not drawing.drawn and "no control requirement" in drawing.caption
         return
     axes = drawing.figure.axes
-    assert len(axes) == 3  # torque, rod forces, mujoco − analytic
+    assert len(axes) == 4  # torque, rod forces, mujoco − analytic: torque, rod forces
     assert "GN·m" in axes[0].get_ylabel() and "MN" in axes[1].get_ylabel()
     diff = axes[2]
     assert diff.get_yscale() == "log" and "mujoco − analytic" in diff.get_title(loc="left")
-    assert np.nanmax(diff.lines[0].get_ydata()) == pytest.approx(TORQUE_SCALE, rel=1e-3)
+    # the torque distance has its panel to itself: no rod-force curve drawn over it
+    curves = [ln for ln in diff.lines if ln.get_label() != "threshold"]
+    assert [ln.get_label() for ln in curves] == ["‖Δτ‖₂ / max‖τ‖₂"]
+    assert np.nanmax(curves[0].get_ydata()) == pytest.approx(TORQUE_SCALE, rel=1e-3)
+    assert all("ΔF" in ln.get_label() for ln in axes[3].lines if ln.get_label() != "threshold")
     for ax in axes:  # legends stand outside the data, to the right of the panel
         legend = ax.get_legend()
         right_edge = ax.transAxes.transform((1.0, 1.0))[0]
@@ -336,3 +341,54 @@ def test_cli_refuses_a_bad_figure_format_before_any_work(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "figure_format" in err[0] and "gif" in err[0]
     assert not out.exists()
+
+
+@pytest.fixture(scope="module")
+def masses_only():
+    """(scene, plants, comparison) of Example 1 with the masses controlled and ω not: no control
+    torque in either plant, rod forces in both (the copy's forces scaled by 1 + 1e-9)."""
+    from analytic.effects import Effect
+
+    sc = resolve_scene("paper_example1_controlled")
+    sc = sc.with_effects(sc.effects - {Effect.CONTROL_OMEGA})
+    tr = simulate(sc, t_end=T_END, rtol=1e-10)
+    copy = dataclasses.replace(_copy(tr), rod_forces=tr.rod_forces * (1.0 + TORQUE_SCALE))
+    return sc, [tr, copy], compare(tr, copy, sc, t_end=T_END)
+
+
+def test_a_scene_without_torque_control_draws_no_torque_panel(masses_only):
+    """No empty τ panel: the rod forces and their distance only, and the caption says why."""
+    _, plants, cmp = masses_only
+    assert not any(np.any(p.torque) for p in plants)
+    drawing = figure_control(plants, FigureContext(plants[0].scene), cmp.thresholds)
+    titles = [ax.get_title(loc="left") for ax in drawing.figure.axes]
+    assert len(titles) == 2 and not any("torque" in t for t in titles), titles
+    assert "neither plant applies one" in drawing.caption
+    for ax in drawing.figure.axes:
+        assert any(np.any(np.nan_to_num(np.asarray(l.get_ydata(), float))) for l in ax.lines)
+
+
+def test_a_check_that_does_not_apply_says_so(masses_only, tmp_path):
+    """The control_torque check of a scene without torque control is NOT_APPLICABLE in the record,
+    report.json and report.md, never a pass with value 0."""
+    from validation.compare import CheckState
+    from validation.summary import check_sentence
+
+    sc, plants, cmp = masses_only
+    (check,) = [c for c in cmp.checks if c.name == "control_torque"]
+    assert check.state is CheckState.NOT_APPLICABLE and not check.applicable
+    assert math.isnan(check.value)
+    assert "not applicable" in check_sentence(check)
+    (rod,) = [c for c in cmp.checks if c.name == "rod_forces"]
+    assert rod.state is CheckState.PASS and rod.value == pytest.approx(TORQUE_SCALE, rel=1e-3)
+    files = write_report(tmp_path, cmp, plants, {"scene": {"name": sc.name}})
+    doc = json.loads(files.json.read_text())
+    (js,) = [c for c in doc["checks"] if c["name"] == "control_torque"]
+    assert js["verdict"] == "not applicable" and js["applicable"] is False
+    assert js["value"] is None and js["t_max"] is None
+    md = files.markdown.read_text()
+    row = next(ln for ln in md.splitlines() if ln.startswith("| control_torque |"))
+    assert "not applicable" in row and "pass" not in row
+    assert "Not applicable: control\\_torque" in md or "Not applicable: control_torque" in md
+    applicable = len(cmp.applicable_checks)
+    assert f"{applicable} of {applicable} checks pass." in md

@@ -168,6 +168,15 @@ class Series:
         return self.key.split(".", 1)[1]
 
 
+class CheckState(StrEnum):
+    """A check's outcome, as every output states it (``report.md``'s verdict column, the
+    ``verdict`` of report.json's check records)."""
+
+    PASS = "pass"
+    FAIL = "FAIL"
+    NOT_APPLICABLE = "not applicable"  # nothing to check (no control torque in either plant)
+
+
 @dataclass(frozen=True)
 class Check:
     """One verdict.
@@ -186,6 +195,10 @@ class Check:
         t_max: time of the worst value, s.
         bound: the name of the threshold when ``name`` is not it ("" when it is): a hard case's
             ``hard_*`` bound (:mod:`validation.hard_cases`), which several checks share.
+        applicable: False when there is nothing to check (neither plant has the quantity, e.g. no
+            control torque in a scene that controls no angular velocity): the check is neither
+            passed nor failed but NOT_APPLICABLE (``passed`` is True so it fails nothing;
+            ``value`` and ``t_max`` are NaN; ``reason`` says why).
     """
 
     name: str
@@ -199,6 +212,14 @@ class Check:
     scale: float = 1.0
     t_max: float = math.nan
     bound: str = ""
+    applicable: bool = True
+
+    @property
+    def state(self) -> CheckState:
+        """PASS, FAIL or NOT_APPLICABLE."""
+        if not self.applicable:
+            return CheckState.NOT_APPLICABLE
+        return CheckState.PASS if self.passed else CheckState.FAIL
 
     @property
     def label(self) -> str:
@@ -216,7 +237,8 @@ class Check:
             "threshold": self.threshold,
             "unit": self.unit,
             "passed": self.passed,
-            "verdict": "pass" if self.passed else "FAIL",
+            "verdict": self.state.value,
+            "applicable": self.applicable,
             "reason": self.reason,
             "series": self.series,
             "scale": self.scale,
@@ -254,6 +276,11 @@ class Comparison:
     @property
     def failed_checks(self) -> tuple[Check, ...]:
         return tuple(c for c in self.checks if not c.passed)
+
+    @property
+    def applicable_checks(self) -> tuple[Check, ...]:
+        """The checks that check something (not NOT_APPLICABLE)."""
+        return tuple(c for c in self.checks if c.applicable)
 
     def get(self, key: str) -> Series:
         for s in self.series:
@@ -500,6 +527,13 @@ def plant_series(traj: Trajectory, scene: Any = None) -> tuple[Series, ...]:
 # ----------------------------------------------------------------------------------------------
 
 
+def _not_applicable(th: Threshold, subject: Subject, why: str) -> Check:
+    """A check of ``th`` with nothing to check (:attr:`Check.applicable` False), saying why."""
+    return Check(
+        th.name, subject, math.nan, th.value, th.unit, True, why, applicable=False
+    )
+
+
 def _bound_check(th: Threshold, subject: Subject, series: Series, scale: float = 1.0) -> Check:
     s = series.summary
     if th.relative:
@@ -619,15 +653,22 @@ def compare(
         k = by["position_C"].t.shape[0]
         for name in list(Difference)[:6]:  # the absolute ones; the forces are relative, below
             checks.append(_bound_check(th[name], pair, by[name]))
-        checks.append(
-            _bound_check(
-                th["control_torque"],
-                pair,
-                by["control_torque"],
-                _scale_max(analytic.torque[:k]),
+        if np.any(analytic.torque[:k]) or np.any(mujoco.torque[:k]):
+            checks.append(
+                _bound_check(
+                    th["control_torque"],
+                    pair,
+                    by["control_torque"],
+                    _scale_max(analytic.torque[:k]),
+                )
             )
-        )
-        if analytic.n:
+        else:
+            checks.append(
+                _not_applicable(
+                    th["control_torque"], pair, "neither plant applies a control torque"
+                )
+            )
+        if analytic.n and (np.any(analytic.rod_forces[:k]) or np.any(mujoco.rod_forces[:k])):
             checks.append(
                 _bound_check(
                     th["rod_forces"],
@@ -635,6 +676,10 @@ def compare(
                     by["rod_forces"],
                     float(np.max(np.abs(analytic.rod_forces[:k]), initial=0.0)),
                 )
+            )
+        elif analytic.n:
+            checks.append(
+                _not_applicable(th["rod_forces"], pair, "neither plant applies a rod force")
             )
     else:
         notes.append("no MuJoCo trajectory: only the analytic plant's own checks were made")

@@ -753,29 +753,35 @@ def figure_control(
     th = dict(thresholds) if thresholds is not None else thresholds_for(None)
     ref, others = plants[0], plants[1:]
     n = ref.n
-    nrows = 1 + (1 if n else 0) + len(others)
+    has_tau = any(np.any(p.torque) for p in plants)
+    has_f = bool(n) and any(np.any(p.rod_forces) for p in plants)
+    per_other = int(has_tau) + int(has_f)  # one distance panel per force kind and other plant
+    nrows = int(has_tau) + int(has_f) + per_other * len(others)
     fig, axes = _figure(nrows, f"{ctx.scene}: control forces", side_legends=True)
     refname = ref.engine.value
     colors = [f"C{j}" for j in range(10)]
-
-    ax = axes[0]
-    div, prefix = _eng(float(np.max(np.abs(ref.torque), initial=0.0)))
-    for j in range(3):
-        ax.plot(
-            ref.t,
-            ref.torque[:, j] / div,
-            color=colors[j],
-            linewidth=1.2,
-            label=f"$\\tau_{'xyz'[j]}$",
-        )
-    ax.set_ylabel(f"τ ({prefix}N·m)")
-    _title(ax, f"{refname} plant: control torque τ, body axes")
-    _linear_axis(ax)
-    _side_legend(ax)
-    row = 1
-    units = [f"{prefix}N·m"]
-    if n:
+    row = 0
+    units = []
+    if has_tau:
         ax = axes[row]
+        row += 1
+        div, prefix = _eng(float(np.max(np.abs(ref.torque), initial=0.0)))
+        for j in range(3):
+            ax.plot(
+                ref.t,
+                ref.torque[:, j] / div,
+                color=colors[j],
+                linewidth=1.2,
+                label=f"$\\tau_{'xyz'[j]}$",
+            )
+        ax.set_ylabel(f"τ ({prefix}N·m)")
+        _title(ax, f"{refname} plant: control torque τ, body axes")
+        _linear_axis(ax)
+        _side_legend(ax)
+        units.append(f"{prefix}N·m")
+    if has_f:
+        ax = axes[row]
+        row += 1
         div, fprefix = _eng(float(np.max(np.abs(ref.rod_forces), initial=0.0)))
         for i in range(n):
             ax.plot(
@@ -790,69 +796,77 @@ def figure_control(
         _linear_axis(ax)
         _side_legend(ax)
         units.append(f"{fprefix}N")
-        row += 1
     zero_rows: list[str] = []
     for other in others:
-        ax = axes[row]
-        row += 1
         k = _common_samples(ref, other)
         t = ref.t[:k]
-        tau_scale = max(
-            float(np.max(np.linalg.norm(ref.torque[:k], axis=1), initial=0.0)),
-            th["control_torque"].floor,
-        )
-        curves = [np.linalg.norm(other.torque[:k] - ref.torque[:k], axis=1) / tau_scale]
-        labels = ["‖Δτ‖₂ / max‖τ‖₂"]
-        if n:
+        panels = []  # (what, threshold name, curves, labels)
+        if has_tau:
+            tau_scale = max(
+                float(np.max(np.linalg.norm(ref.torque[:k], axis=1), initial=0.0)),
+                th["control_torque"].floor,
+            )
+            dtau = np.linalg.norm(other.torque[:k] - ref.torque[:k], axis=1) / tau_scale
+            panels.append(("control torque", "control_torque", [dtau], ["‖Δτ‖₂ / max‖τ‖₂"]))
+        if has_f:
             f_scale = max(
                 float(np.max(np.abs(ref.rod_forces[:k]), initial=0.0)), th["rod_forces"].floor
             )
-            for i in range(n):
-                curves.append(np.abs(other.rod_forces[:k, i] - ref.rod_forces[:k, i]) / f_scale)
-                labels.append(f"|ΔF{str(i + 1).translate(_SUBSCRIPT)}| / max|F|")
-        limits = sorted(
-            {th["control_torque"].value, th["rod_forces"].value}
-            if n
-            else {th["control_torque"].value}
-        )
-        _log_axis(ax, [*curves, np.asarray(limits, float)])
-        for j, (v, lab) in enumerate(zip(curves, labels, strict=True)):
-            if not np.any(v):
-                zero_rows.append(f"{lab} of {other.engine.value}")
-                continue
-            ax.plot(
-                t,
-                np.where(v > 0, v, np.nan),
-                color="tab:brown" if j == 0 else colors[(2 + j) % 10],
-                linewidth=1.0,
-                label=lab,
+            curves = [
+                np.abs(other.rod_forces[:k, i] - ref.rod_forces[:k, i]) / f_scale for i in range(n)
+            ]
+            labels = [f"|ΔF{str(i + 1).translate(_SUBSCRIPT)}| / max|F|" for i in range(n)]
+            panels.append(("rod forces", "rod_forces", curves, labels))
+        for what, th_name, curves, labels in panels:
+            ax = axes[row]
+            row += 1
+            limit = th[th_name].value
+            _log_axis(ax, [*curves, np.asarray([limit], float)])
+            for j, (v, lab) in enumerate(zip(curves, labels, strict=True)):
+                if not np.any(v):
+                    zero_rows.append(f"{lab} of {other.engine.value}")
+                    continue
+                color = "tab:brown" if th_name == "control_torque" else colors[(3 + j) % 10]
+                ax.plot(t, np.where(v > 0, v, np.nan), color=color, linewidth=1.0, label=lab)
+            ax.axhline(limit, label="threshold", **THRESHOLD_STYLE)
+            ax.set_ylabel("1 (relative)")
+            _title(
+                ax,
+                f"{other.engine.value} − {refname}: {what}, relative to the {refname} plant's "
+                "largest",
             )
-        for m, lim in enumerate(limits):
-            ax.axhline(lim, label="threshold" if m == 0 else None, **THRESHOLD_STYLE)
-        ax.set_ylabel("1 (relative)")
-        _title(
-            ax,
-            f"{other.engine.value} − {refname}: distance relative to the {refname} plant's "
-            "largest force",
-        )
-        ax.grid(True, which="major", alpha=0.3)
-        _side_legend(ax)
+            ax.grid(True, which="major", alpha=0.3)
+            _side_legend(ax)
     axes[-1].set_xlabel("t (s)")
     _finish_axes(fig, axes)
-    what = "control torque τ (body axes)" + (" and the rod force F_i on each mass" if n else "")
-    sentences = [
-        f"Control forces. Top: the {refname} plant's {what}, in {' and '.join(units)}; this plant "
-        "is the reference."
+    drawn = [
+        x
+        for x, on in (
+            ("control torque τ (body axes)", has_tau),
+            ("the rod force F_i on each mass", has_f),
+        )
+        if on
     ]
+    sentences = [
+        f"Control forces. Top: the {refname} plant's {' and '.join(drawn)}, in "
+        f"{' and '.join(units)}; this plant is the reference."
+    ]
+    if not has_tau:
+        sentences.append("No control torque is drawn: neither plant applies one.")
     if others:
         sentences.append(
-            "Below, one panel per other plant: its distance from the reference, relative to the "
-            "reference's largest magnitude, ‖τ − τ_ref‖₂ / max‖τ_ref‖₂"
-            + (" and |F_i − F_ref,i| / max_i |F_ref,i|" if n else "")
-            + " (log axes; dotted black: the thresholds control_torque"
-            + (" and rod_forces" if n else "")
-            + "). Drawn on the reference's axes, the other plants' forces would hide under its "
-            "curves: they agree to these relative distances."
+            "Below, for each other plant, its distance from the reference relative to the "
+            "reference's largest magnitude, one panel per force so that no curve hides another: "
+            + " and ".join(
+                x
+                for x, on in (
+                    ("‖τ − τ_ref‖₂ / max‖τ_ref‖₂", has_tau),
+                    ("|F_i − F_ref,i| / max_i |F_ref,i|", has_f),
+                )
+                if on
+            )
+            + " (log axes; dotted black: the threshold). Drawn on the reference's axes, the other "
+            "plants' forces would hide under its curves: they agree to these relative distances."
         )
     if zero_rows:
         sentences.append(f"Not drawn, identically zero: {'; '.join(zero_rows)}.")

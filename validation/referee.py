@@ -212,13 +212,16 @@ def rule(
 
 
 def referee(cmp: Comparison, names: Mapping[str, str] | None = None) -> tuple[Verdict, ...]:
-    """Verdicts on every quantity that all three pairs of ``cmp`` checked (empty otherwise)."""
+    """Verdicts on every quantity that all three pairs of ``cmp`` checked (empty otherwise; a
+    quantity that does not apply, such as the control torque of a scene without one, has none)."""
     pairs = {c.subject for c in cmp.checks if c.subject.is_pair}
     if len(pairs) != 3:
         return ()
     out = []
     for q in QUANTITIES:
-        by = {c.subject: c for c in cmp.checks if c.subject.is_pair and c.name == q}
+        by = {
+            c.subject: c for c in cmp.checks if c.subject.is_pair and c.name == q and c.applicable
+        }
         if len(by) == 3:
             out.append(rule(q, by, names))
     return tuple(out)

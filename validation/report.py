@@ -35,7 +35,7 @@ import numpy as np
 
 from analytic.trajectory import Trajectory
 from validation.atomic import OutputError, write_bytes
-from validation.compare import Comparison, Series
+from validation.compare import Check, CheckState, Comparison, Series
 from validation.figures import (
     DEFAULT_FORMATS,
     FIGURES,
@@ -204,6 +204,12 @@ def _fmt(x: float) -> str:
     return f"{x:.3e}" if x != 0 else "0"
 
 
+def _state_cell(c: Check) -> str:
+    """A check's verdict cell: ``pass``, ``**FAIL**`` or ``not applicable``."""
+    state = c.state
+    return "**FAIL**" if state is CheckState.FAIL else state.value
+
+
 def _referee_lines(verdicts: Sequence[Verdict], meta: Mapping[str, Any]) -> list[str]:
     """The referee's section: one sentence per quantity, then the pairwise table."""
     if not verdicts:
@@ -337,8 +343,16 @@ def render_markdown(
         lines += [f"**Redone:** {_md(again)}", ""]
     if cmp is not None:
         bad = cmp.failed_checks
-        total = len(cmp.checks)
-        lines.append(f"{total - len(bad)} of {total} checks pass." + (" Failed:" if bad else ""))
+        total = len(cmp.applicable_checks)
+        idle = [c for c in cmp.checks if not c.applicable]
+        also = (
+            f" Not applicable: {', '.join(_md(c.label) for c in idle)} ({_md(idle[0].reason)})."
+            if idle
+            else ""
+        )
+        lines.append(
+            f"{total - len(bad)} of {total} checks pass." + also + (" Failed:" if bad else "")
+        )
         for c in bad:
             lines.append(f"- {_cell(check_sentence(c))}")
         lines.append("")
@@ -356,7 +370,7 @@ def render_markdown(
         for c in cmp.checks:
             lines.append(
                 f"| {_cell(c.label)} | {_fmt(c.value)} | {_fmt(c.threshold)} | {_cell(c.unit)} | "
-                f"{'pass' if c.passed else '**FAIL**'} | {_fmt(c.t_max)} |"
+                f"{_state_cell(c)} | {_fmt(c.t_max)} |"
             )
         lines += [
             "",

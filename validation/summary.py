@@ -41,13 +41,16 @@ def check_sentence(check: Check, reason: bool = True) -> str:
     """One check in words: ``analytic: stopped at 9.37 s of 20 s (why)`` for a run that did not
     reach its horizon, ``position_C = 5.000e-05 m > threshold 1.000e-06 m (why)`` otherwise;
     ``reason=False`` leaves out a threshold's reason (a long sentence) but never why a run
-    stopped."""
+    stopped; a check that does not apply says so, with why (``control_torque: not applicable
+    (neither plant applies a control torque)``)."""
     if check.name == COMPLETED:
         who = check.subject.value
         if check.passed:
             return f"{who}: reached {check.threshold:g} s"
         reached = "no sample" if math.isnan(check.value) else f"{check.value:.3g} s"
         return f"{who}: stopped at {reached} of {check.threshold:g} s ({check.reason})"
+    if not check.applicable:
+        return f"{check.label}: not applicable ({check.reason})"
     unit = "" if check.unit in ("", "1") else f" {check.unit}"
     op = "≤" if check.passed else ">"
     why = f" ({check.reason})" if reason else ""
