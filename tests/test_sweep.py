@@ -14,6 +14,7 @@ import dataclasses
 import itertools
 import json
 import math
+import re
 from concurrent.futures import Executor, Future, ThreadPoolExecutor
 from pathlib import Path
 
@@ -80,7 +81,7 @@ def test_every_setting_of_the_grid_is_reported(result):
     assert len(result.runs) == expected
     assert [r["run_id"] for r in result.runs] == list(range(expected))
     for r in result.runs:
-        assert r["status"] in {"ok", "diverged", "failed", "too_slow", "skipped"}
+        assert r["status"] in {"ok", "diverged", "failed", "too_slow", "skipped", "degraded"}
         if r["status"] != "ok":
             assert r["note"], f"run {r['run_id']} {r['status']} without a reason"
 
@@ -963,3 +964,140 @@ def test_a_directory_or_link_at_the_reference_cache_path_is_left_alone(scene, tm
         via_link = reference.obtain_reference(scene, T_CACHE, ex, linked)
     assert ex.reference_runs == runs + 2 and via_link.info["cache"]["status"] != "cached"
     assert target.is_file()  # the link's target is untouched
+
+
+# ----------------------------------------------------------------------------------------------
+# What sweep.md says, and what it claims from timings
+# ----------------------------------------------------------------------------------------------
+
+
+def test_sweep_text_says_what_was_done(result):
+    """No 'up to 1 timings', no doubled 'computed'; the timing rule as the config has it."""
+    from validation.sweep.markdown import reference_origin
+
+    md = (result.out_dir / "sweep.md").read_text()
+    assert not re.search(r"up to 1 timings", md)
+    assert "computed (computed" not in md and "Computed by this sweep (computed" not in md
+    assert reference_origin({"status": "computed (not in the cache)"}) == (
+        "Computed by this sweep (not in the cache)."
+    )
+    assert reference_origin({"status": "cached"}).startswith("Read from the cache")
+    once = dataclasses.replace(sweep.SweepConfig.quick(), repeats=1)
+    from validation.sweep.markdown import _timing_words
+
+    assert "timed once" in _timing_words(once, 2) and "up to" not in _timing_words(once, 2)
+
+
+def test_quick_help_states_its_measured_duration():
+    """The --quick help names a duration in seconds, not 'minutes'."""
+    import argparse
+
+    from validation.cli import build_parser
+
+    parser = build_parser()
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    quick = next(a for a in sub.choices["sweep"]._actions if "--quick" in a.option_strings)
+    assert "minutes" not in quick.help and "s on" in quick.help
+
+
+def test_the_cheapest_pick_is_ranked_only_by_timings_that_separate(tmp_path):
+    """Non-monotone single timings (a coarser step slower than a finer one) are not ranked;
+    overlapping repeated timings name the rivals; separated ones are ranked."""
+    from validation.sweep.selection import cheapest_settings, ranking
+
+    runs = [
+        _row("mujoco", "RK4", 5e-3, "ok", 1e-7, [7.08e-3], rid=0),
+        _row("mujoco", "RK4", 2.5e-3, "ok", 5e-9, [3.91e-3], rid=1),
+    ]
+    pick = cheapest_settings(runs, (1e-6,))["mujoco"][1e-6]
+    assert pick == 1 and not ranking(runs, pick, 1e-6).ranked  # one timing each: no spread
+    overlapping = [
+        _row("mujoco", "RK4", 5e-3, "ok", 1e-7, [7e-3, 4e-3, 9e-3], rid=0),
+        _row("mujoco", "RK4", 2.5e-3, "ok", 5e-9, [3.9e-3, 3.5e-3, 5e-3], rid=1),
+    ]
+    rank = ranking(overlapping, 1, 1e-6)
+    assert rank.rivals == (0,) and not rank.ranked
+    apart = [
+        _row("mujoco", "RK4", 5e-3, "ok", 1e-7, [7e-3, 6.5e-3, 7.5e-3], rid=0),
+        _row("mujoco", "RK4", 2.5e-3, "ok", 5e-9, [3.9e-3, 3.5e-3, 4.2e-3], rid=1),
+        _row("mujoco", "RK4", 1e-2, "degraded", 1e-8, [1e-3, 1e-3, 1e-3], rid=2),
+    ]
+    assert cheapest_settings(apart, (1e-6,))["mujoco"][1e-6] == 1  # never the degraded run
+    assert ranking(apart, 1, 1e-6).ranked
+
+
+def test_every_cheapest_cell_states_its_timings(result):
+    """Each pick in sweep.md carries its timings and says when they do not rank it."""
+    from validation.sweep.selection import ranking
+
+    md = (result.out_dir / "sweep.md").read_text()
+    table = md.split("## Cheapest setting per accuracy level")[1].split("\n## ")[0]
+    for by_level in result.cheapest.values():
+        for lv, rid in by_level.items():
+            if rid is None:
+                continue
+            line = next(ln for ln in table.splitlines() if ln.startswith(f"| {lv:.0e} |"))
+            cell = next(c for c in line.split("|") if c.strip().startswith(f"#{rid} "))
+            assert "ms (" in cell and "timing" in cell
+            assert ("not ranked" in cell) == (not ranking(result.runs, rid, lv).ranked)
+
+
+def test_a_dropped_control_is_degraded_not_ok(scene, result, monkeypatch):
+    """A MuJoCo run in which a sampled control reached MJ_MAXVAL is 'degraded' (measured, drawn
+    as a mark, never picked), not 'ok'."""
+    ref = sweep.ref_samples(sweep.reference_run(scene, 0.5, result.reference["max_step"]))
+    real = running.mujoco_run
+
+    def loud(sc, integrator, dt, t_end, budget=None):
+        tr = real(sc, integrator, dt, t_end)
+        torque = tr.torque.copy()
+        torque[-1, 0] = 2 * series.MJ_MAXVAL
+        return dataclasses.replace(tr, torque=torque)
+
+    monkeypatch.setattr(running, "mujoco_run", loud)
+    cfg = dataclasses.replace(sweep.SweepConfig.quick(), dts=(1e-2,))
+    (row,) = sweep.run_series(scene, "mujoco", "RK4", cfg, ref)
+    assert row["status"] == "degraded" and "drops it for that step" in row["note"]
+    assert row["wall_time_s"] is not None and row["error"] is not None
+    row["run_id"] = 0  # numbered by the sweep
+    assert sweep.cheapest_settings([row], (1.0,))["mujoco"][1.0] is None
+    (mark,) = figure.figure_data([row], 0.0, "s", cfg.t_end).marks
+    assert mark.outcome == "degraded" and "degraded" in mark.label
+
+
+def test_coincident_series_are_both_visible_and_said_so():
+    """Two series of one plant with the same errors (MuJoCo's Euler and implicitfast) are both
+    in the legend, each naming the other, and the second is drawn with its own markers."""
+    runs = [
+        _row("mujoco", "Euler", 1e-2, "ok", 3e-3, [0.010, 0.011], rid=0),
+        _row("mujoco", "Euler", 5e-3, "ok", 1.5e-3, [0.020, 0.021], rid=1),
+        _row("mujoco", "implicitfast", 1e-2, "ok", 3e-3, [0.012, 0.013], rid=2),
+        _row("mujoco", "implicitfast", 5e-3, "ok", 1.5e-3, [0.022, 0.024], rid=3),
+        _row("mujoco", "RK4", 1e-2, "ok", 1e-6, [0.03, 0.031], rid=4),
+        _row("mujoco", "RK4", 5e-3, "ok", 6e-8, [0.06, 0.061], rid=5),
+    ]
+    data = figure.figure_data(runs, 0.0, "s", 1.0)
+    same = {ln.method: ln.same_as for ln in data.lines}
+    assert same == {"Euler": ("implicitfast",), "implicitfast": ("Euler",), "RK4": ()}
+    assert figure.render_png(data)[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_effect_costs_claim_no_ratio_the_spread_does_not_support(result):
+    """Each effect cost carries its spread and rounds; a ratio to the full scene is printed only
+    where the two timing ranges do not meet."""
+    from validation.effects_cost import effects_markdown
+
+    full = result.effects[0]
+    lines = effects_markdown(list(result.effects))
+    assert f"over {full['repeats']} rounds" in lines[0]
+    for r in result.effects[1:]:
+        if r["note"]:
+            continue
+        row = next(ln for ln in lines if ln.startswith(f"| {r['off']} |"))
+        for c in ("analytic_fast", "mj_forward", "mj_forward_ctrl"):
+            apart = r[f"{c}_max"] < full[f"{c}_min"] or r[f"{c}_min"] > full[f"{c}_max"]
+            assert r[f"{c}_resolved"] == apart
+        assert row.count("×") == sum(
+            bool(r[f"{c}_resolved"]) for c in ("analytic_numpy", "analytic_fast", "mj_forward",
+                                                "mj_forward_ctrl")
+        )  # fmt: skip

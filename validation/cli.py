@@ -424,7 +424,11 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _add_scene_arg(p, DEFAULT_SCENE, builtin_names())
     p.add_argument("--out", help="output directory (default: out/sweep_<scene slug>)")
-    p.add_argument("--quick", action="store_true", help="a small grid (minutes, not tens)")
+    p.add_argument(
+        "--quick",
+        action="store_true",
+        help="a small grid over a 0.5 s horizon (~10 s on an idle 2-core machine)",
+    )
     p.add_argument("--t-end", type=_positive_float, help="horizon in seconds (default 20)")
     p.set_defaults(func=cmd_sweep)
 

@@ -2,7 +2,9 @@
 
 For the scene as given and for each effect it lists, the scene without that effect
 (``scene.with_effects(...)``; a combination the scene validation refuses is reported as such), the
-median cost in µs of one evaluation of:
+median cost in µs of one evaluation, with the fastest and slowest of the rounds (``<column>_min``,
+``<column>_max``; ``<column>_resolved``: the variant's range and the full scene's do not meet, so
+their ratio ``<column>_rel`` is a difference the timings support), of:
 
 * ``analytic_numpy``: ``TumblingModel.acceleration`` (the reference numpy path);
 * ``analytic_fast``: the analytic engine's default evaluator (compiled kernel when numba is
@@ -110,25 +112,56 @@ def effects_cost(scene: Scene, repeats: int = 15) -> list[dict[str, Any]]:
             samples[k].append((time.perf_counter() - t0) / n * 1e6)
     for (i, c), v in samples.items():
         rows[i][c] = statistics.median(v)
+        rows[i][f"{c}_min"] = min(v)
+        rows[i][f"{c}_max"] = max(v)
     full = rows[0]
     for row in rows:
+        row["repeats"] = repeats
         for c in COST_COLUMNS:
             v, f = row[c], full[c]
             row[f"{c}_rel"] = (v / f) if (v is not None and f) else None
+            row[f"{c}_resolved"] = resolved(row, full, c)
     return rows
 
 
+def resolved(row: dict[str, Any], full: dict[str, Any], column: str) -> bool | None:
+    """Whether a variant's cost differs from the full scene's beyond the timings' spread: their
+    ranges [fastest, slowest] over the rounds do not meet. None when either was not timed; the
+    full scene's own row is never resolved from itself."""
+    lo, hi = row.get(f"{column}_min"), row.get(f"{column}_max")
+    flo, fhi = full.get(f"{column}_min"), full.get(f"{column}_max")
+    if None in (lo, hi, flo, fhi):
+        return None
+    if row is full:
+        return False
+    return bool(hi < flo or lo > fhi)
+
+
 def effects_markdown(rows: list[dict[str, Any]]) -> list[str]:
-    """Markdown table lines (µs, and the fraction of the full scene's cost)."""
+    """Markdown table lines: µs with the spread over the rounds, and the ratio to the full scene's
+    cost only where the spreads do not overlap (:func:`resolved`)."""
 
     def cell(r, c):
         v, rel = r[c], r.get(f"{c}_rel")
-        return "–" if v is None else f"{v:.3g} ({rel:.2f})"
+        if v is None:
+            return "–"
+        spread = ""
+        if r.get(f"{c}_min") is not None:
+            spread = f" [{r[f'{c}_min']:.3g}–{r[f'{c}_max']:.3g}]"
+        if r is rows[0]:
+            return f"{v:.3g}{spread}"
+        if r.get(f"{c}_resolved"):
+            return f"{v:.3g}{spread} (×{rel:.2f})"
+        return f"{v:.3g}{spread} (≈ full: ranges overlap)"
 
+    repeats = rows[0].get("repeats") if rows else None
+    rounds = f"over {repeats} rounds" if repeats else "over the rounds"
     lines = [
-        "Median µs per evaluation (fraction of the full scene's cost). analytic_fast is what the "
-        "analytic engine calls per right-hand side; mj_forward_ctrl includes the analytic "
-        "controller in MuJoCo's control callback.",
+        f"Median µs per evaluation {rounds}, [fastest–slowest]. A ratio to the full scene's cost "
+        "(×) is given only where the two ranges do not meet; otherwise the timings do not tell "
+        "the two costs apart (≈ full). analytic_fast is what the analytic engine calls per "
+        "right-hand side; mj_forward_ctrl includes the analytic controller in MuJoCo's control "
+        "callback.",
         "",
         "| effect off | " + " | ".join(COST_COLUMNS) + " | note |",
         "|---|" + "---|" * (len(COST_COLUMNS) + 1),

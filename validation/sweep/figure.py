@@ -4,8 +4,10 @@ One line per plant and solver / integrator through its settings, loose to tight.
 setting: x its median wall time with the spread of its timings as a bar (min to max), y its error.
 A run that is not ``ok`` is never dropped: a too-slow run is a ``▷`` mark where its series was cut
 (at its measured or predicted wall time, at the last error the series reached), a failed or
-diverged one an ``✕`` mark on the figure's top edge; each mark carries a label. The reference's
-floor is a grey line.
+diverged one an ``✕`` mark on the figure's top edge, a degraded one a ``+`` where it is; each mark
+carries a label. Two series of a plant that draw the same errors (MuJoCo's Euler and implicitfast
+on an undamped body) are both visible: the second thin and dotted with large hollow markers over
+the first, and the legend says they coincide. The reference's floor is a grey line.
 """
 
 from __future__ import annotations
@@ -19,8 +21,12 @@ from typing import Any
 from validation.sweep.config import ANALYTIC, MUJOCO, PINOCCHIO, Outcome
 from validation.sweep.metrics import ERROR_MEASURE
 
-MARK_OUTCOMES = (Outcome.TOO_SLOW, Outcome.FAILED, Outcome.DIVERGED)
+MARK_OUTCOMES = (Outcome.TOO_SLOW, Outcome.FAILED, Outcome.DIVERGED, Outcome.DEGRADED)
 """Outcomes drawn as a labelled mark (skipped settings are named by their series' mark)."""
+
+SAME_ERROR_RTOL = 1e-12
+"""Two series of one plant whose errors agree to this (relative) at every shared setting are
+coincident: drawn so that both stay visible, and said so in the legend."""
 
 STYLES = {ANALYTIC: ("-", "o"), MUJOCO: ("--", "s"), PINOCCHIO: (":", "^")}
 """Line style and marker per plant; colour is per solver / integrator."""
@@ -47,6 +53,25 @@ class Line:
     engine: str
     method: str
     points: tuple[Point, ...]
+    same_as: tuple[str, ...] = ()  # methods of the same plant drawing the same errors
+
+
+def coincident(a: Line, b: Line) -> bool:
+    """Same plant, the same settings, errors equal to :data:`SAME_ERROR_RTOL` at each."""
+    if a.engine != b.engine or len(a.points) != len(b.points) or not a.points:
+        return False
+    return all(
+        p.setting == q.setting and abs(p.error - q.error) <= SAME_ERROR_RTOL * max(p.error, q.error)
+        for p, q in zip(a.points, b.points, strict=True)
+    )
+
+
+def _with_coincidences(lines: list[Line]) -> list[Line]:
+    out = []
+    for ln in lines:
+        same = tuple(o.method for o in lines if o is not ln and coincident(ln, o))
+        out.append(Line(ln.engine, ln.method, ln.points, same) if same else ln)
+    return out
 
 
 @dataclass(frozen=True)
@@ -119,6 +144,7 @@ def figure_data(
                 marks.append(_mark(r, pts, rows))
         if pts:
             lines.append(Line(engine, method, tuple(pts)))
+    lines = _with_coincidences(lines)
     return FigureData(
         f"work-precision: {scene}, horizon {t_end:g} s", t_end, tuple(lines), tuple(marks), floor
     )
@@ -133,6 +159,10 @@ def _mark(r: Mapping[str, Any], pts: list[Point], rows: Sequence[Mapping[str, An
         how = "predicted" if r["wall_time_s"] is None else "stopped at"  # its budget
         label = f"{what}: too slow ({how} {wall:.2g} s)" if wall else f"{what}: too slow"
         error = pts[-1].error if pts else None
+    elif status is Outcome.DEGRADED:  # measured: drawn where it is, as a warning
+        wall = r["wall_time_s"]
+        label = f"{what}: degraded (a control dropped for a step)"
+        error = r["error"]
     elif status is Outcome.OK:  # ok, but its wall time or error cannot be drawn on log axes
         wall = r["wall_time_s"]
         label = f"{what}: ok, error {r['error']!s}, wall {r['wall_time_s']!s} s (off the log axes)"
@@ -141,7 +171,7 @@ def _mark(r: Mapping[str, Any], pts: list[Point], rows: Sequence[Mapping[str, An
         wall = r["wall_time_s"]
         label = f"{what}: {status.value}"
         error = None
-    if skipped and status is not Outcome.OK:
+    if skipped and status not in (Outcome.OK, Outcome.DEGRADED):
         label += f", {skipped} skipped"
     return Mark(
         str(r["engine"]),
@@ -152,6 +182,15 @@ def _mark(r: Mapping[str, Any], pts: list[Point], rows: Sequence[Mapping[str, An
         error if _finite_positive(error) else None,
         label,
     )
+
+
+MARK_SYMBOLS = {
+    Outcome.TOO_SLOW: (">", "too slow (series cut)"),
+    Outcome.FAILED: ("X", "failed / diverged"),
+    Outcome.DIVERGED: ("X", "failed / diverged"),
+    Outcome.DEGRADED: ("P", "degraded (a control dropped)"),
+}
+"""Marker and legend words of each marked outcome."""
 
 
 def render_png(data: FigureData) -> bytes:
@@ -167,16 +206,26 @@ def render_png(data: FigureData) -> bytes:
         "#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f",
     ]  # fmt: skip
     colour = {m: colours[i % len(colours)] for i, m in enumerate(methods)}
+    drawn: list[Line] = []
     for ln in data.lines:
         ls, marker = STYLES.get(ln.engine, ("-.", "x"))
         c = colour[ln.method]
         x = [p.wall for p in ln.points]
         y = [p.error for p in ln.points]
         xerr = [[p.wall - p.wall_min for p in ln.points], [p.wall_max - p.wall for p in ln.points]]
-        ax.errorbar(x, y, xerr=xerr, ls=ls, marker="none", capsize=2, lw=1.2, elinewidth=0.8,
-                    color=c)  # fmt: skip
-        ax.plot(x, y, ls=ls, lw=1.2, marker=marker, ms=5, color=c, label=f"{ln.engine} {ln.method}",
-                markevery=[i for i, p in enumerate(ln.points) if p.n >= 2])  # fmt: skip
+        label = f"{ln.engine} {ln.method}"
+        lw, ms, z = 1.2, 5, 2
+        under = [o for o in drawn if o.method in ln.same_as]
+        if ln.same_as:
+            label += f" (≡ {', '.join(ln.same_as)} here: the same errors)"
+        if under:  # drawn over a coincident series: thin, with large hollow markers around it
+            ls, marker, lw, ms, z = (0, (1, 2)), "D", 2.4, 9, 1
+        ax.errorbar(x, y, xerr=xerr, ls=ls, marker="none", capsize=2, lw=lw, elinewidth=0.8,
+                    color=c, zorder=z)  # fmt: skip
+        ax.plot(x, y, ls=ls, lw=lw, marker=marker, ms=ms, color=c, label=label, zorder=z,
+                mfc="none" if under else c,
+                markevery=[i for i, p in enumerate(ln.points) if p.n >= 2 or under])  # fmt: skip
+        drawn.append(ln)
         single = [p for p in ln.points if p.n < 2]
         if single:  # one timing: no spread to show, drawn hollow
             ax.plot([p.wall for p in single], [p.error for p in single], ls="none", marker=marker,
@@ -194,11 +243,11 @@ def render_png(data: FigureData) -> bytes:
     seen_kinds = set()
     for i, m in enumerate(data.marks):
         c = colour.get(m.method, "k")
-        symbol = ">" if m.outcome is Outcome.TOO_SLOW else "X"
+        symbol, kind_words = MARK_SYMBOLS[m.outcome]
         kind_label = None
-        if m.outcome not in seen_kinds:
-            seen_kinds.add(m.outcome)
-            kind_label = "too slow (series cut)" if symbol == ">" else "failed / diverged"
+        if kind_words not in seen_kinds:
+            seen_kinds.add(kind_words)
+            kind_label = kind_words
         if m.wall is not None and m.error is not None:
             xy, transform = (m.wall, m.error), ax.transData
         elif m.wall is not None:

@@ -19,10 +19,12 @@ from validation.sweep.config import (
     PINOCCHIO,
     REFERENCE_ATOL,
     REFERENCE_RTOL,
+    Outcome,
     SweepConfig,
 )
 from validation.sweep.metrics import ERROR_MEASURE
 from validation.sweep.result import SweepResult
+from validation.sweep.selection import ranking
 
 FIGURE_FILE = "work_precision.png"
 VIEW_NAME = "work-precision"
@@ -74,12 +76,41 @@ def _timing_words(cfg: SweepConfig, workers: int | None) -> str:
         if workers
         else "in the executor the sweep was given"
     )
+    if cfg.repeats > 1:
+        how = (
+            "the first timing of a setting is its accuracy run, and a setting is timed again "
+            f"while it has fewer than {cfg.repeats} timings and they add up to less than "
+            f"{cfg.repeat_budget_s:g} s; the median is reported, with the fastest and slowest"
+        )
+    else:
+        how = (
+            "each setting is timed once, by its accuracy run (no repeats: the timings' spread is "
+            "not measured)"
+        )
     return (
-        f"Wall time: the integration only, as the engine measures it, after an untimed warm-up run "
-        f"of each series; the first timing of a setting is its accuracy run, repeated up to "
-        f"{cfg.repeats} timings in all while they add up to less than {cfg.repeat_budget_s:g} s; "
-        f"the median is reported, with the min and max. Runs are timed {where}."
+        "Wall time: the integration only, as the engine measures it, after an untimed warm-up run "
+        f"of each series; {how}. Runs are timed {where}."
     )
+
+
+def reference_origin(cache: Mapping[str, Any]) -> str:
+    """Where the reference came from, in one sentence (``cache``: the reference's cache record,
+    whose ``status`` is ``cached`` or says why it was computed)."""
+    status = str(cache.get("status", ""))
+    if status == "cached":
+        return "Read from the cache (computed by an earlier sweep of the same scene, horizon and code)."
+    why = status.removeprefix("computed").strip().strip("()").strip()
+    return f"Computed by this sweep ({why or 'not cached'})."
+
+
+def _count_words(mine: Sequence[Mapping[str, Any]]) -> str:
+    """``20/20 runs ok`` and, when any, how many were degraded."""
+    ok = sum(r["status"] == Outcome.OK for r in mine)
+    degraded = sum(r["status"] == Outcome.DEGRADED for r in mine)
+    words = f"{ok}/{len(mine)} runs ok"
+    if degraded:
+        words += f", {degraded} degraded (MuJoCo dropped a control for a step; see the note)"
+    return words
 
 
 def _plants(cfg: SweepConfig, runs: Sequence[Mapping[str, Any]], skipped: Mapping[str, str]):
@@ -93,8 +124,7 @@ def _plants(cfg: SweepConfig, runs: Sequence[Mapping[str, Any]], skipped: Mappin
         mine = [r for r in runs if r["engine"] == e]
         if not mine:
             continue
-        ok = sum(r["status"] == "ok" for r in mine)
-        out.append(f"- **{e}**: {what[e]}; {ok}/{len(mine)} runs ok.")
+        out.append(f"- **{e}**: {what[e]}; {_count_words(mine)}.")
     out += [
         "",
         "Every plant is measured against the same reference (the analytic engine's), with the same "
@@ -127,16 +157,44 @@ def _pinocchio_vs_analytic(runs: Sequence[Mapping[str, Any]]) -> list[str]:
     ]
     for ra, rp in pairs:
         wa, wp = ra["wall_time_s"], rp["wall_time_s"]
-        ratio = wp / wa if wa and wp and ra["status"] == rp["status"] == "ok" else None
+        ratio = wp / wa if wa and wp and ra["status"] == rp["status"] == Outcome.OK else None
         L.append(
             f"| {rp['method']} | {rp['rtol']:.0e} | "
-            f"{fmt(ra['error'], '.2e') if ra['status'] == 'ok' else ra['status']} | "
-            f"{fmt(rp['error'], '.2e') if rp['status'] == 'ok' else rp['status']} | "
+            f"{fmt(ra['error'], '.2e') if ra['status'] == Outcome.OK else ra['status']} | "
+            f"{fmt(rp['error'], '.2e') if rp['status'] == Outcome.OK else rp['status']} | "
             f"{fmt(None if wa is None else wa * 1e3, '.3g')} | "
             f"{fmt(None if wp is None else wp * 1e3, '.3g')} | {fmt(ratio, '.2f')} | "
             f"{fmt(ra['nfev'])} | {fmt(rp['nfev'])} |"
         )
     return L
+
+
+def _ms_span(r: Mapping[str, Any]) -> str:
+    """``15.4 ms (14.9–16.0 ms, 3 timings)``, or ``15.4 ms (1 timing)``."""
+    n = int(r.get("wall_time_repeats") or 1)
+    w = r["wall_time_s"] * 1e3
+    if n < 2 or r.get("wall_time_min_s") is None:
+        return f"{w:.3g} ms (1 timing)"
+    return (
+        f"{w:.3g} ms ({r['wall_time_min_s'] * 1e3:.3g}–{r['wall_time_max_s'] * 1e3:.3g} ms, "
+        f"{n} timings)"
+    )
+
+
+def _cheapest_cell(runs: Sequence[Mapping[str, Any]], rid: int, level: float) -> str:
+    """The pick for one plant and level, its timings, and whether they rank it."""
+    r = runs[rid]
+    rank = ranking(runs, rid, level)
+    cell = (
+        f"#{rid} {r['method']} {r['setting_name']} {r['setting']:.3g}: {_ms_span(r)}, "
+        f"error {r['error']:.2g}"
+    )
+    if rank.rivals:
+        others = ", ".join(f"#{i}" for i in rank.rivals)
+        cell += f"; not ranked: its timings overlap those of {others}"
+    elif rank.timings < 2:
+        cell += "; not ranked: a single timing"
+    return cell
 
 
 def figure_caption(res: SweepResult, cfg: SweepConfig) -> str:
@@ -147,15 +205,23 @@ def figure_caption(res: SweepResult, cfg: SweepConfig) -> str:
     return (
         f"**Figure: work-precision of {', '.join(ran)} on {res.scene}, horizon 0–{cfg.t_end:g} s.** "
         "Each point is one setting: x is its wall time per run (s, log axis; the integration only, "
-        f"median of up to {cfg.repeats} timings, bar from the fastest to the slowest timing, "
-        f"hollow: a single timing), y its error (log axis): the {ERROR_MEASURE}. "
+        + (
+            f"median of up to {cfg.repeats} timings, bar from the fastest to the slowest timing, "
+            "hollow: a single timing"
+            if cfg.repeats > 1
+            else "a single timing, drawn hollow: no spread measured"
+        )
+        + f"), y its error (log axis): the {ERROR_MEASURE}. "
         "Lines join the settings of one plant (line style and marker: analytic solid ○, MuJoCo "
         "dashed □, Pinocchio dotted △) and one solver or integrator (colour), loose to tight. "
         f"Settings: analytic engine{scipy_plants}: {_scipy_grid(cfg)}; "
         f"MuJoCo: {_mujoco_grid(cfg)}. "
         f"▷ marks where a series was cut as too slow (a run over the {cfg.max_run_wall_s:g} s "
         "budget, at its measured or predicted wall time); ✕ a failed or diverged run (error above "
-        f"{cfg.diverge_error:g} or not finite), on the top edge; each mark is labelled. The grey "
+        f"{cfg.diverge_error:g} or not finite), on the top edge; ✚ a degraded run (MuJoCo "
+        "dropped a control for a step), where it is; each mark is labelled. Two series of one "
+        "plant that draw the same errors are both shown, the second dotted with large hollow ◇, "
+        "and the legend says they coincide. The grey "
         f"dotted line is the reference's floor, {FLOOR_FACTOR:g}x its estimated error "
         f"{est:.2e}."
     )
@@ -174,12 +240,7 @@ def sweep_markdown(res: SweepResult, cfg: SweepConfig, *, image: str | None = FI
         for lv, rid in by_level.items():
             if rid is not None:
                 marked[rid].append(lv)
-    cache = ref.get("cache", {})
-    origin = (
-        "Read from the cache (computed by an earlier sweep of the same scene, horizon and code)."
-        if cache.get("status") == "cached"
-        else f"Computed by this sweep ({cache.get('status', 'not cached')})."
-    )
+    origin = reference_origin(ref.get("cache", {}))
     L = [
         f"# What accuracy costs in time: {res.scene}",
         "",
@@ -217,6 +278,12 @@ def sweep_markdown(res: SweepResult, cfg: SweepConfig, *, image: str | None = FI
         "",
         "## Cheapest setting per accuracy level",
         "",
+        "The `ok` run of least median wall time whose error reaches the level, with its timings "
+        "(median, fastest–slowest, how many). It is named the cheapest only when its timings rank "
+        "it: at least two timings, and no other run reaching the level with a timing range that "
+        "meets its range; otherwise the cell says which runs the timings cannot tell apart from "
+        "it. A `degraded` run is never picked.",
+        "",
         "| level | " + " | ".join(columns) + " |",
         "|---|" + "---|" * len(columns),
     ]
@@ -231,11 +298,7 @@ def sweep_markdown(res: SweepResult, cfg: SweepConfig, *, image: str | None = FI
             elif rid is None:
                 cells.append("not reached")
             else:
-                r = runs[rid]
-                cells.append(
-                    f"#{rid} {r['method']} {r['setting_name']} {r['setting']:.3g}: "
-                    f"{r['wall_time_s'] * 1e3:.3g} ms (error {r['error']:.2g})"
-                )
+                cells.append(_cheapest_cell(runs, rid, lv))
         L.append(f"| {lv:.0e} | " + " | ".join(cells) + " |")
     L += _pinocchio_vs_analytic(runs)
     L += [
@@ -295,4 +358,12 @@ def sweep_markdown(res: SweepResult, cfg: SweepConfig, *, image: str | None = FI
     return "\n".join(L)
 
 
-__all__ = ["FIGURE_FILE", "VIEW_NAME", "figure_caption", "fmt", "skipped_note", "sweep_markdown"]
+__all__ = [
+    "FIGURE_FILE",
+    "VIEW_NAME",
+    "figure_caption",
+    "fmt",
+    "reference_origin",
+    "skipped_note",
+    "sweep_markdown",
+]

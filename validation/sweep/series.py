@@ -9,6 +9,10 @@ A series stops, and its remaining settings are reported ``skipped`` with the rea
 * fails or diverges after an earlier setting worked;
 * is at the reference's floor (error within ``FLOOR_FACTOR`` of its estimated error): a tighter
   setting's error could not be resolved.
+
+A MuJoCo run in which a sampled control reached ``MJ_MAXVAL`` ran without that control for a step
+(MuJoCo drops it as unstable): it is ``degraded``, not ``ok`` (measured and timed, never picked as
+the cheapest setting).
 """
 
 from __future__ import annotations
@@ -126,7 +130,8 @@ def run_series(
                 note=f"error {row['error']:.3g} > {cfg.diverge_error:g} (or not finite)",
             )
         else:
-            row["status"] = Outcome.OK
+            # a control dropped by MuJoCo for a step (fill_row's note): not the run asked for
+            row["status"] = Outcome.DEGRADED if row.get("note") else Outcome.OK
             any_ok = True
             samples = timing.timings(scene, engine, method, s, cfg, first)
             row[SAMPLES_KEY] = samples
