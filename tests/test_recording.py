@@ -1,17 +1,24 @@
 """run.rrd and demo.rrd read back with RrdReader: entities, sample counts, quaternion order, Z up,
 log10 plots one unit each, the exaggerated difference view, a trail whose cost is linear in the
-run, and a blueprint in every file."""
+run, a blueprint in every file that opens as the active one under the artefact's own application
+id, and every string in characters the viewer's fonts have."""
 
 from __future__ import annotations
 
 import dataclasses
 import math
 import re
+import subprocess
+import sys
+import unicodedata
 from pathlib import Path
 
 import numpy as np
+import pyarrow as pa
 import pytest
 import rerun as rr
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from rerun.chunk import RrdReader
 from scipy.spatial.transform import Rotation
 
@@ -20,11 +27,21 @@ from analytic.simulate import simulate
 from analytic.trajectory import Engine, Trajectory
 from validation.compare import Group, compare
 from validation.demo import write_demo
-from validation.recording import TIMELINE, log_run, narrative_for, new_stream, write_recording
+from validation.recording import (
+    TIMELINE,
+    AppId,
+    log_run,
+    narrative_for,
+    new_stream,
+    write_recording,
+)
 from validation.rrd_layout import difference_title, legend_markdown, overlay_title
 from validation.rrd_plots import plot_of, series_path
-from validation.rrd_style import power_of_ten, unit_text
+from validation.rrd_style import VIEWER_CHARACTERS, power_of_ten, unit_text, viewer_text
 from validation.rrd_world import DIFFERENCE_TARGET, body_size, exaggerate
+from validation.sweep.config import Outcome
+from validation.sweep.figure import FigureData, Line, Mark, Point
+from validation.sweep.rrd import write_rrd
 
 SCENES = Path(__file__).resolve().parents[1] / "analytic" / "scenes"
 T_END = 0.4
@@ -223,7 +240,7 @@ def test_one_plot_per_unit_each_titled_with_its_unit(ex1):
         units.setdefault(homes[0], set()).add(s.unit)
         title = by_origin[homes[0]]
         assert title.startswith("log10 ") and title.endswith(unit_text(s.unit)), title
-        assert plot_of("", s).title == title
+        assert viewer_text(plot_of("", s).title) == title
     assert all(len(u) == 1 for u in units.values()), units
     assert len({next(iter(u)) for o, u in units.items() if "/errors/" in o}) == len(
         [o for o in units if "/errors/" in o]
@@ -421,7 +438,7 @@ def test_demo_has_four_narrated_steps(tmp_path):
         assert f"/{step.prefix}/world/analytic/body" in ents
         assert "Eq." in step.narrative
         text = narrative(store, f"/{step.prefix}/narrative")
-        assert text.startswith(step.narrative)
+        assert text.startswith(viewer_text(step.narrative, newlines=True))
         # the demo's recording states its arrow scales and its difference view's factor
         assert "m per rad/s" in text and "difference ×" in text
         uncontrolled = step.scene == "paper_example1"  # steps 1 and 4: no control at all
@@ -476,3 +493,151 @@ def test_narrative_for_is_what_the_recording_carries(ex1):
     assert narrative_for(scene, plants, cmp) == narrative(store, "/narrative")
     text = narrative_for(scene, plants, cmp, "# Step\n\nBody.", heading=None)
     assert text.count("#") == 1 and "m per rad/s" in text
+
+
+# ----------------------------------------------------------------------------------------------
+# How the viewer opens a file, and the characters it can draw
+# ----------------------------------------------------------------------------------------------
+
+
+def _strings(value) -> list[str]:
+    """Every string inside a value read from an Arrow column (lists, structs, maps)."""
+    if isinstance(value, str):
+        return [value]
+    if isinstance(value, dict):
+        return [x for v in value.values() for x in _strings(v)]
+    if isinstance(value, list | tuple):
+        return [x for v in value for x in _strings(v)]
+    return []
+
+
+def _is_text(t: pa.DataType) -> bool:
+    if pa.types.is_string(t) or pa.types.is_large_string(t):
+        return True
+    if pa.types.is_list(t) or pa.types.is_large_list(t) or pa.types.is_fixed_size_list(t):
+        return _is_text(t.value_type)
+    if pa.types.is_struct(t):
+        return any(_is_text(t.field(i).type) for i in range(t.num_fields))
+    return False
+
+
+def rrd_strings(path: Path) -> dict[str, set[str]]:
+    """Every string a recording file carries, read back with Rerun's reader, from its
+    recordings and its blueprints: entity paths, and each text-valued component (labels, series
+    names, text documents, view and container names, entity filters) -> its values."""
+    reader = RrdReader(path)
+    out: dict[str, set[str]] = {}
+    for entry in [*reader.recordings(), *reader.blueprints()]:
+        for c in RrdReader(path).store(store=entry).stream().to_chunks():
+            out.setdefault("entity path", set()).add(c.entity_path)
+            rb = c.to_record_batch()
+            for f in rb.schema:
+                if f.metadata and f.metadata.get(b"rerun:kind") == b"data" and _is_text(f.type):
+                    values = out.setdefault(f.name, set())
+                    values.update(_strings(rb.column(f.name).to_pylist()))
+    return out
+
+
+def outside_the_fonts(strings: dict[str, set[str]]) -> dict[str, list[str]]:
+    """Per component, the characters of its strings the viewer cannot draw (a text document
+    may hold newlines)."""
+    bad: dict[str, list[str]] = {}
+    for name, values in strings.items():
+        extra = {"\n"} if name.startswith("TextDocument") else set()
+        chars = {ch for v in values for ch in v} - VIEWER_CHARACTERS - extra
+        if chars:
+            bad[name] = sorted(
+                f"{ch!r} U+{ord(ch):04X} {unicodedata.name(ch, '?')}" for ch in chars
+            )
+    return bad
+
+
+def rrd_commands(path: Path) -> list[str]:
+    """The blueprint activation commands of a file, as ``rerun rrd print`` shows them."""
+    out = subprocess.run(
+        [sys.executable, "-m", "rerun", "rrd", "print", str(path)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=True,
+    ).stdout
+    return re.findall(r"BlueprintActivationCommand\(.*\)", out)
+
+
+@pytest.fixture(scope="module")
+def demo(tmp_path_factory):
+    return write_demo(tmp_path_factory.mktemp("demo"), t_end=0.2)
+
+
+@pytest.fixture(scope="module")
+def sweep_rrd(tmp_path_factory):
+    """A sweep.rrd of two series, one failed run and one too slow (labels with their marks)."""
+    pts = tuple(
+        Point(i, dt, 1e-3 * 2**-i, 0.9e-3 * 2**-i, 1.1e-3 * 2**-i, 3, 10.0 ** (-4 - 2 * i), False)
+        for i, dt in enumerate((0.01, 0.005, 0.0025))
+    )
+    data = FigureData(
+        "work–precision of uᵀu − 1 ≤ 10⁻¹²",
+        1.0,
+        (Line("analytic", "DOP853", pts), Line("mujoco", "RK4", pts[:2])),
+        (
+            Mark("mujoco", "RK4", 9, Outcome.DIVERGED, None, None, "dt 0.02: diverged ✕"),
+            Mark("mujoco", "RK4", 10, Outcome.TOO_SLOW, 0.5, None, "dt 1e-5: too slow"),
+        ),
+        1e-13,
+    )
+    path = tmp_path_factory.mktemp("sweep") / "sweep.rrd"
+    text = "# Sweep\n\n`φ = uᵀu − 1` obeys φ̈ + δ1 φ̇ + δ2 φ = 0; ✕ a failed run, ★ the cheapest."
+    write_rrd(path, data, b"", text, recording_id="sweep-test")
+    return path
+
+
+def test_every_file_opens_in_its_blueprint_under_its_own_application_id(ex1, demo, sweep_rrd):
+    """The viewer remembers a layout per application id and applies it to the next file with
+    that id unless the file makes its blueprint the active one: each kind of file has an id of
+    its own, and its blueprint is sent active (and default, for Blueprint -> Reset)."""
+    files = {AppId.VALIDATE: ex1[3].path, AppId.DEMO: demo.rrd, AppId.SWEEP: sweep_rrd}
+    assert len({a.value for a in files}) == 3
+    for app_id, path in files.items():
+        reader = RrdReader(path)
+        stores = [*reader.recordings(), *reader.blueprints()]
+        assert [s.kind for s in stores] == ["recording", "blueprint"], path.name
+        assert {s.application_id for s in stores} == {app_id.value}, path.name
+        commands = rrd_commands(path)
+        assert len(commands) == 1, (path.name, commands)
+        assert "make_active: true" in commands[0] and "make_default: true" in commands[0]
+        assert f'"{app_id.value}"' in commands[0]
+
+
+def test_every_string_the_recordings_carry_is_in_the_viewers_fonts(ex1, demo, sweep_rrd):
+    """Labels, series names, view and tab names, entity paths and the text documents of
+    run.rrd, demo.rrd and sweep.rrd use only characters the viewer's bundled fonts have (the
+    headless viewer stops on any other)."""
+    for path in (ex1[3].path, demo.rrd, sweep_rrd):
+        strings = rrd_strings(path)
+        # the reader sees what is checked: view names, series names, documents, labels
+        assert "ViewBlueprint:display_name" in strings, path.name
+        assert ("SeriesLines:names" in strings) == (path != sweep_rrd), path.name
+        assert ("Points2D:labels" in strings) == (path == sweep_rrd), path.name
+        assert any(k.startswith("TextDocument") for k in strings), path.name
+        assert outside_the_fonts(strings) == {}, path.name
+    views = [v["name"] for v in blueprint_views(ex1[3].path).values()]
+    assert "log10 quaternion norm error |u^T u − 1|" in views  # ᵀ spelled, not dropped
+
+
+def test_viewer_text_spells_what_the_fonts_lack():
+    assert viewer_text("|uᵀu − 1|") == "|u^T u − 1|"
+    assert viewer_text("10⁻¹² s") == "10^−12 s"
+    assert viewer_text("ω̄_x and p̄_i") == "ωbar_x and pbar_i"
+    assert viewer_text("u ⊗ (0, ω), ✕") == "u (x) (0, ω), ×"
+    plain = "mujoco − analytic, difference ×1e8 (N·m, kg·m²/s, 10⁶, ≤ 1e-9, Δ, τ)"
+    assert viewer_text(plain) == plain  # already drawable: unchanged
+    assert viewer_text("a\nb") == "a?b" and viewer_text("a\nb", newlines=True) == "a\nb"
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.text())
+def test_viewer_text_is_always_drawable(text):
+    out = viewer_text(text, newlines=True)
+    assert set(out) <= VIEWER_CHARACTERS | {"\n"}
+    assert viewer_text(out, newlines=True) == out

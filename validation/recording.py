@@ -43,13 +43,14 @@ from validation.rrd_layout import (
 from validation.rrd_plots import log_plots
 from validation.rrd_stream import (
     RRD_FLUSH_TIMEOUT_S,
+    AppId,
     atomic_stream,
     binary_stream,
     check_rrd,
     new_stream,
     rrd_bytes,
 )
-from validation.rrd_style import PLANT_COLOR, TIMELINE, entity_root
+from validation.rrd_style import PLANT_COLOR, TIMELINE, entity_root, viewer_text
 from validation.rrd_world import ArrowScales, arrow_scales, log_world
 
 
@@ -79,7 +80,8 @@ def log_run(
     The first plant is the reference, drawn solid; the others are drawn over it in their own
     colours, and each in a view of its own with its difference from the reference exaggerated.
     ``narrative`` (markdown; default :func:`default_narrative`) is logged followed by
-    :func:`legend_markdown`, which states the arrow scales and the exaggeration factors.
+    :func:`legend_markdown`, which states the arrow scales and the exaggeration factors, spelled
+    in the viewer's characters (:func:`validation.rrd_style.viewer_text`).
 
     Returns:
         the entity paths that received time series (plus the narrative's), and the run's
@@ -97,7 +99,8 @@ def log_run(
         if narrative
         else default_narrative(scene, plants, comparison, legend=legend)
     )
-    rec.log(f"{p0}/narrative", rr.TextDocument(text, media_type=rr.MediaType.MARKDOWN), static=True)
+    doc = rr.TextDocument(viewer_text(text, newlines=True), media_type=rr.MediaType.MARKDOWN)
+    rec.log(f"{p0}/narrative", doc, static=True)
     entities.append(f"{p0}/narrative")
     return entities, legend
 
@@ -131,7 +134,7 @@ def write_recording(
         rrb.TimePanel(state="expanded"),
         collapse_panels=False,
     )
-    with atomic_stream(path, blueprint=bp, recording_id=recording_id) as rec:
+    with atomic_stream(path, AppId.VALIDATE, blueprint=bp, recording_id=recording_id) as rec:
         entities, legend = log_run(rec, scene, plants, comparison, narrative)
     samples = max((p.t.shape[0] for p in plants), default=0)
     return RecordingInfo(
@@ -143,6 +146,7 @@ __all__ = [
     "PLANT_COLOR",
     "RRD_FLUSH_TIMEOUT_S",
     "TIMELINE",
+    "AppId",
     "ArrowScales",
     "Legend",
     "RecordingInfo",

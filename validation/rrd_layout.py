@@ -26,7 +26,13 @@ from typing import Any
 from analytic.trajectory import Trajectory
 from validation.compare import Comparison, Subject
 from validation.rrd_plots import Plot, Tab, plots_for
-from validation.rrd_style import PLANT_COLOR_NAME, TIMELINE, entity_root, power_of_ten
+from validation.rrd_style import (
+    PLANT_COLOR_NAME,
+    TIMELINE,
+    entity_root,
+    power_of_ten,
+    viewer_text,
+)
 from validation.rrd_world import (
     ArrowScales,
     arrow_scales,
@@ -264,7 +270,7 @@ def views_3d(p0: str, names: Sequence[str], factors: Mapping[str, float]):
     overlay = rrb.Spatial3DView(
         origin=f"{p0}/world",
         contents=["+ $origin/**", "- $origin/exaggerated/**"],
-        name=overlay_title(names),
+        name=viewer_text(overlay_title(names)),
         overrides=overrides,
         eye_controls=rrb.EyeControls3D(tracking_entity=f"{p0}/world/{ref}/body"),
     )
@@ -275,7 +281,7 @@ def views_3d(p0: str, names: Sequence[str], factors: Mapping[str, float]):
         rrb.Spatial3DView(
             origin=f"{p0}/world",
             contents=[*reference, f"+ $origin/exaggerated/{p}/**"],
-            name=difference_title(ref, p, factors.get(p)),
+            name=viewer_text(difference_title(ref, p, factors.get(p))),
             eye_controls=rrb.EyeControls3D(tracking_entity=f"{p0}/world/{ref}/body"),
         )
         for p in names[1:]
@@ -293,10 +299,14 @@ def _plot_tabs(plots: Sequence[Plot]):
 
     tabs = []
     for tab in Tab:
-        views = [rrb.TimeSeriesView(origin=p.origin, name=p.title) for p in plots if p.tab is tab]
+        views = [
+            rrb.TimeSeriesView(origin=p.origin, name=viewer_text(p.title))
+            for p in plots
+            if p.tab is tab
+        ]
         if views:
             columns = 1 if len(views) < 3 else 2
-            tabs.append(rrb.Grid(*views, grid_columns=columns, name=tab.value))
+            tabs.append(rrb.Grid(*views, grid_columns=columns, name=viewer_text(tab.value)))
     return rrb.Tabs(*tabs, active_tab=0)
 
 
@@ -343,7 +353,7 @@ def blueprint_for(
         left,
         _plot_tabs(plots_for(prefix, scene, comparison)),
         column_shares=[3, 2],
-        name=name or scene.name,
+        name=viewer_text(name or scene.name),
     )
 
 

@@ -45,6 +45,7 @@ from validation.rrd_style import (
     shade,
     slug,
     unit_text,
+    viewer_text,
 )
 
 
@@ -176,7 +177,7 @@ def _log_thresholds(rec, prefix: str, comparison: Comparison, logged: dict[str, 
             t = series[0].t
             rec.log(
                 path,
-                rr.SeriesLines(names=[label], colors=[THRESHOLD_RGBA], widths=[1.0]),
+                rr.SeriesLines(names=[viewer_text(label)], colors=[THRESHOLD_RGBA], widths=[1.0]),
                 static=True,
             )
             _send_scalars(rec, path, np.array([t[0], t[-1]]), np.full(2, math.log10(bound)))
@@ -202,7 +203,7 @@ def log_plots(
             rec.log(
                 path,
                 rr.SeriesLines(
-                    names=[f"{name} {c}" for c in comps],
+                    names=[viewer_text(f"{name} {c}") for c in comps],
                     colors=[shade(plant_color(name), j) for j in range(len(comps))],
                 ),
                 static=True,
@@ -222,7 +223,7 @@ def log_plots(
         if s.name not in names:
             names.append(s.name)
         color = shade(plant_color(s.subject.value), names.index(s.name))
-        rec.log(path, rr.SeriesLines(names=[_legend(s)], colors=[color]), static=True)
+        rec.log(path, rr.SeriesLines(names=[viewer_text(_legend(s))], colors=[color]), static=True)
         t, v = log10_nonzero(s.t, s.values)
         if _send_scalars(rec, path, t, v):
             entities.append(path)

@@ -14,6 +14,7 @@ from __future__ import annotations
 import contextlib
 import uuid
 from collections.abc import Iterator
+from enum import StrEnum
 from pathlib import Path
 from typing import Any
 
@@ -22,8 +23,20 @@ RRD_FLUSH_TIMEOUT_S = 120.0
 recording of a 60 s run takes well under a second, so two minutes means it is stuck, not slow."""
 
 
-def new_stream(app_id: str = "tumble", recording_id: str | None = None):
-    """An explicit stream (not the global one) without the wall-clock timeline."""
+class AppId(StrEnum):
+    """Rerun's application id of each kind of recording. The viewer remembers a layout per
+    application id, so each kind has its own: a run's layout is never applied to the demo.
+    (Rerun 0.41 takes an id as a catalog entry name: letters, digits, ``-`` and ``_``; it
+    rewrites any other, with a warning.)"""
+
+    VALIDATE = "tumbling-testbed-validate"
+    DEMO = "tumbling-testbed-demo"
+    SWEEP = "tumbling-testbed-sweep"
+
+
+def new_stream(app_id: str = AppId.VALIDATE, recording_id: str | None = None):
+    """An explicit stream (not the global one) without the wall-clock timeline, under Rerun
+    application id ``app_id`` (an :class:`AppId`: one per kind of file)."""
     import rerun as rr
 
     rec = rr.RecordingStream(app_id, recording_id=recording_id or str(uuid.uuid4()))
@@ -31,7 +44,7 @@ def new_stream(app_id: str = "tumble", recording_id: str | None = None):
     return rec
 
 
-def binary_stream(app_id: str = "tumble", recording_id: str | None = None):
+def binary_stream(app_id: str = AppId.VALIDATE, recording_id: str | None = None):
     """``(rec, sink)``: a :func:`new_stream` and its in-memory sink (``rec.binary_stream()``);
     read the encoded bytes with :func:`rrd_bytes`."""
     rec = new_stream(app_id, recording_id)
@@ -66,7 +79,7 @@ def check_rrd(path: str | Path) -> None:
 @contextlib.contextmanager
 def atomic_stream(
     path: str | Path,
-    app_id: str = "tumble",
+    app_id: AppId,
     blueprint: Any = None,
     recording_id: str | None = None,
 ) -> Iterator[Any]:
@@ -76,14 +89,16 @@ def atomic_stream(
     stall its writer; the bytes are then written by :func:`validation.atomic.write_bytes`, read
     back (:func:`check_rrd`) and only then moved over ``path``. On any exception, or when the
     recording is incomplete, ``path`` keeps its previous contents. ``blueprint`` (a
-    ``rerun.blueprint.Blueprint``) is stored in the file as its default layout.
+    ``rerun.blueprint.Blueprint``) is stored in the file as its active and default layout: the
+    viewer opens the file in it, whatever layout it remembers for ``app_id``, and *Reset to
+    default blueprint* returns to it.
     """
     from validation.atomic import write_bytes
 
     path = Path(path)
     rec, sink = binary_stream(app_id, recording_id)
     if blueprint is not None:
-        rec.send_blueprint(blueprint, make_active=False, make_default=True)
+        rec.send_blueprint(blueprint, make_active=True, make_default=True)
     try:
         yield rec
     except BaseException:
@@ -94,6 +109,7 @@ def atomic_stream(
 
 __all__ = [
     "RRD_FLUSH_TIMEOUT_S",
+    "AppId",
     "atomic_stream",
     "binary_stream",
     "check_rrd",

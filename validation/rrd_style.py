@@ -9,6 +9,7 @@ plots): analytic blue, MuJoCo orange, Pinocchio green, as in the report's figure
 from __future__ import annotations
 
 import re
+import unicodedata
 
 import numpy as np
 
@@ -107,6 +108,126 @@ def power_of_ten(k: float) -> str:
     return f"1e{e}" if np.isclose(k, 10.0**e) else f"{k:.3g}"
 
 
+# ----------------------------------------------------------------------------------------------
+# Text the viewer draws
+# ----------------------------------------------------------------------------------------------
+
+
+def _chars(*spans: tuple[int, int]) -> frozenset[str]:
+    return frozenset(chr(c) for a, b in spans for c in range(a, b + 1))
+
+
+VIEWER_CHARACTERS: frozenset[str] = _chars(
+    (0x20, 0x7E),  # ASCII
+    (0xA1, 0xAC),  # ¡ … ¬ (Latin-1, no soft hyphen)
+    (0xAE, 0xFF),  # ® … ÿ: ° ± ² ³ µ · ¹ × ÷ and the accented letters
+    (0x391, 0x3A1),  # Greek capitals
+    (0x3A3, 0x3A9),
+    (0x3B1, 0x3C9),  # Greek small letters
+    (0x2013, 0x2014),  # – —
+    (0x2018, 0x201E),  # quotes
+    (0x2022, 0x2022),  # •
+    (0x2026, 0x2026),  # …
+    (0x2032, 0x2033),  # ′ ″
+    (0x2070, 0x2070),  # ⁰
+    (0x2074, 0x207A),  # ⁴ … ⁹ ⁺
+    (0x2080, 0x2089),  # ₀ … ₉
+    (0x2190, 0x2193),  # ← ↑ → ↓
+    (0x2202, 0x2202),  # ∂
+    (0x2211, 0x2212),  # ∑ −
+    (0x221A, 0x221A),  # √
+    (0x221E, 0x221E),  # ∞
+    (0x2248, 0x2248),  # ≈
+    (0x2260, 0x2260),  # ≠
+    (0x2264, 0x2265),  # ≤ ≥
+    (0x25B2, 0x25B3),  # ▲ △
+    (0x25B6, 0x25B7),  # ▶ ▷
+    (0x25BC, 0x25BD),  # ▼ ▽
+    (0x2713, 0x2713),  # ✓
+    (0x2717, 0x2717),  # ✗
+)
+"""The characters every string a recording carries may use (besides the newline of a text
+document): the viewer of rerun-sdk 0.41 draws text in the fonts it bundles, Inter (proportional)
+and JetBrains Mono (monospace), and nothing else; a character outside them is drawn as a box, or
+makes the headless viewer (``rerun --headless --screenshot-to``) stop with "No glyph for …". This
+set lies in both fonts (``tests/test_viewer.py`` reads their character maps out of the installed
+``rerun`` binary), so a string renders in either. Combining marks are left out: the viewer lays
+out one glyph per character, so a mark would not sit over its letter."""
+
+REPLACEMENT = "?"
+"""What :func:`viewer_text` writes for a character it has no spelling for."""
+
+_SPELLED = {
+    "\u0304": "bar",  # ω̄ -> ωbar (the paper's requirement)
+    "\u0305": "bar",
+    "\u0307": "dot",  # ṗ -> pdot
+    "\u0308": "ddot",
+    "\u0302": "hat",
+    "\u0303": "tilde",
+    "⊗": "(x)",
+    "✕": "×",
+    "⋅": "·",
+    "∙": "·",
+    "∥": "||",
+    "‖": "||",
+    "∈": " in ",
+    "≡": "=",
+    "½": "1/2",
+    "\u00ad": "",
+    "\t": " ",
+}
+"""Spellings, within :data:`VIEWER_CHARACTERS`, of the characters the project's own texts use."""
+
+
+def _script(c: str) -> str | None:
+    """``^`` or ``_`` for a superscript or subscript character, else None."""
+    tag = unicodedata.decomposition(c).split(" ", 1)[0]
+    return {"<super>": "^", "<sub>": "_"}.get(tag)
+
+
+def _spell(c: str) -> str:
+    """A character outside :data:`VIEWER_CHARACTERS` spelled with characters inside it."""
+    if c in _SPELLED:
+        return _SPELLED[c]
+    parts = unicodedata.normalize("NFKD", c)
+    out = "".join(
+        _SPELLED.get(p, "") if unicodedata.combining(p) else p
+        for p in parts
+        if p in VIEWER_CHARACTERS or unicodedata.combining(p)
+    )
+    return out if out and all(p in VIEWER_CHARACTERS for p in out) else REPLACEMENT
+
+
+def viewer_text(text: str, newlines: bool = False) -> str:
+    """``text`` in :data:`VIEWER_CHARACTERS` only, for a label, a name, a view's title or (with
+    ``newlines``) a text document: ``uᵀu`` -> ``u^T u``, ``10⁻¹²`` -> ``10^-12``, ``ω̄`` ->
+    ``ωbar``, ``ṗ`` -> ``pdot``, ``⊗`` -> ``(x)``; a character with no spelling becomes
+    :data:`REPLACEMENT`. A text already inside the set is returned unchanged."""
+    text = unicodedata.normalize("NFC", text)
+    out: list[str] = []
+    i = 0
+    while i < len(text):
+        c = text[i]
+        if c in VIEWER_CHARACTERS or (newlines and c == "\n"):
+            out.append(c)
+            i += 1
+            continue
+        mark = _script(c)
+        if mark is None:
+            out.append(_spell(c))
+            i += 1
+            continue
+        j = i  # a run of super- or subscripts with one outside the set: all of it, after ^ or _
+        while j < len(text) and _script(text[j]) == mark:
+            j += 1
+        run = unicodedata.normalize("NFKC", text[i:j])
+        out.append(mark + "".join(ch if ch in VIEWER_CHARACTERS else REPLACEMENT for ch in run))
+        if j < len(text) and text[j].isalnum():
+            out.append(" ")
+        i = j
+    return "".join(out)
+
+
 __all__ = [
     "GHOST_ALPHA",
     "MASS_RGBA",
@@ -118,6 +239,7 @@ __all__ = [
     "THRESHOLD_RGBA",
     "TIMELINE",
     "TORQUE_RGBA",
+    "VIEWER_CHARACTERS",
     "entity_root",
     "log10_nonzero",
     "plant_color",
@@ -126,4 +248,5 @@ __all__ = [
     "slug",
     "toward",
     "unit_text",
+    "viewer_text",
 ]

@@ -23,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
+from validation.rrd_style import viewer_text
 from validation.sweep.config import Outcome
 from validation.sweep.figure import FigureData
 from validation.sweep.markdown import VIEW_NAME
@@ -65,7 +66,7 @@ def write_rrd(
     import rerun as rr
     import rerun.blueprint as rrb
 
-    from validation.recording import atomic_stream
+    from validation.recording import AppId, atomic_stream
 
     (w0, w1), (e0, e1) = _bounds(data)
     x_range = (X_PER_DECADE * w0 - 0.5, X_PER_DECADE * w1 + 4.0)  # room for the labels
@@ -75,7 +76,7 @@ def write_rrd(
             rrb.Tabs(
                 rrb.Spatial2DView(
                     origin="/work_precision",
-                    name=VIEW_NAME,
+                    name=viewer_text(VIEW_NAME),
                     visual_bounds=rrb.VisualBounds2D(x_range=x_range, y_range=y_range),
                 ),
                 rrb.Spatial2DView(origin="/figure", name="work_precision.png"),
@@ -88,7 +89,7 @@ def write_rrd(
     )
     methods = list(dict.fromkeys([ln.method for ln in data.lines] + [m.method for m in data.marks]))
     colour = {m: PALETTE[i % len(PALETTE)] for i, m in enumerate(methods)}
-    with atomic_stream(path, "tumble_sweep", blueprint=blueprint, recording_id=recording_id) as rec:
+    with atomic_stream(path, AppId.SWEEP, blueprint=blueprint, recording_id=recording_id) as rec:
         grid, labels, label_pos = [], [], []
         for d in range(w0, w1 + 1):
             x = X_PER_DECADE * d
@@ -102,7 +103,12 @@ def write_rrd(
         rec.log(
             "work_precision/axes",
             rr.LineStrips2D(grid, colors=[(90, 90, 90)], radii=0.01),
-            rr.Points2D(label_pos, labels=labels, radii=0.001, colors=[(160, 160, 160)]),
+            rr.Points2D(
+                label_pos,
+                labels=[viewer_text(x) for x in labels],
+                radii=0.001,
+                colors=[(160, 160, 160)],
+            ),
             static=True,
         )
         if data.floor > 0:
@@ -129,7 +135,9 @@ def write_rrd(
             c = colour[ln.method]
             rec.log(
                 f"work_precision/{ln.engine}/{ln.method}",
-                rr.LineStrips2D([xy], colors=[c], radii=0.03, labels=[f"{ln.engine} {ln.method}"]),
+                rr.LineStrips2D(
+                    [xy], colors=[c], radii=0.03, labels=[viewer_text(f"{ln.engine} {ln.method}")]
+                ),
                 static=True,
             )
             rec.log(
@@ -139,8 +147,10 @@ def write_rrd(
                     radii=0.08,
                     colors=[c],
                     labels=[
-                        f"{ln.engine} {ln.method} #{p.run_id}: error {p.error:.2g}, "
-                        f"{p.wall * 1e3:.3g} ms (n = {p.n})"
+                        viewer_text(
+                            f"{ln.engine} {ln.method} #{p.run_id}: error {p.error:.2g}, "
+                            f"{p.wall * 1e3:.3g} ms (n = {p.n})"
+                        )
                         for p in ln.points
                     ],
                     show_labels=False,
@@ -161,19 +171,20 @@ def write_rrd(
                 x = X_PER_DECADE * (math.log10(m.wall) if m.wall else w0)
                 y = -math.log10(m.error) if m.error else -e1
                 pos.append([x, y])
-            symbol = {Outcome.TOO_SLOW: "▷"}
+            symbol = {Outcome.TOO_SLOW: "▷"}  # else ×: both in the viewer's fonts
             rec.log(
                 f"work_precision/marks/{engine}/{method}",
                 rr.Points2D(
                     pos,
                     radii=0.15,
                     colors=[colour[method]],
-                    labels=[f"{symbol.get(m.outcome, '✕')} {m.label}" for m in marks],
+                    labels=[viewer_text(f"{symbol.get(m.outcome, '×')} {m.label}") for m in marks],
                 ),
                 static=True,
             )
         rec.log("figure", rr.EncodedImage(contents=png, media_type="image/png"), static=True)
-        rec.log("report", rr.TextDocument(text, media_type=rr.MediaType.MARKDOWN), static=True)
+        doc = rr.TextDocument(viewer_text(text, newlines=True), media_type=rr.MediaType.MARKDOWN)
+        rec.log("report", doc, static=True)
 
 
 __all__ = ["X_PER_DECADE", "write_rrd"]
