@@ -28,7 +28,7 @@ from analytic.trajectory import RunStatus, Trajectory
 from validation.atomic import write_text
 from validation.compare import Comparison, Subject, compare
 from validation.outputs import OutputRun, output_run
-from validation.recording import atomic_stream, log_run, narrative_for
+from validation.recording import AppId, atomic_stream, log_run, narrative_for
 from validation.scenes import resolve_scene
 
 PAPER = (
@@ -396,12 +396,15 @@ def step_layout(
     import rerun.blueprint as rrb
 
     from validation.rrd_layout import views_3d
+    from validation.rrd_style import viewer_text
     from validation.rrd_world import difference_factors
 
     p0 = f"/{step.prefix}"
     plots = step_plots(step, scene, two_plants)
     views = [
-        rrb.TimeSeriesView(origin=f"{p0}/plots/{p.value}", name=plot_title(p, step, scene))
+        rrb.TimeSeriesView(
+            origin=f"{p0}/plots/{p.value}", name=viewer_text(plot_title(p, step, scene))
+        )
         for p in plots
     ]
     rest = len(views) - 1
@@ -413,7 +416,7 @@ def step_layout(
         rrb.TextDocumentView(origin=f"{p0}/narrative", name="what to look at"),
         row_shares=[3, 2],
     )
-    return rrb.Horizontal(left, right, column_shares=[1, 1], name=step.title)
+    return rrb.Horizontal(left, right, column_shares=[1, 1], name=viewer_text(step.title))
 
 
 def step_narrative(step: DemoStep) -> str:
@@ -691,12 +694,15 @@ def _log_curves(rec, origin: str, curves: Sequence[Curves]) -> None:
     column (nothing for an empty one)."""
     import rerun as rr
 
+    from validation.rrd_style import viewer_text
+
     for c in curves:
         if not c.t.size:
             continue
         v = np.asarray(c.values, float).reshape(len(c.t), -1)
         path = f"{origin}/{c.entity}"
-        rec.log(path, rr.SeriesLines(names=list(c.names), colors=list(c.colors)), static=True)
+        names = [viewer_text(x) for x in c.names]
+        rec.log(path, rr.SeriesLines(names=names, colors=list(c.colors)), static=True)
         rec.send_columns(
             path,
             indexes=[rr.TimeColumn("sim_time", duration=c.t)],
@@ -881,7 +887,7 @@ def _demo_into(run: OutputRun, t_end: float, rtol: float, mujoco: bool) -> DemoR
     t0 = time.perf_counter()
     tabs = [step_layout(r.step, r.scene, two, r.comparison, r.plants) for r in runs]
     bp = rrb.Blueprint(rrb.Tabs(*tabs), rrb.TimePanel(state="expanded"))
-    with atomic_stream(path, "tumble_demo", blueprint=bp, recording_id=run.run_id) as rec:
+    with atomic_stream(path, AppId.DEMO, blueprint=bp, recording_id=run.run_id) as rec:
         for r in runs:
             log_step(rec, r)
     walls["recording"] = time.perf_counter() - t0
