@@ -35,7 +35,7 @@ def _make(deps: int):
 
 @inline
 def rates(q, qd, tau, rod, fC, a, d, m, mu0, m_T, out):  # pragma: no cover - compiled
-    """:func:`aux_rates`'s body, pasted into compiled callers (the analytic plant's right-hand
+    """:func:`aux_rates`'s body, called by compiled callers (the analytic plant's right-hand
     side, :mod:`analytic.fast_rhs`), which then need no separately compiled function."""
     u0, u1, u2, u3 = q[3], q[4], q[5], q[6]
     v0, v1, v2, v3 = qd[3], qd[4], qd[5], qd[6]

@@ -1,7 +1,7 @@
 """The right-hand side of the compiled loop (:mod:`analytic.compiled_stepping`): a numba ``cfunc``
 with the C signature CyRK's solver calls, ``void(double* dy, double t, double* y, double* args)``,
-doing what :func:`analytic.fast_rhs.rhs_into` does (its body, :func:`analytic.fast_rhs.rhs_body`,
-pasted in, so no other compiled function is linked into it).
+doing what :func:`analytic.fast_rhs.rhs_into` does (it calls its body,
+:func:`analytic.fast_rhs.rhs_body`).
 
 It needs numba (imported here at module level); :mod:`analytic.compiled_stepping` imports this module
 only when numba is installed.
@@ -23,15 +23,13 @@ new process loads it instead of compiling it again (~5 s).
 
 from __future__ import annotations
 
-import numba
 import numpy as np
 from numba import carray, types
 from numba.extending import intrinsic
 
 from analytic.fast_rhs import rhs_body
 from analytic.kernel.entry import Solver
-from analytic.kernel.jit import LeanCompiler
-from analytic.kernel.paste import flatten
+from analytic.kernel.jit import cfunc
 
 A_NY, A_NFP, A_NIP, A_NWORK, A_FP, A_IP, A_WORK, A_CTX = range(8)
 N_ARGS = 8
@@ -97,7 +95,7 @@ def _make(deps: int, solver: int):
             fp = carray(_f64_at(np.int64(a[A_FP])), (np.int64(a[A_NFP]),))
             ip = carray(_i64_at(np.int64(a[A_IP])), (np.int64(a[A_NIP]),))
             work = carray(_f64_at(np.int64(a[A_WORK])), (np.int64(a[A_NWORK]),))
-            # pasted; `solver` is a constant of the closure: numba keeps only that solve
+            # `solver` is a constant of the closure: the solve this callback embeds
             status = rhs_body(solver, t, y, fp, ip, work, dy)
             if status == 0:  # the kernel's STATUS_OK
                 return
@@ -119,13 +117,7 @@ def make(deps: int, solver: Solver = Solver.ANY):
         solver: the solve it embeds (:func:`analytic.kernel.entry.solver_of` of the scene), so a
             Gauss scene compiles no M⁻² code.
     """
-    body = flatten(_make(deps, int(solver)))
-    try:
-        return numba.cfunc(SIGNATURE, cache=True, pipeline_class=LeanCompiler)(body)
-    except (
-        RuntimeError
-    ):  # no usable cache directory: compiled in memory (as analytic.kernel.jit.jit)
-        return numba.cfunc(SIGNATURE, pipeline_class=LeanCompiler)(body)
+    return cfunc(SIGNATURE, _make(deps, int(solver)))
 
 
 __all__ = ["N_ARGS", "N_CTX", "SIGNATURE", "make"]

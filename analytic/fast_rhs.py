@@ -38,7 +38,6 @@ from analytic.kernel.layout import (
     STATUS_OK,
     STATUS_UNSUPPORTED,
 )
-from analytic.kernel.paste import flatten
 from analytic.kernel.system import tail
 
 STATUS_NONFINITE = 3
@@ -46,7 +45,7 @@ STATUS_NONFINITE = 3
 
 @inline
 def rhs_body(solver, t, y, fp, ip, work, out):  # pragma: no cover - compiled
-    """:func:`rhs_into`'s work, pasted into it and into the stepping loop's C callback
+    """:func:`rhs_into`'s work, called by it and by the stepping loop's C callback
     (:mod:`analytic.compiled_rhs`); ``solver`` (a :class:`Solver` value) is a constant of each
     caller, so numba keeps only that solve."""
     n = ip[I_N]
@@ -111,7 +110,7 @@ DEPS = source_fingerprint(*KERNEL_SOURCES, _aux)
 def rhs_as(solver: Solver):
     """The compiled right-hand side embedding the solve ``solver`` (a :class:`Solver`; compiled,
     or loaded from numba's cache, on its first call); None without numba."""
-    return jit(flatten(_make(DEPS, int(solver)))) if HAVE_NUMBA else None
+    return jit(_make(DEPS, int(solver))) if HAVE_NUMBA else None
 
 
 def rhs_for(ip: np.ndarray):

@@ -24,7 +24,6 @@ from analytic.kernel.entry import Solver, evaluate_as, solver_of
 from analytic.kernel.jit import HAVE_NUMBA, KERNEL_SOURCES, jit, source_fingerprint
 from analytic.kernel.kinematics import rotation
 from analytic.kernel.layout import STATUS_OK, STATUS_UNSUPPORTED
-from analytic.kernel.paste import flatten
 
 
 def make_stage(deps: int, solver: int):
@@ -104,7 +103,7 @@ DEPS = source_fingerprint(*KERNEL_SOURCES)
 
 
 def _compiled(solver: Solver):
-    return jit(flatten(make_stage(DEPS, int(solver)))) if HAVE_NUMBA else None
+    return jit(make_stage(DEPS, int(solver))) if HAVE_NUMBA else None
 
 
 stage_gauss = _compiled(Solver.GAUSS)

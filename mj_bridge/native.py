@@ -51,20 +51,14 @@ import mujoco
 import numpy as np
 
 from analytic.kernel.entry import Solver, solver_of
-from analytic.kernel.jit import (
-    HAVE_NUMBA,
-    KERNEL_SOURCES,
-    LeanCompiler,
-    inline,
-    source_fingerprint,
-)
+from analytic.kernel.jit import HAVE_NUMBA, KERNEL_SOURCES, inline, source_fingerprint
+from analytic.kernel.jit import cfunc as cached_cfunc
 from analytic.kernel.layout import F_TA, F_TC, F_TFREQ, STATUS_OK
-from analytic.kernel.paste import flatten
 from mj_bridge import fast_stage
 
 if HAVE_NUMBA:
     from llvmlite import ir
-    from numba import carray, cfunc, types
+    from numba import carray, types
     from numba.extending import intrinsic
 
     @intrinsic
@@ -253,9 +247,8 @@ def _inlined_stage(solver: Solver):
     return inline(_make_native_stage(DEPS, int(solver))) if HAVE_NUMBA else None
 
 
-# one per solve (module globals: the callback refers to them by name), pasted into the callback
-# rather than compiled and linked on their own: one compile and one LLVM pass over the linked
-# kernel fewer on a first run's critical path
+# one per solve (module globals: the callback refers to them by name), compiled into the callback
+# (not cached on their own)
 native_stage_gauss = _inlined_stage(Solver.GAUSS)
 native_stage_minv2 = _inlined_stage(Solver.MINV2)
 native_stage = _inlined_stage(Solver.ANY)
@@ -322,16 +315,11 @@ if HAVE_NUMBA:
 
 @functools.cache
 def compiled(solver: Solver = Solver.GAUSS):
-    """The numba ``CFunc`` of the callback embedding ``solver``; compiled on first use, then loaded
-    from numba's disk cache (its ``cache_hits`` say which)."""
+    """The numba ``cfunc`` of the callback embedding ``solver``; compiled on first use, then
+    loaded from numba's disk cache."""
     if not available():
         raise RuntimeError("the native controller callback is not available here")
-    sig = types.void(types.voidptr, types.voidptr)
-    cb = flatten(_make_cb(DEPS, int(solver)))
-    try:
-        return cfunc(sig, nopython=True, cache=True, pipeline_class=LeanCompiler)(cb)
-    except RuntimeError:  # no usable cache directory (see analytic.kernel.jit)
-        return cfunc(sig, nopython=True, pipeline_class=LeanCompiler)(cb)
+    return cached_cfunc(types.void(types.voidptr, types.voidptr), _make_cb(DEPS, int(solver)))
 
 
 def callback():

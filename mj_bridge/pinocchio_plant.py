@@ -76,7 +76,6 @@ from analytic.kernel.layout import (
     STATUS_OK,
     STATUS_UNSUPPORTED,
 )
-from analytic.kernel.paste import flatten
 from analytic.kernel.system import tail
 from analytic.model import ControlOutput, TumblingModel
 from analytic.scene import OutputSettings, Scene
@@ -309,9 +308,9 @@ def _finish(acc, work, ydot):  # pragma: no cover - compiled
 
 
 DEPS = source_fingerprint(*KERNEL_SOURCES, _aux)
-stage_gauss = jit(flatten(_make_stage(DEPS, int(Solver.GAUSS))))
-stage_minv2 = jit(flatten(_make_stage(DEPS, int(Solver.MINV2))))
-stage = jit(flatten(_make_stage(DEPS, int(Solver.ANY))))  # any scene: both solves compiled in
+stage_gauss = jit(_make_stage(DEPS, int(Solver.GAUSS)))
+stage_minv2 = jit(_make_stage(DEPS, int(Solver.MINV2)))
+stage = jit(_make_stage(DEPS, int(Solver.ANY)))  # any scene: both solves compiled in
 
 
 def stage_for(ip: np.ndarray):

@@ -284,6 +284,16 @@ def cmd_bench(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_warmup(args: argparse.Namespace) -> int:
+    from mj_bridge.plants import installed_plants
+    from validation.scenes import resolve_scene
+    from validation.warmup import builtin_scenes, warm_up_command
+
+    scenes = [resolve_scene(args.scene)] if args.scene else builtin_scenes()
+    engines = [e.value for e in installed_plants()]
+    return 0 if warm_up_command(scenes, engines, out=lambda s: print(s, flush=True)) else 1
+
+
 def cmd_scene_reference(args: argparse.Namespace) -> int:
     from validation.atomic import write_text
     from validation.scene_reference import render
@@ -445,6 +455,22 @@ def build_parser() -> argparse.ArgumentParser:
 
     add_bench_arguments(p)  # the options of python -m validation.bench, one definition
     p.set_defaults(func=cmd_bench)
+
+    p = sub.add_parser(
+        "warmup",
+        help="compile every numba kernel a scene needs (default: every built-in scene)",
+        description="Compile (or load from numba's cache) every numba kernel the installed "
+        "plants need for SCENE (default: every built-in scene), printing one line per kernel "
+        "with its time, so that a Docker image or a CI job pays the one-time compile when it is "
+        "built. Exits 1 when a kernel failed to compile.",
+    )
+    p.add_argument(
+        "scene",
+        nargs="?",
+        default=None,
+        help=f"scene file (TOML) or built-in scene name (default: all: {', '.join(builtin_names())})",
+    )
+    p.set_defaults(func=cmd_warmup)
 
     p = sub.add_parser(
         "scene-reference",

@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from analytic.kernel.jit import HAVE_NUMBA, inline, workspace
+from analytic.kernel.jit import HAVE_NUMBA, inline, stack_workspace
 from analytic.kernel.layout import (
     I_FN_SOLVE,
     I_FN_SYSTEM,
@@ -165,9 +165,9 @@ if HAVE_NUMBA:
         another process's); a strided ``q`` or ``qd`` (a caller's slice) is copied first."""
         if ip[I_FN_SYSTEM] == 0 or ip[I_FN_SOLVE] == 0:
             return STATUS_UNSUPPORTED
-        w = workspace()
+        w = carray(stack_workspace(), (WS_LEN,))
         qc = np.ascontiguousarray(q)  # a view (no copy) unless the caller's slice is strided
-        qdc = np.ascontiguousarray(qd)  # (new names: a name has one type, jit.LeanCompiler)
+        qdc = np.ascontiguousarray(qd)
         call_system(ip[I_FN_SYSTEM], t, qc, qdc, fp, ip, out, full, w)
         return call_solve(ip[I_FN_SOLVE], qc, fp, ip, out, w, full)
 

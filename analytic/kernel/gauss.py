@@ -160,7 +160,7 @@ def _make_evaluate(deps: int):
 
 @inline
 def join(t, q, qd, fp, ip, out):
-    """:func:`evaluate`'s body, pasted into compiled callers (``analytic.kernel.entry.evaluate_as``):
+    """:func:`evaluate`'s body, called by compiled callers (``analytic.kernel.entry.evaluate_as``):
     the two compiled halves called by the addresses in ``ip`` (:mod:`analytic.kernel.abi`;
     ``STATUS_UNSUPPORTED`` when they are not set, i.e. ``ip`` did not come from a
     :class:`analytic.fast.FastModel`)."""

@@ -1,39 +1,28 @@
 """The kernel's two halves as compiled C callbacks, each compiled once and cached on its own.
 
-* :data:`SYSTEM`: stages 1-6 (:func:`analytic.kernel.system.make_build_system`), the same for
-  every weighting;
-* :data:`SOLVE_GAUSS` / :data:`SOLVE_MINV2`: the solve of the scene's weighting
-  (:func:`analytic.kernel.gauss.make_solve_gauss`, also every uncontrolled scene;
-  :func:`analytic.kernel.minv2.make_solve_minv2`).
+* stages 1-6 (:func:`analytic.kernel.system.make_build_system`), the same for every weighting;
+* the solve of the scene's weighting (:func:`analytic.kernel.gauss.make_solve_gauss`, also every
+  uncontrolled scene; :func:`analytic.kernel.minv2.make_solve_minv2`).
 
-Each is a numba ``cfunc`` with a C signature of :mod:`analytic.kernel.abi`, created here without
-being compiled; :func:`compiled` compiles it (or loads it from numba's disk cache) the first time a
-process asks, and :func:`addresses` gives the two addresses a scene's callers read from ``ip``
-(written by :class:`analytic.fast.FastModel`). Two processes can compile the two halves at the same
-time (:mod:`validation.warmup`, a first run); the callers do not need either to compile.
+Each is a ``numba.cfunc(sig, cache=True)`` with a C signature of :mod:`analytic.kernel.abi`, made
+the first time a process asks (:func:`callback`: compiled, or loaded from numba's disk cache);
+:func:`addresses` gives the two addresses a scene's callers read from ``ip`` (written by
+:class:`analytic.fast.FastModel`). Two processes can compile the two halves at the same time
+(:mod:`validation.warmup`); the callers do not need either to compile.
 
-Each body rebuilds the arrays behind its pointers (:func:`analytic.kernel.abi.arrays`) and calls
-its stages. numba compiles each half from source in which the stages are already pasted
-(:func:`analytic.kernel.paste.flatten`): numba's own inlining re-ran its front end and deep-copied
-the stages' code at every call site, about a third of a first compile.
-"""
+The stages are ordinary numba functions (:func:`analytic.kernel.jit.inline`) that numba compiles
+into each half; the halves index their C pointers directly (numba lowers a pointer index as one
+address and one load)."""
 
 from __future__ import annotations
 
+import functools
 import threading
-import warnings
 from enum import StrEnum
 
 from analytic.kernel import gauss, minv2, system
 from analytic.kernel.abi import SOLVE_SIG, SYSTEM_SIG
-from analytic.kernel.jit import (
-    HAVE_NUMBA,
-    KERNEL_SOURCES,
-    CacheFallbackWarning,
-    LeanCompiler,
-    source_fingerprint,
-)
-from analytic.kernel.paste import flatten
+from analytic.kernel.jit import HAVE_NUMBA, KERNEL_SOURCES, cfunc, source_fingerprint
 
 
 class KernelHalf(StrEnum):
@@ -45,59 +34,42 @@ class KernelHalf(StrEnum):
     """The scene's solve: Gauss (also uncontrolled scenes) or M⁻²."""
 
 
-def _callback(pyfunc, sig):
-    """A ``cfunc`` of ``pyfunc`` with disk caching, not compiled yet (:func:`compiled` does)."""
-    from numba.core import sigutils
-    from numba.core.ccallback import CFunc
+_DEPS = source_fingerprint(*KERNEL_SOURCES)
+"""The fingerprint every half closes over (an edit of any kernel file compiles them again)."""
 
-    cf = CFunc(
-        pyfunc,
-        sigutils.normalize_signature(sig),
-        locals={},
-        options={},
-        pipeline_class=LeanCompiler,
-    )
-    try:
-        cf.enable_caching()
-    except RuntimeError:  # no usable cache directory: compiled in memory (as jit.jit says once)
-        warnings.warn(
-            "no writable cache directory for numba; the kernel is compiled in memory in every "
-            "process",
-            CacheFallbackWarning,
-            stacklevel=2,
-        )
-    return cf
-
-
-if HAVE_NUMBA:
-    _DEPS = source_fingerprint(*KERNEL_SOURCES)
-    SYSTEM = _callback(flatten(system.make_build_system(_DEPS)), SYSTEM_SIG)
-    """Stages 1-6: ``void(t, q*, qd*, fp*, ip*, out*, len_out, full, w*)``."""
-    SOLVE_GAUSS = _callback(flatten(gauss.make_solve_gauss(_DEPS)), SOLVE_SIG)
-    """The Gauss solve: ``int64(q*, fp*, ip*, out*, len_out, w*, full)`` -> status."""
-    SOLVE_MINV2 = _callback(flatten(minv2.make_solve_minv2(_DEPS)), SOLVE_SIG)
-    """The M⁻² solve, same signature (``full`` must be 1: this weighting needs ``Q^C``)."""
-else:  # pragma: no cover - without numba the numpy model answers
-    SYSTEM = SOLVE_GAUSS = SOLVE_MINV2 = None
+_MAKERS = {
+    (KernelHalf.SYSTEM, False): (system.make_build_system, SYSTEM_SIG),
+    (KernelHalf.SYSTEM, True): (system.make_build_system, SYSTEM_SIG),
+    (KernelHalf.SOLVE, False): (gauss.make_solve_gauss, SOLVE_SIG),
+    (KernelHalf.SOLVE, True): (minv2.make_solve_minv2, SOLVE_SIG),
+}
+"""``(half, minv2_solve)`` -> (the factory of its body, its C signature): stages 1-6
+``void(t, q*, qd*, fp*, ip*, out*, len_out, full, w*)``, the same for every weighting; the Gauss or
+the M⁻² solve ``int64(q*, fp*, ip*, out*, len_out, w*, full)`` -> status (the M⁻² solve needs
+``full`` = 1: this weighting needs ``Q^C``)."""
 
 _lock = threading.Lock()
 
 
+@functools.cache
+def _compile(make, sig):
+    return cfunc(sig, make(_DEPS))
+
+
 def callback(half: KernelHalf | str, minv2_solve: bool = False):
-    """The ``cfunc`` object of ``half`` (for a solve, the M⁻² one when ``minv2_solve``)."""
-    if KernelHalf(half) is KernelHalf.SYSTEM:
-        return SYSTEM
-    return SOLVE_MINV2 if minv2_solve else SOLVE_GAUSS
+    """The compiled ``cfunc`` of ``half`` (for a solve, the M⁻² one when ``minv2_solve``),
+    compiled in this process or loaded from numba's disk cache on the first call."""
+    if not HAVE_NUMBA:  # pragma: no cover - without numba the numpy model answers
+        raise RuntimeError("the compiled kernel needs numba")
+    make, sig = _MAKERS[KernelHalf(half), bool(minv2_solve)]
+    with _lock:
+        return _compile(make, sig)
 
 
 def compiled(half: KernelHalf | str, minv2_solve: bool = False) -> int:
     """Compile ``half`` in this process (or load it from numba's disk cache) if not done yet;
     returns its address."""
-    cf = callback(half, minv2_solve)
-    with _lock:
-        if cf.address is None:
-            cf.compile()
-    return cf.address
+    return callback(half, minv2_solve).address
 
 
 def addresses(minv2_solve: bool) -> tuple[int, int]:
@@ -107,9 +79,6 @@ def addresses(minv2_solve: bool) -> tuple[int, int]:
 
 
 __all__ = [
-    "SOLVE_GAUSS",
-    "SOLVE_MINV2",
-    "SYSTEM",
     "KernelHalf",
     "addresses",
     "callback",

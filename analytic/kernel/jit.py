@@ -1,38 +1,39 @@
 """numba plumbing of the compiled kernel: where its cache lives, how functions are compiled, and
-what a cached function's key covers.
+what a cached function's key covers. Only numba's documented API is used (``numba.njit``,
+``numba.cfunc``, ``numba.types``, ``numba.carray``, ``numba.extending.intrinsic``,
+``cache=True``, ``NUMBA_CACHE_DIR``).
 
-**Four kinds of compiled function.**
+**Three kinds of compiled function.**
 
-* :func:`inline` (``njit(inline="always")``, no disk cache): the kernel's stages and the small
-  kinematic helpers; numba pastes their code into the caller.
-* the kernel's two halves (:mod:`analytic.kernel.halves`): C callbacks (``cfunc``) into which the
-  stages are pasted, compiled once and cached on their own; every compiled caller calls them by
-  address (:mod:`analytic.kernel.abi`).
-* :func:`jit_entry` (``njit(cache=True)``, key tied to the sources, see below): entry points (what
-  Python or another package calls: ``gauss.evaluate``, ``minv2.evaluate``, ``fast_rhs.rhs_into``
-  ...), which join the halves.
-* :func:`jit` (``njit(cache=True)``, keyed on its own file by numba): only for functions that call
-  nothing from another file (the M⁻² dense helpers).
+* :func:`inline` (``numba.njit``, no disk cache): the kernel's stages and the small kinematic
+  helpers. numba compiles each once per process and links it into its callers, where LLVM
+  inlines it; a cached caller carries their code, so a later process loads the caller alone.
+* the kernel's two halves (:mod:`analytic.kernel.halves`) and the other C callbacks: ``numba.
+  cfunc(..., cache=True)``; every compiled caller calls the halves by address
+  (:mod:`analytic.kernel.abi`).
+* :func:`jit_entry` (``numba.njit(cache=True)``, key tied to the sources, see below): entry points
+  (what Python or another package calls: ``gauss.evaluate``, ``minv2.evaluate``,
+  ``fast_rhs.rhs_into`` ...); :func:`jit` for functions that call nothing from another file.
 
 **Why the tie.** numba's disk cache checks only the source file of the function being cached
 (numba's caching notes: "Cache invalidation fails to recognize changes in symbols defined in another
-file"), yet a cached entry point contains the code of every stage it calls. numba does hash a
-function's closure variables into the cache key, so an entry point built by a factory that closes
-over :func:`source_fingerprint` of the kernel package (and of any other file it embeds) is
-recompiled whenever one of those files changes, instead of running a stale copy.
+file"), yet a cached function contains the code of every stage it calls. Each cached function is
+therefore built by a factory that closes over :func:`source_fingerprint` of the kernel package (and
+of any other file it embeds), and refers to it (``if deps < 0: return``, never true): numba's cache
+key covers the function's closure variables, so an edit of any of those files compiles it again
+instead of loading a stale copy.
 
 **Where the cache lives.** numba writes ``__pycache__`` beside the sources, else its user-wide cache
 directory. When this package's own ``__pycache__`` cannot be written (a read-only site-packages)
 and ``NUMBA_CACHE_DIR`` is not set, this module sets ``NUMBA_CACHE_DIR`` (numba's documented
 setting) to ``$XDG_CACHE_HOME/tumbling-testbed/numba`` (``~/.cache/...`` without XDG_CACHE_HOME)
 before numba is imported, and says so once (:class:`CacheFallbackWarning`). When no directory at
-all can be written, entry points are compiled in memory in each process (same results, slower
-first call), also said once.
+all can be written, functions are compiled in memory in each process (same results, slower first
+call), also said once.
 """
 
 from __future__ import annotations
 
-import contextlib
 import hashlib
 import inspect
 import os
@@ -46,7 +47,6 @@ import numpy as np
 from analytic.kernel import cache_check
 from analytic.kernel.cache_dir import APP_NAME, PACKAGE_DIR, kernel_cache_dir
 from analytic.kernel.layout import WS_LEN
-from analytic.kernel.paste import flatten
 
 
 class CacheFallbackWarning(UserWarning):
@@ -60,9 +60,8 @@ def _configure_cache_dir() -> str | None:
     if os.environ.get("NUMBA_CACHE_DIR") or fallback in (None, PACKAGE_DIR / "__pycache__"):
         return None  # none writable: numba's own user-wide directory is tried next (see jit())
     os.environ["NUMBA_CACHE_DIR"] = str(fallback)
-    numba_config = sys.modules.get("numba.core.config")
-    if numba_config is not None:  # numba imported before this module: it read the environment
-        numba_config.CACHE_DIR = str(fallback)
+    if "numba" in sys.modules:  # imported before this module: it read the environment already
+        sys.modules["numba"].config.CACHE_DIR = str(fallback)
     warnings.warn(
         f"{APP_NAME}: {PACKAGE_DIR / '__pycache__'} is not writable; numba caches the compiled "
         f"kernel in {fallback}",
@@ -85,142 +84,51 @@ except ImportError:  # pragma: no cover - exercised only without numba
 
 _in_memory_said = False
 
-if HAVE_NUMBA:
-    from numba.core import typed_passes, untyped_passes
-    from numba.core.compiler import CompilerBase, DefaultPassBuilder
-    from numba.core.compiler_machinery import PassManager
 
-    LEAN_DROPPED = (
-        untyped_passes.WithLifting,
-        untyped_passes.InlineClosureLikes,
-        untyped_passes.MakeFunctionToJitFunction,
-        untyped_passes.FindLiterallyCalls,
-        untyped_passes.LiteralUnroll,
-        typed_passes.PreLowerStripPhis,
-        typed_passes.NopythonRewrites,
-        typed_passes.IRLegalization,
-    )
-    """numba passes the compiled code of this project has no use for: ``with`` contexts, closures
-    and comprehensions, ``literally``/``literal_unroll``, SSA's phi nodes (no SSA, below), the
-    rewrites into fused array expressions, and a check of features it does not use."""
+def _say_in_memory() -> None:
+    global _in_memory_said
+    if not _in_memory_said:
+        _in_memory_said = True
+        warnings.warn(
+            f"{APP_NAME}: no writable cache directory for numba; the kernel is compiled in "
+            "memory in every process",
+            CacheFallbackWarning,
+            stacklevel=3,
+        )
 
-    try:  # where numba resolves the signature of a call to a typed function (numba 0.68)
-        from numba.core.types.functions import BaseFunction as _BaseFunction
 
-        _RESOLVE = _BaseFunction.get_call_type
-    except (ImportError, AttributeError):  # pragma: no cover - another numba: no memo
-        _BaseFunction = _RESOLVE = None
-
-    _SCALAR_TYPES = (numba.types.Number, numba.types.Boolean)
-    _scalar_calls: dict = {}
-    _compiles_open = 0
-
-    def _remembered_call_type(self, context, args, kws):
-        """``BaseFunction.get_call_type`` remembering what it found for scalar arguments."""
-        if kws or not all(isinstance(a, _SCALAR_TYPES) for a in args):
-            return _RESOLVE(self, context, args, kws)
-        key = (self, id(context), tuple(args))
-        sig = _scalar_calls.get(key)
-        if sig is None:
-            sig = _RESOLVE(self, context, args, kws)
-            if sig is not None:
-                _scalar_calls[key] = sig
-        return sig
-
-    @contextlib.contextmanager
-    def scalar_call_types_remembered():
-        """Inside the block (a compile, which holds numba's global compiler lock), numba's
-        resolution of a call to a typed function (an operator, ``math.sqrt``...) whose arguments
-        are all scalars is looked up once per function type and argument types, and remembered
-        until the outermost such block ends.
-
-        Why: numba resolves the signature of every scalar operation by trying each template that
-        may apply (numpy's ufunc rules first, which reject scalars only after matching a ufunc
-        loop), once while typing each statement, again for each typing round, and once more
-        while lowering it. On the kernel's halves that was a quarter of the Python work of a
-        first compile (numba 0.68). For scalar arguments the answer depends only on the
-        function type and the argument types (literal values included, they are part of a
-        literal type), so remembering it changes no signature; the signature found first is
-        the one numba would find again, with the same implementation key recorded."""
-        global _compiles_open
-        if _RESOLVE is None:
-            yield
-            return
-        _compiles_open += 1
-        if _compiles_open == 1:
-            _BaseFunction.get_call_type = _remembered_call_type
-        try:
-            yield
-        finally:
-            _compiles_open -= 1
-            if _compiles_open == 0:
-                _BaseFunction.get_call_type = _RESOLVE
-                _scalar_calls.clear()
-
-    class LeanCompiler(CompilerBase):
-        """numba's nopython pipeline (``DefaultPassBuilder``) without :data:`LEAN_DROPPED` and
-        without SSA reconstruction, passed as numba's documented ``pipeline_class``.
-
-        Why: numba's compile time grows with the statements of a function, and these passes
-        each walk all of them; on the kernel's two halves they were a third to a half of a
-        first compile (measured with numba 0.68). What is left types, lowers and optimises the
-        same statements, so the machine code does the same arithmetic in the same order
-        (``tests/test_fast.py`` compiles the halves with numba's default pipeline too and
-        compares every output bit for bit).
-
-        Without SSA a variable has one type in a function: code compiled this way must not reuse
-        a name for values of two types (numba says so at compile time, never silently).
-
-        Each compile runs inside :func:`scalar_call_types_remembered` (numba's resolution of
-        scalar operations looked up once per compile instead of at every statement)."""
-
-        def define_pipelines(self):
-            self.state.flags.enable_ssa = False
-            default = DefaultPassBuilder.define_nopython_pipeline(self.state)
-            pm = PassManager("lean")
-            for pass_class, description in default.passes:
-                if pass_class not in LEAN_DROPPED:
-                    pm.add_pass(pass_class, description)
-            pm.finalize()
-            return [pm]
-
-        def _compile_core(self):
-            with scalar_call_types_remembered():
-                return super()._compile_core()
-
-else:  # pragma: no cover
-    LeanCompiler = None
+def cached(decorator, fn):
+    """``decorator(cache=True)(fn)``, or ``decorator()(fn)`` when numba has no usable cache
+    directory (said once). ``decorator`` is a ``functools.partial`` of ``numba.njit`` or
+    ``numba.cfunc``: numba raises ``RuntimeError`` at decoration when none of
+    ``$NUMBA_CACHE_DIR``, ``__pycache__`` beside the source and its user-wide directory can be
+    written."""
+    try:
+        return decorator(cache=True)(fn)
+    except RuntimeError:  # no usable cache locator
+        _say_in_memory()
+        return decorator()(fn)
 
 
 def jit(fn):
-    """``numba.njit(cache=True)``, or in memory when no cache directory is usable (said once).
-
-    numba raises ``RuntimeError`` at decoration when none of ``$NUMBA_CACHE_DIR``, ``__pycache__``
-    beside the source and its user-wide directory can be written.
-    """
-    global _in_memory_said
+    """``numba.njit(cache=True)``, or in memory when no cache directory is usable (said once)."""
     if not HAVE_NUMBA:  # pragma: no cover
         return fn
-    try:
-        return numba.njit(cache=True, fastmath=False, nogil=True, pipeline_class=LeanCompiler)(fn)
-    except RuntimeError:  # no usable cache locator
-        if not _in_memory_said:
-            _in_memory_said = True
-            warnings.warn(
-                f"{APP_NAME}: no writable cache directory for numba; the kernel is compiled in "
-                "memory in every process",
-                CacheFallbackWarning,
-                stacklevel=2,
-            )
-        return numba.njit(cache=False, fastmath=False, nogil=True, pipeline_class=LeanCompiler)(fn)
+    return cached(lambda **kw: numba.njit(fastmath=False, nogil=True, **kw), fn)
+
+
+def cfunc(sig, fn):
+    """``numba.cfunc(sig, cache=True)`` (compiled now, or loaded from numba's cache), or in memory
+    when no cache directory is usable (said once)."""
+    return cached(lambda **kw: numba.cfunc(sig, nopython=True, **kw), fn)
 
 
 def inline(fn):
-    """A kernel stage or helper: ``numba.njit(inline="always")``, pasted into its callers' code
-    (never cached on its own; plain Python without numba)."""
+    """A kernel stage or helper: ``numba.njit`` without a disk cache of its own (compiled into,
+    and cached with, its callers; plain Python without numba)."""
     if not HAVE_NUMBA:  # pragma: no cover
         return fn
-    return numba.njit(inline="always", fastmath=False)(fn)
+    return numba.njit(fastmath=False, nogil=True)(fn)
 
 
 def source_fingerprint(*sources: ModuleType | str | Path) -> int:
@@ -234,8 +142,8 @@ def source_fingerprint(*sources: ModuleType | str | Path) -> int:
 
 
 KERNEL_SOURCES: tuple[Path, ...] = tuple(sorted(PACKAGE_DIR.glob("*.py")))
-"""Every source file of the kernel package: an entry point embeds some of them, and a cached entry
-point is refused when any of them changes (one fingerprint keeps the rule simple)."""
+"""Every source file of the kernel package: a cached function embeds some of them, and its cache
+entry is refused when any of them changes (one fingerprint keeps the rule simple)."""
 
 
 def jit_entry(factory, *also: ModuleType | str | Path):
@@ -244,9 +152,9 @@ def jit_entry(factory, *also: ModuleType | str | Path):
 
     ``factory`` returns the function to compile, which must refer to the fingerprint (e.g.
     ``if deps < 0: return STATUS_UNSUPPORTED``, a test that is never true) so that it is a closure
-    variable, which numba hashes into the cache key.
+    variable, which numba covers in the cache key.
     """
-    return jit(flatten(factory(source_fingerprint(*KERNEL_SOURCES, *also))))
+    return jit(factory(source_fingerprint(*KERNEL_SOURCES, *also)))
 
 
 def cache_dir_note() -> str:
@@ -262,39 +170,30 @@ def cache_dir_note() -> str:
 
 
 if HAVE_NUMBA and not numba.config.DISABLE_JIT:
-    from numba.core import cgutils, types
+    from llvmlite import ir
+    from numba import types
     from numba.extending import intrinsic
-    from numba.np.arrayobj import populate_array
 
     @intrinsic
-    def workspace(typingctx):
-        """A float64 array of ``WS_LEN`` uninitialised slots on the calling function's stack
-        (slots: :mod:`analytic.kernel.layout` ``WS_*``).
+    def stack_workspace(typingctx):
+        """A ``double*`` to ``WS_LEN`` uninitialised float64 slots on the calling function's stack
+        (slots: :mod:`analytic.kernel.layout` ``WS_*``); wrap it with ``numba.carray(p,
+        (WS_LEN,))``.
 
-        An intrinsic, so its code is emitted inside the caller: the memory lives as long as the
-        caller's frame (never return it or a view of it). Unlike ``np.empty`` there is no heap
-        allocation, no reference count, and LLVM may keep constant-index slots in registers.
+        An intrinsic, so its code is emitted inside the caller (in its entry block): the memory
+        lives as long as the caller's frame (never return it or a view of it). Unlike
+        ``np.empty`` there is no heap allocation and no reference count.
         """
-        arrty = types.Array(types.float64, 1, "C")
+        sig = types.CPointer(types.float64)()
 
-        def codegen(context, builder, sig, args):
-            f64 = context.get_value_type(types.float64)
-            data = cgutils.alloca_once(builder, f64, size=WS_LEN)
-            ary = context.make_array(arrty)(context, builder)
-            intp = context.get_value_type(types.intp)
-            populate_array(
-                ary,
-                data=data,
-                shape=[intp(WS_LEN)],
-                strides=[intp(8)],
-                itemsize=intp(8),
-                meminfo=None,
-            )
-            return ary._getvalue()
+        def codegen(context, builder, signature, args):
+            with builder.goto_entry_block():
+                slots = builder.alloca(ir.ArrayType(ir.DoubleType(), WS_LEN))
+            return builder.bitcast(slots, ir.DoubleType().as_pointer())
 
-        return arrty(), codegen
+        return sig, codegen
 
 else:  # pragma: no cover - plain Python (no numba, or NUMBA_DISABLE_JIT=1)
 
-    def workspace():
+    def stack_workspace():
         return np.empty(WS_LEN)

@@ -324,7 +324,7 @@ def _make_evaluate(deps: int):
 
 @inline
 def join(t, q, qd, fp, ip, out):
-    """:func:`evaluate`'s body, pasted into compiled callers (``analytic.kernel.entry.evaluate_as``):
+    """:func:`evaluate`'s body, called by compiled callers (``analytic.kernel.entry.evaluate_as``):
     the two compiled halves called by the addresses in ``ip`` (:mod:`analytic.kernel.abi`;
     ``STATUS_UNSUPPORTED`` when they are not set)."""
     n = ip[I_N] & IX

@@ -27,9 +27,7 @@ def make_build_system(deps: int):
         ``out``. ``full`` (0/1): whether ``out`` holds the whole output (a tracked mass's ``Q_i``
         then goes to its ``Q^C_i`` slot).
 
-        :mod:`analytic.kernel.halves` compiles it with the stages pasted in at the source level
-        (:func:`analytic.kernel.paste.flatten`). The stages index the C pointers themselves (no
-        array is built around them): numba compiles a pointer's index as one address and one
+        The stages index the C pointers themselves (no array is built around them): numba compiles a pointer's index as one address and one
         load, an array's with its checks and wraparound, several times the compile work."""
         if deps < 0:  # never true: ties numba's cache key to the kernel's sources
             return
