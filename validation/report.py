@@ -344,9 +344,14 @@ def render_markdown(
     if cmp is not None:
         bad = cmp.failed_checks
         total = len(cmp.applicable_checks)
-        idle = [c for c in cmp.checks if not c.applicable]
+        idle: dict[str, list[str]] = {}  # why -> the checks that do not apply for that reason
+        for c in cmp.checks:
+            if not c.applicable:
+                idle.setdefault(c.reason, []).append(c.label)
         also = (
-            f" Not applicable: {', '.join(_md(c.label) for c in idle)} ({_md(idle[0].reason)})."
+            " Not applicable: "
+            + "; ".join(f"{', '.join(map(_md, who))} ({_md(why)})" for why, who in idle.items())
+            + "."
             if idle
             else ""
         )
