@@ -29,6 +29,7 @@ Nothing here imports numpy, the engines or the plotting libraries (versions are 
 from __future__ import annotations
 
 import enum
+import importlib
 import json
 import math
 import re
@@ -194,8 +195,8 @@ def parse_build_node(node: Any) -> str | None:
 def build_info() -> BuildInfo | None:
     """The package's build record, or None when the package was never built by setuptools-scm
     (run from a checkout that was never installed, or an install before the record existed)."""
-    try:
-        from validation import _version  # written at build time; not in the repository
+    try:  # written at build time, not in the repository; looked up in sys.modules first
+        _version = importlib.import_module("validation._version")
     except ImportError:
         return None
     dirty = getattr(_version, "build_dirty", None)
