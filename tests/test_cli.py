@@ -250,3 +250,22 @@ def test_fast_bench_help_prints_help_and_runs_nothing(capsys):
     assert exc.value.code == 0
     out = capsys.readouterr().out
     assert out.startswith("usage: python -m validation.fast_bench") and "numba available" not in out
+
+
+def test_validate_counts_the_checks_as_the_report_does(tmp_path, capsys):
+    """The closing verdict line counts what report.json counts: passed of the applicable checks,
+    and the not-applicable ones apart (an uncontrolled scene has no control torque to compare)."""
+    out = tmp_path / "v"
+    rc = main(
+        ["validate", "paper_example1", "--t-end", "0.2", "--plants", "analytic,mujoco",
+         "--out", str(out)]
+    )  # fmt: skip
+    line = next(x for x in capsys.readouterr().out.splitlines() if "checks passed" in x)
+    doc = json.loads((out / "report.json").read_text())
+    applicable = [c for c in doc["checks"] if c["applicable"]]
+    passed = sum(c["passed"] for c in applicable)
+    n_na = len(doc["checks"]) - len(applicable)
+    assert n_na > 0 and rc == 0
+    assert line == (
+        f"PASS: {passed}/{len(applicable)} checks passed ({n_na} not applicable) for paper_example1"
+    )

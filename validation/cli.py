@@ -150,9 +150,14 @@ def cmd_validate(args: argparse.Namespace) -> int:
             )
         finally:
             progress.close(walls=res.wall_times if res is not None else None, stopped=res is None)
-    n_fail = sum(1 for c in res.checks if not c.passed)
+    applicable = [c for c in res.checks if c.applicable]
+    n_fail = sum(1 for c in applicable if not c.passed)
+    n_na = len(res.checks) - len(applicable)
     verdict = "PASS" if res.passed else "FAIL"
-    print(f"{verdict}: {len(res.checks) - n_fail}/{len(res.checks)} checks passed for {scene.name}")
+    na = f" ({n_na} not applicable)" if n_na else ""
+    print(
+        f"{verdict}: {len(applicable) - n_fail}/{len(applicable)} checks passed{na} for {scene.name}"
+    )
     if res.failure:
         print(f"  run failed: {res.failure}")
     from validation.summary import check_sentence
