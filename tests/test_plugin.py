@@ -247,3 +247,18 @@ def test_pair_checks_are_the_compared_differences():
     from validation.compare import Difference
 
     assert PAIR_CHECKS == tuple(d.value for d in Difference)
+
+
+def test_a_check_that_does_not_apply_is_skipped_not_passed(pytester: pytest.Pytester) -> None:
+    """An uncontrolled scene has no control torque to compare: its control checks are reported as
+    skipped, "not applicable", never as passes."""
+    text = (SCENES_DIR / "paper_example1.toml").read_text()
+    text, k = re.subn(r"(?m)^t_end = .*$", "t_end = 0.05", text)
+    assert k == 1
+    pytester.makefile(".toml", test_free=text)
+    result = pytester.runpytest(*TWO, "-rA")
+    counts = result.parseoutcomes()
+    assert counts.get("failed", 0) == 0 and counts.get("errors", 0) == 0 and counts["passed"] > 0
+    skipped = [line for line in result.outlines if line.startswith("SKIPPED")]
+    assert skipped and all("not applicable" in line for line in skipped)
+    assert any("control_torque" in line for line in skipped)
