@@ -64,7 +64,7 @@ wraps, ``CyRK.nb.numba_solver.c_numba_cysolve_ivp`` (a ctypes function; the same
 result getters it uses, from Python: nothing of CyRK is compiled at run time. The rename does not
 touch these names; ``pyproject.toml`` pins ``cyrk <0.21``, and when the names or the version differ
 :func:`unavailable` says so and ``auto`` runs scipy's loop. The right-hand side ``cfunc`` is cached
-on disk by numba like the kernel (:func:`analytic.kernel.jit.jit`).
+on disk by numba like the kernel (:func:`analytic.kernel.jit.cfunc`).
 """
 
 from __future__ import annotations
@@ -201,7 +201,7 @@ def _runtime(solver: int = -1) -> SimpleNamespace:
     from analytic.kernel.entry import Solver
     from analytic.kernel.jit import source_fingerprint
 
-    with compile_lock.compiling(compile_lock.RHS):  # a first run's helper may be compiling it
+    with compile_lock.compiling(compile_lock.RHS):  # another process may be compiling it
         cfunc = compiled_rhs.make(source_fingerprint(*_rhs_modules()), Solver(solver))
     return SimpleNamespace(**vars(_cyrk()), address=cfunc.address, cfunc=cfunc, layout=compiled_rhs)
 
@@ -210,7 +210,7 @@ def prepare(solver: int) -> bool:
     """Compile (or load) the loop's right-hand side ``cfunc`` embedding the solve ``solver`` (a
     :class:`analytic.kernel.entry.Solver` value) without running it; False when the compiled loop
     cannot run here. It calls the kernel's halves by address (:mod:`analytic.kernel.abi`), so it
-    compiles before they do (a first run, :mod:`validation.warmup`)."""
+    compiles before they do (a warm-up, :mod:`validation.warmup`)."""
     if unavailable():
         return False
     _runtime(int(solver))

@@ -124,7 +124,6 @@ rhs_into = rhs_as(Solver.ANY)
 
 rhs_gauss = rhs_as(Solver.GAUSS)
 rhs_minv2 = rhs_as(Solver.MINV2)
-"""The variants :func:`rhs_for` gives, bound at module level like every compiled function, so
-that a look at numba's cache (:func:`validation.warmup.cold_engines`) sees the one a run used."""
+"""The variants :func:`rhs_for` gives, bound at module level like every compiled function."""
 
 __all__ = ["DEPS", "STATUS_NONFINITE", "rhs_as", "rhs_for", "rhs_gauss", "rhs_into", "rhs_minv2"]

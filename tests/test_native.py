@@ -387,7 +387,7 @@ def test_a_read_only_install_caches_in_the_user_cache_dir(tmp_path):
 
 
 def test_the_stage_compiled_ahead_is_the_one_both_callbacks_use():
-    """A first run compiles the MuJoCo stage in a helper process ahead of the native callback
+    """A warm-up compiles the MuJoCo stage in a worker process ahead of the native callback
     (``fast_stage.compile_for``, for ``fast_stage.argument_types()``); the callback links that
     stage and the Python callback calls it, so both must pass exactly those types: a run through
     either adds no second compiled signature."""

@@ -4,7 +4,8 @@ side of :mod:`analytic.fast`.
 Modules, in the order an evaluation runs through them:
 
 * :mod:`~analytic.kernel.layout`: where every number lives (packed parameters, output, workspace);
-* :mod:`~analytic.kernel.jit`: numba plumbing (compilation, disk cache, source fingerprints);
+* :mod:`~analytic.kernel.jit`: numba plumbing (compilation with numba's documented API, disk
+  cache, source fingerprints);
 * :mod:`~analytic.kernel.kinematics`: ``S(u)``, ``H(u)``, ``L_x(u)`` (Eqs. 11-34), stage 1;
 * :mod:`~analytic.kernel.forces`: ``Q`` (Eq. 52, springs Eq. 38), stages 2 and 4;
 * :mod:`~analytic.kernel.mass_matrix`: ``M`` (Eq. 51), stage 3;
@@ -23,8 +24,8 @@ one int array ``ip``, so a call unboxes six arguments. ``evaluate(t, q, q̇, fp,
 ``[q̈ (nq), Q^C (nq), τ (3), A_c q̈ - b_c (k)]`` into ``out`` and returns a status (0 = done).
 
 Cost notes (one evaluation is ~1 µs at small n, so constant factors matter): the stages are
-pasted (numba ``inline``) into two C callbacks, stages 1-6 and the solve (two, so that two processes
-compile a first run's kernel at once), which every caller calls through addresses held in ``ip``
+compiled into two C callbacks, stages 1-6 and the solve (two, so that two processes compile a
+first run's kernel at once), which every caller calls through addresses held in ``ip``
 (:mod:`~analytic.kernel.abi`: a caller's compile then neither waits for nor repeats the kernel's);
 no heap allocation on the Gauss path (one stack workspace carved
 by ``layout.WS_*``; the rod rows of ``Q`` and ``b_c`` live in ``out``); closed forms for ``L_a(u)``,

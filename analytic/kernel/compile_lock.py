@@ -1,15 +1,13 @@
 """One process compiles a kernel; another that needs it meanwhile waits, then loads it from disk.
 
 numba's on-disk cache has no locking: two processes that need the same uncompiled kernel at the
-same time both compile it (same result, twice the work). That happens by design on a first
-``tumble validate`` (:mod:`validation.warmup`): a helper process is still compiling the analytic
-plant's compiled right-hand side when the plants start, and the analytic plant's run then needs it.
+same time both compile it (same result, twice the work): a warm-up's worker
+(:mod:`validation.warmup`) and a plant's interval, or plants run side by side in worker processes.
 
 :func:`compiling` wraps the compile of a named kernel: it takes an exclusive lock on a file in the
 kernel cache directory (``fcntl.flock``; released by the operating system if the holder dies), so a
 second process waits there and then finds the code on disk. :func:`hold` / :func:`release` take
-the same lock ahead of time (the helper takes it as soon as it is given the job, before the plants
-can ask). Within one process a held name is not waited for again. Where ``fcntl`` or a writable
+the same lock ahead of time. Within one process a held name is not waited for again. Where ``fcntl`` or a writable
 cache directory is missing, nothing is locked (each process compiles, as numba does).
 """
 

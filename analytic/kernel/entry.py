@@ -57,11 +57,9 @@ _GAUSS, _MINV2 = int(Solver.GAUSS), int(Solver.MINV2)
 
 @inline
 def evaluate_as(solver, t, q, qd, fp, ip, out):
-    """The kernel a compiled caller embeds, by ``solver`` (a :class:`Solver` value). Pass a
-    constant of the caller (a closure variable of its factory): numba then drops the other branches
-    before compiling, so only that solve is compiled into the caller. A single solve is called as
-    its two cached halves (``join``), not through its entry point: a first run compiles the caller
-    as soon as the halves are on disk."""
+    """The kernel a compiled caller embeds, by ``solver`` (a :class:`Solver` value, a constant of
+    the caller). A single solve is called as its two cached halves by address (``join``), so the
+    caller compiles without them; ``Solver.ANY`` goes through :data:`evaluate`."""
     if solver == _GAUSS:
         return gauss.join(t, q, qd, fp, ip, out)
     if solver == _MINV2:

@@ -104,7 +104,7 @@ def control_outputs(q, fp, ip, n, kw, kp, out, full, w):
 def make_solve_gauss(deps: int):
     """The C callback body of stages 7-9 under Gauss weighting (:data:`analytic.kernel.abi.
     SOLVE_SIG`), closing over the kernel's source fingerprint; :mod:`analytic.kernel.halves`
-    compiles it once (a first run: in one process while another compiles stages 1-6,
+    compiles it once (a warm-up: in one process while another compiles stages 1-6,
     :mod:`validation.warmup`)."""
 
     def solve_gauss(q, fp, ip, out, len_out, w, full):
