@@ -61,3 +61,53 @@ def test_python_snippet_runs_as_written(line, code, tmp_path):
 def test_toml_snippet_is_a_scene(line, text):
     scene = scene_from_dict(tomllib.loads(text), source=f"README.md:{line}")
     thresholds_for(scene)  # and its [thresholds], if any, are known names
+
+
+def _commands() -> list[str]:
+    """Every ``tumble ...`` command the README shows (in code blocks and inline code), with
+    optional parts (``[SCENE]``, ``[--quick]``) left out."""
+    text = README.read_text(encoding="utf-8")
+    found = re.findall(r"(?m)(?:^|&& |`)(tumble(?: [^`&#\n]*)?)", text)
+    found = [cmd for cmd in found if cmd.strip() != "tumble"]
+    out = []
+    for cmd in found:
+        cmd = re.sub(r"\s*\[[^\]]*\]", "", cmd).strip()
+        if cmd not in out:
+            out.append(cmd)
+    return out
+
+
+COMMANDS = _commands()
+
+
+def test_readme_shows_the_commands():
+    assert "tumble validate" in COMMANDS and len(COMMANDS) >= 8
+
+
+@pytest.mark.parametrize("cmd", COMMANDS)
+def test_every_command_shown_is_one_the_cli_takes(cmd):
+    """Each command line the README shows parses as written (subcommand and options exist)."""
+    import shlex
+
+    from validation.cli import build_parser
+
+    args = build_parser().parse_args(shlex.split(cmd)[1:])
+    assert callable(args.func)
+
+
+def test_every_link_leads_to_a_file():
+    text = README.read_text(encoding="utf-8")
+    links = re.findall(r"\]\(([^)#\s]+)\)", text)
+    assert links
+    missing = [link for link in links if not (ROOT / link).exists()]
+    assert not missing, missing
+
+
+def test_ci_runs_the_readme_test_command():
+    """.ci/run installs and tests exactly as the README's second command says."""
+    text = README.read_text(encoding="utf-8")
+    line = next(x for x in text.splitlines() if 'pip install ".[test]"' in x)
+    steps = [s.strip() for s in line.split("&&")]
+    ci = (ROOT / ".ci" / "run").read_text()
+    for step in steps[steps.index('pip install ".[test]"') :]:
+        assert re.search(rf"(?m)^{re.escape(step)}$", ci), step
