@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from analytic.kernel.jit import inline, jit_entry
+from analytic.kernel.jit import inner, jit_entry
 from analytic.kernel.kinematics import omega, rotation
 
 
@@ -33,7 +33,7 @@ def _make(deps: int):
     return aux_rates
 
 
-@inline
+@inner
 def rates(q, qd, tau, rod, fC, a, d, m, mu0, m_T, out):  # pragma: no cover - compiled
     """:func:`aux_rates`'s body, called by compiled callers (the analytic plant's right-hand
     side, :mod:`analytic.fast_rhs`), which then need no separately compiled function."""

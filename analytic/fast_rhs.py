@@ -25,7 +25,7 @@ import numpy as np
 from analytic import aux_rates as _aux
 from analytic.aux_rates import rates
 from analytic.kernel.entry import Solver, evaluate_as, solver_of
-from analytic.kernel.jit import HAVE_NUMBA, KERNEL_SOURCES, inline, jit, source_fingerprint
+from analytic.kernel.jit import HAVE_NUMBA, KERNEL_SOURCES, inline_always, jit, source_fingerprint
 from analytic.kernel.layout import (
     F_MBR,
     F_MU0,
@@ -43,7 +43,7 @@ from analytic.kernel.system import tail
 STATUS_NONFINITE = 3
 
 
-@inline
+@inline_always
 def rhs_body(solver, t, y, fp, ip, work, out):  # pragma: no cover - compiled
     """:func:`rhs_into`'s work, called by it and by the stepping loop's C callback
     (:mod:`analytic.compiled_rhs`); ``solver`` (a :class:`Solver` value) is a constant of each

@@ -51,7 +51,7 @@ import mujoco
 import numpy as np
 
 from analytic.kernel.entry import Solver, solver_of
-from analytic.kernel.jit import HAVE_NUMBA, KERNEL_SOURCES, inline, source_fingerprint
+from analytic.kernel.jit import HAVE_NUMBA, KERNEL_SOURCES, inner, source_fingerprint
 from analytic.kernel.jit import cfunc as cached_cfunc
 from analytic.kernel.layout import F_TA, F_TC, F_TFREQ, STATUS_OK
 from mj_bridge import fast_stage
@@ -244,7 +244,7 @@ DEPS = source_fingerprint(*KERNEL_SOURCES, fast_stage)
 
 
 def _inlined_stage(solver: Solver):
-    return inline(_make_native_stage(DEPS, int(solver))) if HAVE_NUMBA else None
+    return inner(_make_native_stage(DEPS, int(solver))) if HAVE_NUMBA else None
 
 
 # one per solve (module globals: the callback refers to them by name), compiled into the callback

@@ -78,11 +78,11 @@ KERNELS: dict[str, tuple[Job, ...]] = {
 """The kernels each plant needs (every plant embeds the analytic kernel's two halves)."""
 
 COST_S: dict[Job, float] = {
-    Job.SYSTEM: 2.5,
-    Job.SOLVE: 2.0,
-    Job.RHS: 1.7,
-    Job.MUJOCO_STAGE: 2.8,
-    Job.PINOCCHIO_STAGE: 2.0,
+    Job.SYSTEM: 2.1,
+    Job.SOLVE: 2.1,
+    Job.RHS: 1.5,
+    Job.MUJOCO_STAGE: 2.7,
+    Job.PINOCCHIO_STAGE: 2.2,
     Job.PLANT: 0.3,
 }
 """Time of each job on an empty cache, s: its CPU time in its worker (what its wall is on a

@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from analytic.kernel.jit import HAVE_NUMBA, inline, stack_workspace
+from analytic.kernel.jit import HAVE_NUMBA, inner, stack_workspace
 from analytic.kernel.layout import (
     I_FN_SOLVE,
     I_FN_SYSTEM,
@@ -44,7 +44,7 @@ from analytic.kernel.layout import (
     tail_offsets,
 )
 
-tail = inline(tail_offsets)
+tail = inner(tail_offsets)
 """:func:`analytic.kernel.layout.tail_offsets` for compiled code (the kernel, the compiled
 right-hand sides and stages): the offsets of ``fp``'s tail, computed where they are read."""
 
@@ -53,7 +53,7 @@ if HAVE_NUMBA:
     from numba import carray, types
     from numba.extending import intrinsic
 
-    @inline
+    @inner
     def arrays(q_p, fp_p, ip_p, out_p, len_out, w_p):
         """The arrays behind a half's pointer arguments, ``(q, fp, ip, out, w)``, with their
         lengths read from ``ip``: ``n + 7``; the end of ``fp``'s tail
@@ -157,7 +157,7 @@ if HAVE_NUMBA:
 
         return sig, codegen
 
-    @inline
+    @inner
     def call_halves(t, q, qd, fp, ip, out, full):
         """Stages 1-6, then the solve, by the addresses in ``ip`` (one stack workspace between
         them): the body both weightings' ``join`` share. ``STATUS_UNSUPPORTED`` without a call

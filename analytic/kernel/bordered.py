@@ -13,7 +13,7 @@ with ``1 + k_ω ≤ 4`` border rows. With ``S_4 = L D Lᵀ`` (L unit lower, unro
 
 from __future__ import annotations
 
-from analytic.kernel.jit import inline
+from analytic.kernel.jit import inner
 from analytic.kernel.layout import (
     I_COMP,
     IX,
@@ -37,7 +37,7 @@ from analytic.kernel.layout import (
 )
 
 
-@inline
+@inner
 def ldl_in_place(w, o, ld, oi, k):
     """In-place ``A = L D Lᵀ`` (L unit lower, stored below the diagonal) of the k x k matrix at
     ``w[o + ld i + j]`` (lower triangle read); ``w[oi + j] = 1 / D_j``. Returns False if a pivot is
@@ -61,7 +61,7 @@ def ldl_in_place(w, o, ld, oi, k):
     return True
 
 
-@inline
+@inner
 def ldl_solve(w, o, ld, oi, k, ox):
     """``x <- (L D Lᵀ)⁻¹ x`` for ``x = w[ox:ox+k]``, with the factors of :func:`ldl_in_place`."""
     for i in range(k):
@@ -78,7 +78,7 @@ def ldl_solve(w, o, ld, oi, k, ox):
         w[ox + i] = v
 
 
-@inline
+@inner
 def bordered_solve(q, ip, kw, out, w):
     """Stage 8: ``q̈_u`` and ``ν = [λ, μ_ω]`` (to ``w[WS_NU:]``) from the bordered 4x4 system, then
     ``q̈_R`` (module docstring); writes ``out[0:7]``.

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 
-from analytic.kernel.jit import inline
+from analytic.kernel.jit import inner
 from analytic.kernel.layout import (
     F_D1,
     F_D2,
@@ -41,7 +41,7 @@ from analytic.kernel.layout import (
 )
 
 
-@inline
+@inner
 def modeling_row(q, qd, fp, nq, w):
     """Stage 5: ``b_m = -δ1 uᵀu̇ - (δ2/2)(uᵀu - 1) - u̇ᵀu̇`` (Eq. 59), ``|u|²``, and
     ``α = tr(M)/nq``, added to the u rows of Q as ``Q_α = Q + α b_m a_m``. Reads the diagonal of
@@ -65,7 +65,7 @@ def modeling_row(q, qd, fp, nq, w):
     w[WS_ALPHA] = alpha
 
 
-@inline
+@inner
 def control_rows(t, q, qd, fp, ip, n, kw, kp, o_m, o_pe, o_l, o_lam, o_alpha, o_beta, out, w):
     """Stage 6: ``b_c`` (module docstring). The ω rows go to ``w[WS_BW:]`` (tracking errors to
     ``w[WS_EW:]``); a tracked mass's ``b_i`` goes to ``out[7 + i]``, its q̈_i (Gauss: ``q̈_i = b_i``).

@@ -14,7 +14,7 @@ from enum import IntEnum
 import numpy as np
 
 from analytic.kernel import gauss, minv2
-from analytic.kernel.jit import inline, jit_entry
+from analytic.kernel.jit import inline_always, jit_entry
 from analytic.kernel.layout import I_KP, I_KW, I_WEIGHT, STATUS_UNSUPPORTED, W_GAUSS, W_MINV2
 
 
@@ -55,11 +55,13 @@ evaluate = jit_entry(_make_evaluate)
 _GAUSS, _MINV2 = int(Solver.GAUSS), int(Solver.MINV2)
 
 
-@inline
+@inline_always
 def evaluate_as(solver, t, q, qd, fp, ip, out):
-    """The kernel a compiled caller embeds, by ``solver`` (a :class:`Solver` value, a constant of
-    the caller). A single solve is called as its two cached halves by address (``join``), so the
-    caller compiles without them; ``Solver.ANY`` goes through :data:`evaluate`."""
+    """The kernel a compiled caller embeds, by ``solver`` (a :class:`Solver` value). Pass a
+    constant of the caller (a closure variable of its factory): inlined by numba
+    (:func:`analytic.kernel.jit.inline_always`), the other branches are dropped before compiling.
+    A single solve is called as its two cached halves by address (``join``), so the caller
+    compiles without them; ``Solver.ANY`` goes through :data:`evaluate`."""
     if solver == _GAUSS:
         return gauss.join(t, q, qd, fp, ip, out)
     if solver == _MINV2:

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 
-from analytic.kernel.jit import inline
+from analytic.kernel.jit import inner
 from analytic.kernel.kinematics import Ht_times
 from analytic.kernel.layout import (
     F_G,
@@ -50,7 +50,7 @@ from analytic.kernel.layout import (
 )
 
 
-@inline
+@inner
 def rod_pass(q, qd, fp, ip, n, o_m, o_pe, o_kl, o_kn, out, full, w):
     """Stage 2: the rod rows of Q (Eq. 52, third block row; springs ``F^S = -∂U_s/∂p`` of Eq. 38,
     docs/errata.md item 2) and, in the same pass, the moments the other stages need.
@@ -140,7 +140,7 @@ def rod_pass(q, qd, fp, ip, n, o_m, o_pe, o_kl, o_kn, out, full, w):
     w[WS_SPQ] = spq
 
 
-@inline
+@inner
 def body_forces(t, q, qd, fp, ip, w):
     """Stage 4: the R and u rows of Q (Eq. 52, first two block rows, with ``B_d``) into
     ``w[WS_QB:WS_QB+7]``, and the given torque's ``Q_τ = Hᵀτ`` (Remark 2, Eq. 61):

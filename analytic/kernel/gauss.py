@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from analytic.kernel.abi import call_halves
 from analytic.kernel.bordered import bordered_solve
-from analytic.kernel.jit import inline, jit_entry
+from analytic.kernel.jit import inner, jit_entry
 from analytic.kernel.layout import (
     F_ARR,
     I_COMP,
@@ -37,7 +37,7 @@ from analytic.kernel.layout import (
 from analytic.kernel.schur import schur_complement
 
 
-@inline
+@inner
 def control_outputs(q, fp, ip, n, kw, kp, out, full, w):
     """Stage 9: the rod rows and the control force.
 
@@ -158,7 +158,7 @@ def _make_evaluate(deps: int):
     return evaluate
 
 
-@inline
+@inner
 def join(t, q, qd, fp, ip, out):
     """:func:`evaluate`'s body, called by compiled callers (``analytic.kernel.entry.evaluate_as``):
     the two compiled halves called by the addresses in ``ip`` (:mod:`analytic.kernel.abi`;

@@ -10,7 +10,7 @@ the first time a process asks (:func:`callback`: compiled, or loaded from numba'
 :class:`analytic.fast.FastModel`). Two processes can compile the two halves at the same time
 (:mod:`validation.warmup`); the callers do not need either to compile.
 
-The stages are ordinary numba functions (:func:`analytic.kernel.jit.inline`) that numba compiles
+The stages are ordinary numba functions (:func:`analytic.kernel.jit.inner`) that numba compiles
 into each half; the halves index their C pointers directly (numba lowers a pointer index as one
 address and one load)."""
 

@@ -3,11 +3,16 @@ what a cached function's key covers. Only numba's documented API is used (``numb
 ``numba.cfunc``, ``numba.types``, ``numba.carray``, ``numba.extending.intrinsic``,
 ``cache=True``, ``NUMBA_CACHE_DIR``).
 
-**Three kinds of compiled function.**
+**Four kinds of compiled function.**
 
-* :func:`inline` (``numba.njit``, no disk cache): the kernel's stages and the small kinematic
+* :func:`inner` (``numba.njit``, no disk cache): the kernel's stages and the small kinematic
   helpers. numba compiles each once per process and links it into its callers, where LLVM
   inlines it; a cached caller carries their code, so a later process loads the caller alone.
+* :func:`inline_always` (``numba.njit(inline="always")``, numba's documented inlining): only the
+  small functions that choose the solve from a ``solver`` argument
+  (:func:`analytic.kernel.entry.evaluate_as`, :func:`analytic.fast_rhs.rhs_body`). Inlined into a
+  caller that passes a constant (a closure variable of its factory), numba drops the branches of
+  the other solves before compiling, so a Gauss caller compiles no M⁻² code.
 * the kernel's two halves (:mod:`analytic.kernel.halves`) and the other C callbacks: ``numba.
   cfunc(..., cache=True)``; every compiled caller calls the halves by address
   (:mod:`analytic.kernel.abi`).
@@ -123,12 +128,20 @@ def cfunc(sig, fn):
     return cached(lambda **kw: numba.cfunc(sig, nopython=True, **kw), fn)
 
 
-def inline(fn):
+def inner(fn):
     """A kernel stage or helper: ``numba.njit`` without a disk cache of its own (compiled into,
     and cached with, its callers; plain Python without numba)."""
     if not HAVE_NUMBA:  # pragma: no cover
         return fn
     return numba.njit(fastmath=False, nogil=True)(fn)
+
+
+def inline_always(fn):
+    """``numba.njit(inline="always")``: inlined by numba into each caller, where a constant
+    ``solver`` argument prunes the other solves' branches (plain Python without numba)."""
+    if not HAVE_NUMBA:  # pragma: no cover
+        return fn
+    return numba.njit(inline="always", fastmath=False)(fn)
 
 
 def source_fingerprint(*sources: ModuleType | str | Path) -> int:

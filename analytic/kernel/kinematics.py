@@ -8,7 +8,7 @@ in the same order. :func:`rotation` is the one compiled ``S(u)`` of the project.
 
 from __future__ import annotations
 
-from analytic.kernel.jit import inline
+from analytic.kernel.jit import inner
 from analytic.kernel.layout import (
     F_J,
     F_TAT,
@@ -29,7 +29,7 @@ from analytic.kernel.layout import (
 )
 
 
-@inline
+@inner
 def rotation(u0, u1, u2, u3):
     """``S(u)``, the active rotation body -> inertial of Eq. (11), written in the paper's form
     ``2u0² - 1 + 2ui²`` (a rotation only for unit u; docs/errata.md C2). Returns its nine entries,
@@ -47,7 +47,7 @@ def rotation(u0, u1, u2, u3):
     )
 
 
-@inline
+@inner
 def omega(u0, u1, u2, u3, v0, v1, v2, v3):
     """Body-axis angular velocity ``ω = H(u) u̇`` (Eqs. 12-13; docs/errata.md item 1), rad/s."""
     return (
@@ -57,7 +57,7 @@ def omega(u0, u1, u2, u3, v0, v1, v2, v3):
     )
 
 
-@inline
+@inner
 def H_into(u0, u1, u2, u3, w, o):
     """``H(u)`` of Eq. (13), row-major (3, 4) at ``w[o:o+12]``."""
     w[o] = -2 * u1
@@ -74,7 +74,7 @@ def H_into(u0, u1, u2, u3, w, o):
     w[o + 11] = 2 * u0
 
 
-@inline
+@inner
 def Ht_times(u0, u1, u2, u3, x0, x1, x2):
     """``H(u)ᵀ x`` (Eq. 13) for a 3-vector x, as a 4-tuple (e.g. ``Q_τ = Hᵀτ``, Eq. 61)."""
     return (
@@ -85,7 +85,7 @@ def Ht_times(u0, u1, u2, u3, x0, x1, x2):
     )
 
 
-@inline
+@inner
 def kinematic_terms(q, qd, fp, o_a, w):
     """Stage 1: everything kinematic the other stages read (Eqs. 11-13, 23-29, 34), into ``w``.
 

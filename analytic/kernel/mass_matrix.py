@@ -14,7 +14,7 @@ So only the 7x7 body block and the two 7-vectors are stored.
 
 from __future__ import annotations
 
-from analytic.kernel.jit import inline
+from analytic.kernel.jit import inner
 from analytic.kernel.layout import (
     F_J,
     F_MBR,
@@ -33,7 +33,7 @@ from analytic.kernel.layout import (
 )
 
 
-@inline
+@inner
 def body_block(fp, w):
     """Stage 3: ``M_bb`` (Eq. 51, 7x7 row-major, both triangles) into ``w[WS_MB:]`` and the
     ``M_bp`` column vectors ``c1``, ``c2`` into ``w[WS_C1:]``, ``w[WS_C2:]`` (module docstring).

@@ -20,7 +20,7 @@ import math
 import numpy as np
 
 from analytic.kernel.abi import arrays, call_halves
-from analytic.kernel.jit import inline, jit, jit_entry
+from analytic.kernel.jit import inner, jit, jit_entry
 from analytic.kernel.layout import (
     F_ARR,
     F_MU0,
@@ -322,7 +322,7 @@ def _make_evaluate(deps: int):
     return evaluate
 
 
-@inline
+@inner
 def join(t, q, qd, fp, ip, out):
     """:func:`evaluate`'s body, called by compiled callers (``analytic.kernel.entry.evaluate_as``):
     the two compiled halves called by the addresses in ``ip`` (:mod:`analytic.kernel.abi`;

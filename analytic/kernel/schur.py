@@ -21,7 +21,7 @@ steps.)
 
 from __future__ import annotations
 
-from analytic.kernel.jit import inline
+from analytic.kernel.jit import inner
 from analytic.kernel.layout import (
     F_MBR,
     F_MU0,
@@ -54,7 +54,7 @@ from analytic.kernel.layout import (
 )
 
 
-@inline
+@inner
 def schur_complement(q, fp, w):
     """Stage 7: ``r_b``, ``A⁻¹ r_R`` (to ``WS_XR``), ``B_F``, ``h``, ``r_4`` and the lower
     triangle of ``S_4`` (module docstring) into ``w``; ``γ`` and ``1/m_T`` to ``WS_GAM``, ``WS_KT``.
