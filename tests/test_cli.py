@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tests.guards import forbid_plant_runs
 from validation.cli import EXIT_USAGE, main, user_warnings
 
 
@@ -88,17 +89,6 @@ def _scene_file(tmp_path, replace=(), append="") -> str:
     return str(path)
 
 
-def _no_plant_may_run(monkeypatch):
-    import analytic.simulate  # noqa: F401  (the modules, not the functions of the same name)
-    import mj_bridge
-    import mj_bridge.simulate
-
-    def boom(*a, **k):
-        raise AssertionError("a plant ran")
-
-    for module in ("analytic.simulate", "mj_bridge.simulate"):
-        monkeypatch.setattr(sys.modules[module], "simulate", boom)
-    monkeypatch.setattr(mj_bridge, "simulate", boom)
 
 
 @pytest.mark.parametrize(
@@ -128,7 +118,7 @@ def test_validate_refuses_bad_input_before_any_plant(
     tmp_path, monkeypatch, capsys, replace, append, args, line
 ):
     scene = _scene_file(tmp_path, replace, append)
-    _no_plant_may_run(monkeypatch)
+    forbid_plant_runs(monkeypatch)
     out = tmp_path / "out"
     rc = main(["validate", scene, "--out", str(out), *args])
     err = capsys.readouterr().err.splitlines()

@@ -9,7 +9,6 @@ so in one line. Nothing here runs a plant: every refusal comes before one would 
 
 from __future__ import annotations
 
-import sys
 import tomllib
 from pathlib import Path
 
@@ -19,6 +18,7 @@ from analytic import scene as scene_module
 from analytic.random_scenes import chain_scene
 from analytic.scene import MAX_SCENE_NESTING, load_scene, scene_from_dict
 from analytic.trajectory import Engine
+from tests.guards import forbid_plant_runs
 from validation.cli import EXIT_FAILED, EXIT_USAGE, main
 
 pytestmark = pytest.mark.faults
@@ -40,22 +40,11 @@ def _write(tmp_path, text: str) -> Path:
     return path
 
 
-def _no_plant_may_run(monkeypatch):
-    import analytic.simulate  # noqa: F401  (the modules, not the functions of the same name)
-    import mj_bridge
-    import mj_bridge.simulate
-
-    def boom(*a, **k):
-        raise AssertionError("a plant ran")
-
-    for module in ("analytic.simulate", "mj_bridge.simulate"):
-        monkeypatch.setattr(sys.modules[module], "simulate", boom)
-    monkeypatch.setattr(mj_bridge, "simulate", boom)
 
 
 def _validate_refuses(tmp_path, monkeypatch, capsys, path, *args) -> str:
     """``tumble validate`` on ``path``: exit 2, one stderr line (returned), no plant, no output."""
-    _no_plant_may_run(monkeypatch)
+    forbid_plant_runs(monkeypatch)
     out = tmp_path / "out"
     rc = main(["validate", str(path), "--out", str(out), *args])
     err = capsys.readouterr().err.splitlines()
@@ -290,7 +279,7 @@ def test_out_of_memory_on_the_command_line_is_one_line(monkeypatch, capsys):
 def test_a_bad_option_is_one_line_and_exit_2(argv, line, monkeypatch, capsys):
     """A bad option value (zero, negative, NaN, an unknown choice, a missing value) -> one line
     ``tumble <command>: error: --option: ... (got ...)``, exit 2, no usage block."""
-    _no_plant_may_run(monkeypatch)
+    forbid_plant_runs(monkeypatch)
     with pytest.raises(SystemExit) as exc:
         main(argv)
     captured = capsys.readouterr()

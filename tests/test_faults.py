@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from analytic import RunStatus, load_scene, simulate
+from tests.guards import forbid_plant_runs
 from validation import hard_cases as hc
 
 
@@ -166,18 +167,6 @@ def test_fault_part_way_keeps_samples_before_it(monkeypatch, tmp_path, fault, ne
 # ------------------------------------------------------------------------------------------------
 
 
-def _no_plant_may_run(monkeypatch):
-    """Each plant's simulate raises if called (and the callers check that no output appeared)."""
-    import analytic.simulate  # noqa: F401  (the modules, not the functions of the same name)
-    import mj_bridge
-    import mj_bridge.simulate
-
-    def boom(*a, **k):
-        raise AssertionError("a plant ran")
-
-    for module in ("analytic.simulate", "mj_bridge.simulate"):
-        monkeypatch.setattr(sys.modules[module], "simulate", boom)
-    monkeypatch.setattr(mj_bridge, "simulate", boom)
 
 
 @pytest.mark.parametrize(
@@ -202,7 +191,7 @@ def test_run_validation_refuses_bad_input_before_any_plant(
     scene = load_scene(hc.SCENES_DIR / "paper_example1.toml")
     if thresholds is not None:
         scene = scene.replace(extra={"thresholds": thresholds})
-    _no_plant_may_run(monkeypatch)
+    forbid_plant_runs(monkeypatch)
     out = tmp_path / "out"
     with pytest.raises(ValueError) as exc:
         run_validation(scene, out, **kwargs)
