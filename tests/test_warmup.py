@@ -97,20 +97,27 @@ def test_a_damaged_stamp_counts_as_no_stamp_and_is_rewritten(tmp_path, monkeypat
 
 
 def test_the_estimate_is_the_measured_costs_scheduled_over_the_workers():
-    """Longest first onto the least loaded worker, then the plants' intervals, plus a worker's
-    start: worked by hand for two plants on one and on two workers."""
+    """One worker: every cost in turn. As many workers as jobs: the longest chain (a plant after
+    the longest of its kernels). Two workers: between the two bounds a schedule must respect (half
+    the work, the longest chain) and the work itself; each job once, after what it needs."""
     sc = resolve_scene(SCENE)
-    kernels = [Task(j, 0, sc) for j in (Job.SYSTEM, Job.SOLVE, Job.RHS, Job.MUJOCO_STAGE)]
-    plants = [Task(Job.PLANT, 0, sc, e) for e in ("analytic", "mujoco")]
     c = warmup.COST_S
-    one = warmup.POOL_START_S + c[Job.SYSTEM] + c[Job.SOLVE] + c[Job.RHS] + c[Job.MUJOCO_STAGE]
-    assert warmup.estimate_s(kernels, plants, 1) == pytest.approx(one + 2 * c[Job.PLANT])
-    costs = sorted((c[t.job] for t in kernels), reverse=True)
-    w = [0.0, 0.0]
-    for x in costs:  # by hand: each to the worker that is free first
-        w[w.index(min(w))] += x
-    two = warmup.POOL_START_S + max(w) + c[Job.PLANT]
-    assert warmup.estimate_s(kernels, plants, 2) == pytest.approx(two)
+    jobs = (Job.SYSTEM, Job.SOLVE, Job.RHS, Job.MUJOCO_STAGE)
+    tasks = [Task(j, 0, sc) for j in jobs] + [
+        Task(Job.PLANT, 0, sc, e) for e in ("analytic", "mujoco")
+    ]
+    work = sum(c[j] for j in jobs) + 2 * c[Job.PLANT]
+    start = warmup.POOL_START_S
+    assert warmup.estimate_s(tasks, 1) == pytest.approx(start + work)
+    chain = max(c[j] for j in jobs) + c[Job.PLANT]
+    assert warmup.estimate_s(tasks, len(tasks)) == pytest.approx(start + chain)
+    two = warmup.estimate_s(tasks, 2) - start
+    assert max(work / 2, chain) - 1e-12 <= two <= work
+    plan = warmup.schedule(tasks, 2)
+    assert sorted(t.key for t, _s, _e in plan) == sorted(t.key for t in tasks)
+    ends = {t.key: e for t, _s, e in plan}
+    for t, begin, _e in plan:
+        assert all(ends[k] <= begin + 1e-12 for k in warmup.needs(t, tasks))
 
 
 def test_a_plant_starts_only_after_its_kernels_and_the_pinocchio_stage_after_the_halves(
@@ -140,7 +147,7 @@ def test_a_plant_starts_only_after_its_kernels_and_the_pinocchio_stage_after_the
     kernels = warmup._unique(kernels)
     heard: list[warmup.StageTime] = []
     with ThreadPoolExecutor(2) as pool:
-        warmup._run_all(pool, [*kernels, *plants], heard.append)
+        warmup._run_all(pool, 2, [*kernels, *plants], heard.append)
     order = {ev: k for k, ev in enumerate(events)}
     assert len(heard) == len(kernels) + len(plants) == 8  # each job once
     for e in ("analytic", "mujoco", "pinocchio"):
@@ -148,10 +155,32 @@ def test_a_plant_starts_only_after_its_kernels_and_the_pinocchio_stage_after_the
             assert order["end", f"{j.value}/"] < order["start", f"plant/{e}"]
     for j in warmup.HALVES:
         assert order["end", f"{j.value}/"] < order["start", "pinocchio-stage/"]
-    free = [t for t in kernels if not warmup.needs(t, kernels)]
-    longest = sorted(free, key=lambda t: -warmup.COST_S[t.job])[:2]
     starts = [name for what, name in events if what == "start"]
-    assert set(starts[:2]) == {f"{t.job.value}/" for t in longest}  # longest first
+    assert set(starts[:2]) == {"system/", "solve/"}  # what the most others wait for goes first
+
+
+def _crash(task: Task) -> warmup.StageTime:  # module level: a forked worker finds it by name
+    os._exit(3)
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="forks only on Linux")
+def test_a_worker_that_dies_fails_its_line_not_the_run(tmp_path, monkeypatch):
+    """A worker killed mid-compile (a crash in compiled code): the warm-up reports it on one line,
+    stamps nothing (the next run warms up again) and returns; the run compiles what is missing."""
+    monkeypatch.setattr(warmup, "_stamp_path", lambda: tmp_path / warmup.WARM_STAMP)
+    monkeypatch.setattr(warmup, "run_task", _crash)
+    monkeypatch.setattr(
+        warmup,
+        "_pool",
+        lambda n, fork=None: warmup.ProcessPoolExecutor(
+            1, mp_context=warmup.multiprocessing.get_context("fork")
+        ),
+    )
+    lines: list[str] = []
+    sc = resolve_scene(SCENE)
+    res = warmup.warm_up([sc], ["analytic"], lines.append, force=True)
+    assert any("failed: BrokenProcessPool" in line for line in lines), lines
+    assert res.stages and not warmup.is_stamped_warm(warmup.warm_keys(["analytic"], sc))
 
 
 def test_tumble_warmup_lists_every_kernel_once_for_every_scene(tmp_path, monkeypatch):

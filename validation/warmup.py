@@ -19,7 +19,8 @@ so, one line per kernel:
    compiles whatever else its default settings call.
 
 The announcement's estimate is :func:`estimate_s`: the per-job compile times in :data:`COST_S`
-(measured on the 2-core development machine) scheduled over the workers.
+(measured on the 2-core development machine) scheduled over the workers as :func:`_run_all` runs
+them (:func:`schedule`); a busy machine takes longer.
 
 A failure while warming up is never fatal: it is reported on its line, and the plant's own run
 compiles what is missing and reports its own error. Without a writable cache directory there is
@@ -31,6 +32,7 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import json
+import math
 import multiprocessing
 import os
 import platform
@@ -38,7 +40,8 @@ import sys
 import threading
 import time
 from collections.abc import Callable, Iterator, Sequence
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from concurrent.futures import FIRST_COMPLETED, Executor, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
 from enum import StrEnum
 from importlib import metadata
@@ -376,23 +379,45 @@ def free_cpus() -> int:
         return os.cpu_count() or 1
 
 
-def _schedule_s(costs: Sequence[float], workers: int) -> float:
-    """Wall time of ``costs`` run longest first on ``workers`` processes, s."""
-    ends = [0.0] * max(1, workers)
-    for c in sorted(costs, reverse=True):
-        ends[ends.index(min(ends))] += c
-    return max(ends)
+def estimate_s(tasks: Sequence[Task], workers: int) -> float:
+    """The announced wall time of a warm-up, s: :func:`schedule` of the measured :data:`COST_S`
+    on ``workers`` processes, plus a worker's start."""
+    return POOL_START_S + max((end for _t, _start, end in schedule(tasks, workers)), default=0.0)
 
 
-def estimate_s(kernels: Sequence[Task], plants: Sequence[Task], workers: int) -> float:
-    """The announced wall time of a warm-up, s, from the measured :data:`COST_S`: the kernels
-    longest first on ``workers`` processes, then the plants' intervals (a slight overestimate:
-    some intervals start while the last kernels compile)."""
-    return (
-        POOL_START_S
-        + _schedule_s([COST_S[t.job] for t in kernels], workers)
-        + _schedule_s([COST_S[t.job] for t in plants], workers)
-    )
+def schedule(tasks: Sequence[Task], workers: int) -> list[tuple[Task, float, float]]:
+    """``(task, start, end)`` in s of each task as :func:`_run_all` runs them, with the measured
+    :data:`COST_S` as durations: whenever a worker is free, it takes the ready task of highest
+    :func:`priority` (or waits for the next one to finish)."""
+    waiting = _order(tasks)
+    free = [0.0] * max(1, workers)
+    ends: dict[tuple, float] = {}
+    out = []
+    while waiting:
+        k = free.index(min(free))
+        now = free[k]
+        ready = [t for t in waiting if all(ends.get(x, math.inf) <= now for x in needs(t, tasks))]
+        if not ready:  # idle until the next task ends
+            free[k] = min(e for e in ends.values() if e > now)
+            continue
+        t = ready[0]
+        waiting.remove(t)
+        free[k] = ends[t.key] = now + COST_S[t.job]
+        out.append((t, now, free[k]))
+    return out
+
+
+def priority(task: Task, tasks: Sequence[Task]) -> float:
+    """The longest chain of measured costs from ``task``'s start to the end of what waits for it
+    (critical-path first: the kernel's halves, which the Pinocchio stage and every plant wait
+    for, go before a longer job that nothing waits for)."""
+    after = [priority(u, tasks) for u in tasks if task.key in needs(u, tasks)]
+    return COST_S[task.job] + max(after, default=0.0)
+
+
+def _order(tasks: Sequence[Task]) -> list[Task]:
+    """``tasks`` by decreasing :func:`priority` (a task always after what it needs)."""
+    return sorted(tasks, key=lambda t: -priority(t, tasks))
 
 
 def _pool(workers: int, fork: bool | None = None) -> ProcessPoolExecutor:
@@ -426,22 +451,28 @@ def needs(task: Task, tasks: Sequence[Task]) -> set[tuple]:
 
 
 def _run_all(
-    pool: ProcessPoolExecutor, tasks: Sequence[Task], report: Callable[[StageTime], None]
+    pool: Executor, workers: int, tasks: Sequence[Task], report: Callable[[StageTime], None]
 ) -> None:
-    """Run ``tasks`` in ``pool``, each as soon as what it :func:`needs` is done, longest first,
-    reporting each as it finishes."""
-    waiting = sorted(tasks, key=lambda t: -COST_S[t.job])
+    """Run ``tasks`` on the ``workers`` of ``pool``: whenever one is free, the task of highest
+    :func:`priority` whose :func:`needs` are done; each reported as it finishes."""
+    waiting = _order(tasks)
     blockers = {t.key: needs(t, tasks) for t in tasks}
     running: dict[Any, Task] = {}
     done: set[tuple] = set()
     while waiting or running:
-        for t in [t for t in waiting if blockers[t.key] <= done]:
+        ready = [t for t in waiting if blockers[t.key] <= done]
+        for t in ready[: max(0, workers - len(running))]:
             waiting.remove(t)
             running[pool.submit(run_task, t)] = t
         finished, _ = wait(running, return_when=FIRST_COMPLETED)
         for fut in finished:
-            done.add(running.pop(fut).key)
-            report(fut.result())
+            task = running.pop(fut)
+            done.add(task.key)
+            try:
+                st = fut.result()
+            except Exception as exc:  # the worker died (a crash in compiled code, killed)
+                st = StageTime(task.title, 0.0, f"{type(exc).__name__}: {exc}".splitlines()[0])
+            report(st)
 
 
 def cache_writable() -> bool:
@@ -496,13 +527,13 @@ def warm_up(
     if not cache_writable():
         say(
             "numba has no writable cache directory here (set NUMBA_CACHE_DIR): every run compiles "
-            f"its kernels (~{estimate_s(kernels, plant_tasks, 1):.0f} s)"
+            f"its kernels (~{estimate_s([*kernels, *plant_tasks], 1):.0f} s)"
         )
         return WarmupResult(cached=False)
     n = max(1, min(workers or free_cpus(), len(kernels)))
     say(
         f"compiling {len(kernels)} numba kernels once per machine "
-        f"(~{estimate_s(kernels, plant_tasks, n):.0f} s with {n} worker{'s' if n > 1 else ''}, as "
+        f"(~{estimate_s([*kernels, *plant_tasks], n):.0f} s with {n} worker{'s' if n > 1 else ''}, as "
         "measured on 2 cores; later runs load them from numba's cache):"
     )
     stages: list[StageTime] = []
@@ -512,8 +543,11 @@ def warm_up(
         tail = f" (failed: {st.error}; the run compiles it instead)" if st.error else ""
         say(f"  {st.title}: {st.seconds:.1f} s{tail}")
 
-    with _pool(n) as pool:
-        _run_all(pool, [*kernels, *plant_tasks], report)
+    try:
+        with _pool(n) as pool:
+            _run_all(pool, n, [*kernels, *plant_tasks], report)
+    except BrokenProcessPool as exc:  # a worker died: what is left compiles in the run
+        report(StageTime("the warm-up's worker processes", 0.0, f"BrokenProcessPool: {exc}"))
     total = time.perf_counter() - t0
     say(f"  kernels ready in {total:.1f} s")
     if not any(st.error for st in stages):
