@@ -39,6 +39,7 @@ import platform
 import sys
 import threading
 import time
+import warnings
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Executor, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
@@ -349,11 +350,15 @@ def _compile_pinocchio_stage(task: Task) -> None:
 
 
 def _compile_plant(task: Task) -> None:
+    """One output interval, its warnings silenced: it runs only to compile; what the scene's
+    physics says (an unstable run's overflows, MuJoCo's warnings) the run itself reports."""
     from mj_bridge.plants import plant
 
     pl = plant(task.engine)
     scene = task.scene
-    pl.simulate(scene, pl.default_settings(scene), t_end=1.0 / scene.output.rate)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        pl.simulate(scene, pl.default_settings(scene), t_end=1.0 / scene.output.rate)
 
 
 _COMPILE: dict[Job, Callable[[Task], None]] = {
