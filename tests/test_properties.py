@@ -85,8 +85,9 @@ def _dotted(path) -> str:
 REQUIRED = [
     ("scene", "name"), ("scene", "effects"), ("body", "mass"), ("body", "inertia"),
     ("rod", "axis"), ("rod", "offset"), ("masses", "mass"), ("masses", "p_e"),
-    ("initial", "p"), ("initial", "attitude"),
+    ("initial", "p"),
 ]  # fmt: skip
+"""Keys a paper scene cannot do without (the attitude can: it defaults to the identity)."""
 POSITIVE = [("body", "mass"), ("body", "inertia"), ("masses", "mass")]
 PER_MASS = [("masses", "p_e"), ("masses", "ring_radius"), ("initial", "p"), ("initial", "pdot"),
             ("springs", "k_linear"), ("springs", "k_cubic")]  # fmt: skip
