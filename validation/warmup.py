@@ -537,9 +537,9 @@ def warm_up(
         return WarmupResult(cached=False)
     n = max(1, min(workers or free_cpus(), len(kernels)))
     say(
-        f"compiling {len(kernels)} numba kernels once per machine "
-        f"(~{estimate_s([*kernels, *plant_tasks], n):.0f} s with {n} worker{'s' if n > 1 else ''}, as "
-        "measured on 2 cores; later runs load them from numba's cache):"
+        f"{'compiling (or loading)' if force else 'compiling'} {len(kernels)} numba kernels once "
+        f"per machine (~{estimate_s([*kernels, *plant_tasks], n):.0f} s with {n} worker"
+        f"{'s' if n > 1 else ''}, as measured on 2 cores; later runs load them from numba's cache):"
     )
     stages: list[StageTime] = []
 
