@@ -82,16 +82,17 @@ KERNELS: dict[str, tuple[Job, ...]] = {
 """The kernels each plant needs (every plant embeds the analytic kernel's two halves)."""
 
 COST_S: dict[Job, float] = {
-    Job.SYSTEM: 2.1,
-    Job.SOLVE: 2.1,
-    Job.RHS: 1.5,
-    Job.MUJOCO_STAGE: 2.7,
-    Job.PINOCCHIO_STAGE: 2.2,
-    Job.PLANT: 0.3,
+    Job.SYSTEM: 3.9,
+    Job.SOLVE: 4.3,
+    Job.RHS: 2.3,
+    Job.MUJOCO_STAGE: 3.5,
+    Job.PINOCCHIO_STAGE: 5.0,
+    Job.PLANT: 0.5,
 }
-"""Time of each job on an empty cache, s: its CPU time in its worker (what its wall is on a
-quiet machine), measured with ``warm_up(..., workers=1)`` on the 2-core development machine
-(numba 0.68.1), rounded up; used only for the announced estimate."""
+"""Wall time of each job on an empty cache with two of them side by side, s: ``tumble warmup``
+and first ``tumble validate`` runs on the 2-core development machine (numba 0.68.1; one job
+alone takes about half: 2.0, 2.1, 1.4, 2.6, 2.1 s of CPU); used only for the announced
+estimate."""
 
 POOL_START_S = 1.0
 """A worker's start (numba and the kernel's modules imported), s, on the same machine."""
