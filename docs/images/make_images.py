@@ -186,12 +186,24 @@ def shrink_png(src: Path, dst: Path, max_bytes: int = MAX_BYTES) -> Path:
         scale *= 0.85
 
 
-def main() -> int:
+PICTURE_T_END_S = 5.0
+"""Horizon of the run the viewer picture shows, s: a quarter of the default scene's, so the
+web viewer has the whole recording (about 1.5 MB) drawn before the screenshot."""
+
+
+def main(argv: list[str] | None = None) -> int:
+    import argparse
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--wait", type=float, default=RENDER_WAIT_S, help="seconds to let the viewer draw")
+    args = ap.parse_args(argv)
     with tempfile.TemporaryDirectory() as tmp:
         run = Path(tmp) / "validate"
         tumble = [sys.executable, "-m", "validation.cli", "validate", "--out", str(run)]
         subprocess.run(tumble, check=True)
-        shot = viewer_screenshot(run / "run.rrd", Path(tmp) / "viewer.png")
+        short = Path(tmp) / "short"
+        subprocess.run([*tumble[:-2], "--t-end", str(PICTURE_T_END_S), "--out", str(short)], check=True)
+        shot = viewer_screenshot(short / "run.rrd", Path(tmp) / "viewer.png", wait_s=args.wait)
         for src, name in ((shot, "viewer.png"), (run / "tracking.png", "tracking.png")):
             dst = shrink_png(src, HERE / name)
             print(f"{dst.relative_to(HERE.parents[1])}: {dst.stat().st_size} bytes")
