@@ -82,17 +82,17 @@ KERNELS: dict[str, tuple[Job, ...]] = {
 """The kernels each plant needs (every plant embeds the analytic kernel's two halves)."""
 
 COST_S: dict[Job, float] = {
-    Job.SYSTEM: 3.9,
-    Job.SOLVE: 4.3,
-    Job.RHS: 2.3,
-    Job.MUJOCO_STAGE: 3.5,
-    Job.PINOCCHIO_STAGE: 5.0,
-    Job.PLANT: 0.5,
+    Job.SYSTEM: 3.1,
+    Job.SOLVE: 2.6,
+    Job.RHS: 1.7,
+    Job.MUJOCO_STAGE: 2.4,
+    Job.PINOCCHIO_STAGE: 3.7,
+    Job.PLANT: 0.2,
 }
 """Wall time of each job on an empty cache with two of them side by side, s: ``tumble warmup``
-and first ``tumble validate`` runs on the 2-core development machine (numba 0.68.1; one job
-alone takes about half: 2.0, 2.1, 1.4, 2.6, 2.1 s of CPU); used only for the announced
-estimate."""
+and a first ``tumble validate`` (fresh clone and venv) on the idle 2-core development machine
+(numba 0.68.1); used only for the announced estimate. A busy machine takes up to about 1.4x
+these."""
 
 POOL_START_S = 1.0
 """A worker's start (numba and the kernel's modules imported), s, on the same machine."""
