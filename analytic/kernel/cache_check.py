@@ -23,7 +23,7 @@ defined (:func:`ensure_checked`, called by :mod:`analytic.kernel.jit` at import)
 
 After a run's kernels are ready (:func:`record`: the end of :func:`validation.warmup.warm_up`, and
 the normal exit of the process that checked), the manifest is rewritten from the files present.
-Processes started by a process that checked (the warm-up helper, workers) trust its check
+Processes started by a process that checked (the warm-up's pool, the plant workers) trust its check
 (:data:`ENV_MARK`) and leave recording to it, so a file one of them has just written is never
 taken for an unknown one by a sibling. A file numba wrote in a run killed before it was recorded
 is unknown to the next run and recompiled (a few seconds, once).
