@@ -21,6 +21,7 @@ import io
 import json
 import os
 import shutil
+import signal
 import socket
 import subprocess
 import sys
@@ -66,7 +67,11 @@ def web_viewer(rrd: Path) -> Iterator[str]:
     http, grpc = _free_port(), _free_port()
     cmd = [sys.executable, "-m", "rerun", "--web-viewer", "--bind", "127.0.0.1"]
     cmd += ["--web-viewer-port", str(http), "--port", str(grpc), str(rrd)]
-    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    # Its own process group: ``python -m rerun`` starts the viewer binary as a child, which must
+    # end with it (terminating the Python launcher alone left the server running, busy).
+    proc = subprocess.Popen(
+        cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True
+    )
     try:
         deadline = time.monotonic() + 30
         while time.monotonic() < deadline:
@@ -76,8 +81,21 @@ def web_viewer(rrd: Path) -> Iterator[str]:
         proxy = urllib.parse.quote(f"rerun+http://127.0.0.1:{grpc}/proxy", safe="")
         yield f"http://127.0.0.1:{http}/?url={proxy}"
     finally:
-        proc.terminate()
-        proc.wait(timeout=30)
+        _stop_group(proc)
+
+
+def _stop_group(proc: subprocess.Popen) -> None:
+    """End ``proc`` and every process of its group: SIGTERM, then SIGKILL after 10 s."""
+    for sig, wait_s in ((signal.SIGTERM, 10.0), (signal.SIGKILL, 10.0)):
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(proc.pid, sig)
+        try:
+            proc.wait(timeout=wait_s)
+        except subprocess.TimeoutExpired:
+            continue
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(proc.pid, signal.SIGKILL)  # the group's other members, should any remain
+        return
 
 
 class _DevTools:
