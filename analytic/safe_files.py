@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import contextlib
 import errno
+import hashlib
 import os
 import stat
 from collections.abc import Iterator
@@ -100,4 +101,14 @@ def read_regular(path: str | Path, limit: int) -> bytes:
     return b"".join(chunks)
 
 
-__all__ = ["NotRegularFile", "file_kind", "open_regular", "read_regular"]
+def file_digest(path: str | Path) -> tuple[str, int]:
+    """``(hex SHA-256, size in bytes)`` of the regular file at ``path`` (:func:`open_regular`)."""
+    h, size = hashlib.sha256(), 0
+    with open_regular(path) as fd:
+        while chunk := os.read(fd, 1 << 20):
+            h.update(chunk)
+            size += len(chunk)
+    return h.hexdigest(), size
+
+
+__all__ = ["NotRegularFile", "file_digest", "file_kind", "open_regular", "read_regular"]

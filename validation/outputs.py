@@ -69,6 +69,7 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from analytic.safe_files import file_digest, open_regular, read_regular
 from validation.atomic import OutputError, write_text
 
 DEFAULT_ROOT = Path("out")
@@ -221,31 +222,11 @@ def _lstat(path: Path) -> os.stat_result | None:
         return None
 
 
-def _open_regular(path: Path) -> int:
-    """A read-only descriptor of the regular file ``path``.
-
-    Opened with ``O_NOFOLLOW|O_NONBLOCK``: a symbolic link is refused and a FIFO or device never
-    blocks the open; anything but a regular file is then refused.
-
-    Raises:
-        OSError: ``path`` is missing, a link, or not a regular file.
-    """
-    fd = os.open(path, os.O_RDONLY | _NOFOLLOW | _NONBLOCK | _CLOEXEC)
-    if not stat.S_ISREG(os.fstat(fd).st_mode):
-        os.close(fd)
-        raise OSError(errno.EINVAL, "not a regular file", str(path))
-    return fd
-
-
 def _digest(path: Path) -> tuple[int, str]:
-    """``(bytes, SHA-256 hex)`` of the regular file ``path`` (see :func:`_open_regular`)."""
-    h = hashlib.sha256()
-    size = 0
-    with open(_open_regular(path), "rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            h.update(block)
-            size += len(block)
-    return size, h.hexdigest()
+    """``(bytes, SHA-256 hex)`` of the regular file ``path``, never through a link or blocking
+    (:func:`analytic.safe_files.file_digest`)."""
+    digest, size = file_digest(path)
+    return size, digest
 
 
 def _kind(entry: os.DirEntry) -> str:
@@ -335,10 +316,12 @@ def _read_manifest(path: Path) -> dict[str, ManifestEntry]:
         OSError: it cannot be opened as a regular file (a link, a FIFO ...).
         ValueError: it is not one of this tool's manifests.
     """
-    with open(_open_regular(path), "rb") as f:
-        data = f.read(MANIFEST_MAX_BYTES + 1)
-    if len(data) > MANIFEST_MAX_BYTES:
-        raise ValueError(f"larger than {MANIFEST_MAX_BYTES} bytes")
+    try:
+        data = read_regular(path, MANIFEST_MAX_BYTES)
+    except OSError as exc:
+        if exc.errno == errno.EFBIG:
+            raise ValueError(f"larger than {MANIFEST_MAX_BYTES} bytes") from None
+        raise
     return parse_manifest(data)
 
 
@@ -432,9 +415,8 @@ def _is_our_leftover(path: Path, run_id: str) -> bool:
     if st is None or not stat.S_ISDIR(st.st_mode):
         return False
     try:
-        with open(_open_regular(path / STAGING_MARKER), "rb") as f:
-            if f.read(64).decode("ascii").strip() == run_id:
-                return True
+        if read_regular(path / STAGING_MARKER, 64).decode("ascii").strip() == run_id:
+            return True
     except (OSError, UnicodeDecodeError):
         pass
     try:
@@ -829,8 +811,7 @@ def _commit_swap(staging: Path, target: Path, previous: Owned | None) -> None:
 
 def _copy_new(src: Path, dst: Path) -> None:
     """Copy the regular file ``src`` to the new file ``dst`` (``O_EXCL``), flushed to disk."""
-    sfd = _open_regular(src)
-    try:
+    with open_regular(src) as sfd:
         flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | _NOFOLLOW | _CLOEXEC
         dfd = os.open(dst, flags, 0o666)
         try:
@@ -846,8 +827,6 @@ def _copy_new(src: Path, dst: Path) -> None:
             dst.unlink(missing_ok=True)
             raise
         os.close(dfd)
-    finally:
-        os.close(sfd)
 
 
 def _bring(src: Path, dst: Path) -> None:

@@ -48,7 +48,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from analytic.kernel.cache_dir import kernel_cache_dir
-from analytic.safe_files import file_kind, open_regular, read_regular
+from analytic.safe_files import file_digest, file_kind, read_regular
 
 MANIFEST_NAME = "tumble-numba-manifest.json"
 """The manifest's file, in :func:`analytic.kernel.cache_dir.kernel_cache_dir`."""
@@ -136,14 +136,6 @@ class _Scan:
 # ----------------------------------------------------------------------------------------------
 
 
-def file_digest(path: str | Path) -> tuple[str, int]:
-    """``(hex SHA-256, size in bytes)`` of the regular file at ``path`` (:func:`open_regular`)."""
-    h, size = hashlib.sha256(), 0
-    with open_regular(path) as fd:
-        while chunk := os.read(fd, 1 << 20):
-            h.update(chunk)
-            size += len(chunk)
-    return h.hexdigest(), size
 
 
 def _write_atomic(path: Path, data: bytes) -> None:
