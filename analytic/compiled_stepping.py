@@ -210,7 +210,7 @@ def prepare(solver: int) -> bool:
     """Compile (or load) the loop's right-hand side ``cfunc`` embedding the solve ``solver`` (a
     :class:`analytic.kernel.entry.Solver` value) without running it; False when the compiled loop
     cannot run here. It calls the kernel's halves by address (:mod:`analytic.kernel.abi`), so it
-    compiles before they do (a warm-up, :mod:`validation.warmup`)."""
+    compiles before they do (a warm-up, :mod:`validation.runs.warmup`)."""
     if unavailable():
         return False
     _runtime(int(solver))

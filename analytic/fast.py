@@ -9,7 +9,7 @@ Usage::
     qdd = fm.qddot(t, q, qdot)                 # the same q̈ only (the integrator's right-hand side)
     qdd, torque, rod_forces, force_at_C, QC = fm.qddot_and_forces(t, q, qdot)  # views, no record
 
-The numpy model stays the reference; ``tests/test_fast.py`` checks that both agree to 1e-12
+The numpy model stays the reference; ``tests/analytic/test_fast.py`` checks that both agree to 1e-12
 (relative, Euclidean norm) on q̈, ``τ``, the rod forces and ``Q^C``.
 
 What runs where:
@@ -271,7 +271,7 @@ def compile_half(scene: Scene, half: KernelHalf | str) -> bool:
     without running it (:mod:`analytic.kernel.halves`).
 
     The kernel's callers call the two halves by address, so two processes can compile one half
-    each at the same time (:mod:`validation.warmup`, a first run), and the callers compile without
+    each at the same time (:mod:`validation.runs.warmup`, a first run), and the callers compile without
     either. Returns False when there is nothing to compile (numba absent, or a weighting the
     kernel does not serve).
     """

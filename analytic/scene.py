@@ -463,7 +463,7 @@ _VECTOR_KINDS = (Kind.VECTOR3, Kind.VECTOR4, Kind.VECTOR_N, Kind.VECTOR_N1, Kind
 class SceneText(str):
     """Text a scene file gives (its name, description, a threshold's reason), kept verbatim.
 
-    A plain ``str`` in every respect; the JSON writers (``validation.provenance``) carry it as it
+    A plain ``str`` in every respect; the JSON writers (``validation.report.provenance``) carry it as it
     is, where text the code writes itself may not be a placeholder such as ``"unknown"`` or
     ``"nan"``: a scene's description may well read "unknown"."""
 
@@ -923,12 +923,12 @@ def scene_from_dict(data: Mapping[str, Any], source: str = "") -> Scene:
     mj = _parse_mujoco(top.table_or_empty("mujoco"))
 
     # [thresholds] belongs to later layers (the comparison's names are checked where they are
-    # resolved, validation.thresholds); here its shape: numbers, or {value, reason} tables.
+    # resolved, validation.compare.thresholds); here its shape: numbers, or {value, reason} tables.
     extra = {}
     th = top.table("thresholds")
     if th is not None:
         extra["thresholds"] = _parse_thresholds(th)
-    # [hard_case] belongs to the hard-case suite, which validates it (validation/hard_cases/
+    # [hard_case] belongs to the hard-case suite, which validates it (validation/studies/hard_cases/
     # criterion.py); here only that it is a table, kept verbatim.
     hc = top.table("hard_case")
     if hc is not None:

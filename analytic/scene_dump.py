@@ -5,7 +5,7 @@ the same keys (``lambda``, ``k_linear``, ``[initial.attitude] quaternion``), 1-b
 indices, every default filled in. :func:`scene_to_toml` writes that as TOML text, which
 :func:`analytic.scene.load_scene` reads back to an equal scene (every field, every array
 bit for bit; ``source`` aside, which is where a scene was read from). It is the ``provenance.scene``
-block of the JSON outputs (:mod:`validation.provenance`) and the ``scene.toml`` that ``tumble
+block of the JSON outputs (:mod:`validation.report.provenance`) and the ``scene.toml`` that ``tumble
 validate`` writes beside its report: pasted into a scene file, it runs the same scene.
 
 What the file gave in another form is written in the one the loader resolved it to: the attitude as

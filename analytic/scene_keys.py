@@ -5,7 +5,7 @@ not declared here is a programming error (``LookupError``), a default it applies
 declared here, and the kind of value it reads (a number, a list of n numbers, ...) must be the
 declared kind. The reference ``docs/scene-format.md`` is rendered from this table
 (``python -m validation scene-reference``), so the documentation and the loader cannot drift apart;
-``tests/test_scene_reference.py`` checks both directions.
+``tests/validation/report/test_scene_reference.py`` checks both directions.
 
 Conventions (as in the loader): units SI; *body* vectors are in BR's principal axes at its centre
 of mass C (the paper's xyz), *inertial* vectors in XYZ with Z up; quaternions are w first; mass and

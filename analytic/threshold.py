@@ -1,8 +1,8 @@
 """The record of one named bound: its value, its unit and the reason for its number.
 
 One type for the whole project, at the lowest layer so that every layer (and the tests) can hold
-its bounds in it: the comparison's scene-overridable defaults (``validation/thresholds.py``) and
-the tolerances only the tests use (``tests/tolerances.py``).
+its bounds in it: the comparison's scene-overridable defaults (``validation/compare/thresholds.py``) and
+the tolerances only the tests use (``tests/support/tolerances.py``).
 """
 
 from __future__ import annotations
@@ -25,13 +25,13 @@ class Threshold:
 
     Attributes:
         name: the key used in reports and in a scene's ``[thresholds]`` table (for a test
-            tolerance: its name in ``tests/tolerances.py``).
+            tolerance: its name in ``tests/support/tolerances.py``).
         value: the bound (inclusive: a check passes when ``checked value <= value``), finite and
             non-negative, in ``unit``.
         unit: unit of ``value`` ("1" for relative or dimensionless bounds).
         reason: why this number.
         relative: whether the checked value is divided by a scale (``max(scale, floor)``, see
-            ``validation/thresholds.py``).
+            ``validation/compare/thresholds.py``).
         floor: for relative thresholds, the smallest scale used, in the signal's unit.
         source: :class:`ThresholdSource` (a string naming one is accepted and converted).
 

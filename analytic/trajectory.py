@@ -195,7 +195,7 @@ class Trajectory:
     def save_npz(self, path: str | Path) -> Path:
         """Write :meth:`npz_bytes` to ``path`` atomically (a new file beside it, then a rename).
 
-        The command line writes through ``validation.atomic`` instead, which also checks the
+        The command line writes through ``validation.runs.atomic`` instead, which also checks the
         written size; this is the dependency-free form for library users.
         """
         path = Path(path)

@@ -17,7 +17,7 @@ Model (joint names as in the MJCF twin, :mod:`model_xml.builder`; mass indices 1
   (:mod:`mj_bridge.pinocchio_plant`); the model has no armature, damping or friction.
 
 ``pin.buildModelFromMJCF`` of the exported twin (:func:`model_xml.to_mjcf`) gives the same tree and
-mass properties (``tests/test_pinocchio.py``), except that Pinocchio 4.1's reader ignores
+mass properties (``tests/mj_bridge/test_pinocchio_plant.py``), except that Pinocchio 4.1's reader ignores
 ``<option gravity>`` (it keeps 0, 0, -9.81), picks ``JointModelPX/PY/PZ`` when ``a`` is a coordinate
 axis, and carries the MJCF's tiny isotropic padding of point masses (taken off BR); tendons and
 actuators are not read. This module builds the model from the scene directly.

@@ -1,12 +1,13 @@
 """The side-by-side validation of the analytic plant and the MuJoCo twin, and the ``tumble`` CLI.
 
-Importing this package sets ``NO_COLOR=1`` when stderr is not a terminal (unless ``NO_COLOR`` is
+Importing this package pins BLAS to one thread (``OPENBLAS_NUM_THREADS``, ``OMP_NUM_THREADS``,
+``MKL_NUM_THREADS``, unless set) and sets ``NO_COLOR=1`` when stderr is not a terminal (unless ``NO_COLOR`` is
 set already): Rerun's logger otherwise writes ANSI colour codes into files and pipes. It reads the
 variable once, when ``rerun`` is first imported, which in this project happens inside this package
-(:mod:`validation.recording`).
+(:mod:`validation.recording.recording`).
 
 Public names (imported on first use, so ``import validation`` stays cheap: the pytest plugin
-:mod:`validation.pytest_plugin` imports this package in every pytest run):
+:mod:`validation.testing.pytest_plugin` imports this package in every pytest run):
 
 * :func:`assert_agree`: run a scene and raise ``AssertionError`` with the table of failed checks;
 * :func:`run_validation`, :class:`ValidationResult`: the ``tumble validate`` job;
@@ -17,16 +18,25 @@ Public names (imported on first use, so ``import validation`` stays cheap: the p
 
 import os as _os
 
+# The process-wide numerical environment, set here once: every entry point (``tumble``,
+# ``python -m validation.*``, the pytest plugin, ``import validation``) imports this package before
+# numpy. The model works on small dense matrices (n + 7 up to a few hundred): multithreaded BLAS
+# only adds synchronisation there, and on a loaded 2-core machine its spinning threads slowed one
+# evaluation by up to 100x (measured: n = 50, 1.3 ms with one thread against 120 ms with two while
+# another process ran). ``setdefault``: a user's explicit setting wins.
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    _os.environ.setdefault(_var, "1")
+
 if "NO_COLOR" not in _os.environ and not _os.isatty(2):
     _os.environ["NO_COLOR"] = "1"
 
 _LAZY = {
-    "assert_agree": "validation.agree",
-    "Check": "validation.compare",
+    "assert_agree": "validation.testing.agree",
+    "Check": "validation.compare.checks",
     "resolve_scene": "validation.scenes",
     "run_validation": "validation.validate",
-    "Threshold": "validation.thresholds",
-    "thresholds_for": "validation.thresholds",
+    "Threshold": "validation.compare.thresholds",
+    "thresholds_for": "validation.compare.thresholds",
     "ValidationResult": "validation.validate",
 }
 

@@ -3,32 +3,27 @@
 Errors are one line on stderr (``tumble: error: ...``) and a non-zero exit status, never a
 traceback: 2 for bad input (found before any work), 1 for a failed run or check or a result that
 could not be written, 130 after Ctrl-C and 143 after SIGTERM (the partial results are kept, marked
-interrupted). Every output directory is one run, whole (:mod:`validation.outputs`); default output
+interrupted). Every output directory is one run, whole (:mod:`validation.runs.outputs`); default output
 paths are built from a sanitised slug of the scene's name, always under ``out/``.
 
 Only the standard library is imported before ``main`` has installed its signal handlers, so a
 Ctrl-C during start-up (numpy, MuJoCo, numba loading) is one line too; an interrupt that lands
 inside compiled code's Python callback is kept and raised at the next progress report
-(:mod:`validation.interrupts`).
+(:mod:`validation.runs.interrupts`).
 """
 
 from __future__ import annotations
 
+import argparse
+import contextlib
+import json
 import os
+import sys
+import warnings
+from pathlib import Path
+from typing import NoReturn
 
-# Small dense matrices only: one BLAS thread (see tests/conftest.py for the measurement).
-for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_var, "1")
-
-import argparse  # noqa: E402
-import contextlib  # noqa: E402
-import json  # noqa: E402
-import sys  # noqa: E402
-import warnings  # noqa: E402
-from pathlib import Path  # noqa: E402
-from typing import NoReturn  # noqa: E402
-
-from validation import interrupts  # noqa: E402
+from validation.runs import interrupts
 
 EXIT_FAILED = 1  # a run or a check failed, or its results could not be written
 EXIT_USAGE = 2  # bad input (scene, arguments), found before any work
@@ -73,11 +68,11 @@ def _add_scene_arg(p: argparse.ArgumentParser, default: str, builtin: list[str])
 def cmd_simulate(args: argparse.Namespace) -> int:
     from analytic.simulate import simulate
     from analytic.trajectory import RunStatus
-    from validation.atomic import write_bytes, write_text
-    from validation.outputs import default_out_dir, output_run
-    from validation.progress import Progress
+    from validation.compare.summary import drift_figures, summary_table
+    from validation.runs.atomic import write_bytes, write_text
+    from validation.runs.outputs import default_out_dir, output_run
+    from validation.runs.progress import Progress
     from validation.scenes import DEFAULT_SCENE, resolve_scene
-    from validation.summary import drift_figures, summary_table
 
     scene = resolve_scene(args.scene, DEFAULT_SCENE)
     t_end = args.t_end or scene.output.t_end
@@ -122,15 +117,15 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
 
 def cmd_validate(args: argparse.Namespace) -> int:
-    from validation.outputs import default_out_dir
-    from validation.progress import StageProgress, Status
+    from validation.runs.outputs import default_out_dir
+    from validation.runs.progress import StageProgress, Status
     from validation.scenes import DEFAULT_SCENE, resolve_scene
     from validation.validate import run_validation
 
     scene = resolve_scene(args.scene, DEFAULT_SCENE)
     out = Path(args.out) if args.out else default_out_dir("validate_", scene.name)
     t_end = args.t_end or scene.output.t_end
-    from validation.warmup import warming
+    from validation.runs.warmup import warming
 
     chosen = _checked_plants(scene, args)
     res = None
@@ -160,12 +155,12 @@ def cmd_validate(args: argparse.Namespace) -> int:
     )
     if res.failure:
         print(f"  run failed: {res.failure}")
-    from validation.summary import check_sentence
+    from validation.compare.summary import check_sentence
 
     for c in res.checks:
         if not c.passed:
             print(f"  failed: {check_sentence(c, reason=False)}")
-    from validation.referee import VerdictKind
+    from validation.compare.referee import VerdictKind
 
     for v in res.verdicts:
         if v.kind is not VerdictKind.AGREE:
@@ -198,8 +193,8 @@ def _checked_plants(scene, args: argparse.Namespace) -> list:
 
 def cmd_export_mjcf(args: argparse.Namespace) -> int:
     from model_xml import to_mjcf
-    from validation.atomic import write_text
-    from validation.outputs import default_out_file
+    from validation.runs.atomic import write_text
+    from validation.runs.outputs import default_out_file
     from validation.scenes import DEFAULT_SCENE, resolve_scene
 
     scene = resolve_scene(args.scene, DEFAULT_SCENE)
@@ -212,7 +207,7 @@ def cmd_export_mjcf(args: argparse.Namespace) -> int:
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
-    from validation.demo import write_demo
+    from validation.studies.demo import write_demo
 
     out = Path(args.out) if args.out else Path("out") / "demo"
     res = write_demo(out)
@@ -221,7 +216,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
 
 def cmd_hard_cases(args: argparse.Namespace) -> int:
-    from validation.hard_cases import run_hard_cases
+    from validation.studies.hard_cases import run_hard_cases
 
     out = Path(args.out) if args.out else Path("out") / "hard_cases"
     plants = None
@@ -252,9 +247,9 @@ def cmd_hard_cases(args: argparse.Namespace) -> int:
 
 
 def cmd_sweep(args: argparse.Namespace) -> int:
-    from validation.outputs import default_out_dir
+    from validation.runs.outputs import default_out_dir
     from validation.scenes import DEFAULT_SCENE, resolve_scene
-    from validation.sweep import run_sweep
+    from validation.studies.sweep import run_sweep
 
     scene = resolve_scene(args.scene, DEFAULT_SCENE)
     out = Path(args.out) if args.out else default_out_dir("sweep_", scene.name)
@@ -277,7 +272,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
-    from validation.bench import run, write_bench
+    from validation.bench.command import run, write_bench
 
     def say(s: str) -> None:
         print(s, flush=True)
@@ -291,8 +286,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
 def cmd_warmup(args: argparse.Namespace) -> int:
     from mj_bridge.plants import installed_plants
+    from validation.runs.warmup import builtin_scenes, warm_up_command
     from validation.scenes import resolve_scene
-    from validation.warmup import builtin_scenes, warm_up_command
 
     scenes = [resolve_scene(args.scene)] if args.scene else builtin_scenes()
     engines = [e.value for e in installed_plants()]
@@ -300,8 +295,8 @@ def cmd_warmup(args: argparse.Namespace) -> int:
 
 
 def cmd_scene_reference(args: argparse.Namespace) -> int:
-    from validation.atomic import write_text
-    from validation.scene_reference import render
+    from validation.report.scene_reference import render
+    from validation.runs.atomic import write_text
 
     if args.out:
         write_text(Path(args.out), render())
@@ -456,9 +451,9 @@ def build_parser() -> argparse.ArgumentParser:
         "bare step, n = 1000 vs n = 10, and the 60 s controlled Example 1 vs MuJoCo RK4 at the "
         "same accuracy. Numbers only: exits 0 whether or not a goal holds.",
     )
-    from validation.bench import add_arguments as add_bench_arguments
+    from validation.bench.command import add_arguments as add_bench_arguments
 
-    add_bench_arguments(p)  # the options of python -m validation.bench, one definition
+    add_bench_arguments(p)  # the options of python -m validation.bench.command, one definition
     p.set_defaults(func=cmd_bench)
 
     p = sub.add_parser(
@@ -532,7 +527,7 @@ def main(argv: list[str] | None = None) -> int:
             print(f"tumble: error: {_out_of_memory(exc)}", file=sys.stderr)
             return EXIT_FAILED
         except OSError as exc:
-            from validation.atomic import OutputError
+            from validation.runs.atomic import OutputError
 
             if isinstance(exc, OutputError):  # the run happened; its results could not be written
                 print(f"tumble: error: {exc}", file=sys.stderr)

@@ -15,7 +15,7 @@ from typing import Any
 
 from analytic.scene import Scene
 from analytic.trajectory import Engine
-from validation.thresholds import thresholds_for
+from validation.compare.thresholds import thresholds_for
 
 
 def check_validation_inputs(

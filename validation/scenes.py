@@ -3,7 +3,7 @@
 The built-in scenes (the paper's examples, the spacecraft with propellant slosh) live with the
 scene format in ``analytic/scenes/`` (:mod:`analytic.builtin_scenes`), so
 ``analytic.load_scene("paper_example1")`` finds them too. The hard-case suite's scenes are this
-layer's (``validation/scenes/hard/``, with the criteria of :mod:`validation.hard_cases`); the
+layer's (``validation/scenes/hard/``, with the criteria of :mod:`validation.studies.hard_cases`); the
 command line also accepts them, as ``hard/<name>``.
 """
 
@@ -13,7 +13,7 @@ from pathlib import Path
 
 from analytic.builtin_scenes import BUILTIN_DIR, builtin_scene_names, builtin_scene_path
 from analytic.scene import Scene, load_scene
-from validation.thresholds import thresholds_for
+from validation.compare.thresholds import thresholds_for
 
 SCENES_DIR = BUILTIN_DIR
 """The built-in scenes (``analytic/scenes``)."""
@@ -64,7 +64,7 @@ def resolve_scene(name_or_path: str | None, default: str = DEFAULT_SCENE) -> Sce
     """Load a scene given by path or built-in name (``default`` when None).
 
     Everything in it is checked here, before any work: its fields by the loader, and the names
-    and values of its ``[thresholds]`` against :data:`validation.thresholds.DEFAULTS`. Messages
+    and values of its ``[thresholds]`` against :data:`validation.compare.thresholds.DEFAULTS`. Messages
     name a file as the user gave it.
     """
     given = name_or_path or default

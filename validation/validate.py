@@ -2,7 +2,7 @@
 
 :func:`run_validation`: the analytic plant (scipy, the scene's solver settings), the MuJoCo twin
 (the scene's integrator and time step, overridable) and, when installed, the Pinocchio referee, all
-driven by the analytic controller; :func:`validation.compare.compare_plants`; then ``report.md``,
+driven by the analytic controller; :func:`validation.compare.checks.compare_plants`; then ``report.md``,
 ``report.json``, the figures (PNG, and SVG or PDF on request) and ``run.rrd`` in ``out_dir``. A run
 that fails (an engine error, a plant stopping early, MuJoCo's bridge missing, a figure or the
 recording that could not be made) still writes what it has, marked FAILED; one a signal stops
@@ -11,7 +11,7 @@ without comparison, figures or recording. The verdict is PASSED only when every 
 names is in the committed directory, whole (:func:`_check_committed`); a file that cannot be
 written (a full disk, in this process or a worker) is an :class:`OutputError`: no verdict, the
 previous contents of ``out_dir`` kept. A stage whose worker process was lost (killed) is done
-again here, and the report says so. The teaching demo is :mod:`validation.demo`.
+again here, and the report says so. The teaching demo is :mod:`validation.studies.demo`.
 """
 
 from __future__ import annotations
@@ -29,27 +29,27 @@ from typing import Any
 from analytic.scene import Scene, load_scene
 from analytic.scene_dump import scene_to_toml
 from analytic.trajectory import Engine, RunStatus, Trajectory
-from validation import workers
-from validation.atomic import OutputError, write_text
-from validation.compare import Check, Comparison, compare_plants
-from validation.figures import (
+from validation.compare.checks import Check, Comparison, compare_plants
+from validation.compare.referee import Verdict, referee
+from validation.preflight import check_validation_inputs, validation_plants
+from validation.report.figures import (
     DEFAULT_FORMATS,
     FIGURES,
     FigureContext,
     FigureFormat,
     parse_formats,
 )
-from validation.interrupts import interrupt_name, raise_pending
-from validation.outputs import OutputRun, output_run
-from validation.preflight import check_validation_inputs, validation_plants
-from validation.referee import Verdict, referee
-from validation.report import (
+from validation.report.report import (
     RunVerdict,
     draw_figures,
     is_write_failure,
     versions,
     write_report,
 )
+from validation.runs import workers
+from validation.runs.atomic import OutputError, write_text
+from validation.runs.interrupts import interrupt_name, raise_pending
+from validation.runs.outputs import OutputRun, output_run
 from validation.scenes import DEFAULT_SCENE
 
 SCENES = Path(__file__).resolve().parent / "scenes"
@@ -89,7 +89,7 @@ class ValidationResult:
         failure: why the run failed ("" if it did not).
         files: name -> path of every file written.
         wall_times: stage -> seconds (each plant, compare, report, recording, total).
-        verdicts: the referee's rulings (three plants), see :mod:`validation.referee`.
+        verdicts: the referee's rulings (three plants), see :mod:`validation.compare.referee`.
     """
 
     scene: str
@@ -159,7 +159,7 @@ def run_validation(
     Args:
         scene: a :class:`Scene`, a scene file, or a built-in scene name.
         out_dir: output directory. It receives this run's files as one set
-            (:func:`validation.outputs.output_run`): ``manifest.json`` lists them with their
+            (:func:`validation.runs.outputs.output_run`): ``manifest.json`` lists them with their
             hashes and the run id; a failed run's partial set is marked failed, an interrupted one
             interrupted (and the KeyboardInterrupt re-raised after the files are in place).
         integrator: MuJoCo integrator (default the scene's ``[mujoco] integrator``).
@@ -170,11 +170,11 @@ def run_validation(
         plants: which plants (engine names, or ``"analytic,mujoco"``), at least two, each named
             once (:func:`validation.preflight.validation_plants`); default every installed
             plant (:func:`mj_bridge.plants.installed_plants`). With three, the referee names the
-            plant that disagrees with the two that agree (:mod:`validation.referee`).
+            plant that disagrees with the two that agree (:mod:`validation.compare.referee`).
         figure_formats: the figures' file formats, PNG by default (``("png", "svg")`` adds SVG
-            files for papers; :class:`validation.figures.FigureFormat`).
+            files for papers; :class:`validation.report.figures.FigureFormat`).
         concurrent: run the plants side by side, and the recording beside the figures, in
-            worker processes where that is safe (:mod:`validation.workers`); False runs every
+            worker processes where that is safe (:mod:`validation.runs.workers`); False runs every
             stage here, one after the other. The files are the same either way.
 
     Returns:
@@ -216,14 +216,14 @@ def run_validation(
 
 def _check_committed(target: Path, files: dict[str, Path]) -> None:
     """Every file the result names is in the committed directory, whole: listed in its
-    ``manifest.json`` (:func:`validation.outputs.parse_manifest`) with the size found there (the
+    ``manifest.json`` (:func:`validation.runs.outputs.parse_manifest`) with the size found there (the
     verdict is given only then).
 
     Raises:
         OutputError: the manifest is not readable, or a file is missing or not the size its
             manifest records.
     """
-    from validation.outputs import parse_manifest
+    from validation.runs.outputs import parse_manifest
 
     try:
         listed = parse_manifest((target / "manifest.json").read_bytes())
@@ -267,7 +267,7 @@ def _plant_task(pl: Any, settings: Any, sc: Scene, horizon: float, *, report) ->
 def _recording_task(
     path: Path, sc: Scene, plants, cmp, run_id: str, *, report
 ) -> tuple[Any, float]:
-    from validation.recording import write_recording
+    from validation.recording.recording import write_recording
 
     t0 = time.perf_counter()
     info = write_recording(path, sc, plants, cmp, recording_id=run_id)
@@ -280,7 +280,7 @@ EVIDENCE_SHARES: tuple[tuple[str, ...], ...] = (
     (RECORDING, "errors"),
     ("tracking", "invariants", "control"),
 )
-"""How the recording and the figures (:data:`validation.figures.FIGURES`) are shared between the
+"""How the recording and the figures (:data:`validation.report.figures.FIGURES`) are shared between the
 two evidence workers, balanced as measured on the default scene (one process, 2-core machine):
 the recording 0.1 s, the error figure (a panel per compared quantity) 0.8-1.0 s, the others
 0.3-0.4 s each."""
@@ -306,7 +306,7 @@ def _evidence_task(share: Sequence[str], rec_args, fig_args, *, report) -> dict[
 
 
 def _as_output_error(exc: BaseException, path: Path) -> OutputError:
-    """``exc`` (a filesystem's refusal to write, :func:`validation.report.is_write_failure`) as
+    """``exc`` (a filesystem's refusal to write, :func:`validation.report.report.is_write_failure`) as
     the :class:`OutputError` it means: the run's set cannot be completed."""
     return exc if isinstance(exc, OutputError) else OutputError(path, exc)
 
@@ -314,7 +314,7 @@ def _as_output_error(exc: BaseException, path: Path) -> OutputError:
 def _import_rerun() -> None:
     import rerun.blueprint  # noqa: F401
 
-    import validation.recording  # noqa: F401  (scipy.spatial)
+    import validation.recording.recording  # noqa: F401  (scipy.spatial)
 
 
 def _prepare_rerun_and_figures() -> None:
@@ -323,10 +323,10 @@ def _prepare_rerun_and_figures() -> None:
 
 
 def _prepare_figures() -> None:
-    """matplotlib imported and one throw-away figure drawn (:func:`validation.figures.prepare_drawing`):
+    """matplotlib imported and one throw-away figure drawn (:func:`validation.report.figures.prepare_drawing`):
     the fonts and caches the first figure needs are loaded (in an evidence worker, before it is
     given its inputs)."""
-    from validation.figures import prepare_drawing
+    from validation.report.figures import prepare_drawing
 
     try:
         prepare_drawing()
@@ -352,7 +352,7 @@ def _run_plants(
     here, as soon as every plant has started (``jobs``: those running in workers).
 
     An interrupt (Ctrl-C, SIGTERM) stops every plant at once (the workers are told,
-    :func:`validation.workers.wait`), starts no further one, and keeps what each reached."""
+    :func:`validation.runs.workers.wait`), starts no further one, and keeps what each reached."""
     slots = workers.available_cpus() if fork else 1
     queue = list(enumerate(runs))
     running: list[tuple[int, Any, Any, workers.Job]] = []
@@ -533,7 +533,7 @@ def _validate_into(
 ) -> ValidationResult:
     """:func:`run_validation`'s work, writing into the staging directory ``run.path``.
 
-    With ``concurrent`` (and where :func:`validation.workers.can_fork`), the plants run side by
+    With ``concurrent`` (and where :func:`validation.runs.workers.can_fork`), the plants run side by
     side in workers, and two more workers import rerun and matplotlib meanwhile, then write the
     recording and draw the figures side by side; the files are those of a run one stage after
     the other.

@@ -21,7 +21,7 @@ defined (:func:`ensure_checked`, called by :mod:`analytic.kernel.jit` at import)
   removed at exit: the kernels are compiled and used, the cache itself is left as it is, and one
   line says it could not be written.
 
-After a run's kernels are ready (:func:`record`: the end of :func:`validation.warmup.warm_up`, and
+After a run's kernels are ready (:func:`record`: the end of :func:`validation.runs.warmup.warm_up`, and
 the normal exit of the process that checked), the manifest is rewritten from the files present.
 Processes started by a process that checked (the warm-up's pool, the plant workers) trust its check
 (:data:`ENV_MARK`) and leave recording to it, so a file one of them has just written is never

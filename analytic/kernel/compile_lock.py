@@ -2,7 +2,7 @@
 
 numba's on-disk cache has no locking: two processes that need the same uncompiled kernel at the
 same time both compile it (same result, twice the work): a warm-up's worker
-(:mod:`validation.warmup`) and a plant's interval, or plants run side by side in worker processes.
+(:mod:`validation.runs.warmup`) and a plant's interval, or plants run side by side in worker processes.
 
 :func:`compiling` wraps the compile of a named kernel: it takes an exclusive lock on a file in the
 kernel cache directory (``fcntl.flock``; released by the operating system if the holder dies), so a
@@ -35,9 +35,9 @@ PinocchioDynamics.compile`)."""
 
 _held: dict[str, IO[bytes]] = {}
 """The locks this process holds. A process forked meanwhile (a worker of
-:mod:`validation.workers`) closes its copies at once: it holds none of them itself (so it waits
+:mod:`validation.runs.workers`) closes its copies at once: it holds none of them itself (so it waits
 like any other process), and an ``flock`` lives while any copy of its file is open (as for the
-output directories' locks, :mod:`validation.outputs`)."""
+output directories' locks, :mod:`validation.runs.outputs`)."""
 
 
 def _forget_held() -> None:  # pragma: no cover - in a forked child

@@ -105,7 +105,7 @@ def make_solve_gauss(deps: int):
     """The C callback body of stages 7-9 under Gauss weighting (:data:`analytic.kernel.abi.
     SOLVE_SIG`), closing over the kernel's source fingerprint; :mod:`analytic.kernel.halves`
     compiles it once (a warm-up: in one process while another compiles stages 1-6,
-    :mod:`validation.warmup`)."""
+    :mod:`validation.runs.warmup`)."""
 
     def solve_gauss(q, fp, ip, out, len_out, w, full):
         """Stages 7-9 (Gauss): the Schur complement, the bordered solve and the control outputs,

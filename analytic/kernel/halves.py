@@ -8,7 +8,7 @@ Each is a ``numba.cfunc(sig, cache=True)`` with a C signature of :mod:`analytic.
 the first time a process asks (:func:`callback`: compiled, or loaded from numba's disk cache);
 :func:`addresses` gives the two addresses a scene's callers read from ``ip`` (written by
 :class:`analytic.fast.FastModel`). Two processes can compile the two halves at the same time
-(:mod:`validation.warmup`); the callers do not need either to compile.
+(:mod:`validation.runs.warmup`); the callers do not need either to compile.
 
 The stages are ordinary numba functions (:func:`analytic.kernel.jit.inner`) that numba compiles
 into each half; the halves index their C pointers directly (numba lowers a pointer index as one

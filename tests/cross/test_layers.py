@@ -1,0 +1,266 @@
+"""The import graph of the four packages: every layer points down, and no module cycle.
+
+Layers, lowest first (``docs/architecture.md``): ``analytic`` (the paper) < ``model_xml`` (the MJCF
+twin) < ``mj_bridge`` (the engine plants) < ``validation`` (comparison, reports, CLI). A module may
+import from its own layer or a lower one, never a higher one; and no set of modules may import each
+other in a cycle (counting imports inside functions too: a lazy import hides a cycle from the
+interpreter, not from a reader).
+
+The graph is read from the source with :mod:`ast`; no module is imported, so the test needs none of
+the engines and cannot be fooled by an import that fails. Every ``import`` and ``from ... import``
+statement counts, wherever it stands (module level, inside a function, under ``TYPE_CHECKING``).
+``from pkg import name`` is an edge to the module ``pkg.name`` when that module exists, else to
+``pkg`` (its ``__init__``). A package importing its own submodules is not a cycle by itself: the
+implicit import of a parent package by its submodule is not an edge.
+
+Exceptions are named below with the reason and what must change; an entry that no longer matches
+the code fails :func:`test_allow_lists_name_only_what_is_still_there`, so the list only shrinks.
+"""
+
+from __future__ import annotations
+
+import ast
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+
+LAYERS = ("analytic", "model_xml", "mj_bridge", "validation")
+"""The packages, lowest layer first."""
+
+KNOWN_UPWARD: Mapping[tuple[str, str], str] = {}
+"""Upward edges tolerated for now: ``(importer, imported) -> reason and what must change``.
+
+Empty: the upward edges found when this test was written (``analytic.fast_bench`` importing
+``validation.bench`` and ``model_xml``) were removed by moving that benchmark into ``validation``.
+Add an entry only for an edge in a module someone else is restructuring, saying what must change.
+"""
+
+KNOWN_CYCLES: Mapping[frozenset[str], str] = {}
+"""Import cycles tolerated for now: ``frozenset(modules) -> reason and what must change``.
+
+Empty: the cycle ``validation.bench`` <-> ``validation.goals`` was broken by moving the chain scene
+and the timing loop into ``validation.timing`` and dropping ``goals``' own command line.
+"""
+
+
+@dataclass(frozen=True)
+class Edge:
+    """``importer`` imports ``imported`` at ``path:line``."""
+
+    importer: str
+    imported: str
+    path: str
+    line: int
+
+    def __str__(self) -> str:
+        return f"{self.path}:{self.line}: {self.importer} imports {self.imported}"
+
+
+def discover(root: Path, packages: Iterable[str]) -> dict[str, Path]:
+    """Dotted module name -> source file, for every ``.py`` file under each package directory."""
+    modules: dict[str, Path] = {}
+    for pkg in packages:
+        for path in sorted((root / pkg).rglob("*.py")):
+            parts = list(path.relative_to(root).with_suffix("").parts)
+            if parts[-1] == "__init__":
+                parts.pop()
+            modules[".".join(parts)] = path
+    return modules
+
+
+def _owner(name: str, modules: Mapping[str, Path]) -> str | None:
+    """The longest prefix of dotted ``name`` that is one of ``modules`` (None: outside them)."""
+    parts = name.split(".")
+    while parts:
+        candidate = ".".join(parts)
+        if candidate in modules:
+            return candidate
+        parts.pop()
+    return None
+
+
+def import_edges(root: Path, modules: Mapping[str, Path]) -> list[Edge]:
+    """Every import from one of ``modules`` to another (self-imports dropped), in file order."""
+    edges: list[Edge] = []
+    for name, path in modules.items():
+        is_package = path.name == "__init__.py"
+        tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+        for node in ast.walk(tree):
+            targets: list[str] = []
+            if isinstance(node, ast.Import):
+                targets = [alias.name for alias in node.names]
+            elif isinstance(node, ast.ImportFrom):
+                if node.level:  # relative: resolved against the importing module's package
+                    base = name.split(".") if is_package else name.split(".")[:-1]
+                    base = base[: len(base) - (node.level - 1)]
+                    source = ".".join([*base, *([node.module] if node.module else [])])
+                else:
+                    source = node.module or ""
+                for alias in node.names:
+                    sub = f"{source}.{alias.name}"
+                    targets.append(sub if sub in modules else source)
+            for target in targets:
+                owner = _owner(target, modules)
+                if owner is not None and owner != name:
+                    rel = path.relative_to(root).as_posix()
+                    edges.append(Edge(name, owner, rel, node.lineno))
+    return sorted(set(edges), key=lambda e: (e.path, e.line, e.imported))
+
+
+def layer_of(module: str) -> int:
+    return LAYERS.index(module.split(".")[0])
+
+
+def upward_edges(edges: Iterable[Edge]) -> list[Edge]:
+    return [e for e in edges if layer_of(e.imported) > layer_of(e.importer)]
+
+
+def cycles(edges: Iterable[Edge]) -> list[frozenset[str]]:
+    """The strongly connected components of more than one module (Tarjan, iterative)."""
+    graph: dict[str, set[str]] = {}
+    for e in edges:
+        graph.setdefault(e.importer, set()).add(e.imported)
+        graph.setdefault(e.imported, set())
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    found: list[frozenset[str]] = []
+    for start in sorted(graph):
+        if start in index:
+            continue
+        work = [(start, iter(sorted(graph[start])))]
+        index[start] = low[start] = len(index)
+        stack.append(start)
+        on_stack.add(start)
+        while work:
+            v, children = work[-1]
+            for w in children:
+                if w not in index:
+                    index[w] = low[w] = len(index)
+                    stack.append(w)
+                    on_stack.add(w)
+                    work.append((w, iter(sorted(graph[w]))))
+                    break
+                if w in on_stack:
+                    low[v] = min(low[v], index[w])
+            else:
+                work.pop()
+                if work:
+                    parent = work[-1][0]
+                    low[parent] = min(low[parent], low[v])
+                if low[v] == index[v]:
+                    component = set()
+                    while True:
+                        w = stack.pop()
+                        on_stack.discard(w)
+                        component.add(w)
+                        if w == v:
+                            break
+                    if len(component) > 1:
+                        found.append(frozenset(component))
+    return found
+
+
+def _describe_cycle(component: frozenset[str], edges: Iterable[Edge]) -> str:
+    inside = [str(e) for e in edges if e.importer in component and e.imported in component]
+    return f"{sorted(component)}:\n    " + "\n    ".join(inside)
+
+
+@pytest.fixture(scope="module")
+def graph() -> tuple[dict[str, Path], list[Edge]]:
+    modules = discover(ROOT, LAYERS)
+    return modules, import_edges(ROOT, modules)
+
+
+def test_the_graph_sees_every_layer(graph):
+    """Not vacuous: every package has modules, and edges known to exist are found (a module-level
+    import, a ``from pkg import submodule`` inside a function, and one between layers)."""
+    modules, edges = graph
+    for pkg in LAYERS:
+        assert pkg in modules, f"{pkg}/__init__.py not found under {ROOT}"
+        assert any(m.startswith(pkg + ".") for m in modules), f"no modules found in {pkg}"
+    pairs = {(e.importer, e.imported) for e in edges}
+    assert ("analytic.model", "analytic.scene") in pairs
+    assert ("validation.bench.goals", "analytic.fast") in pairs  # `from analytic import fast`, in a def
+    assert ("validation.cli", "validation.bench.command") in pairs
+    assert ("analytic.fast", "analytic.kernel.layout") in pairs  # a subpackage is seen too
+    assert any(layer_of(e.imported) < layer_of(e.importer) for e in edges)
+
+
+def test_every_package_is_installed():
+    """``[tool.setuptools] packages`` in pyproject.toml is an explicit list, so a subpackage
+    missing from it (``analytic.kernel``) would be left out of an installed wheel: every directory
+    of the layers with an ``__init__.py`` must be listed."""
+    import tomllib
+
+    listed = set(
+        tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["packages"]
+    )
+    found = {
+        ".".join(init.parent.relative_to(ROOT).parts)
+        for pkg in LAYERS
+        for init in (ROOT / pkg).rglob("__init__.py")
+    }
+    assert found <= listed, f"packages missing from pyproject.toml: {sorted(found - listed)}"
+
+
+def test_no_module_imports_from_a_higher_layer(graph):
+    _, edges = graph
+    bad = [e for e in upward_edges(edges) if (e.importer, e.imported) not in KNOWN_UPWARD]
+    assert not bad, (
+        f"imports pointing up the layers {' < '.join(LAYERS)}:\n  "
+        + "\n  ".join(map(str, bad))
+        + "\nmove what is shared down into the lower layer, or the importer up"
+    )
+
+
+def test_no_import_cycles(graph):
+    _, edges = graph
+    bad = [c for c in cycles(edges) if c not in KNOWN_CYCLES]
+    assert not bad, "import cycles between modules:\n  " + "\n  ".join(
+        _describe_cycle(c, edges) for c in bad
+    )
+
+
+def test_allow_lists_name_only_what_is_still_there(graph):
+    """An exception that the code no longer needs is removed from the list, so it only shrinks."""
+    _, edges = graph
+    up = {(e.importer, e.imported) for e in upward_edges(edges)}
+    stale = [pair for pair in KNOWN_UPWARD if pair not in up]
+    stale += [sorted(c) for c in KNOWN_CYCLES if c not in set(cycles(edges))]
+    assert not stale, f"no longer in the code, remove from the allow-list: {stale}"
+
+
+def test_the_checker_finds_an_upward_import_and_a_cycle(tmp_path):
+    """The functions above on a planted tree: an upward import inside a function, a relative
+    import, a ``from pkg import submodule`` cycle; and nothing reported for a clean tree."""
+    files = {
+        "analytic/__init__.py": "from analytic.model import Model\n",
+        "analytic/model.py": "def f():\n    from validation import report\n",
+        "analytic/scene.py": "from . import model\n",
+        "validation/__init__.py": "",
+        "validation/report.py": "from validation import bench\n",
+        "validation/bench.py": "import validation.report as r\nimport numpy\n",
+    }
+    for rel, text in files.items():
+        (tmp_path / rel).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / rel).write_text(text)
+    modules = discover(tmp_path, ("analytic", "validation"))
+    edges = import_edges(tmp_path, modules)
+    assert [(e.importer, e.imported, e.line) for e in upward_edges(edges)] == [
+        ("analytic.model", "validation.report", 2)
+    ]
+    assert ("analytic.scene", "analytic.model") in {(e.importer, e.imported) for e in edges}
+    assert cycles(edges) == [frozenset({"validation.bench", "validation.report"})]
+    (tmp_path / "validation/bench.py").write_text("import numpy\n")
+    (tmp_path / "analytic/model.py").write_text("from analytic import scene\n")
+    (tmp_path / "analytic/scene.py").write_text("import numpy\n")
+    clean = import_edges(tmp_path, discover(tmp_path, ("analytic", "validation")))
+    assert ("analytic.model", "analytic.scene") in {(e.importer, e.imported) for e in clean}
+    assert not upward_edges(clean)
+    assert cycles(clean) == []

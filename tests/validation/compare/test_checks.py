@@ -1,0 +1,323 @@
+"""Comparison of two trajectories: independent references for every measure and planted offsets."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from analytic.scene import load_scene
+from analytic.simulate import simulate
+from analytic.trajectory import Engine, RunStatus, Trajectory
+from validation.compare.checks import (
+    Difference,
+    Subject,
+    attitude_angle,
+    compare,
+    mass_error_reference,
+    omega_error_reference,
+)
+from validation.compare.thresholds import DEFAULTS, thresholds_for
+
+SCENES = Path(__file__).resolve().parents[3] / "analytic" / "scenes"
+T_END = 0.5
+
+
+@pytest.fixture(scope="module")
+def scene():
+    return load_scene(SCENES / "paper_example1_controlled.toml")
+
+
+@pytest.fixture(scope="module")
+def traj(scene) -> Trajectory:
+    tr = simulate(scene, t_end=T_END, rtol=1e-10)
+    assert tr.status is RunStatus.OK
+    return tr
+
+
+def as_mujoco(tr: Trajectory, **changes) -> Trajectory:
+    """The same record relabelled as the other plant, with some fields replaced."""
+    return dataclasses.replace(tr, engine=Engine.MUJOCO, **changes)
+
+
+def quat_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Hamilton product, w first, batched over leading axes."""
+    a0, av = a[..., :1], a[..., 1:]
+    b0, bv = b[..., :1], b[..., 1:]
+    w = a0 * b0 - np.sum(av * bv, axis=-1, keepdims=True)
+    v = a0 * bv + b0 * av + np.cross(av, bv)
+    return np.concatenate([w, v], axis=-1)
+
+
+# ----------------------------------------------------------------------------------------------
+# attitude angle
+# ----------------------------------------------------------------------------------------------
+
+
+def test_attitude_angle_q_and_minus_q_agree():
+    rng = np.random.default_rng(1)
+    u = rng.normal(size=(50, 4))
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    # exact on any machine: x·(-y) = -(x·y) in IEEE arithmetic, so the vector part cancels to 0
+    assert np.all(attitude_angle(u, -u) == 0.0)
+    assert np.all(attitude_angle(u, u) == 0.0)
+
+
+@pytest.mark.parametrize("theta", [1e-9, 1e-4, 0.3, 1.0, 2.5, math.pi - 1e-6])
+def test_attitude_angle_of_a_known_rotation(theta):
+    rng = np.random.default_rng(2)
+    u = rng.normal(size=(20, 4))
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    n = rng.normal(size=(20, 3))
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    dq = np.concatenate([np.full((20, 1), math.cos(theta / 2)), math.sin(theta / 2) * n], axis=1)
+    # body-fixed (right) and space-fixed (left) perturbations are both rotations by theta
+    np.testing.assert_allclose(attitude_angle(u, quat_mul(u, dq)), theta, rtol=1e-9, atol=1e-15)
+    np.testing.assert_allclose(attitude_angle(u, quat_mul(dq, u)), theta, rtol=1e-9, atol=1e-15)
+    # and a sign flip of the perturbed quaternion does not matter
+    np.testing.assert_allclose(attitude_angle(u, -quat_mul(u, dq)), theta, rtol=1e-9, atol=1e-15)
+
+
+def test_attitude_angle_matches_scipy_and_ignores_scale():
+    rng = np.random.default_rng(3)
+    a = rng.normal(size=(30, 4))
+    b = rng.normal(size=(30, 4))
+    ra = Rotation.from_quat(a, scalar_first=True)
+    rb = Rotation.from_quat(b, scalar_first=True)
+    expected = (ra.inv() * rb).magnitude()
+    np.testing.assert_allclose(attitude_angle(a, b), expected, atol=1e-12)
+    np.testing.assert_allclose(attitude_angle(3.0 * a, 0.5 * b), expected, atol=1e-12)
+
+
+def test_attitude_angle_rejects_bad_shapes():
+    with pytest.raises(ValueError, match="u_b"):
+        attitude_angle(np.zeros((3, 4)), np.zeros((3, 3)))
+
+
+# ----------------------------------------------------------------------------------------------
+# closed-form tracking references
+# ----------------------------------------------------------------------------------------------
+
+
+def test_omega_reference_is_exponential_decay():
+    t = np.linspace(0.0, 5.0, 51)
+    e0 = np.array([11.0, 9.0, 14.5])
+    ref = omega_error_reference(t, e0, 0.6 * np.eye(3))
+    np.testing.assert_allclose(ref, np.exp(-0.6 * t)[:, None] * e0, rtol=1e-12)
+
+
+def test_mass_reference_is_the_damped_oscillator():
+    t = np.linspace(0.0, 4.0, 41)
+    alpha, beta = np.array([2.0]), np.array([12.0])
+    e0, ed0 = np.array([0.3]), np.array([-0.4])
+    wd = math.sqrt(beta[0] - alpha[0] ** 2 / 4)
+    closed = np.exp(-alpha[0] * t / 2) * (
+        e0[0] * np.cos(wd * t) + (ed0[0] + alpha[0] * e0[0] / 2) / wd * np.sin(wd * t)
+    )
+    np.testing.assert_allclose(
+        mass_error_reference(t, e0, ed0, alpha, beta)[:, 0], closed, atol=1e-13
+    )
+
+
+def test_mass_reference_critically_damped_over_a_long_uniform_grid():
+    """Critical damping, α² = 4β: e(t) = (e0 + (ė0 + α e0 / 2) t) exp(-α t / 2); 10⁴ uniform samples
+    (the one-step propagator's rounding grows with the sample count)."""
+    t = np.linspace(0.0, 20.0, 10_001)
+    alpha, beta = np.array([3.0]), np.array([2.25])
+    e0, ed0 = np.array([0.3]), np.array([-0.4])
+    closed = (e0[0] + (ed0[0] + alpha[0] * e0[0] / 2) * t) * np.exp(-alpha[0] * t / 2)
+    np.testing.assert_allclose(
+        mass_error_reference(t, e0, ed0, alpha, beta)[:, 0], closed, atol=1e-13
+    )
+
+
+@pytest.mark.parametrize("grid", ["uniform", "uneven"])
+def test_omega_reference_with_a_coupled_gain_matches_one_exponential_per_time(grid):
+    """A non-symmetric, non-diagonal gain P: each sample equals its own expm(-P t) e0 (scipy),
+    on a uniform grid (one-step propagator) and on an uneven one (batched exponentials)."""
+    from scipy.linalg import expm
+
+    rng = np.random.default_rng(7)
+    gain = np.diag([0.4, 0.9, 1.7]) + 0.3 * rng.standard_normal((3, 3))
+    assert np.all(np.linalg.eigvals(gain).real > 0)
+    t = np.linspace(0.5, 12.5, 2_001)
+    if grid == "uneven":
+        t = np.sort(rng.uniform(0.5, 12.5, 400))
+    e0 = np.array([11.0, -9.0, 14.5])
+    want = np.stack([expm(-gain * (ti - t[0])) @ e0 for ti in t])
+    np.testing.assert_allclose(omega_error_reference(t, e0, gain), want, rtol=0, atol=1e-12)
+
+
+# ----------------------------------------------------------------------------------------------
+# compare
+# ----------------------------------------------------------------------------------------------
+
+
+def test_self_comparison_gives_zero_differences(scene, traj):
+    c = compare(traj, as_mujoco(traj), scene, t_end=T_END)
+    diffs = [s for s in c.series if s.subject is Subject.BOTH]
+    assert {s.name for s in diffs} == {d.value for d in Difference}  # every compared quantity
+    for s in diffs:
+        assert s.t.shape == traj.t.shape
+        assert np.all(s.values == 0.0), s.key
+    for ch in c.checks:
+        if ch.subject is Subject.BOTH:
+            assert ch.value == 0.0 and ch.passed, ch.label
+    assert c.passed
+
+
+def test_the_analytic_plant_obeys_its_error_dynamics_and_balances(scene, traj):
+    """The physics, not the comparison: with the engine at rtol 1e-10 every per-plant check passes."""
+    c = compare(traj, None, scene, t_end=T_END)
+    labels = {ch.label for ch in c.checks}
+    assert {
+        "analytic.completed",
+        "analytic.tracking_omega",
+        "analytic.tracking_p",
+        "analytic.quat_norm",
+        "analytic.linear_momentum",
+        "analytic.angular_momentum",
+        "analytic.energy",
+    } <= labels
+    assert c.passed, [ch.label for ch in c.failed_checks]
+    assert any("no MuJoCo" in n for n in c.notes)
+
+
+def test_planted_offset_of_C_appears_with_its_exact_magnitude(scene, traj):
+    k = 20  # a spike of 5e-5 m at sample k, then half of it to the end
+    off = np.array([3e-5, 0.0, -4e-5])  # |off| = 5e-5 m exactly
+    q = traj.q.copy()
+    q[k, :3] += off
+    q[k + 1 :, :3] += 0.5 * off
+    c = compare(traj, as_mujoco(traj, q=q), scene, t_end=T_END)
+    s = c.get("diff.position_C")
+    assert s.summary.max == pytest.approx(5e-5, rel=1e-9)
+    assert s.summary.final == pytest.approx(2.5e-5, rel=1e-9)
+    assert s.summary.t_max == pytest.approx(traj.t[k])
+    n = traj.t.shape[0]
+    rms = math.sqrt((5e-5**2 + (n - k - 1) * 2.5e-5**2) / n)
+    assert s.summary.rms == pytest.approx(rms, rel=1e-9)
+    ch = c.check("position_C")
+    assert ch.value == pytest.approx(5e-5, rel=1e-9)
+    assert ch.threshold == DEFAULTS["position_C"].value
+    assert not ch.passed and not c.passed
+    assert c.failed_checks == (ch,)
+
+
+def test_planted_rotation_appears_as_its_angle_and_sign_flip_does_not(scene, traj):
+    theta = 2e-3
+    dq = np.array([math.cos(theta / 2), 0.0, math.sin(theta / 2), 0.0])
+    q = traj.q.copy()
+    q[:, 3:7] = quat_mul(q[:, 3:7], dq)
+    c = compare(traj, as_mujoco(traj, q=q), scene, t_end=T_END)
+    assert c.check("attitude").value == pytest.approx(theta, rel=1e-9)
+    assert not c.check("attitude").passed
+
+    q = traj.q.copy()
+    q[:, 3:7] *= -1.0
+    c = compare(traj, as_mujoco(traj, q=q), scene, t_end=T_END)
+    assert c.check("attitude").value == 0.0 and c.check("attitude").passed
+
+
+def test_relative_torque_check_divides_by_the_analytic_peak(scene, traj):
+    c = compare(traj, as_mujoco(traj, torque=traj.torque * (1 + 1e-3)), scene, t_end=T_END)
+    ch = c.check("control_torque")
+    assert ch.scale == pytest.approx(np.max(np.linalg.norm(traj.torque, axis=1)))
+    assert ch.value == pytest.approx(1e-3, rel=1e-9)
+    assert not ch.passed
+
+
+def test_planted_energy_leak_fails_the_energy_balance(scene, traj):
+    inv = traj.invariants
+    leak = 1e-6 * np.max(np.abs(inv.energy)) * np.linspace(0.0, 1.0, traj.t.shape[0])
+    bad = as_mujoco(traj, invariants=dataclasses.replace(inv, energy=inv.energy + leak))
+    c = compare(traj, bad, scene, t_end=T_END)
+    ch = c.check("mujoco.energy")
+    assert not ch.passed
+    assert ch.value >= 0.9e-6  # the leak, less the (≤1e-8 relative) integration error
+    assert c.check("analytic.energy").passed
+
+
+def test_failed_run_is_compared_on_its_samples_and_fails_completed(scene, traj):
+    k = 17
+    fields = (
+        "t",
+        "q",
+        "qdot",
+        "qddot",
+        "QC",
+        "torque",
+        "rod_forces",
+        "force_at_C",
+        "residual_norm",
+    )
+    cut = {f: getattr(traj, f)[:k] for f in fields}
+    inv = traj.invariants
+    cut["invariants"] = dataclasses.replace(
+        inv, **{f.name: getattr(inv, f.name)[:k] for f in dataclasses.fields(inv)}
+    )
+    tk = traj.tracking
+    cut["tracking"] = dataclasses.replace(tk, e_omega=tk.e_omega[:k], e_p=tk.e_p[:k])
+    failed = as_mujoco(traj, status=RunStatus.FAILED, message="planted failure", **cut)
+    c = compare(traj, failed, scene, t_end=T_END)
+    assert c.get("diff.position_C").t.shape == (k,)
+    done = c.check("mujoco.completed")
+    assert not done.passed and "planted failure" in done.reason
+    assert done.value == pytest.approx(traj.t[k - 1])
+    assert c.check("analytic.completed").passed
+    assert not c.passed
+    assert any("planted failure" in n for n in c.notes)
+
+
+def test_comparison_is_frozen(scene, traj):
+    c = compare(traj, as_mujoco(traj), scene, t_end=T_END)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        c.checks = ()  # type: ignore[misc]
+    with pytest.raises(ValueError):
+        c.series[0].values[0] = 1.0
+
+
+# ----------------------------------------------------------------------------------------------
+# thresholds
+# ----------------------------------------------------------------------------------------------
+
+
+def test_every_default_threshold_has_a_reason_and_a_unit():
+    for name, th in DEFAULTS.items():
+        assert th.name == name and th.reason and th.unit and th.value > 0
+
+
+def test_scene_thresholds_override_the_defaults(scene, traj):
+    q = traj.q.copy()
+    q[:, :3] += np.array([5e-5, 0.0, 0.0])
+    looser = scene.replace(
+        extra={"thresholds": {"position_C": {"value": 1e-4, "reason": "planted"}}}
+    )
+    th = thresholds_for(looser)
+    assert th["position_C"].value == 1e-4 and th["position_C"].source == "scene"
+    assert "planted" in th["position_C"].reason
+    assert th["attitude"] == DEFAULTS["attitude"]
+    c = compare(traj, as_mujoco(traj, q=q), looser, t_end=T_END)
+    assert c.check("position_C").passed and c.check("position_C").threshold == 1e-4
+    tighter = scene.replace(extra={"thresholds": {"position_C": 1e-5}})
+    c = compare(traj, as_mujoco(traj, q=q), tighter, t_end=T_END)
+    assert not c.check("position_C").passed
+
+
+@pytest.mark.parametrize(
+    ("table", "field"),
+    [
+        ({"positon_C": 1e-6}, "thresholds.positon_C"),
+        ({"position_C": -1.0}, "thresholds.position_C"),
+        ({"position_C": "small"}, "thresholds.position_C"),
+        ({"position_C": {"reason": "x"}}, "thresholds.position_C.value"),
+        ({"position_C": {"value": 1.0, "why": "x"}}, "thresholds.position_C.why"),
+    ],
+)
+def test_bad_threshold_tables_name_the_field(scene, table, field):
+    with pytest.raises(ValueError, match=field.replace(".", r"\.")):
+        thresholds_for(scene.replace(extra={"thresholds": table}))

@@ -1,0 +1,241 @@
+"""report.md / report.json / figures: verdict first, planted failures reported exactly, atomic."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from analytic.scene import load_scene
+from analytic.simulate import simulate
+from analytic.trajectory import Engine, RunStatus
+from validation.compare.checks import Check, Group, Series, Subject, compare
+from validation.compare.summary import check_sentence, max_abs, summary_table
+from validation.report.report import SeriesSummary, versions, write_atomic, write_report
+from validation.runs import atomic as atomic_mod
+
+SCENES = Path(__file__).resolve().parents[3] / "analytic" / "scenes"
+T_END = 0.3
+PNG = b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.fixture(scope="module")
+def scene():
+    return load_scene(SCENES / "paper_example1_controlled.toml")
+
+
+@pytest.fixture(scope="module")
+def traj(scene):
+    return simulate(scene, t_end=T_END, rtol=1e-10)
+
+
+@pytest.fixture(scope="module")
+def planted(scene, traj, tmp_path_factory):
+    """A 'MuJoCo' copy with C displaced by exactly 5e-5 m: one check must fail with that value."""
+    q = traj.q.copy()
+    q[:, :3] += np.array([0.0, 3e-5, 4e-5])
+    other = dataclasses.replace(traj, engine=Engine.MUJOCO, q=q)
+    cmp = compare(traj, other, scene, t_end=T_END)
+    out = tmp_path_factory.mktemp("planted")
+    files = write_report(
+        out, cmp, [traj, other], {"scene": {"name": scene.name}, "versions": versions()}
+    )
+    return out, files
+
+
+def test_planted_offset_fails_with_its_exact_value(planted):
+    out, _ = planted
+    doc = json.loads((out / "report.json").read_text())
+    assert doc["verdict"] == "FAILED" and doc["passed"] is False
+    by = {(c["subject"], c["name"]): c for c in doc["checks"]}
+    c = by[("analytic vs mujoco", "position_C")]
+    assert c["value"] == pytest.approx(5e-5, rel=1e-9)
+    assert c["verdict"] == "FAIL" and c["passed"] is False and c["reason"]
+    assert c["threshold"] == 1e-6 and c["unit"] == "m"
+    # every other comparison check passes (the copy is otherwise identical)
+    others = [v for k, v in by.items() if k != ("analytic vs mujoco", "position_C")]
+    assert all(v["passed"] for v in others)
+    assert doc["summaries"]["diff.position_C"]["max_abs"] == pytest.approx(5e-5, rel=1e-9)
+    assert doc["run"]["versions"]["numpy"] == np.__version__
+
+
+def test_markdown_puts_the_verdict_first_and_embeds_the_figures(planted):
+    out, files = planted
+    md = (out / "report.md").read_text()
+    first = md.splitlines()[0]
+    assert first.startswith("# ") and "FAILED" in first
+    head = md.split("## Checks")[0]
+    assert "position_C" in head  # the failed check is named before the tables
+    for f in files.figures:
+        assert f"]({f.name})" in md
+        assert f.read_bytes().startswith(PNG)
+    assert {f.name for f in files.figures} == {
+        "errors.png",
+        "tracking.png",
+        "invariants.png",
+        "control.png",
+    }
+
+
+def test_self_comparison_report_passes(scene, traj, tmp_path):
+    other = dataclasses.replace(traj, engine=Engine.MUJOCO)
+    cmp = compare(traj, other, scene, t_end=T_END)
+    write_report(tmp_path, cmp, [traj, other], {"scene": {"name": scene.name}})
+    doc = json.loads((tmp_path / "report.json").read_text())
+    assert doc["verdict"] == "PASSED" and all(c["passed"] for c in doc["checks"])
+    assert (tmp_path / "report.md").read_text().splitlines()[0].endswith("PASSED")
+
+
+def test_a_failed_run_writes_what_it_has_marked_failed(scene, traj, tmp_path):
+    write_report(tmp_path, None, [traj], {"scene": {"name": scene.name}}, failure="MuJoCo exploded")
+    doc = json.loads((tmp_path / "report.json").read_text())
+    assert doc["verdict"] == "FAILED" and doc["failure"] == "MuJoCo exploded"
+    md = (tmp_path / "report.md").read_text()
+    assert "FAILED" in md.splitlines()[0] and "MuJoCo exploded" in md
+    assert (tmp_path / "control.png").read_bytes().startswith(PNG)
+
+
+# ----------------------------------------------------------------------------------------------
+# Numbers that do not mislead
+# ----------------------------------------------------------------------------------------------
+
+
+def test_max_of_a_signed_quantity_is_its_largest_magnitude():
+    """A series that is mostly negative: its largest value (2) is not its largest magnitude (7)."""
+    t = np.array([0.0, 0.1, 0.2, 0.3])
+    s = Series(
+        "analytic.rod_force_2",
+        "rod force",
+        "N",
+        Group.CONTROL,
+        Subject.ANALYTIC,
+        t,
+        np.array([2.0, -7.0, -3.0, -1.0]),
+    )
+    m = SeriesSummary.of(s)
+    assert m.max_abs == 7.0 and m.t_max_abs == 0.1
+    assert m.final == -1.0  # the last value keeps its sign
+    assert max_abs(np.array([[3.0, 4.0], [0.0, -4.5]])) == (5.0, 0)  # vectors: Euclidean norm
+
+
+def test_report_states_the_largest_rod_force_magnitude(scene, traj, tmp_path):
+    """The rod force on mass 2 made negative throughout: report.json and report.md give its
+    largest |F_2|, not its largest (negative) value."""
+    F = traj.rod_forces.copy()
+    F[:, 1] = -np.abs(F[:, 1]) - 1.0
+    tr = dataclasses.replace(traj, rod_forces=F)
+    cmp = compare(tr, None, scene, t_end=T_END)
+    write_report(tmp_path, cmp, [tr], {"scene": {"name": scene.name}})
+    doc = json.loads((tmp_path / "report.json").read_text())
+    s = doc["summaries"]["analytic.rod_force_2"]
+    peak = float(np.max(np.abs(F[:, 1])))
+    assert s["max_abs"] == pytest.approx(peak, rel=1e-12) and s["max_abs"] > 0 > np.max(F[:, 1])
+    assert s["t_max_abs"] == pytest.approx(traj.t[np.argmax(np.abs(F[:, 1]))])
+    assert "max" not in s  # one definition, named
+    md = (tmp_path / "report.md").read_text()
+    row = next(r for r in md.splitlines() if r.startswith("| rod force on mass 2 |"))
+    assert float(row.split("|")[3]) == pytest.approx(peak, rel=1e-3)
+
+
+def test_simulate_summary_names_the_torque_norm(traj):
+    """``tumble simulate`` prints max ‖τ‖₂ (the norm the report uses), not the largest component."""
+    line = next(x for x in summary_table(traj).splitlines() if "control:" in x)
+    norm = float(np.max(np.linalg.norm(traj.torque, axis=1)))
+    component = float(np.max(np.abs(traj.torque)))
+    assert norm > component * (1 + 1e-3)  # they differ here, so the test can tell them apart
+    printed = float(line.split("max ‖τ‖₂")[1].split()[0])
+    assert printed == pytest.approx(norm, rel=1e-3)
+
+
+def test_an_interrupted_run_says_where_it_stopped(scene, tmp_path):
+    """Ctrl-C at 0.15 s of a 0.3 s run: 'stopped at 0.15 s of 0.3 s', not '1.500e-01 > 3.000e-01'."""
+
+    def ctrl_c(t):
+        if t >= 0.15:
+            raise KeyboardInterrupt
+
+    short = simulate(scene, t_end=T_END, rtol=1e-8, progress=ctrl_c)
+    assert short.status is RunStatus.INTERRUPTED
+    reached = float(short.t[-1])
+    cmp = compare(short, None, scene, t_end=T_END)
+    c = cmp.check("analytic.completed")
+    assert not c.passed
+    text = check_sentence(c)
+    assert text.startswith(f"analytic: stopped at {reached:.3g} s of {T_END:g} s (")
+    write_report(tmp_path, cmp, [short], {"scene": {"name": scene.name}})
+    assert f"stopped at {reached:.3g} s of {T_END:g} s" in (tmp_path / "report.md").read_text()
+    planted = Check("completed", Subject.ANALYTIC, 9.37, 20.0, "s", False, "interrupted")
+    assert check_sentence(planted) == "analytic: stopped at 9.37 s of 20 s (interrupted)"
+
+
+def test_writes_are_atomic(tmp_path, monkeypatch):
+    target = tmp_path / "report.json"
+    write_atomic(target, "old")
+
+    def broken_replace(src, dst):
+        raise OSError("disk full")
+
+    monkeypatch.setattr(atomic_mod.os, "replace", broken_replace)
+    with pytest.raises(OSError, match="disk full"):
+        write_atomic(target, "new")
+    monkeypatch.undo()
+    assert target.read_text() == "old"
+    assert os.listdir(tmp_path) == ["report.json"]  # no temporary file left behind
+
+
+# ----------------------------------------------------------------------------------------------
+# run_validation end to end (short horizon)
+# ----------------------------------------------------------------------------------------------
+
+
+def test_run_validation_with_both_plants(tmp_path):
+    from validation.validate import run_validation
+
+    res = run_validation("paper_example1_controlled", tmp_path, t_end=0.1, plants="analytic,mujoco")
+    assert dataclasses.is_dataclass(res)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        res.passed = False  # type: ignore[misc]
+    doc = json.loads((tmp_path / "report.json").read_text())
+    assert doc["passed"] is res.passed
+    assert {p["engine"] for p in doc["plants"]} == {"analytic", "mujoco"}
+    assert len(doc["checks"]) == len(res.checks) > 10
+    assert doc["run"]["mujoco_settings"]["integrator"] == "RK4"
+    assert set(doc["run"]["wall_times_s"]) >= {"analytic", "mujoco", "compare", "recording"}
+    for name in ("report.md", "report.json", "run.rrd", "errors.png", "control.png"):
+        assert (tmp_path / name).exists(), name
+    # the same controller in both plants: they agree to the default thresholds over 0.1 s
+    assert res.passed, [c.label for c in res.failed_checks]
+
+
+def test_run_validation_without_the_mujoco_twin_is_failed_not_crashed(tmp_path, monkeypatch):
+    from mj_bridge.plants import MujocoPlant
+    from validation import validate
+
+    def missing(*args, **kwargs):
+        raise ImportError("the MuJoCo twin (mj_bridge) is not available: planted")
+
+    monkeypatch.setattr(MujocoPlant, "_simulate", missing)
+    res = validate.run_validation(
+        "paper_example1_controlled", tmp_path, t_end=0.1, plants="analytic,mujoco"
+    )
+    assert not res.passed and "mj_bridge" in res.failure
+    md = (tmp_path / "report.md").read_text()
+    assert "FAILED" in md.splitlines()[0] and "mj_bridge" in md
+    assert json.loads((tmp_path / "report.json").read_text())["verdict"] == "FAILED"
+    # the analytic plant's own checks are still there
+    assert any(c.label == "analytic.energy" for c in res.checks)
+
+
+def test_progress_accepts_both_callback_forms():
+    from validation.validate import _stage_progress
+
+    seen = []
+    _stage_progress(lambda stage, t: seen.append((stage, t)), "mujoco")(1.5)
+    _stage_progress(lambda t: seen.append(t), "analytic")(0.5)
+    assert seen == [("mujoco", 1.5), 0.5]
+    assert _stage_progress(lambda t: None, "mujoco") is None
+    assert _stage_progress(None, "analytic") is None

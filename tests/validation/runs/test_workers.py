@@ -1,0 +1,177 @@
+"""The worker processes of ``tumble validate`` (:mod:`validation.runs.workers`): results, messages and
+failures come back as they would here, and a run with workers writes what a run without them
+writes."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from validation.runs import workers
+
+needs_fork = pytest.mark.skipif(
+    not (sys.platform.startswith("linux") and workers.available_cpus() > 1),
+    reason="workers fork only on Linux with more than one CPU",
+)
+"""The forking tests run in a new interpreter: this one may have threads by now (rerun's, after a
+recording test), and then :func:`validation.runs.workers.can_fork` rightly declines."""
+
+SCRIPT = """
+import json, os, sys
+from validation.runs import workers
+assert workers.can_fork(), "a fresh interpreter with one thread should fork"
+
+def square(x, *, report):
+    for k in range(3):
+        report(k)
+    return x * x, os.getpid()
+
+def fail(*, report):
+    raise ZeroDivisionError("on purpose")
+
+def vanish(*, report):
+    os._exit(3)
+
+out = {}
+heard = []
+job = workers.start("square", square, 7, on_message=heard.append)
+value, pid = job.result()
+out["square"] = [job.forked, value, pid != os.getpid(), heard]
+prepared = []
+job = workers.start("square", square, later=True, prepare=lambda: prepared.append(1))
+job.give(5)
+out["later"] = [job.result()[0], prepared]
+try:
+    workers.start("fail", fail).result()
+except workers.WorkerError as exc:
+    out["fail"] = [exc.kind, str(exc)]
+try:
+    workers.start("vanish", vanish).result()
+except workers.WorkerLost as exc:
+    out["vanish"] = str(exc)
+print(json.dumps(out))
+"""
+
+
+@pytest.fixture(scope="module")
+def forked():
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1")
+    env.pop(workers.ENV_SWITCH, None)
+    proc = subprocess.run(
+        [sys.executable, "-c", SCRIPT], capture_output=True, text=True, env=env, timeout=120
+    )
+    assert proc.returncode == 0, proc.stderr
+    return json.loads(proc.stdout.splitlines()[-1])
+
+
+@needs_fork
+def test_a_forked_job_returns_its_result_and_forwards_its_messages_in_order(forked):
+    is_forked, value, other_pid, heard = forked["square"]
+    assert is_forked and value == 49 and other_pid
+    assert heard == [0, 1, 2]
+
+
+@needs_fork
+def test_a_job_started_before_its_inputs_runs_when_given_them(forked):
+    value, prepared_here = forked["later"]
+    assert value == 25
+    assert prepared_here == []  # prepare ran in the child, not in the parent
+
+
+@needs_fork
+def test_an_exception_in_the_worker_comes_back_named(forked):
+    kind, text = forked["fail"]
+    assert kind == "ZeroDivisionError" and text == "ZeroDivisionError: on purpose"
+
+
+@needs_fork
+def test_a_worker_that_dies_is_reported_lost(forked):
+    assert "exit 3" in forked["vanish"]
+
+
+def _square(x, *, report):
+    for k in range(3):
+        report(k)
+    return x * x, os.getpid()
+
+
+def _fail(*, report):
+    raise ZeroDivisionError("on purpose")
+
+
+def test_switched_off_every_job_runs_here(monkeypatch):
+    monkeypatch.setenv(workers.ENV_SWITCH, "0")
+    assert not workers.can_fork()
+    heard = []
+    job = workers.start("square", _square, 3, on_message=heard.append)
+    assert not job.forked
+    value, pid = job.result()
+    assert value == 9 and pid == os.getpid() and heard == [0, 1, 2]
+    with pytest.raises(ZeroDivisionError):
+        workers.start("fail", _fail).result()
+
+
+@needs_fork
+def test_validate_with_workers_writes_what_validate_without_them_writes(tmp_path):
+    """``tumble validate`` with the plants in workers and with every stage in one process: the
+    same checks with the same measured values (same machine, same code: the workers only move
+    where it runs), the same files."""
+    reports = {}
+    for mode, switch in (("workers", "1"), ("one", "0")):
+        env = dict(os.environ, **{workers.ENV_SWITCH: switch})
+        out = tmp_path / mode
+        proc = subprocess.run(
+            [sys.executable, "-m", "validation", "validate", "--t-end", "0.5", "--out", str(out)],
+            capture_output=True,
+            text=True,
+            env=env,
+            timeout=600,
+        )
+        assert proc.returncode == 0, proc.stderr
+        reports[mode] = json.loads((out / "report.json").read_text())
+        reports[mode]["files"] = sorted(json.loads((out / "manifest.json").read_text())["files"])
+    a, b = reports["workers"], reports["one"]
+    assert [c["name"] for c in a["checks"]] == [c["name"] for c in b["checks"]]
+    for ca, cb in zip(a["checks"], b["checks"], strict=True):
+        assert ca["passed"] and cb["passed"]
+        np.testing.assert_allclose(ca["value"], cb["value"], rtol=1e-12, atol=1e-300)
+    assert a["files"] == b["files"]
+    assert {"recording", "figures"} <= set(a["run"]["wall_times_s"])
+
+
+@needs_fork
+def test_ctrl_c_reaches_the_plants_in_workers_and_keeps_the_partial_set(tmp_path):
+    """A terminal's Ctrl-C (SIGINT to the process group) while the plants run in workers: exit 130,
+    the output set committed and marked interrupted, as without workers."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    out = tmp_path / "v"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "validation", "validate", "--out", str(out)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+    )
+    try:
+        for line in proc.stderr:
+            if "mujoco plant" in line:
+                break
+        time.sleep(0.2)
+        os.killpg(proc.pid, signal.SIGINT)
+        _, err = proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    assert proc.returncode == 130, err
+    man = json.loads((out / "manifest.json").read_text())
+    assert man["state"] == "interrupted"
+    assert set(man["files"]) | {"manifest.json"} == {p.name for p in out.iterdir()}

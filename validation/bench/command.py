@@ -1,0 +1,203 @@
+"""Benchmarks: what the analytic engine costs, and the fast engine's speed goals as ratios
+measured in this one process (numbers printed, never asserted; tests cover correctness).
+
+``python -m validation.bench.command [--skip-long] [--out DIR]`` is ``tumble bench``: the same options, the
+same output. It prints
+
+* the cost of one evaluation of the controlled dynamics (``M``, ``Q``, Udwadia-Kalaba with control)
+  for n = 2, 5, 50 on the numpy reference path and on the compiled path, next to MuJoCo's
+  ``mj_forward`` on the same body (median of repeats, µs);
+* every goal of :mod:`validation.bench.goals` with its ratio and whether it holds (the 60 s Example 1
+  goal takes about a minute; ``--skip-long`` leaves it out); the Pinocchio plant's goal is skipped,
+  with the reason printed, when ``pin`` is not installed;
+* with ``--out DIR``, the same numbers in ``DIR/bench.json`` (with ``DIR/manifest.json``, one run
+  of :func:`validation.runs.outputs.output_run`, like every other command's ``--out``); the file carries
+  the provenance block of :mod:`validation.report.provenance` and follows
+  ``validation/report/schemas/bench.schema.json`` (``docs/json-output.md``).
+
+``--json FILE`` (this module's former option, a file rather than a directory) still writes FILE,
+with a deprecation warning: use ``--out DIR``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:  # the engines are imported when measuring, so `tumble --help` stays quick
+    from analytic.scene import Scene
+
+
+def analytic_eval_cost(scene: Scene, compiled: bool = False) -> float:
+    """Seconds per evaluation of the controlled dynamics on the numpy path or the compiled one."""
+    import numpy as np
+
+    from analytic.model import TumblingModel
+    from validation.bench.timing import time_call
+
+    q, qd = scene.initial.q0(), scene.initial.qdot0()
+    if compiled:
+        from analytic.fast import FastModel
+
+        fm = FastModel(scene)
+        q, qd = np.ascontiguousarray(q), np.ascontiguousarray(qd)
+        fm.qddot(0.3, q, qd)
+        return time_call(lambda: fm.qddot(0.3, q, qd))
+    model = TumblingModel(scene)
+    return time_call(lambda: model.acceleration(0.3, q, qd))
+
+
+def mujoco_forward_cost(scene: Scene) -> float | None:
+    """``mj_forward`` on the same body (None when the MuJoCo twin is not available)."""
+    try:
+        import mujoco
+
+        from model_xml import build_spec
+    except ImportError:
+        return None
+    from validation.bench.timing import time_call
+
+    m = build_spec(scene).compile()
+    d = mujoco.MjData(m)
+    mujoco.mj_forward(m, d)
+    return time_call(lambda: mujoco.mj_forward(m, d))
+
+
+def evaluation_table(ns: tuple[int, ...] = (2, 5, 50)) -> list[dict[str, float]]:
+    """µs per evaluation for chain scenes of n masses: numpy path, compiled path, mj_forward."""
+    from validation.bench.timing import chain_scene
+
+    rows = []
+    for n in ns:
+        sc = chain_scene(n)
+        mj = mujoco_forward_cost(sc)
+        rows.append(
+            {
+                "n": n,
+                "numpy_us": analytic_eval_cost(sc) * 1e6,
+                "compiled_us": analytic_eval_cost(sc, compiled=True) * 1e6,
+                "mj_forward_us": mj * 1e6 if mj else float("nan"),
+            }
+        )
+    return rows
+
+
+def run(skip_long: bool = False, json_path: str | None = None, out=print) -> bool:
+    """Print the table and the goals, and write them to ``json_path`` when given; returns whether
+    every goal measured holds."""
+    holds, doc = measure_and_print(skip_long, out)
+    if json_path:
+        from validation.report.provenance import dumps
+        from validation.runs.atomic import write_text
+
+        write_text(json_path, dumps(doc))
+        out(f"written: {json_path}")
+    return holds
+
+
+def measure_and_print(skip_long: bool = False, out=print) -> tuple[bool, dict[str, Any]]:
+    """Measure, print as it goes; returns (every goal measured holds, the ``bench.json`` document)."""
+    from validation.bench import goals
+    from validation.report.provenance import FileKind, provenance
+
+    out("one evaluation of the controlled dynamics (median, µs)")
+    out(f"  {'n':>4} {'numpy':>10} {'compiled':>10} {'mj_forward':>11}")
+    rows = evaluation_table()
+    for r in rows:
+        out(
+            f"  {r['n']:>4} {r['numpy_us']:10.1f} {r['compiled_us']:10.2f} "
+            f"{r['mj_forward_us']:11.2f}"
+        )
+    out("\nspeed goals, each a ratio measured in this process")
+    measured = goals.measure(skip_long, progress=out)
+    out("\nsummary")
+    for g in measured:
+        if g.skipped:
+            out(f"  SKIPPED  {g.name}: {g.skipped}")
+        else:
+            out(f"  {g.verdict}  {g.name}: {g.value:.3g} (≤ {g.limit:g})")
+    holds = all(g.holds for g in measured if not g.skipped)
+    return holds, bench_document(rows, measured, provenance(FileKind.BENCH))
+
+
+def bench_document(
+    rows: list[dict[str, float]], measured: list, block: dict[str, Any]
+) -> dict[str, Any]:
+    """The content of ``bench.json``: the provenance block, the evaluation table and the goals
+    (schema ``validation/report/schemas/bench.schema.json``; a NaN, e.g. no MuJoCo, is written as null)."""
+    return {
+        "provenance": block,
+        "evaluation_us": rows,
+        "goals": [
+            {
+                "name": g.name,
+                "ratio": None if g.skipped else g.value,
+                "limit": g.limit,
+                "holds": g.holds,
+                "verdict": g.verdict,
+                "skipped": g.skipped or None,
+                "extrapolated": g.extrapolated,
+                "detail": g.detail,
+                "data": g.data,
+            }
+            for g in measured
+        ],
+    }
+
+
+def write_bench(out_dir: str | Path, skip_long: bool = False, out=print) -> Path:
+    """Measure, print, and write ``out_dir/bench.json`` as one output run (with
+    ``manifest.json``); returns the final path of ``bench.json``."""
+    from validation.report.provenance import dumps
+    from validation.runs.atomic import write_text
+    from validation.runs.outputs import output_run
+
+    with output_run(Path(out_dir), "bench") as orun:
+        _, doc = measure_and_print(skip_long, out)
+        write_text(orun.path / "bench.json", dumps(doc))
+    final = orun.final("bench.json")
+    out(f"written: {final}")
+    return final
+
+
+def add_arguments(ap: argparse.ArgumentParser) -> None:
+    """The options of ``tumble bench`` and ``python -m validation.bench.command`` (one definition)."""
+    ap.add_argument(
+        "--out", metavar="DIR", help="also write DIR/bench.json (with DIR/manifest.json)"
+    )
+    ap.add_argument("--skip-long", action="store_true", help="skip the 60 s Example 1 goal")
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(
+        prog="python -m validation.bench.command", description=__doc__.split("\n")[0]
+    )
+    add_arguments(ap)
+    ap.add_argument(
+        "--json", metavar="FILE", help="deprecated: use --out DIR (writes DIR/bench.json)"
+    )
+    args = ap.parse_args(argv)
+
+    def say(s: str) -> None:
+        print(s, flush=True)
+
+    if args.json and args.out:
+        ap.error("--json is the deprecated form of --out: give one of them")
+    if args.json:
+        print(
+            "python -m validation.bench.command: warning: --json FILE is deprecated; use --out DIR "
+            "(writes DIR/bench.json with a manifest, as `tumble bench --out DIR`)",
+            file=sys.stderr,
+        )
+        run(args.skip_long, args.json, out=say)
+    elif args.out:
+        write_bench(args.out, args.skip_long, out=say)
+    else:
+        run(args.skip_long, None, out=say)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

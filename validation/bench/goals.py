@@ -1,0 +1,647 @@
+"""The fast engine's speed goals, each measured as a ratio in this one process, with whether it
+holds. Numbers are printed, never asserted (tests cover correctness, not speed).
+
+``python -m validation.bench.command [--skip-long]`` (or ``tumble bench``) prints these:
+
+1. **evaluation**: one evaluation of the analytic controlled dynamics (``M``, ``Q``, Udwadia–Kalaba
+   with control; ``FastModel.qddot``, the integrator's right-hand side) / MuJoCo's ``mj_forward``
+   on the same body (``model_xml.build_spec(scene).compile()``), for
+   ``validation.bench.timing.chain_scene`` n = 2 and n = 5. Holds when ≤ 1.
+2. **controller in RK4**: the extra cost per RK4 step of the analytic controller running in
+   ``mjcb_control`` (four stages; the twin's default: the compiled stage as a native callback,
+   :mod:`mj_bridge.native`, with work and impulses accumulated as in a run) / the bare ``mj_step``
+   (RK4, no callback, ctrl = 0), on the controlled paper scenes. Holds when ≤ 1 ("costs no more than
+   the MuJoCo step it sits in"). The same controller through the Python callback is printed too.
+3. **60 s Example 1**: the controlled Example 1 over 60 s, analytic DOP853 at rtol 1e-12 (atol 1e-13):
+   its error against a reference (DOP853 at rtol 2.5e-14) in the sweep's error measure
+   (:func:`validation.studies.sweep.errors_against`); then MuJoCo RK4 with dt halving from 1e-3 s until its
+   error is at most the analytic one. Ratio = analytic wall / RK4 wall at exactly that accuracy:
+   the dt is interpolated between the last two runs by RK4's observed order and the wall time
+   linearly in the step count (the first run found as accurate is also printed). If none is
+   reached within the time cap, the RK4 cost at the needed dt is extrapolated from its observed
+   order and the ratio is marked as extrapolated. Holds when ≤ 1.
+4. **n scaling**: cost of one fast evaluation at n = 1000 / at n = 10. Holds when ≤ 150.
+5. **Pinocchio plant**: the controlled Example 1 over 20 s, DOP853 at rtol 1e-12 (atol 1e-13), on
+   the Pinocchio plant / on the analytic plant, both through the plant protocol
+   (``plant(name).simulate``). Each plant runs once first (compilation, cache loads), then the two
+   alternate for ``rounds`` repeats; the ratio is of the median walls (the integration, as each
+   plant measures it in ``info["wall_time_s"]``; the whole ``simulate`` call is printed too). Both
+   plants step on scipy's loop (the analytic plant with ``stepper="scipy"``), so the ratio compares
+   the plants, not the loops; one run of the analytic plant on its default (compiled) loop is
+   printed beside it. Holds when ≤ 3. Skipped, with the reason printed, when Pinocchio (``pin``) is
+   not installed; it takes a few seconds, so ``--skip-long`` keeps it.
+6. **compiled stepping**: the controlled Example 1 over 60 s, DOP853 at rtol 1e-12 (atol 1e-13), on
+   the analytic plant's compiled loop (:mod:`analytic.compiled_stepping`): its wall
+   (``info["wall_time_s"]``) / (its evaluations ``nfev`` x the cost of one evaluation of the compiled
+   right-hand side, :func:`analytic.fast_rhs.rhs_into` called from a compiled loop, ``nfev`` times,
+   on 64 states of the run in turn). Runs and timing loops alternate for ``rounds`` repeats
+   (medians). The same ratio for scipy's loop (the before) is printed beside it. Holds when ≤ 1.5
+   (:data:`COMPILED_STEPPING_LIMIT`). Skipped, with the reason, when the compiled loop is
+   unavailable (CyRK or numba missing). About 10 to 20 s.
+
+Timings are medians over interleaved rounds (both sides of a ratio measured alternately), with one
+BLAS thread.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import statistics
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Goal:
+    """One goal: ``value`` compared with ``limit`` (holds when value ≤ limit)."""
+
+    name: str
+    value: float
+    limit: float
+    detail: str = ""
+    extrapolated: bool = False
+    data: dict[str, Any] = field(default_factory=dict)
+    skipped: str = ""
+    """Why the goal was not measured ("" when it was); a skipped goal neither holds nor fails."""
+
+    @property
+    def holds(self) -> bool:
+        return bool(not self.skipped and math.isfinite(self.value) and self.value <= self.limit)
+
+    @property
+    def verdict(self) -> str:
+        """``HOLDS``, ``FAILS`` or ``SKIPPED``."""
+        if self.skipped:
+            return "SKIPPED"
+        return "HOLDS" if self.holds else "FAILS"
+
+    def line(self) -> str:
+        if self.skipped:
+            return f"{self.name}: skipped ({self.skipped})"
+        verdict = "holds" if self.holds else "fails"
+        if self.extrapolated:
+            verdict += " (extrapolated)"
+        return (
+            f"{self.name}: ratio {self.value:.3g} (goal ≤ {self.limit:g}): {verdict}. {self.detail}"
+        )
+
+
+def interleaved(fns: dict[str, Callable[[], Any]], rounds: int = 11) -> dict[str, float]:
+    """Median seconds per call of each function, timed in alternating ~10 ms batches."""
+    numbers = {}
+    for k, fn in fns.items():
+        fn()
+        t0 = time.perf_counter()
+        fn()
+        numbers[k] = max(1, int(0.01 / max(time.perf_counter() - t0, 1e-7)))
+    samples: dict[str, list[float]] = {k: [] for k in fns}
+    for _ in range(rounds):
+        for k, fn in fns.items():
+            n = numbers[k]
+            t0 = time.perf_counter()
+            for _ in range(n):
+                fn()
+            samples[k].append((time.perf_counter() - t0) / n)
+    return {k: statistics.median(v) for k, v in samples.items()}
+
+
+def _chain(n: int):
+    import mujoco
+
+    from analytic import fast
+    from model_xml import build_spec
+    from validation.bench.timing import chain_scene
+
+    sc = chain_scene(n)
+    fm = fast.FastModel(sc)
+    q = np.ascontiguousarray(sc.initial.q0())
+    qd = np.ascontiguousarray(sc.initial.qdot0())
+    m = build_spec(sc).compile()
+    d = mujoco.MjData(m)
+    return sc, (lambda: fm.qddot(0.3, q, qd)), (lambda: mujoco.mj_forward(m, d))
+
+
+def goal_evaluation(n: int, rounds: int = 11) -> Goal:
+    _, fa, fm = _chain(n)
+    c = interleaved({"analytic": fa, "mj_forward": fm}, rounds)
+    return Goal(
+        f"evaluation n={n}: analytic controlled dynamics / mj_forward",
+        c["analytic"] / c["mj_forward"],
+        1.0,
+        f"analytic {c['analytic'] * 1e6:.2f} µs, mj_forward {c['mj_forward'] * 1e6:.2f} µs",
+        data={k: v * 1e6 for k, v in c.items()},
+    )
+
+
+def goal_controller_in_rk4(scene_name: str, steps: int = 200, rounds: int = 9) -> Goal:
+    import mujoco
+
+    from mj_bridge.callbacks import installed
+    from mj_bridge.twin import Twin
+    from validation.scenes import resolve_scene
+
+    sc = resolve_scene(scene_name)
+    tw = Twin(sc, integrator="RK4")
+    tw_py = Twin(sc, integrator="RK4", native_callback=False)
+    q0, qd0 = sc.initial.q0(), sc.initial.qdot0()
+
+    def bare() -> None:
+        tw.set_state(0.0, q0, qd0)
+        tw.d.ctrl[:] = 0.0
+        mujoco.mj_step(tw.m, tw.d, nstep=steps)
+
+    def controlled(twin: Twin) -> Callable[[], None]:
+        def run() -> None:  # as mj_bridge.simulate runs it: work and impulses accumulated
+            twin.set_state(0.0, q0, qd0)
+            twin.d.ctrl[:] = 0.0
+            with twin.callbacks():
+                twin.step(steps)
+
+        return run
+
+    def bare_nocb() -> None:
+        with installed(control=None, act_bias=None):
+            bare()
+
+    def empty_cb() -> None:
+        with installed(control=lambda m, d: None, act_bias=None):
+            bare()
+
+    fns = {"bare": bare_nocb, "empty": empty_cb, "controlled": controlled(tw)}
+    fns["python_cb"] = controlled(tw_py)
+    c = interleaved(fns, rounds)
+    step = c["bare"] / steps
+    ctl = c["controlled"] / steps
+    empty = c["empty"] / steps
+    py = c["python_cb"] / steps
+    how = "native mjcb_control" if tw.native else "Python mjcb_control (native unavailable)"
+    return Goal(
+        f"controller in RK4 ({scene_name}): added cost per step / bare mj_step",
+        (ctl - step) / step,
+        1.0,
+        f"bare RK4 step {step * 1e6:.1f} µs, with the analytic controller ({how}) "
+        f"{ctl * 1e6:.1f} µs ({ctl / step:.2f}x); through a Python callback {py * 1e6:.1f} µs "
+        f"({py / step:.2f}x), of which calling an empty Python callback 4x a step costs "
+        f"{(empty - step) * 1e6:.1f} µs",
+        data={
+            "bare_us": step * 1e6,
+            "controlled_us": ctl * 1e6,
+            "python_cb_us": py * 1e6,
+            "empty_cb_us": empty * 1e6,
+            "native": tw.native,
+        },
+    )
+
+
+def goal_example1_60s(
+    t_end: float = 60.0, cap_s: float = 120.0, progress: Callable[[str], None] = print
+) -> Goal:
+    import analytic
+    import mj_bridge
+    from validation.scenes import resolve_scene
+    from validation.studies.sweep import errors_against, ref_samples, reference_run
+
+    sc = resolve_scene("paper_example1_controlled")
+    progress(f"  reference (DOP853 rtol 2.5e-14, {t_end:g} s) ...")
+    ref = ref_samples(reference_run(sc, t_end))
+    tr_a = analytic.simulate(
+        sc, method="DOP853", rtol=1e-12, atol=1e-13, t_end=t_end
+    ).raise_if_interrupted()
+    e_a = errors_against(tr_a, ref)["error"]
+    w_a = float(tr_a.info["wall_time_s"])
+    progress(f"  analytic rtol 1e-12: error {e_a:.3g}, wall {w_a:.2f} s")
+    interval = 1.0 / sc.output.rate
+    pts: list[tuple[float, float, float]] = []  # (dt, error, wall)
+    k = round(interval / 1e-3)
+    while True:
+        dt = interval / k
+        tr = mj_bridge.simulate(sc, integrator="RK4", dt=dt, t_end=t_end).raise_if_interrupted()
+        e = errors_against(tr, ref)["error"] if tr.status.value == "ok" else math.inf
+        w = float(tr.info["wall_time_s"])
+        pts.append((dt, e, w))
+        progress(f"  RK4 dt {dt:.4g}: error {e:.3g}, wall {w:.2f} s")
+        if e <= e_a:
+            value, detail = w_a / w, ""
+            if len(pts) >= 2 and math.isfinite(pts[-2][1]) and pts[-2][1] > e_a:
+                # the run found is more accurate than needed: interpolate the dt that just reaches
+                # e_a by the observed order, and its wall time linearly in the step count (1/dt)
+                (dt1, e1, w1), (dt2, e2, w2) = pts[-2], pts[-1]
+                order = math.log(e1 / e2) / math.log(dt1 / dt2)
+                dt_need = dt2 * (e_a / e2) ** (1.0 / order)
+                w_need = w1 + (w2 - w1) * (1 / dt_need - 1 / dt1) / (1 / dt2 - 1 / dt1)
+                value = w_a / w_need  # the conservative ratio: MuJoCo at exactly that accuracy
+                detail = (
+                    f"; interpolated by RK4's observed order {order:.2f}: dt {dt_need:.3g} s "
+                    f"reaches {e_a:.2e} in about {w_need:.2f} s (the ratio uses this)"
+                )
+            return Goal(
+                "60 s controlled Example 1: analytic rtol 1e-12 wall / MuJoCo RK4 wall at the same"
+                " accuracy",
+                value,
+                1.0,
+                f"analytic {w_a:.2f} s (error {e_a:.2e}); RK4 dt {dt:.4g} s {w:.2f} s "
+                f"(error {e:.2e}){detail}",
+                data={"analytic": (e_a, w_a), "rk4": pts},
+            )
+        if 2 * w > cap_s or not math.isfinite(e):
+            break
+        k *= 2
+    # Extrapolate from the last two finite points: error ∝ dt^p, wall ∝ 1/dt.
+    fin = [p for p in pts if math.isfinite(p[1]) and p[1] > 0]
+    if len(fin) < 2:
+        return Goal("60 s controlled Example 1", math.inf, 1.0, "RK4 runs failed", data={})
+    (dt1, e1, _), (dt2, e2, w2) = fin[-2], fin[-1]
+    order = math.log(e1 / e2) / math.log(dt1 / dt2)
+    dt_need = dt2 * (e_a / e2) ** (1.0 / order) if order > 0 else 0.0
+    w_need = w2 * dt2 / dt_need if dt_need > 0 else math.inf
+    return Goal(
+        "60 s controlled Example 1: analytic rtol 1e-12 wall / MuJoCo RK4 wall at the same accuracy",
+        w_a / w_need,
+        1.0,
+        f"analytic {w_a:.2f} s (error {e_a:.2e}); RK4 did not reach it within the {cap_s:g} s cap: "
+        f"observed order {order:.2f} predicts dt {dt_need:.3g} s at {w_need:.3g} s",
+        extrapolated=True,
+        data={"analytic": (e_a, w_a), "rk4": pts},
+    )
+
+
+def goal_scaling(rounds: int = 9) -> Goal:
+    from analytic import fast
+    from validation.bench.timing import chain_scene
+
+    fns = {}
+    for n in (10, 1000):
+        sc = chain_scene(n)
+        fm = fast.FastModel(sc)
+        q = np.ascontiguousarray(sc.initial.q0())
+        qd = np.ascontiguousarray(sc.initial.qdot0())
+        fns[n] = lambda fm=fm, q=q, qd=qd: fm.qddot(0.3, q, qd)
+    c = interleaved(fns, rounds)
+    return Goal(
+        "scaling: fast evaluation cost n=1000 / n=10",
+        c[1000] / c[10],
+        150.0,
+        f"n=10 {c[10] * 1e6:.2f} µs, n=1000 {c[1000] * 1e6:.2f} µs",
+    )
+
+
+PINOCCHIO_GOAL = (
+    "Pinocchio plant: 20 s controlled Example 1 at rtol 1e-12, Pinocchio wall / analytic wall"
+)
+PINOCCHIO_LIMIT = 3.0
+
+
+def goal_pinocchio(
+    t_end: float = 20.0,
+    rounds: int = 7,
+    scene_name: str = "paper_example1_controlled",
+    progress: Callable[[str], None] = print,
+) -> Goal:
+    """Goal 5 (see the module docstring): the Pinocchio plant's wall over the analytic plant's.
+
+    ``data`` holds every wall (``analytic_s``, ``pinocchio_s``: integration; ``*_call_s``: the whole
+    ``simulate`` call), their medians, the order of the rounds and the two plants' agreement (max
+    distance between their positions of C, m) as a check that both ran the same motion.
+    """
+    from mj_bridge.plants import AnalyticSettings, PinocchioPlant, PinocchioSettings, plant
+    from validation.scenes import resolve_scene
+
+    why = PinocchioPlant.unavailable()
+    if why:
+        return Goal(
+            PINOCCHIO_GOAL, math.nan, PINOCCHIO_LIMIT, skipped=f"pin is not installed: {why}"
+        )
+    sc = resolve_scene(scene_name)
+    runs = {  # the same (scipy's) loop on both sides: the ratio compares the plants
+        "analytic": (plant("analytic"), AnalyticSettings("DOP853", 1e-12, 1e-13, stepper="scipy")),
+        "pinocchio": (plant("pinocchio"), PinocchioSettings("DOP853", 1e-12, 1e-13)),
+    }
+
+    def once(name: str):
+        pl, settings = runs[name]
+        t0 = time.perf_counter()
+        tr = pl.simulate(sc, settings, t_end=t_end).raise_if_interrupted()
+        call = time.perf_counter() - t0
+        if tr.status.value != "ok":
+            raise RuntimeError(f"{name} plant: {tr.message}")
+        return tr, float(tr.info["wall_time_s"]), call
+
+    try:
+        first = {name: once(name) for name in runs}  # warm: compilation and cache loads
+        default_loop = plant("analytic").simulate(
+            sc, AnalyticSettings("DOP853", 1e-12, 1e-13), t_end=t_end
+        )
+        walls: dict[str, list[float]] = {name: [] for name in runs}
+        calls: dict[str, list[float]] = {name: [] for name in runs}
+        order = []
+        for k in range(rounds):
+            names = list(runs) if k % 2 == 0 else list(reversed(runs))  # alternate who goes first
+            order.append(names)
+            for name in names:
+                _, wall, call = once(name)
+                walls[name].append(wall)
+                calls[name].append(call)
+    except (RuntimeError, ValueError) as exc:
+        return Goal(PINOCCHIO_GOAL, math.inf, PINOCCHIO_LIMIT, f"a run failed: {exc}")
+    tr_a, tr_p = first["analytic"][0], first["pinocchio"][0]
+    dR = float(np.max(np.linalg.norm(tr_a.R - tr_p.R, axis=1)))
+    med = {name: statistics.median(v) for name, v in walls.items()}
+    med_call = {name: statistics.median(v) for name, v in calls.items()}
+    progress(
+        f"  {t_end:g} s, DOP853 rtol 1e-12: analytic {med['analytic']:.3f} s "
+        f"(nfev {tr_a.info['nfev']}), Pinocchio {med['pinocchio']:.3f} s "
+        f"(nfev {tr_p.info['nfev']}); median of {rounds} interleaved rounds"
+    )
+    return Goal(
+        PINOCCHIO_GOAL,
+        med["pinocchio"] / med["analytic"],
+        PINOCCHIO_LIMIT,
+        f"analytic {med['analytic']:.3f} s, Pinocchio {med['pinocchio']:.3f} s (integration, "
+        f"median of {rounds}); whole simulate call {med_call['analytic']:.3f} s / "
+        f"{med_call['pinocchio']:.3f} s ({med_call['pinocchio'] / med_call['analytic']:.2f}x); "
+        f"nfev {tr_a.info['nfev']} / {tr_p.info['nfev']}; the two plants' C within {dR:.2g} m; "
+        f"the analytic plant on its default ({default_loop.info.get('stepper', '?')}) loop "
+        f"{default_loop.info['wall_time_s']:.3f} s (one run)",
+        data={
+            "t_end_s": t_end,
+            "rounds": rounds,
+            "analytic_s": walls["analytic"],
+            "pinocchio_s": walls["pinocchio"],
+            "analytic_call_s": calls["analytic"],
+            "pinocchio_call_s": calls["pinocchio"],
+            "analytic_median_s": med["analytic"],
+            "pinocchio_median_s": med["pinocchio"],
+            "warm_s": {name: first[name][1] for name in runs},
+            "order": order,
+            "nfev": {"analytic": tr_a.info["nfev"], "pinocchio": tr_p.info["nfev"]},
+            "max_distance_C_m": dR,
+            "analytic_default_loop_s": float(default_loop.info["wall_time_s"]),
+        },
+    )
+
+
+COMPILED_STEPPING_GOAL = (
+    "compiled stepping: 60 s controlled Example 1 at rtol 1e-12, wall / (nfev x one compiled "
+    "right-hand side evaluation)"
+)
+COMPILED_STEPPING_LIMIT = 1.5
+"""The loop may add at most half the cost of the evaluations it makes. The evaluations are the
+work (~2 µs each); a DOP853 step adds a few hundred flops of stage combinations, error norms and
+interpolation to its 12-16 evaluations (~30 µs), a few percent. scipy's loop, stepping from Python,
+costs ~6 (quiet machine) to ~16 (loaded) times its evaluations; 1.5 leaves room for the calls into
+the C++ loop (one per second simulated), the copies of the samples and timing noise on a shared
+machine."""
+
+
+def _rhs_timer(ip):
+    """``loop(n, t, Y, fp, ip, work, out)``: ``n`` calls of the compiled right-hand side of the
+    packed scene ``ip`` (:func:`analytic.fast_rhs.rhs_for`: the one the compiled loop embeds) from
+    compiled code (no dispatch from Python per call), at the states ``(t[i], Y[i])`` in turn: what
+    the compiled loop pays per evaluation."""
+    import numba
+
+    from analytic.fast_rhs import rhs_for
+
+    rhs_into = rhs_for(ip)
+
+    @numba.njit(cache=False)
+    def loop(n, t, Y, fp, ip, work, out):  # pragma: no cover - compiled
+        s = 0.0
+        m = t.size
+        for i in range(n):
+            rhs_into(t[i % m], Y[i % m], fp, ip, work, out)
+            s += out[0]
+        return s
+
+    return loop
+
+
+def goal_compiled_stepping(
+    t_end: float = 60.0,
+    rounds: int = 5,
+    scipy_rounds: int = 3,
+    scene_name: str = "paper_example1_controlled",
+    progress: Callable[[str], None] = print,
+) -> Goal:
+    """Goal 6 (see the module docstring): the compiled loop's wall over the cost of the evaluations
+    it makes.
+
+    ``data``: every wall of the compiled loop and of scipy's (``compiled_s``, ``scipy_s``), the
+    per-evaluation cost of each timing round (``rhs_us``), their medians, ``nfev`` and ``nsteps`` of
+    both loops, scipy's ratio (``ratio_scipy``) and the two loops' largest difference in the sweep's
+    error measure (``loops_differ``, :func:`validation.studies.sweep.errors_against`), a check that both
+    ran the same motion.
+    """
+    from analytic import compiled_stepping, fast
+    from analytic.simulate import simulate
+    from validation.scenes import resolve_scene
+    from validation.studies.sweep import errors_against, ref_samples
+
+    why = compiled_stepping.unavailable()
+    if why:
+        return Goal(
+            COMPILED_STEPPING_GOAL,
+            math.nan,
+            COMPILED_STEPPING_LIMIT,
+            skipped=f"the compiled loop is unavailable: {why}",
+        )
+    sc = resolve_scene(scene_name)
+
+    def run(stepper: str):
+        tr = simulate(
+            sc, method="DOP853", rtol=1e-12, atol=1e-13, t_end=t_end, stepper=stepper
+        ).raise_if_interrupted()
+        if tr.status.value != "ok":
+            raise RuntimeError(f"{stepper} loop: {tr.message}")
+        return tr
+
+    try:
+        simulate(sc, t_end=1.0, stepper="compiled")  # warm: cfunc and kernel cache loads
+        first = run("compiled")
+        nfev = int(first.info["nfev"])
+        fm = fast.FastModel(sc)
+        # the states of the run: 64 of its samples, evaluated in turn
+        pick = np.linspace(0, len(first.t) - 1, 64).round().astype(int)
+        ts = np.ascontiguousarray(first.t[pick])
+        Y = np.ascontiguousarray(
+            np.hstack([first.q[pick], first.qdot[pick], np.zeros((pick.size, 7))])
+        )
+        work = np.empty(2 * fm.nq + 3 + fm.k)
+        out = np.empty(Y.shape[1])
+        loop = _rhs_timer(fm.ip)
+        loop(10, ts, Y, fm.fp, fm.ip, work, out)  # compile
+        walls: dict[str, list[float]] = {"compiled": [], "scipy": []}
+        rhs: list[float] = []
+        tr_s = None
+        for r in range(rounds):
+            walls["compiled"].append(float(run("compiled").info["wall_time_s"]))
+            t0 = time.perf_counter()
+            loop(nfev, ts, Y, fm.fp, fm.ip, work, out)
+            rhs.append((time.perf_counter() - t0) / nfev)
+            if r < scipy_rounds:
+                tr_s = run("scipy")
+                walls["scipy"].append(float(tr_s.info["wall_time_s"]))
+    except (RuntimeError, ValueError) as exc:
+        return Goal(
+            COMPILED_STEPPING_GOAL, math.inf, COMPILED_STEPPING_LIMIT, f"a run failed: {exc}"
+        )
+    med = {name: statistics.median(v) for name, v in walls.items()}
+    c = statistics.median(rhs)
+    nfev_s = int(tr_s.info["nfev"])
+    ratio = med["compiled"] / (nfev * c)
+    ratio_s = med["scipy"] / (nfev_s * c)
+    differ = errors_against(first, ref_samples(tr_s))["error"]
+    progress(
+        f"  {t_end:g} s, DOP853 rtol 1e-12: compiled loop {med['compiled']:.3f} s (nfev {nfev}, "
+        f"{first.info['nsteps']} steps), scipy's loop {med['scipy']:.3f} s (nfev {nfev_s}, "
+        f"{tr_s.info['nsteps']} steps); one compiled evaluation {c * 1e6:.2f} µs"
+    )
+    return Goal(
+        COMPILED_STEPPING_GOAL,
+        ratio,
+        COMPILED_STEPPING_LIMIT,
+        f"compiled loop {med['compiled']:.3f} s against {nfev} x {c * 1e6:.2f} µs = "
+        f"{nfev * c:.3f} s of evaluations (medians of {rounds}); scipy's loop {med['scipy']:.3f} s "
+        f"against {nfev_s * c:.3f} s: ratio {ratio_s:.2f} (median of {scipy_rounds}), "
+        f"{med['scipy'] / med['compiled']:.1f}x the compiled loop's wall; the two loops' samples "
+        f"differ by {differ:.1e} (the sweep's error measure)",
+        data={
+            "t_end_s": t_end,
+            "compiled_s": walls["compiled"],
+            "scipy_s": walls["scipy"],
+            "rhs_us": [v * 1e6 for v in rhs],
+            "compiled_median_s": med["compiled"],
+            "scipy_median_s": med["scipy"],
+            "rhs_median_us": c * 1e6,
+            "nfev": {"compiled": nfev, "scipy": nfev_s},
+            "nsteps": {"compiled": int(first.info["nsteps"]), "scipy": int(tr_s.info["nsteps"])},
+            "ratio_scipy": ratio_s,
+            "loops_differ": differ,
+        },
+    )
+
+
+WHOLE_COMMAND_LIMIT = 1.5
+"""``tumble validate`` warm: total wall ≤ 1.5 × the plants' compute. What is not the plants
+(imports, the comparison, figures, the recording, the files) may cost half as much again."""
+
+COLD_WARM_LIMIT = 3.0
+"""``tumble validate`` cold (an empty numba cache) / warm: a first run may take three times a later
+one (it compiles every kernel once, with numba's documented API only, announced with its measured
+estimate; ``tumble warmup`` pays it ahead, e.g. when a Docker image is built)."""
+
+
+def _plant_names() -> tuple[str, ...]:
+    from analytic.trajectory import Engine
+
+    return tuple(e.value for e in Engine)
+
+
+def _validate_once(out: str, env: dict[str, str]) -> tuple[float, dict[str, float]]:
+    """Wall of one ``python -m validation validate`` (default scene, every installed plant) in a
+    new process, s, and its ``report.json`` stage walls."""
+    import json
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    t0 = time.perf_counter()
+    proc = subprocess.run(
+        [sys.executable, "-m", "validation", "validate", "--out", out],
+        env=env,
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    wall = time.perf_counter() - t0
+    if proc.returncode != 0:
+        raise RuntimeError(
+            f"tumble validate exited {proc.returncode}: {proc.stderr.strip()[-300:]}"
+        )
+    doc = json.loads((Path(out) / "report.json").read_text(encoding="utf-8"))
+    return wall, {k: float(v) for k, v in doc["run"]["wall_times_s"].items()}
+
+
+FIRST_RUN_PAIRS = 3
+"""Cold/warm pairs timed for the first-run goal, each in its own empty numba cache; the goal is
+their median ratio."""
+
+
+def goal_whole_command(progress: Callable[[str], None] = print) -> tuple[Goal, Goal]:
+    """The command a user waits for: ``tumble validate`` on the default scene in a new process.
+
+    :data:`FIRST_RUN_PAIRS` pairs, each a cold run (numba's cache pointed at an empty directory,
+    ``NUMBA_CACHE_DIR``; the user's own cache is not touched) followed at once by a warm run in
+    the same, now filled, directory. A pair is timed back to back because the machine's speed
+    drifts (on a shared 2-core VM, warm runs of the same code ranged 3.6-6.3 s within an hour):
+    a cold run and a warm one from different minutes would measure the drift. Returns the goal
+    "warm wall / plants' compute" (the plants' stage walls in ``report.json``) of the median
+    warm run, and the goal "cold wall / warm wall", the median of the pairs' ratios."""
+    import statistics
+    import tempfile
+
+    progress(
+        f"timing tumble validate in new processes: {FIRST_RUN_PAIRS} x (cold in an empty numba "
+        "cache, then warm)"
+    )
+    pairs = []
+    for i in range(FIRST_RUN_PAIRS):
+        with tempfile.TemporaryDirectory(prefix="tumble-bench-") as tmp:
+            env = dict(os.environ, NUMBA_CACHE_DIR=os.path.join(tmp, "numba"))
+            cold, _ = _validate_once(os.path.join(tmp, "cold"), env)
+            warm = _validate_once(os.path.join(tmp, "warm"), env)
+        pairs.append((cold, warm))
+        progress(f"  pair {i + 1}: cold {cold:.1f} s, warm {warm[0]:.1f} s")
+    wall, stages = sorted((w for _, w in pairs), key=lambda w: w[0])[len(pairs) // 2]
+    plants = sum(v for k, v in stages.items() if k in _plant_names())
+    rest = {k: round(v, 2) for k, v in stages.items() if k not in _plant_names()}
+    whole = Goal(
+        "tumble validate warm: total wall / plants' compute",
+        wall / plants,
+        WHOLE_COMMAND_LIMIT,
+        f"{wall:.2f} s / {plants:.2f} s (other stages, s: {rest})",
+        data={"wall_s": wall, "plants_s": plants, "stages_s": stages},
+    )
+    ratios = [cold / warm[0] for cold, warm in pairs]
+    cold, (warm, _) = pairs[ratios.index(statistics.median_low(ratios))]
+    first = Goal(
+        "tumble validate: cold (empty numba cache) / warm wall, median of pairs",
+        statistics.median(ratios),
+        COLD_WARM_LIMIT,
+        f"{cold:.1f} s / {warm:.1f} s (pairs: "
+        + ", ".join(f"{c:.1f}/{w[0]:.1f}" for c, w in pairs)
+        + ")",
+        data={"pairs_s": [[c, w[0]] for c, w in pairs], "ratios": ratios},
+    )
+    return whole, first
+
+
+def measure(skip_long: bool = False, progress: Callable[[str], None] = print) -> list[Goal]:
+    from analytic import fast
+
+    if not fast.available():
+        progress("numba is not installed: the analytic side runs on numpy")
+    goals = [goal_evaluation(2), goal_evaluation(5)]
+    for g in goals:
+        progress(g.line())
+    for name in ("paper_example1_controlled", "paper_example2_controlled"):
+        goals.append(goal_controller_in_rk4(name))
+        progress(goals[-1].line())
+    goals.append(goal_scaling())
+    progress(goals[-1].line())
+    goals.append(goal_compiled_stepping(progress=progress))
+    progress(goals[-1].line())
+    goals.append(goal_pinocchio(progress=progress))
+    progress(goals[-1].line())
+    if not skip_long:
+        goals.append(goal_example1_60s(progress=progress))
+        progress(goals[-1].line())
+        for g in goal_whole_command(progress=progress):
+            goals.append(g)
+            progress(g.line())
+    return goals

@@ -1,0 +1,19 @@
+"""The recording wing: ``run.rrd`` for the Rerun viewer.
+
+* :mod:`.recording`: ``write_recording``, the front;
+* :mod:`.stream`: in-memory streams and the read-back check;
+* :mod:`.world`: the 3D entities, trails and exaggerated differences;
+* :mod:`.plots`: the time series;
+* :mod:`.layout`: the blueprint, narrative and legend;
+* :mod:`.style`: colours, application ids and viewer text.
+"""
+
+from validation._lazy import lazy_exports
+
+_PUBLIC = {
+    "write_recording": "validation.recording.recording",
+    "RecordingInfo": "validation.recording.recording",
+}
+
+__all__ = sorted(_PUBLIC)
+__getattr__, __dir__ = lazy_exports(__name__, _PUBLIC, globals())

@@ -1,0 +1,24 @@
+"""The report wing: what a run leaves to be read.
+
+* :mod:`.report`: ``write_report`` (``report.md``, ``report.json``, the figures);
+* :mod:`.figures`: the figures and their captions (PNG, SVG or PDF);
+* :mod:`.provenance`: the provenance block of every JSON file, ``dumps`` and the JSON Schemas in
+  ``schemas/``;
+* :mod:`.scene_reference`: ``docs/scene-format.md`` rendered from the key declarations.
+"""
+
+from validation._lazy import lazy_exports
+
+_PUBLIC = {
+    "write_report": "validation.report.report",
+    "RunVerdict": "validation.report.report",
+    "ReportFiles": "validation.report.report",
+    "FigureFormat": "validation.report.figures",
+    "FileKind": "validation.report.provenance",
+    "dumps": "validation.report.provenance",
+    "SCHEMA_DIR": "validation.report.provenance",
+    "render": "validation.report.scene_reference",
+}
+
+__all__ = sorted(_PUBLIC)
+__getattr__, __dir__ = lazy_exports(__name__, _PUBLIC, globals())

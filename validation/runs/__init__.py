@@ -1,0 +1,26 @@
+"""The runs wing: how a command's work is carried out and kept.
+
+* :mod:`.outputs`: output directories (one run, whole; ownership proven by a manifest);
+* :mod:`.atomic`: atomic writes;
+* :mod:`.workers`: the plants in worker processes;
+* :mod:`.interrupts`: Ctrl-C and SIGTERM, kept until a safe point;
+* :mod:`.progress`: progress lines;
+* :mod:`.warmup`: the one-time numba compile (``tumble warmup``).
+"""
+
+from validation._lazy import lazy_exports
+
+_PUBLIC = {
+    "output_run": "validation.runs.outputs",
+    "default_out_dir": "validation.runs.outputs",
+    "OutputError": "validation.runs.atomic",
+    "write_bytes": "validation.runs.atomic",
+    "write_text": "validation.runs.atomic",
+    "Progress": "validation.runs.progress",
+    "StageProgress": "validation.runs.progress",
+    "warm_up": "validation.runs.warmup",
+    "warming": "validation.runs.warmup",
+}
+
+__all__ = sorted(_PUBLIC)
+__getattr__, __dir__ = lazy_exports(__name__, _PUBLIC, globals())

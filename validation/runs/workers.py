@@ -1,0 +1,532 @@
+"""Independent stages of one command in forked worker processes, or in this process.
+
+``tumble validate`` has stages that do not need each other: each plant's run, then the figures and
+the recording. On a machine with more than one CPU they run side by side in child processes forked
+from this one (they inherit its imports and its loaded kernels, so a child starts in milliseconds);
+elsewhere, and whenever forking is not safe, each runs here, in order, with the same results.
+
+* :func:`start` forks a :class:`Job` (or makes an in-process one). A job may be started before its
+  inputs exist (``prepare`` runs at once: a child imports matplotlib or rerun while the plants run)
+  and be given them later with :meth:`Job.give`.
+* :func:`wait` collects jobs, forwarding each child's messages (a plant's progress) as they come.
+* A job whose child dies (killed, ``kill -9``), or cannot deliver its result, raises
+  :class:`WorkerLost`; the caller then does that stage here and says so in its report
+  (:mod:`validation.validate`: a plant, the figures, the recording), so nothing is lost to a
+  worker.
+* A file the child could not write (a full disk) comes back as the same
+  :class:`validation.runs.atomic.OutputError`, never as a stage's ordinary error.
+
+Forking is used only where it is safe and useful: the ``fork`` start method exists (Linux; macOS
+frameworks are not fork-safe), this process runs one thread (a fork copies only the calling thread,
+and locks held by the others would stay locked in the child), and more than one CPU is available to
+this process. ``TUMBLE_WORKERS=0`` in the environment turns workers off (everything runs here).
+
+A child's exception comes back as :class:`WorkerError` (its type name and first line); a Ctrl-C
+that reaches a child ends its task the way it would end here (a plant returns its partial run).
+A child honours the first SIGINT or SIGTERM and ignores the ones after it (a terminal's Ctrl-C and
+the parent's forwarded one arrive together; an interrupt compiled code swallows is kept and raised
+at the task's next progress report, :mod:`validation.runs.interrupts`). When this process is
+interrupted, :func:`wait` tells every running child at once and gives them
+:data:`INTERRUPT_GRACE_S` to send what they reached; a child that has not by then is ended.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import signal
+import sys
+import threading
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+ENV_SWITCH = "TUMBLE_WORKERS"
+"""Set to ``0`` to run every stage in this process."""
+
+POLL_S = 0.05
+"""How often :func:`wait` looks at the children, s (it also wakes as soon as one sends)."""
+
+LOST_GRACE_S = 5.0
+"""How long a child whose process has ended, or which was interrupted, may take to deliver, s."""
+
+INTERRUPT_GRACE_S = 1.0
+"""After a Ctrl-C (or SIGTERM) here, how long the children (told at once: a terminal's Ctrl-C
+reaches them directly, a signal sent to this process alone does not) may take to send their
+partial results, s; then they are ended, and their stages reported as interrupted."""
+
+Report = Callable[[Any], None]
+"""``report(message)``: what a task calls to send a message (a plant's progress) to the parent."""
+
+
+class WorkerLost(RuntimeError):
+    """A worker process ended without delivering its result (killed, or it could not pickle it)."""
+
+
+class WorkerError(RuntimeError):
+    """The task raised in the worker: ``kind`` is the exception's type name."""
+
+    def __init__(self, kind: str, message: str):
+        super().__init__(f"{kind}: {message}")
+        self.kind = kind
+        self.message = message
+
+
+_LATER = object()
+
+
+def _os_threads() -> int:
+    """Threads of this process (Linux ``/proc``; Python's own count elsewhere)."""
+    try:
+        return len(os.listdir("/proc/self/task"))
+    except OSError:
+        return threading.active_count()
+
+
+def available_cpus() -> int:
+    """CPUs this process may run on."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        return os.cpu_count() or 1
+
+
+def can_fork() -> bool:
+    """Whether :func:`start` forks here (module docstring)."""
+    import multiprocessing as mp
+
+    if os.environ.get(ENV_SWITCH, "").strip() == "0":
+        return False
+    if not sys.platform.startswith("linux") or "fork" not in mp.get_all_start_methods():
+        return False
+    return available_cpus() > 1 and _os_threads() == 1
+
+
+def _one_line(exc: BaseException) -> str:
+    return str(exc).splitlines()[0] if str(exc) else ""
+
+
+def _policy() -> int | None:
+    """This process's scheduling policy (None where there are none to set)."""
+    try:
+        return os.sched_getscheduler(0)
+    except (AttributeError, OSError):
+        return None
+
+
+_START_POLICY = _policy()
+"""The policy the command started with (``SCHED_OTHER`` normally): what idle stages return to."""
+
+
+def _set_idle(idle: bool, pid: int = 0) -> None:
+    """Process ``pid`` (0: this one) to Linux ``SCHED_IDLE`` (run only on a CPU nothing else
+    wants) or back to the policy the command started with; where the switch is refused, or the
+    command started idle already, it stays as it is."""
+    if _START_POLICY is None or _START_POLICY == getattr(os, "SCHED_IDLE", None):
+        return
+    try:
+        policy = os.SCHED_IDLE if idle else _START_POLICY
+        os.sched_setscheduler(pid, policy, os.sched_param(0))
+    except (AttributeError, OSError):
+        pass
+
+
+@contextlib.contextmanager
+def idle_priority():
+    """This process at idle priority (Linux ``SCHED_IDLE``) inside the block, normal after."""
+    _set_idle(True)
+    try:
+        yield
+    finally:
+        _set_idle(False)
+
+
+def normal_priority() -> None:
+    """This process back at the policy the command started with (out of :func:`idle_priority`)."""
+    _set_idle(False)
+
+
+@contextlib.contextmanager
+def signals_held(on_signal: Callable[[], None] | None = None, raise_after: bool = True):
+    """SIGINT and SIGTERM do not cut the block: an import cut by Ctrl-C half way leaves a module
+    half made (matplotlib then fails on its next import), so a preparing import finishes first
+    and the interrupt (:class:`validation.runs.interrupts.Terminated` for SIGTERM) is raised after it
+    (unless not ``raise_after``: the caller reads the list the block is given, the signals
+    caught so far, and acts on it itself).
+
+    The signal is not blocked, only noted: ``on_signal()`` runs as soon as it arrives (telling the
+    plants' workers to stop), so the job stops promptly. Main thread only; elsewhere the block
+    runs as it is."""
+    from validation.runs import interrupts
+
+    caught: list[int] = []
+
+    def note(signum, frame) -> None:
+        first = not caught
+        caught.append(signum)
+        if signum == signal.SIGTERM:
+            interrupts.note_sigterm()
+        if first and on_signal is not None:
+            with contextlib.suppress(Exception):
+                on_signal()
+
+    held = (signal.SIGINT, signal.SIGTERM)
+    try:
+        previous = {sig: signal.signal(sig, note) for sig in held}
+    except ValueError:  # not the main thread: no handlers to set
+        yield caught
+        return
+    try:
+        yield caught
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+    if caught and raise_after:
+        raise interrupts.Terminated() if signal.SIGTERM in caught else KeyboardInterrupt()
+
+
+_PARENT_ENDS: list[Any] = []
+"""The parent's ends of every worker's pipes (results in, inputs out). A child closes its copies
+first thing: else a child whose parent is gone would wait forever for inputs (a sibling holding
+the write end) or block writing its result into a pipe it holds the read end of."""
+
+
+def _close_parent_ends() -> None:  # pragma: no cover - in a child
+    for end in _PARENT_ENDS:
+        try:
+            end.close()
+        except OSError:
+            pass
+    _PARENT_ENDS.clear()
+
+
+def _first_interrupt_only(signum, frame):  # pragma: no cover - in a child
+    """A child's SIGINT/SIGTERM handler: the first one interrupts the task, the later ones are
+    ignored (the partial result is being sent)."""
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, signal.SIG_IGN)
+    raise KeyboardInterrupt("interrupted")
+
+
+def _child_signals() -> None:  # pragma: no cover - in a child
+    """The child's signal handling (module docstring): the first interrupt counts, once, and one
+    that compiled code swallows is kept for the task's next progress report."""
+    from validation.runs.interrupts import keep_swallowed
+
+    keep_swallowed()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, _first_interrupt_only)
+
+
+def _send_error(conn, exc: BaseException) -> None:  # pragma: no cover - in a child
+    """Send the task's exception: an interrupt as interrupted, a file that could not be written
+    as an ``OutputError`` (path and reason), anything else by its type name and first line."""
+    from validation.runs.atomic import OutputError
+
+    if isinstance(exc, KeyboardInterrupt):
+        msg = ("err", type(exc).__name__, _one_line(exc) or "interrupted", True)
+    elif isinstance(exc, OutputError):
+        msg = ("output", str(exc.path), exc.reason, exc.errno)
+    else:
+        msg = ("err", type(exc).__name__, _one_line(exc), False)
+    try:
+        conn.send(msg)
+    except Exception:  # the parent is gone
+        pass
+
+
+def _child(conn, inbox, prepare, task, args, idle: bool) -> None:  # pragma: no cover - in a child
+    """The worker process: prepare, wait for the inputs if they come later, run, send back."""
+    _close_parent_ends()
+    _child_signals()
+    try:
+        if idle:
+            _set_idle(True)
+        if prepare is not None:
+            prepare()
+        if args is _LATER:
+            args = inbox.recv()
+            if args is None:  # the parent gave up on this job
+                return
+        if idle:
+            _set_idle(False)
+        out = task(*args, report=lambda msg: conn.send(("msg", msg)))
+        for sig in (signal.SIGINT, signal.SIGTERM):  # a late interrupt must not lose the result
+            signal.signal(sig, signal.SIG_IGN)
+        conn.send(("ok", out))
+    except BaseException as exc:  # an interrupt before a result, or the task's error
+        _send_error(conn, exc)
+    finally:
+        try:
+            conn.close()
+        except Exception:
+            pass
+
+
+@dataclass(eq=False)
+class Job:
+    """One stage: in a child process (``process`` set) or to be run here.
+
+    Attributes:
+        name: what the stage is (for messages).
+        task: ``task(*args, report=...)``.
+        on_message: called with each message the task sends (in the parent).
+    """
+
+    name: str
+    task: Callable[..., Any]
+    args: Any = _LATER
+    on_message: Report | None = None
+    prepare: Callable[[], None] | None = None
+    process: Any = None
+    conn: Any = None
+    inbox: Any = None
+    done: bool = False
+    outcome: tuple = ()
+    interrupted: bool = False
+
+    @property
+    def forked(self) -> bool:
+        return self.process is not None
+
+    def give(self, *args: Any) -> None:
+        """The inputs of a job started without them."""
+        self.args = args
+        if self.forked:
+            _set_idle(False, self.process.pid)  # what it still prepares is now on the way
+            try:
+                self.inbox.send(args)
+            except (OSError, ValueError):  # the child is gone; result() says WorkerLost
+                pass
+            self.inbox.close()
+
+    def cancel(self) -> None:
+        """Give up on a job whose inputs will never come (its child exits)."""
+        if self.forked and not self.done and self.args is _LATER:
+            try:
+                self.inbox.send(None)
+                self.inbox.close()
+            except (OSError, ValueError):
+                pass
+        self.done = True
+        self.outcome = ("cancelled",)
+
+    def _receive(self) -> None:
+        """Read what the child has sent (messages forwarded, the result kept)."""
+        while not self.done and self.conn.poll():
+            try:
+                msg = self.conn.recv()
+            except (EOFError, OSError):
+                self.process.join(timeout=LOST_GRACE_S)
+                code = self.process.exitcode
+                self._finish(("lost", f"the worker process ended (exit {code}) without a result"))
+                return
+            if msg[0] == "msg":
+                if self.on_message is not None:
+                    self.on_message(msg[1])
+            else:
+                self._finish(msg)
+
+    def _finish(self, outcome: tuple) -> None:
+        """Keep the outcome. The child is not waited for: it exits on its own (multiprocessing
+        reaps it when the next worker starts, or at exit), and freeing a large process's memory
+        takes a tenth of a second nobody needs to wait."""
+        self.done = True
+        self.outcome = outcome
+        self.conn.close()
+
+    def result(self) -> Any:
+        """The task's return value (running it here if it is not forked).
+
+        Raises:
+            WorkerLost: the child ended without a result (the caller does the stage itself).
+            WorkerError: the task raised in the child.
+            OutputError: the task could not write a file (a full disk ...), in the child too.
+            KeyboardInterrupt: the task was interrupted in the child before it had a result.
+        """
+        if not self.forked:
+            if not self.done:
+                if self.args is _LATER:
+                    raise RuntimeError(f"{self.name}: no inputs were given")
+                if self.prepare is not None:
+                    self.prepare()
+                self.done = True
+                self.outcome = ("ok", self.task(*self.args, report=self.on_message or _ignore))
+            return self.outcome[1]
+        if wait([self]):
+            self.interrupted = True
+        kind = self.outcome[0]
+        if kind == "ok":
+            return self.outcome[1]
+        if kind == "output":
+            from validation.runs.atomic import OutputError
+
+            _, path, reason, code = self.outcome
+            raise OutputError(path, OSError(code, reason))
+        if kind == "err":
+            _, name, message, interrupted = self.outcome
+            if interrupted:
+                raise KeyboardInterrupt(message)
+            raise WorkerError(name, message)
+        raise WorkerLost(f"{self.name}: {self.outcome[-1]}")
+
+
+def _ignore(_msg: Any) -> None:
+    pass
+
+
+def flush_std_streams() -> None:
+    """Flush ``sys.stdout`` and ``sys.stderr`` before forking: else a child would print what this
+    process had buffered a second time (a closed or missing stream is left alone)."""
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except (OSError, ValueError, AttributeError):
+            pass
+
+
+def start(
+    name: str,
+    task: Callable[..., Any],
+    *args: Any,
+    later: bool = False,
+    prepare: Callable[[], None] | None = None,
+    on_message: Report | None = None,
+    fork: bool = True,
+    idle_until_given: bool = False,
+) -> Job:
+    """Start ``task(*args, report=...)`` in a forked child when :func:`can_fork` (and ``fork``),
+    else return a job that runs it here on :meth:`Job.result`.
+
+    Args:
+        name: what the stage is.
+        task: the function; it takes ``report`` (send a message to ``on_message``) as a keyword.
+        args: its inputs, unless ``later`` (then :meth:`Job.give` delivers them).
+        prepare: run in the child at once (imports), before the inputs arrive.
+        on_message: receives the task's messages in this process.
+        fork: False runs the job here whatever the machine.
+        idle_until_given: the child prepares at the lowest priority (Linux ``SCHED_IDLE``: only on
+            a CPU nothing else wants, so the plants keep theirs) and runs at the normal one once
+            it is given its inputs.
+    """
+    job = Job(name, task, _LATER if later else args, on_message, prepare)
+    if not (fork and can_fork()):
+        return job
+    import multiprocessing as mp
+
+    ctx = mp.get_context("fork")
+    conn, child_conn = ctx.Pipe(duplex=False)
+    inbox_r, inbox_w = ctx.Pipe(duplex=False)
+    flush_std_streams()  # a child must not print this process's buffer again
+    _PARENT_ENDS[:] = [end for end in _PARENT_ENDS if not end.closed]
+    _PARENT_ENDS.extend((conn, inbox_w))
+    proc = ctx.Process(
+        target=_child,
+        args=(child_conn, inbox_r, prepare, task, job.args, idle_until_given),
+        name=f"tumble-{name}",
+        daemon=True,
+    )
+    proc.start()
+    child_conn.close()
+    inbox_r.close()
+    job.process, job.conn, job.inbox = proc, conn, inbox_w
+    if not later:
+        inbox_w.close()
+    return job
+
+
+def wait(jobs: Sequence[Job], first: bool = False, interrupted: bool = False) -> bool:
+    """Collect the forked ``jobs`` until each has its outcome (``first``: until one more has),
+    forwarding their messages. In-process jobs are left for :meth:`Job.result`.
+
+    Returns whether a Ctrl-C (or SIGTERM) reached this process meanwhile (``interrupted``: it
+    had already). It does not stop the collecting: every running child is told at once
+    (:func:`interrupt`) and sends its partial result, kept if it comes within
+    :data:`INTERRUPT_GRACE_S`; a child that has not sent by then is ended and its job marked
+    interrupted (a second Ctrl-C stops waiting and is raised).
+    """
+    from multiprocessing.connection import wait as mp_wait
+
+    deadline = None
+    pending = [j for j in jobs if j.forked and not j.done]
+    if interrupted:
+        interrupt(pending)
+        deadline = time.monotonic() + INTERRUPT_GRACE_S
+    while pending:
+        if deadline is not None and time.monotonic() >= deadline:
+            for j in pending:
+                j.interrupted = True
+                j._finish(("lost", "interrupted before it sent a result"))
+            stop(pending)
+            break
+        try:
+            mp_wait([j.conn for j in pending] + [j.process.sentinel for j in pending], POLL_S)
+            for j in pending:
+                j._receive()
+                if not j.done and not j.process.is_alive():
+                    j._receive()  # what it sent before it ended
+                    if not j.done:
+                        code = j.process.exitcode
+                        j._finish(
+                            ("lost", f"the worker process ended (exit {code}) without a result")
+                        )
+        except KeyboardInterrupt:
+            if deadline is not None:
+                raise
+            interrupted = True
+            interrupt(pending)
+            deadline = time.monotonic() + INTERRUPT_GRACE_S
+        still = [j for j in pending if not j.done]
+        if first and len(still) < len(pending):
+            break
+        pending = still
+    return interrupted
+
+
+def interrupt(jobs: Sequence[Job]) -> None:
+    """Send SIGINT to the running children of ``jobs``: each ends its task as a Ctrl-C would
+    (a plant sends the run it reached); a child told twice ignores the second."""
+    for j in jobs:
+        if j.forked and not j.done and j.process.is_alive():
+            with contextlib.suppress(OSError):
+                os.kill(j.process.pid, signal.SIGINT)
+
+
+STOP_GRACE_S = 0.5
+"""How long :func:`stop` lets a child end on SIGTERM before it is killed, s."""
+
+
+def stop(jobs: Sequence[Job]) -> None:
+    """End the children of ``jobs`` that are still running (after an error or an interrupt in
+    the parent): SIGTERM, then SIGKILL after :data:`STOP_GRACE_S`; each is reaped."""
+    for j in jobs:
+        if j.forked and (not j.done or j.process.is_alive()):
+            if not j.done:
+                j.cancel()
+            if j.process.is_alive():
+                j.process.terminate()
+    for j in jobs:
+        if j.forked:
+            j.process.join(timeout=STOP_GRACE_S)
+            if j.process.is_alive():
+                j.process.kill()
+                j.process.join(timeout=STOP_GRACE_S)
+
+
+__all__ = [
+    "ENV_SWITCH",
+    "Job",
+    "WorkerError",
+    "WorkerLost",
+    "available_cpus",
+    "can_fork",
+    "flush_std_streams",
+    "idle_priority",
+    "interrupt",
+    "normal_priority",
+    "signals_held",
+    "start",
+    "stop",
+    "wait",
+]

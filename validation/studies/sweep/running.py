@@ -1,0 +1,177 @@
+"""One run of one plant at one setting, within a wall-time budget; the executor the runs go to.
+
+Everything here is a module-level function: it travels to process-pool workers and Dask.
+
+A run over its budget is stopped by :class:`BudgetExceeded`, raised from the plant's progress
+callback. It is an ordinary ``Exception``, not a ``KeyboardInterrupt``: the plants turn a
+``KeyboardInterrupt`` into an interrupted run (the user's Ctrl-C or SIGTERM), which the sweep
+re-raises so that the whole sweep stops, while a budget stop ends only the series it is in. The two
+can never be taken for each other.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+import time
+import warnings
+from collections.abc import Callable
+from concurrent.futures import Executor, ProcessPoolExecutor
+from typing import Any
+
+from analytic.scene import Scene
+from validation.studies.sweep.config import PINOCCHIO, RTOL_ENGINES, SweepConfig
+
+MAX_WORKERS = 4
+"""Most processes of the default pool (each run is single-threaded; BLAS is pinned to one thread)."""
+
+
+class BudgetExceeded(Exception):
+    """A run passed its wall-time budget; raised from the plant's progress callback.
+
+    Attributes:
+        budget_s: the budget, s; elapsed_s: wall time when it was noticed, s; t_reached: the
+        simulated time reached, s.
+    """
+
+    def __init__(self, budget_s: float, elapsed_s: float, t_reached: float):
+        super().__init__(
+            f"stopped at its budget of {budget_s:g} s (after {elapsed_s:.3g} s, at t = "
+            f"{t_reached:.4g} s)"
+        )
+        self.budget_s = budget_s
+        self.elapsed_s = elapsed_s
+        self.t_reached = t_reached
+
+
+def within_budget(run: Callable[[Callable[[float], None] | None], Any], budget: float | None):
+    """``run(progress)`` (a plant's run), stopped by :class:`BudgetExceeded` when it takes more
+    than ``budget`` s of wall time (checked at each output sample).
+
+    A run interrupted by the user (Ctrl-C, SIGTERM) comes back interrupted from the plant and is
+    re-raised as ``KeyboardInterrupt``, so the sweep stops.
+    """
+    progress = None
+    if budget is not None:
+        start = time.perf_counter()
+
+        def progress(t: float) -> None:
+            elapsed = time.perf_counter() - start
+            if elapsed > budget:
+                raise BudgetExceeded(budget, elapsed, t)
+
+    with warnings.catch_warnings():
+        # the plants' quadrature states carry atol 1e300 (outside error control); scipy's
+        # first-step heuristic then overflows harmlessly
+        warnings.filterwarnings("ignore", "overflow encountered", RuntimeWarning)
+        tr = run(progress)
+    return tr.raise_if_interrupted()
+
+
+def analytic_run(scene: Scene, method: str, rtol: float, atol: float, t_end: float, budget=None):
+    """One run of the analytic engine (scipy ``method``), within ``budget`` s (:func:`within_budget`)."""
+    import analytic
+
+    return within_budget(
+        lambda progress: analytic.simulate(
+            scene, method=method, rtol=rtol, atol=atol, t_end=t_end, progress=progress
+        ),
+        budget,
+    )
+
+
+def pinocchio_run(scene: Scene, method: str, rtol: float, atol: float, t_end: float, budget=None):
+    """One run of the Pinocchio plant through the plant protocol; ``budget`` as for
+    :func:`analytic_run`."""
+    from mj_bridge.plants import PinocchioSettings, plant
+
+    settings = PinocchioSettings(method, rtol, atol)
+    return within_budget(
+        lambda progress: plant(PINOCCHIO).simulate(scene, settings, t_end=t_end, progress=progress),
+        budget,
+    )
+
+
+def mujoco_run(scene: Scene, integrator: str, dt: float, t_end: float, budget=None):
+    """One MuJoCo run; ``budget`` as for :func:`analytic_run`."""
+    import mj_bridge
+
+    return within_budget(
+        lambda progress: mj_bridge.simulate(
+            scene, integrator=integrator, dt=dt, t_end=t_end, progress=progress
+        ),
+        budget,
+    )
+
+
+def run_setting(
+    scene: Scene,
+    engine: str,
+    method: str,
+    setting: float,
+    cfg: SweepConfig,
+    t_end: float | None = None,
+    budget: float | None = None,
+):
+    """One run of ``engine`` / ``method`` at ``setting`` (rtol, atol = rtol x ``cfg.atol_ratio``;
+    or MuJoCo's dt) over ``t_end`` (default ``cfg.t_end``)."""
+    t_end = cfg.t_end if t_end is None else t_end
+    if engine in RTOL_ENGINES:
+        run = pinocchio_run if engine == PINOCCHIO else analytic_run
+        return run(scene, method, setting, setting * cfg.atol_ratio, t_end, budget=budget)
+    return mujoco_run(scene, method, setting, t_end, budget=budget)
+
+
+def pinocchio_unavailable() -> str:
+    """Why the Pinocchio series cannot run here ("" when ``pin`` is installed)."""
+    from mj_bridge.plants import PinocchioPlant
+
+    return PinocchioPlant.unavailable()
+
+
+def warm_compiled(scene: Scene, skipped: Any = ()) -> None:
+    """One output interval on every plant that runs (not in ``skipped``): numba compiles the
+    kernels once, here, and writes them to its disk cache, from which every worker then loads them
+    (~1 s) instead of compiling them (~20 s on a fresh machine) against a run's budget."""
+    interval = 1.0 / scene.output.rate
+    for engine in sorted(RTOL_ENGINES):
+        if engine not in skipped:
+            run = pinocchio_run if engine == PINOCCHIO else analytic_run
+            run(scene, "DOP853", 1e-6, 1e-8, interval)
+    mujoco_run(scene, "RK4", scene.mujoco.timestep, interval)
+
+
+def default_workers() -> int:
+    """Workers of the default pool: one per core this process may use, at most :data:`MAX_WORKERS`."""
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        cores = os.cpu_count() or 1
+    return max(1, min(MAX_WORKERS, cores))
+
+
+def default_executor() -> Executor:
+    """A local process pool of :func:`default_workers` workers.
+
+    spawn, not fork: the parent may hold threads (BLAS, numba, a Dask client) that fork would copy
+    mid-state; workers import the engines afresh.
+    """
+    return ProcessPoolExecutor(
+        max_workers=default_workers(),
+        mp_context=multiprocessing.get_context("spawn"),
+    )
+
+
+__all__ = [
+    "MAX_WORKERS",
+    "BudgetExceeded",
+    "analytic_run",
+    "default_executor",
+    "default_workers",
+    "mujoco_run",
+    "pinocchio_run",
+    "pinocchio_unavailable",
+    "run_setting",
+    "warm_compiled",
+    "within_budget",
+]

@@ -1,8 +1,0 @@
-"""``python -m validation.sweep [ARGS]`` is ``tumble sweep [ARGS]``: the same parser."""
-
-import sys
-
-from validation.cli import run
-
-if __name__ == "__main__":
-    run(["sweep", *sys.argv[1:]])

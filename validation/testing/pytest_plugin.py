@@ -1,0 +1,532 @@
+"""The pytest plugin: scene files become tests, one test item per agreement check.
+
+Registered as the ``pytest11`` entry point ``tumble`` (``pip install tumbling-testbed``). It does
+nothing until a scene is collected:
+
+* a file ``test_*.toml`` with a ``[scene]`` table, or any ``.toml`` file matching a glob of the ini
+  option ``tumble_scenes``, is a scene file (every other ``.toml`` is left alone);
+* each scene runs once per session on the plants of ``--tumble-plants`` (default every installed
+  plant), and each of its checks is one item, ``test_slosh.toml::position_C``,
+  ``test_slosh.toml::mujoco.energy``, ..., plus ``test_slosh.toml::run`` (the run itself: no plant
+  failed, the report was written); every item carries the marker ``tumble``;
+* runs are cached for the session by scene content and plant settings; under pytest-xdist the
+  items of a scene carry ``xdist_group(<scene file>)`` (``--dist loadgroup`` sends a scene's items
+  to one worker) and a run is shared between workers through the session's temporary directory
+  under a file lock, so a scene never runs twice whatever the distribution mode;
+* output goes to a temporary directory, or with ``--tumble-out DIR`` to ``DIR/<slug of the scene
+  file's path>`` (the report, ``report.json``, figures and ``run.rrd``: CI artefacts).
+
+This module imports pytest and the standard library only; the plants, numpy and MuJoCo are imported
+when the first scene file is collected. ``python -m validation.testing.pytest_plugin --bench`` measures
+the plugin's cost on a pytest run that collects no scene.
+"""
+
+from __future__ import annotations
+
+import errno
+import fnmatch
+import hashlib
+import hmac
+import os
+import re
+import secrets
+import stat
+import sys
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+MARKER = "tumble"
+RUN_ITEM = "run"
+_SCENE_TABLE = re.compile(rb"^[ \t]*\[[ \t]*scene[ \t]*\][ \t]*(#.*)?\r?$", re.MULTILINE)
+
+RUNS: list[str] = []
+"""Scene runs made by this process (one cache key each, in order): what tests count."""
+
+
+# ----------------------------------------------------------------------------------------------
+# Options
+# ----------------------------------------------------------------------------------------------
+
+
+def pytest_addoption(parser: pytest.Parser) -> None:
+    group = parser.getgroup("tumble", "tumbling-testbed agreement checks (scene files as tests)")
+    group.addoption(
+        "--tumble-plants",
+        default=None,
+        metavar="PLANTS",
+        help="plants to run each scene file on, e.g. 'analytic,mujoco' (default: every installed "
+        "plant; at least two)",
+    )
+    group.addoption(
+        "--tumble-out",
+        default=None,
+        metavar="DIR",
+        help="keep each scene's report and recording in DIR/<scene file> (default: a temporary "
+        "directory)",
+    )
+    parser.addini(
+        "tumble_scenes",
+        type="linelist",
+        default=[],
+        help="globs of further scene files to collect (relative to the rootdir), besides "
+        "test_*.toml files with a [scene] table",
+    )
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    config.addinivalue_line(
+        "markers", f"{MARKER}: an agreement check of a scene file (tumbling-testbed)"
+    )
+    if not config.pluginmanager.hasplugin("xdist"):  # keep --strict-markers happy without xdist
+        config.addinivalue_line("markers", "xdist_group(name): run in one pytest-xdist worker")
+    config.stash[_SESSION] = _Session(config)
+
+
+# ----------------------------------------------------------------------------------------------
+# Collection
+# ----------------------------------------------------------------------------------------------
+
+
+def _matches_ini(config: pytest.Config, path: Path) -> bool:
+    globs = config.getini("tumble_scenes")
+    if not globs:
+        return False
+    root = Path(config.rootpath)
+    try:
+        rel = path.resolve().relative_to(root.resolve()).as_posix()
+    except ValueError:
+        rel = None
+    for g in globs:
+        g = g.strip()
+        if not g:
+            continue
+        if fnmatch.fnmatch(path.as_posix(), g) or (rel is not None and fnmatch.fnmatch(rel, g)):
+            return True
+    return False
+
+
+def _read_head(path: Path, limit: int) -> bytes:
+    """At most ``limit`` bytes of the regular file at ``path``: opened without blocking (a FIFO
+    or a device), ``OSError`` for anything that is not a regular file."""
+    fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0))
+    try:
+        if not stat.S_ISREG(os.fstat(fd).st_mode):
+            raise OSError(errno.EINVAL, "not a regular file", str(path))
+        return os.read(fd, limit)
+    finally:
+        os.close(fd)
+
+
+def pytest_collect_file(file_path: Path, parent: pytest.Collector) -> SceneFile | None:
+    if file_path.suffix != ".toml":
+        return None
+    named = file_path.name.startswith("test_")
+    listed = _matches_ini(parent.config, file_path)
+    if not (named or listed):
+        return None
+    if named and not listed:
+        try:
+            head = _read_head(file_path, 1 << 20)
+        except OSError:  # also a FIFO or device named test_*.toml: never opened to block
+            return None
+        if not _SCENE_TABLE.search(head):
+            return None  # a test_*.toml that is not a scene: not ours
+    return SceneFile.from_parent(parent, path=file_path)
+
+
+_SHARE_KEY = "tumble_share_key"
+"""The ``workerinput`` entry that carries the session's secret for shared runs (hex)."""
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_configure_node(node: Any) -> None:
+    """pytest-xdist, in the controller: every worker of this session gets one random secret, with
+    which the runs they share are signed (:func:`_store_signed`)."""
+    key = node.config.stash.get(_SHARE_SECRET, None)
+    if key is None:
+        key = node.config.stash[_SHARE_SECRET] = secrets.token_hex(32)
+    node.workerinput[_SHARE_KEY] = key
+
+
+_SHARE_SECRET = pytest.StashKey[str]()
+
+
+def _store_signed(store: Path, secret: bytes, data: bytes) -> None:
+    """``data`` at ``store`` behind its HMAC-SHA256 under ``secret`` (a temporary file, renamed)."""
+    tmp = store.with_suffix(f".{os.getpid()}.tmp")
+    tmp.write_bytes(hmac.new(secret, data, hashlib.sha256).digest() + data)
+    os.replace(tmp, store)
+
+
+def _load_signed(store: Path, secret: bytes) -> Any:
+    """The run another worker of this session stored at ``store``, or None when there is none, it
+    is not a regular file, or its signature does not match (never unpickled then: a pickle
+    planted by anyone without the session's secret is not trusted)."""
+    import pickle
+
+    if not secret:
+        return None
+    try:
+        blob = _read_head(store, 1 << 30)
+    except OSError:
+        return None
+    mac, data = blob[:32], blob[32:]
+    if len(mac) < 32 or not hmac.compare_digest(mac, hmac.new(secret, data, hashlib.sha256).digest()):
+        return None
+    return pickle.loads(data)
+
+
+class SceneFile(pytest.File):
+    """A scene file: its checks are the items. A bad scene is one collection error naming the
+    field (the loader's one-line ``ValueError``)."""
+
+    labels: tuple[str, ...] = ()
+
+    def collect(self) -> Iterator[pytest.Item]:
+        sess = self.config.stash[_SESSION]
+        try:
+            plants = sess.plants()
+            from validation.scenes import resolve_scene
+
+            scene = resolve_scene(str(self.path))
+            labels = expected_labels(scene, plants)
+        except ValueError as exc:
+            raise self.CollectError(f"{self.path.name}: {exc}") from None
+        self.labels = tuple(labels)
+        group = pytest.mark.xdist_group(self.nodeid)
+        for label in [*labels, RUN_ITEM]:
+            item = CheckItem.from_parent(self, name=label)
+            item.add_marker(MARKER)
+            item.add_marker(group)
+            yield item
+
+
+class CheckFailed(Exception):
+    """A check of a scene file failed: ``args[0]`` is the row to print."""
+
+
+class CheckItem(pytest.Item):
+    """One agreement check of a scene file, read from the session's (cached) run."""
+
+    parent: SceneFile
+
+    def runtest(self) -> None:
+        outcome = self.config.stash[_SESSION].outcome(self.parent.path)
+        if isinstance(outcome, str):
+            raise CheckFailed(f"the scene could not run: {outcome}")
+        from validation.testing.agree import describe_check
+
+        result = outcome
+        where = f"report: {result.files.get('report.md', result.out_dir)}"
+        if self.name == RUN_ITEM:
+            expected = set(self.parent.labels)
+            extra = [c for c in result.failed_checks if c.label not in expected]
+            problems = [f"run failed: {result.failure}"] if result.failure else []
+            problems += [describe_check(c, result) for c in extra]
+            if problems:
+                raise CheckFailed("\n".join([*problems, where]))
+            return
+        by = {c.label: c for c in result.checks}
+        check = by.get(self.name)
+        if check is None:
+            why = f" ({result.failure})" if result.failure else ""
+            raise CheckFailed(f"{self.name}: the run made no such check{why}\n{where}")
+        if not check.applicable:  # nothing to compare (no control torque in either plant)
+            pytest.skip(f"{self.name}: not applicable ({check.reason})")
+        if not check.passed:
+            raise CheckFailed(f"{describe_check(check, result)}\n  {where}")
+
+    def repr_failure(self, excinfo: pytest.ExceptionInfo[BaseException], style=None) -> Any:
+        if isinstance(excinfo.value, CheckFailed):
+            return str(excinfo.value.args[0])
+        return super().repr_failure(excinfo, style=style)
+
+    def reportinfo(self) -> tuple[Path, int | None, str]:
+        return self.path, None, f"{self.path.name}::{self.name}"
+
+
+def expected_labels(scene: Any, plants: tuple[str, ...]) -> list[str]:
+    """The labels of the checks :func:`validation.validate.run_validation` makes for ``scene`` on
+    ``plants`` (report order), known before it runs: what the items are named."""
+    import itertools
+
+    from analytic.effects import Effect
+    from validation.compare.checks import Subject
+    from validation.testing.agree import PAIR_CHECKS
+
+    def own(p: str) -> list[str]:
+        names = []
+        if scene.has(Effect.CONTROL_OMEGA) and scene.control.omega is not None:
+            if len(scene.control.omega.components):
+                names.append("tracking_omega")
+        if scene.has(Effect.CONTROL_MASSES) and scene.control.masses is not None:
+            if len(scene.control.masses.indices):
+                names.append("tracking_p")
+        names += ["quat_norm", "linear_momentum", "angular_momentum", "energy"]
+        return [f"{p}.{n}" for n in names]
+
+    def pair(a: str, b: str) -> list[str]:
+        s = Subject.pair(a, b)
+        names = [n for n in PAIR_CHECKS if n != "rod_forces" or scene.n]
+        return [n if s is Subject.BOTH else f"{s.slug}.{n}" for n in names]
+
+    out = [f"{p}.completed" for p in plants[:2]]
+    if len(plants) > 1:
+        out += pair(plants[0], plants[1])
+    out += [x for p in plants[:2] for x in own(p)]
+    for i, j in itertools.combinations(range(len(plants)), 2):
+        if (i, j) == (0, 1):
+            continue
+        out += pair(plants[i], plants[j])
+        if i == 0:
+            out += [f"{plants[j]}.completed", *own(plants[j])]
+    return out
+
+
+# ----------------------------------------------------------------------------------------------
+# The session's runs
+# ----------------------------------------------------------------------------------------------
+
+
+class _Session:
+    """Runs of scene files for one pytest session, cached by scene content and plant settings."""
+
+    def __init__(self, config: pytest.Config) -> None:
+        self.config = config
+        self._plants: tuple[str, ...] | None = None
+        self._memo: dict[str, Any] = {}
+        self._dirs: dict[str, str] = {}
+        self.keep: list[Any] = []
+
+    def plants(self) -> tuple[str, ...]:
+        """The chosen plants, checked (``ValueError`` naming ``--tumble-plants``)."""
+        if self._plants is None:
+            from mj_bridge.plants import installed_plants, parse_plants
+
+            text = self.config.getoption("tumble_plants")
+            try:
+                chosen = parse_plants(text) if text else installed_plants()
+            except ValueError as exc:
+                raise ValueError(f"--tumble-plants: {exc}") from None
+            if len(chosen) < 2:
+                raise ValueError(
+                    f"--tumble-plants: give at least two plants to compare (got {text!r})"
+                )
+            self._plants = tuple(e.value for e in chosen)
+        return self._plants
+
+    def key(self, content: bytes, plants: tuple[str, ...], t_end: float | None) -> str:
+        import hashlib
+
+        h = hashlib.sha256(content)
+        h.update(repr((plants, t_end, self.config.getoption("tumble_out"))).encode())
+        return h.hexdigest()
+
+    def _out_dir(self, path: Path | None, key: str, label: str) -> Path:
+        if path is not None:
+            try:
+                rel = path.resolve().relative_to(Path(self.config.rootpath).resolve())
+            except ValueError:
+                rel = Path(path.name)
+            label = rel.with_suffix("").as_posix()
+        from validation.runs.outputs import slug
+
+        name = slug(label, "scene file")
+        if self._dirs.get(name, key) != key:
+            name = f"{name}-{key[:8]}"
+        self._dirs[name] = key
+        out = self.config.getoption("tumble_out")
+        if out:
+            return Path(out) / name
+        return self._basetemp() / "tumble" / name
+
+    def _basetemp(self) -> Path:
+        factory = getattr(self.config, "_tmp_path_factory", None)
+        if factory is not None:
+            return Path(factory.getbasetemp())
+        import tempfile
+
+        return Path(tempfile.mkdtemp(prefix="tumble-"))
+
+    def _shared_dir(self) -> Path | None:
+        """Under pytest-xdist: a directory every worker of this session sees."""
+        if not hasattr(self.config, "workerinput"):
+            return None
+        d = self._basetemp().parent / "tumble-runs"
+        d.mkdir(parents=True, exist_ok=True)
+        return d
+
+    def outcome(self, path: Path) -> Any:
+        """The run of the scene file ``path`` on the session's plants (ValidationResult, or the
+        one-line reason it could not run)."""
+        plants = self.plants()
+        try:
+            content = _read_head(path, 1 << 20)
+        except OSError as exc:  # not a regular file (a FIFO is never opened to block)
+            return f"ValueError: scene: cannot read {str(path)!r} ({exc.strerror or exc})"
+        return self.run(content, plants, None, path=path, scene=None)
+
+    def run(
+        self,
+        content: bytes,
+        plants: tuple[str, ...],
+        t_end: float | None,
+        path: Path | None,
+        scene: Any,
+        label: str = "scene",
+    ) -> Any:
+        key = self.key(content, plants, t_end)
+        if key in self._memo:
+            return self._memo[key]
+        shared = self._shared_dir()
+        if shared is None:
+            res = self._run(key, plants, t_end, path, scene, label)
+        else:
+            res = self._run_shared(shared, key, plants, t_end, path, scene, label)
+        self._memo[key] = res
+        return res
+
+    def _run_shared(self, shared: Path, key: str, *args: Any) -> Any:
+        import pickle
+
+        store = shared / f"{key}.pickle"
+        try:
+            import fcntl
+        except ImportError:  # pragma: no cover - not POSIX: each worker runs what it is given
+            return self._run(key, *args)
+        secret = bytes.fromhex(self.config.workerinput.get(_SHARE_KEY, ""))
+        with open(shared / f"{key}.lock", "wb") as lock:
+            fcntl.flock(lock, fcntl.LOCK_EX)
+            try:
+                shared_res = _load_signed(store, secret)
+                if shared_res is not None:
+                    return shared_res
+                res = self._run(key, *args)
+                _store_signed(store, secret, pickle.dumps(res))
+                return res
+            finally:
+                fcntl.flock(lock, fcntl.LOCK_UN)
+
+    def _run(
+        self,
+        key: str,
+        plants: tuple[str, ...],
+        t_end: float | None,
+        path: Path | None,
+        scene: Any,
+        label: str,
+    ) -> Any:
+        from validation.validate import run_validation
+
+        RUNS.append(key)
+        out = self._out_dir(path, key, label)
+        try:
+            return run_validation(
+                scene if scene is not None else path, out, t_end=t_end, plants=",".join(plants)
+            )
+        except (ValueError, OSError) as exc:
+            return f"{type(exc).__name__}: {exc}".splitlines()[0]
+
+
+_SESSION = pytest.StashKey[_Session]()
+
+
+@pytest.fixture
+def tumble_validation(request: pytest.FixtureRequest):
+    """A function ``(scene, plants=None, t_end=None) -> ValidationResult``: the session's cached
+    run of ``scene`` (a scene file, a built-in name or a Scene) on ``plants`` (default
+    ``--tumble-plants``, else every installed plant). A scene file that is also collected as test
+    items shares their run."""
+    sess = request.config.stash[_SESSION]
+
+    def get(scene: Any, plants: Any = None, t_end: float | None = None) -> Any:
+        from validation.scenes import scene_path
+        from validation.testing.agree import load
+
+        if plants is None:
+            chosen = sess.plants()
+        else:
+            from mj_bridge.plants import parse_plants
+
+            text = plants if isinstance(plants, str) else ",".join(map(str, plants))
+            chosen = tuple(e.value for e in parse_plants(text))
+        if isinstance(scene, str | os.PathLike):
+            path = scene_path(os.fspath(scene))
+            sc = load(path) if t_end is not None else None
+            res = sess.run(path.read_bytes(), chosen, t_end, path=path, scene=sc)
+        else:
+            sc = load(scene)
+            sess.keep.append(sc)  # cached for this object: its id stays its own
+            content = f"Scene object {id(sc)}".encode()
+            res = sess.run(content, chosen, t_end, path=None, scene=sc, label=sc.name)
+        if isinstance(res, str):
+            raise ValueError(res)
+        return res
+
+    return get
+
+
+# ----------------------------------------------------------------------------------------------
+# The overhead benchmark: python -m validation.testing.pytest_plugin --bench
+# ----------------------------------------------------------------------------------------------
+
+
+def _bench(repeats: int = 15) -> None:  # pragma: no cover - a measurement, run by hand
+    import statistics
+    import subprocess
+    import tempfile
+    import time
+
+    py = sys.executable
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+    subprocess.run([py, "-c", "import validation.testing.pytest_plugin"], env=env, check=True)  # .pyc
+    imp = (
+        "import time, sys; import pytest; t0 = time.perf_counter(); "
+        "import validation.testing.pytest_plugin; t1 = time.perf_counter(); "
+        "heavy = [m for m in ('numpy', 'mujoco', 'numba', 'scipy') if m in sys.modules]; "
+        "print(t1 - t0, ','.join(heavy))"
+    )
+    times, heavy = [], ""
+    for _ in range(repeats):
+        out = subprocess.run(
+            [py, "-c", imp], capture_output=True, text=True, check=True, env=env
+        ).stdout
+        t, heavy = out.split(" ", 1)
+        times.append(float(t))
+    print(
+        f"import validation.testing.pytest_plugin (after pytest): median {statistics.median(times) * 1e3:.2f} ms; "
+        f"heavy modules imported: {heavy.strip() or 'none'}"
+    )
+    with tempfile.TemporaryDirectory() as d:
+        Path(d, "test_plain.py").write_text("def test_one():\n    assert True\n")
+        Path(d, "pyproject.toml").write_text("[tool.pytest.ini_options]\n")
+        Path(d, "settings.toml").write_text("[scene]\nname = 'not a test file'\n")
+        res: dict[str, list[float]] = {"with": [], "without": []}
+        for i in range(2 * repeats):
+            which = "with" if i % 2 == 0 else "without"
+            args = [py, "-m", "pytest", "-q", "-p", "no:cacheprovider"]
+            if which == "without":
+                args += ["-p", "no:tumble"]
+            t0 = time.perf_counter()
+            subprocess.run(args, cwd=d, capture_output=True, check=True, env=env)
+            res[which].append(time.perf_counter() - t0)
+    w, wo = statistics.median(res["with"]), statistics.median(res["without"])
+    spread = statistics.stdev(res["without"])
+    print(
+        f"pytest on a directory with no scene ({repeats} runs each, median): with the plugin "
+        f"{w * 1e3:.0f} ms, without (-p no:tumble) {wo * 1e3:.0f} ms, difference "
+        f"{(w - wo) * 1e3:+.0f} ms (run-to-run spread {spread * 1e3:.0f} ms)"
+    )
+
+
+if __name__ == "__main__":  # pragma: no cover
+    if "--bench" in sys.argv[1:]:
+        _bench()
+    else:
+        print("usage: python -m validation.testing.pytest_plugin --bench")
+
+
+__all__ = ["MARKER", "RUNS", "CheckItem", "SceneFile", "expected_labels", "tumble_validation"]
