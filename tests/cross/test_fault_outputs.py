@@ -24,7 +24,7 @@ from pathlib import Path
 import pytest
 
 from validation.cli import EXIT_USAGE, main
-from validation.runs import outputs as outputs_mod
+from validation.runs import staging as outputs_mod  # the commit's renames and mount test
 from validation.runs.atomic import OutputError, write_bytes, write_text
 from validation.runs.outputs import MANIFEST, OutputBusy, output_run
 

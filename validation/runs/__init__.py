@@ -1,6 +1,8 @@
 """The runs wing: how a command's work is carried out and kept.
 
 * :mod:`.outputs`: output directories (one run, whole; ownership proven by a manifest);
+  its parts :mod:`.paths` (slugs, default paths, run ids), :mod:`.manifest` (ownership),
+  :mod:`.locks` (one run at a time) and :mod:`.staging` (staging and commit);
 * :mod:`.atomic`: atomic writes;
 * :mod:`.workers`: the plants in worker processes;
 * :mod:`.interrupts`: Ctrl-C and SIGTERM, kept until a safe point;
