@@ -10,7 +10,7 @@ with ``rerun --web-viewer`` on the loopback interface, opens it in headless Chro
 ``docs/images/tracking.png``, both reduced below :data:`MAX_BYTES`.
 
 :func:`viewer_screenshot` drives Chromium over its DevTools protocol on a pipe (standard library
-only); ``tests/validation/recording/test_viewer.py`` uses it to check that a recording opens in its designed layout.
+only); ``tests/cross/test_viewer.py`` uses it to check that a recording opens in its designed layout.
 """
 
 from __future__ import annotations

@@ -47,6 +47,21 @@ and the timing loop into ``validation.timing`` and dropping ``goals``' own comma
 """
 
 
+WINGS: tuple[tuple[str, ...], ...] = (
+    ("runs",),  # how work is carried out and kept: output directories, atomic writes, workers
+    ("compare",),  # differences, checks, thresholds, the referee
+    ("scenes", "preflight"),  # a scene name resolved; a run's inputs checked, once
+    ("report", "recording"),  # the evidence a run leaves
+    ("validate", "judge"),  # the jobs: N plants compared; another engine's file judged
+    ("studies", "testing", "bench"),  # many runs; the pytest face; the speed goals
+    ("cli", "__main__"),  # parse and dispatch
+)
+"""The wings of ``validation``, lowest first: a module may import from its own wing, from a wing
+of its level or from a lower level, never from a higher one (``docs/architecture.md``). A wing is a
+subpackage (``validation/compare/``) or a top-level module (``validation/cli.py``); the private
+helpers ``_lazy`` and ``_version`` sit below every wing. The one exception is a ``__main__`` module
+(``python -m validation.studies.sweep`` is ``tumble sweep``), which may import the command line."""
+
 @dataclass(frozen=True)
 class Edge:
     """``importer`` imports ``imported`` at ``path:line``."""
@@ -234,6 +249,92 @@ def test_allow_lists_name_only_what_is_still_there(graph):
     stale = [pair for pair in KNOWN_UPWARD if pair not in up]
     stale += [sorted(c) for c in KNOWN_CYCLES if c not in set(cycles(edges))]
     assert not stale, f"no longer in the code, remove from the allow-list: {stale}"
+
+
+def wing_level(module: str) -> int | None:
+    """The level of ``module``'s wing in :data:`WINGS`, or ``None`` outside ``validation``'s wings
+    (another package, ``validation/__init__``, the private helpers)."""
+    parts = module.split(".")
+    if parts[0] != "validation" or len(parts) < 2 or parts[1] in ("_lazy", "_version"):
+        return None
+    for level, wings in enumerate(WINGS):
+        if parts[1] in wings:
+            return level
+    raise AssertionError(f"{module}: its wing {parts[1]!r} is not in WINGS; place it there")
+
+
+def wing_violations(edges: Iterable[Edge]) -> list[Edge]:
+    out = []
+    for e in edges:
+        a, b = wing_level(e.importer), wing_level(e.imported)
+        if a is None or b is None or b <= a:
+            continue
+        if e.importer.rsplit(".", 1)[-1] == "__main__" and e.imported == "validation.cli":
+            continue
+        out.append(e)
+    return out
+
+
+def test_validation_wings_point_down(graph):
+    """Inside ``validation``, no wing imports from a higher one (:data:`WINGS`), and every module
+    belongs to a declared wing."""
+    modules, edges = graph
+    for m in modules:
+        wing_level(m)  # raises for a module outside every wing
+    bad = wing_violations(edges)
+    assert not bad, (
+        "imports pointing up validation's wings "
+        + " < ".join("/".join(w) for w in WINGS)
+        + ":\n  "
+        + "\n  ".join(map(str, bad))
+    )
+
+
+def test_the_wing_checker_finds_an_upward_import(tmp_path):
+    """On a planted tree: ``compare`` importing ``report`` (up) is found; ``report`` importing
+    ``compare`` (down) and a sweep's ``__main__`` importing the command line are not."""
+    files = {
+        "validation/__init__.py": "",
+        "validation/cli.py": "",
+        "validation/compare/__init__.py": "",
+        "validation/compare/checks.py": "def f():\n    from validation.report import figures\n",
+        "validation/report/__init__.py": "",
+        "validation/report/figures.py": "from validation.compare import checks\n",
+        "validation/studies/__init__.py": "",
+        "validation/studies/sweep/__init__.py": "",
+        "validation/studies/sweep/__main__.py": "from validation.cli import run\n",
+    }
+    for rel, text in files.items():
+        (tmp_path / rel).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / rel).write_text(text)
+    edges = import_edges(tmp_path, discover(tmp_path, ("validation",)))
+    assert [(e.importer, e.imported) for e in wing_violations(edges)] == [
+        ("validation.compare.checks", "validation.report.figures")
+    ]
+
+
+def test_every_test_file_sits_beside_its_module():
+    """The test of ``x/y.py`` is ``tests/x/test_y.py`` (a package ``x/y/`` is tested by
+    ``tests/x/test_y.py`` or under ``tests/x/y/``); suites spanning layers are in ``tests/cross/``,
+    shared helpers in ``tests/support/``. Every test file under a package's mirror names a module
+    or package that exists, so a newcomer finds a module's tests by its path."""
+    tests = ROOT / "tests"
+    orphans = []
+    for path in sorted(tests.rglob("test_*.py")):
+        rel = path.relative_to(tests)
+        if rel.parts[0] in ("cross", "support"):
+            continue
+        assert rel.parts[0] in LAYERS, f"tests/{rel}: not under a package's mirror, cross or support"
+        source = ROOT.joinpath(*rel.parts[:-1], rel.stem.removeprefix("test_"))
+        if not (source.with_suffix(".py").is_file() or (source / "__init__.py").is_file()):
+            orphans.append(f"tests/{rel}: no {source.relative_to(ROOT)}.py or package")
+    for directory in sorted(p for p in tests.rglob("*") if p.is_dir() and p.name != "__pycache__"):
+        rel = directory.relative_to(tests)
+        if rel.parts[0] in ("cross", "support"):
+            continue
+        if not (ROOT / rel / "__init__.py").is_file():
+            orphans.append(f"tests/{rel}/: mirrors no package {rel}/")
+    assert not orphans, "\n".join(orphans)
 
 
 def test_the_checker_finds_an_upward_import_and_a_cycle(tmp_path):

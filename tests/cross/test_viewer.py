@@ -19,7 +19,7 @@ import pytest
 
 from validation.recording.style import VIEWER_CHARACTERS
 
-ROOT = Path(__file__).resolve().parents[3]
+ROOT = Path(__file__).resolve().parents[2]
 pytestmark = pytest.mark.slow
 
 
