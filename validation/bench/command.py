@@ -6,10 +6,14 @@ same output. It prints
 
 * the cost of one evaluation of the controlled dynamics (``M``, ``Q``, Udwadia-Kalaba with control)
   for n = 2, 5, 50 on the numpy reference path and on the compiled path, next to MuJoCo's
-  ``mj_forward`` on the same body (median of repeats, µs);
-* every goal of :mod:`validation.bench.goals` with its ratio and whether it holds (the 60 s Example 1
-  goal takes about a minute; ``--skip-long`` leaves it out); the Pinocchio plant's goal is skipped,
+  ``mj_forward`` on the same body (median thread CPU time of repeats, µs);
+* every goal of :mod:`validation.bench.goals` with its ratio, the spread of its per-round ratios,
+  the share of a CPU the process had, and its verdict: HOLDS, FAILS, or TOO_BUSY when the rounds
+  disagree too much for a verdict (:mod:`validation.bench.verdicts`); the 60 s Example 1 goal
+  takes about a minute (``--skip-long`` leaves it out); the Pinocchio plant's goal is skipped,
   with the reason printed, when ``pin`` is not installed;
+* the load average before and after, and, when any goal was TOO_BUSY, one line saying the machine
+  was too busy for a verdict on it;
 * with ``--out DIR``, the same numbers in ``DIR/bench.json`` (with ``DIR/manifest.json``, one run
   of :func:`validation.runs.outputs.output_run`, like every other command's ``--out``); the file carries
   the provenance block of :mod:`validation.report.provenance` and follows
@@ -22,12 +26,18 @@ with a deprecation warning: use ``--out DIR``.
 from __future__ import annotations
 
 import argparse
+import dataclasses
+import math
+import os
 import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from validation.bench.verdicts import SPREAD_BOUND, Verdict
+
 if TYPE_CHECKING:  # the engines are imported when measuring, so `tumble --help` stays quick
     from analytic.scene import Scene
+    from validation.bench.goals import Goal
 
 
 def analytic_eval_cost(scene: Scene, compiled: bool = False) -> float:
@@ -102,7 +112,11 @@ def measure_and_print(skip_long: bool = False, out=print) -> tuple[bool, dict[st
     from validation.bench import goals
     from validation.report.provenance import FileKind, provenance
 
-    out("one evaluation of the controlled dynamics (median, µs)")
+    load_before = load_average()
+    out(
+        f"one evaluation of the controlled dynamics (median thread CPU time, µs); load average "
+        f"{load_before:.2f} on {os.cpu_count()} CPUs"
+    )
     out(f"  {'n':>4} {'numpy':>10} {'compiled':>10} {'mj_forward':>11}")
     rows = evaluation_table()
     for r in rows:
@@ -112,23 +126,55 @@ def measure_and_print(skip_long: bool = False, out=print) -> tuple[bool, dict[st
         )
     out("\nspeed goals, each a ratio measured in this process")
     measured = goals.measure(skip_long, progress=out)
+    load_after = load_average()
     out("\nsummary")
     for g in measured:
-        if g.skipped:
-            out(f"  SKIPPED  {g.name}: {g.skipped}")
-        else:
-            out(f"  {g.verdict}  {g.name}: {g.value:.3g} (≤ {g.limit:g})")
+        out("  " + summary_line(g))
+    busy = [g for g in measured if g.verdict is Verdict.TOO_BUSY]
+    if busy:
+        out(
+            f"the machine was too busy for a verdict on {len(busy)} goal(s) (load average "
+            f"{load_before:.2f} before, {load_after:.2f} after, on {os.cpu_count()} CPUs): their "
+            f"rounds spread wider than {SPREAD_BOUND:g} of the limit or across it; run "
+            "`tumble bench` again on a quieter machine"
+        )
     holds = all(g.holds for g in measured if not g.skipped)
-    return holds, bench_document(rows, measured, provenance(FileKind.BENCH))
+    machine = {
+        "cpus": os.cpu_count(),
+        "load_average_1min": {"before": load_before, "after": load_after},
+    }
+    return holds, bench_document(rows, measured, provenance(FileKind.BENCH), machine)
+
+
+def load_average() -> float:
+    """The machine's 1-minute load average (NaN where the platform has none)."""
+    try:
+        return os.getloadavg()[0]
+    except OSError:
+        return math.nan
+
+
+def summary_line(g: Goal) -> str:
+    """``"HOLDS  name: 0.574 (≤ 1; interquartile 0.571-0.576 over 21 rounds, ...)"``."""
+    if g.skipped:
+        return f"{g.verdict}  {g.name}: {g.skipped}"
+    spread = f"; {g.spread.text()}" if g.spread else ""
+    return f"{g.verdict}  {g.name}: {g.value:.3g} (≤ {g.limit:g}{spread})"
 
 
 def bench_document(
-    rows: list[dict[str, float]], measured: list, block: dict[str, Any]
+    rows: list[dict[str, float]],
+    measured: list[Goal],
+    block: dict[str, Any],
+    machine: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
-    """The content of ``bench.json``: the provenance block, the evaluation table and the goals
-    (schema ``validation/report/schemas/bench.schema.json``; a NaN, e.g. no MuJoCo, is written as null)."""
+    """The content of ``bench.json``: the provenance block, the machine's load, the bound of the
+    verdicts, the evaluation table and the goals (schema
+    ``validation/report/schemas/bench.schema.json``; a NaN, e.g. no MuJoCo, is written as null)."""
     return {
         "provenance": block,
+        "machine": machine or {"cpus": os.cpu_count(), "load_average_1min": None},
+        "spread_bound": SPREAD_BOUND,
         "evaluation_us": rows,
         "goals": [
             {
@@ -139,6 +185,7 @@ def bench_document(
                 "verdict": g.verdict,
                 "skipped": g.skipped or None,
                 "extrapolated": g.extrapolated,
+                "spread": None if g.spread is None else dataclasses.asdict(g.spread),
                 "detail": g.detail,
                 "data": g.data,
             }

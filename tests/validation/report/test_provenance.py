@@ -262,6 +262,8 @@ def test_encoder_refuses_unknown_objects():
 def test_schema_refuses_a_placeholder_and_a_missing_block():
     doc = {
         "provenance": json.loads(dumps(provenance(FileKind.BENCH))),
+        "machine": {"cpus": 2, "load_average_1min": {"before": 0.1, "after": 1.9}},
+        "spread_bound": 0.2,
         "evaluation_us": [{"n": 2, "numpy_us": 10.0, "compiled_us": 1.0, "mj_forward_us": None}],
         "goals": [],
     }
@@ -290,10 +292,12 @@ def quick_bench(monkeypatch):
     speeds; tumble bench itself takes minutes)."""
     from validation.bench import command as bench
     from validation.bench import goals
+    from validation.bench.verdicts import Spread
 
     done = goals.Goal("a measured goal", 0.5, 1.0, "detail", data={"runs_s": [0.1, 0.2]})
+    busy = goals.Goal("a busy goal", 0.6, 1.0, "", spread=Spread(0.2, 0.6, 1.1, 21, 0.4))
     skipped = goals.Goal("a skipped goal", math.nan, 3.0, "", skipped="pin is not installed")
-    monkeypatch.setattr(goals, "measure", lambda skip_long, progress: [done, skipped])
+    monkeypatch.setattr(goals, "measure", lambda skip_long, progress: [done, busy, skipped])
     rows = [{"n": 2, "numpy_us": 20.0, "compiled_us": 0.6, "mj_forward_us": math.nan}]
     monkeypatch.setattr(bench, "evaluation_table", lambda: rows)
 
@@ -305,7 +309,9 @@ def test_tumble_bench_out_writes_a_valid_bench_json(tmp_path, quick_bench, capsy
     doc = check_file(tmp_path / "b" / "bench.json", FileKind.BENCH)
     assert doc["provenance"]["command"] == sys.argv
     assert doc["evaluation_us"][0]["mj_forward_us"] is None  # NaN written as null
-    assert [g["verdict"] for g in doc["goals"]] == ["HOLDS", "SKIPPED"]
+    assert [g["verdict"] for g in doc["goals"]] == ["HOLDS", "TOO_BUSY", "SKIPPED"]
+    assert doc["goals"][1]["spread"]["high"] == 1.1 and doc["goals"][0]["spread"] is None
+    assert doc["machine"]["cpus"] >= 1 and doc["spread_bound"] > 0
     assert (tmp_path / "b" / "manifest.json").exists()
     out = capsys.readouterr().out
     assert "HOLDS  a measured goal" in out and f"written: {tmp_path / 'b' / 'bench.json'}" in out

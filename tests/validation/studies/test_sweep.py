@@ -565,8 +565,8 @@ def test_pinocchio_goal_is_skipped_with_its_reason_without_pin(monkeypatch, tmp_
 @needs_pin
 def test_pinocchio_goal_structure():
     """The goal's bookkeeping on a short horizon (speeds are not asserted): warm run first, then
-    interleaved rounds alternating who goes first, ratio = the ratio of the median walls, and both
-    plants ran the same motion."""
+    interleaved rounds alternating who goes first, ratio = the median of the rounds' ratios, and
+    both plants ran the same motion."""
     from validation.bench.goals import goal_pinocchio
 
     g = goal_pinocchio(t_end=0.5, rounds=3, progress=lambda _s: None)
@@ -576,9 +576,14 @@ def test_pinocchio_goal_structure():
     a_first, p_first = ["analytic", "pinocchio"], ["pinocchio", "analytic"]
     assert d["order"] == [a_first, p_first, a_first]
     assert d["analytic_median_s"] == sorted(d["analytic_s"])[1]
-    assert g.value == pytest.approx(d["pinocchio_median_s"] / d["analytic_median_s"])
+    # the ratio: the median of the rounds' ratios of CPU time, each at most the round's wall
+    assert d["ratios"] == pytest.approx(
+        [p / a for p, a in zip(d["pinocchio_cpu_s"], d["analytic_cpu_s"], strict=True)]
+    )
+    assert g.value == sorted(d["ratios"])[1] and g.spread.rounds == 3
+    assert all(c <= w for c, w in zip(d["analytic_cpu_s"], d["analytic_s"], strict=True))
     assert d["max_distance_C_m"] < 1e-9  # same motion (C falls ~1.2 m in 0.5 s)
-    assert g.verdict in {"HOLDS", "FAILS"}
+    assert g.verdict != "SKIPPED"  # HOLDS, FAILS or (three short rounds, a busy machine) TOO_BUSY
 
 
 # ----------------------------------------------------------------------------------------------
