@@ -8,7 +8,7 @@ from analytic.lazy import lazy_attributes
 from analytic.simulate import simulate  # bound here: the function, not its module's name
 
 _LAZY = {
-    "builtin_scene_names": "analytic.builtin_scenes",
+    "builtin_scene_names": "analytic.scene.builtin",
     "Effect": "analytic.effects",
     "SolverMethod": "analytic.effects",
     "Weighting": "analytic.effects",

@@ -24,6 +24,7 @@ _READ_FLAGS = (
     | getattr(os, "O_NONBLOCK", 0)
     | getattr(os, "O_CLOEXEC", 0)
 )
+_FOLLOW_FLAGS = _READ_FLAGS & ~getattr(os, "O_NOFOLLOW", 0)
 
 
 class NotRegularFile(OSError):
@@ -53,8 +54,12 @@ def file_kind(mode: int) -> str:
 
 
 @contextlib.contextmanager
-def open_regular(path: str | Path) -> Iterator[int]:
+def open_regular(path: str | Path, *, follow_links: bool = False) -> Iterator[int]:
     """A read-only descriptor of the regular file at ``path`` (closed on leaving the block).
+
+    ``follow_links``: a symbolic link is followed to the file it names (a file the user names
+    on the command line, such as a scene file), which must then be a regular file; by default
+    a link is refused.
 
     Raises:
         FileNotFoundError: nothing at ``path``.
@@ -62,12 +67,12 @@ def open_regular(path: str | Path) -> Iterator[int]:
         OSError: any other failure to open it (permissions ...).
     """
     try:
-        fd = os.open(path, _READ_FLAGS)
+        fd = os.open(path, _FOLLOW_FLAGS if follow_links else _READ_FLAGS)
     except FileNotFoundError:
         raise
     except OSError as exc:  # ELOOP: a symbolic link; EISDIR; ENXIO: a socket ...
         try:
-            kind = file_kind(os.lstat(path).st_mode)
+            kind = file_kind((os.stat if follow_links else os.lstat)(path).st_mode)
         except OSError:
             raise exc from None
         if kind != "regular file":
@@ -82,14 +87,14 @@ def open_regular(path: str | Path) -> Iterator[int]:
         os.close(fd)
 
 
-def read_regular(path: str | Path, limit: int) -> bytes:
-    """The bytes of the regular file at ``path`` (:func:`open_regular`).
+def read_regular(path: str | Path, limit: int, *, follow_links: bool = False) -> bytes:
+    """The bytes of the regular file at ``path`` (:func:`open_regular`, with ``follow_links``).
 
     Raises:
         OSError: as :func:`open_regular`; ``EFBIG`` when it holds more than ``limit`` bytes
             (checked while reading too, should the file grow).
     """
-    with open_regular(path) as fd:
+    with open_regular(path, follow_links=follow_links) as fd:
         if os.fstat(fd).st_size > limit:
             raise OSError(errno.EFBIG, f"larger than {limit:,} bytes", str(path))
         chunks, total = [], 0

@@ -33,7 +33,8 @@ import mujoco
 import numpy as np
 
 from analytic.effects import Effect, MjIntegrator, ShapeKind, SpringModel
-from analytic.scene import POINT_INERTIA_MIN, POINT_INERTIA_REL, TRIANGLE_RTOL, Scene
+from analytic.scene import Scene
+from analytic.scene.twin import TRIANGLE_RTOL, twin_point_inertia
 from model_xml.coordinates import paper_to_frame_state
 from model_xml.rotations import (
     mat_to_quat,
@@ -64,11 +65,11 @@ _INTEGRATORS = {
 CONTROL_GEAR = 2.0**24
 
 # MuJoCo refuses moving bodies whose inertia is below mjMINVAL (1e-15). A point mass gets an isotropic
-# inertia POINT_INERTIA_REL x min(J_BR) (floored at POINT_INERTIA_MIN), and exactly that much is taken
-# off BR's principal moments: the mass body rotates with BR (slide joint), so an isotropic inertia on
-# it adds exactly eps·I to the system's rotational inertia, and the total is unchanged. The two
-# numbers live with the scene, whose loader refuses a BR that cannot give that much up
-# (analytic.scene.twin_point_inertia).
+# inertia eps (analytic.scene.twin.twin_point_inertia: the one formula, with its numbers), and exactly
+# that much is taken off BR's principal moments: the mass body rotates with BR (slide joint), so an
+# isotropic inertia on it adds exactly eps·I to the system's rotational inertia, and the total is
+# unchanged. The loader refuses a BR that cannot give that much up (analytic.scene.twin), so the
+# twin's limits are checked when a scene is loaded, before any plant runs.
 
 
 def mass_name(i: int) -> str:
@@ -173,7 +174,7 @@ def spring_tendons(scene: Scene) -> list[SpringTendon]:
 
 def point_inertia(scene: Scene) -> float:
     """Isotropic inertia given to a mass body without its own inertia, kg·m² (see module notes)."""
-    return max(POINT_INERTIA_REL * float(np.min(scene.body.inertia)), POINT_INERTIA_MIN)
+    return twin_point_inertia(scene)[0]
 
 
 def mass_inertias(scene: Scene) -> tuple[np.ndarray, float]:

@@ -9,8 +9,8 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from analytic.builtin_scenes import BUILTIN_DIR
 from analytic.scene import load_scene
+from analytic.scene.builtin import BUILTIN_DIR
 from model_xml.mjcf_text import to_mjcf
 
 PAPER_SCENES = (

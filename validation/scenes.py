@@ -1,7 +1,7 @@
 """Scenes by name or by path: the built-in scenes and the hard-case suite's.
 
 The built-in scenes (the paper's examples, the spacecraft with propellant slosh) live with the
-scene format in ``analytic/scenes/`` (:mod:`analytic.builtin_scenes`), so
+scene format in ``analytic/scenes/`` (:mod:`analytic.scene.builtin`), so
 ``analytic.load_scene("paper_example1")`` finds them too. The hard-case suite's scenes are this
 layer's (``validation/scenes/hard/``, with the criteria of :mod:`validation.studies.hard_cases`); the
 command line also accepts them, as ``hard/<name>``.
@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from analytic.builtin_scenes import BUILTIN_DIR, builtin_scene_names, builtin_scene_path
+from analytic.scene.builtin import BUILTIN_DIR, builtin_scene_names, builtin_scene_path
 from analytic.scene import Scene, load_scene
 from validation.compare.thresholds import thresholds_for
 

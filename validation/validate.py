@@ -27,7 +27,7 @@ from pathlib import Path
 from typing import Any
 
 from analytic.scene import Scene, load_scene
-from analytic.scene_dump import scene_to_toml
+from analytic.scene.dump import scene_to_toml
 from analytic.trajectory import Engine, RunStatus, Trajectory
 from validation.compare.checks import Check, Comparison, compare_plants
 from validation.compare.referee import Verdict, referee

@@ -14,9 +14,9 @@ from pathlib import Path
 
 import pytest
 
-from analytic import scene as scene_module
-from analytic.random_scenes import chain_scene
 from analytic.scene import MAX_SCENE_NESTING, load_scene, scene_from_dict
+from analytic.scene import reading as scene_reading
+from analytic.scene.random_scenes import chain_scene
 from analytic.trajectory import Engine
 from tests.support.guards import forbid_plant_runs
 from validation.cli import EXIT_FAILED, EXIT_USAGE, main
@@ -88,12 +88,12 @@ def test_dotted_keys_5000_deep_are_refused_naming_the_path(tmp_path):
 def test_a_parser_recursion_error_becomes_a_value_error(tmp_path, monkeypatch):
     """The TOML parser's RecursionError (should the scan miss a case) -> ValueError naming the file."""
     path = _write(tmp_path, _scene_text())
-    monkeypatch.setattr(scene_module, "_check_text_nesting", lambda text, given: None)
+    monkeypatch.setattr(scene_reading, "check_text_nesting", lambda text, given: None)
 
     def recursing(text):
         raise RecursionError("maximum recursion depth exceeded")
 
-    monkeypatch.setattr(scene_module.tomllib, "loads", recursing)
+    monkeypatch.setattr(scene_reading.tomllib, "loads", recursing)
     with pytest.raises(ValueError, match=r"^scene: nested deeper than .*s\.toml"):
         load_scene(path)
 

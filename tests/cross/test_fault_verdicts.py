@@ -31,7 +31,7 @@ from pathlib import Path
 
 import pytest
 
-from analytic.builtin_scenes import builtin_scene_path
+from analytic.scene.builtin import builtin_scene_path
 from validation import validate as V
 from validation.cli import main
 from validation.runs.atomic import OutputError

@@ -1,14 +1,14 @@
 """The tests' paper scenes, and the random scenes and on-manifold states the MuJoCo-twin,
 Pinocchio, coordinate and MJCF tests draw: :func:`random_scene` and :func:`random_state` are the
-one random-scene generator, :mod:`analytic.random_scenes` (same seeded draws as before it moved
+one random-scene generator, :mod:`analytic.scene.random_scenes` (same seeded draws as before it moved
 there)."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
-from analytic.random_scenes import random_scene, random_state
 from analytic.scene import Scene, load_scene
+from analytic.scene.random_scenes import random_scene, random_state
 
 SCENE_DIR = Path(__file__).resolve().parents[2] / "analytic" / "scenes"
 PAPER = (

@@ -1,10 +1,10 @@
-"""Random scenes for the tests, all from the one generator :mod:`analytic.random_scenes`.
+"""Random scenes for the tests, all from the one generator :mod:`analytic.scene.random_scenes`.
 
 * hypothesis strategies (:func:`scene_and_state`): hypothesis draws the discrete choices (n, the
   mass exponents, control on or off) and a seed; the generator draws the rest from a numpy
   ``Generator`` seeded by it (the examples stay small and shrink well);
 * the model tests' draws (:func:`random_scene_dict`, :func:`random_scene`): the generator's
-  unit-sized scenes (:func:`analytic.random_scenes.unit_scene_dict`) with every force table present
+  unit-sized scenes (:func:`analytic.scene.random_scenes.unit_scene_dict`) with every force table present
   (so a test can switch any effect on), no control, and each mass's inertia a random body-axis
   matrix or a ring; :func:`random_state` gives states off the unit sphere (which no engine plant
   accepts, and the model must handle).
@@ -14,9 +14,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from analytic import random_scenes
-from analytic.random_scenes import unit as _unit
-from analytic.scene import Scene, scene_from_dict
+from analytic.scene import Scene, random_scenes, scene_from_dict
+from analytic.scene.random_scenes import unit as _unit
 
 FORCE_EFFECTS = ("gravity", "springs.linear", "springs.cubic", "mass_inertia", "external_torque")
 
@@ -35,7 +34,7 @@ def random_scene_dict(
     a=None,
     d=None,
 ) -> dict:
-    """The generator's unit-sized model scene (:func:`analytic.random_scenes.unit_scene_dict`)
+    """The generator's unit-sized model scene (:func:`analytic.scene.random_scenes.unit_scene_dict`)
     listing ``effects``, every force table present; ``inertia_kind``: ``"body"`` (a random SPD
     inertia per mass, body axes) or ``"ring"``; ``a``, ``d``: the rod's axis and offset."""
     return random_scenes.unit_scene_dict(

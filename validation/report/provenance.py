@@ -300,7 +300,7 @@ def provenance(
     Args:
         kind: the file's kind (:class:`FileKind` or its value); a ``ValueError`` names an unknown one.
         scene: the resolved :class:`~analytic.scene.Scene` the file is about (dumped whole by
-            :func:`analytic.scene_dump.scene_to_dict`), or None when the file covers several
+            :func:`analytic.scene.dump.scene_to_dict`), or None when the file covers several
             scenes or none (``hard_cases.json``, ``bench.json``).
         argv: the command line (default ``sys.argv``).
         origin: which code ran (default: :func:`code_origin`, found now).
@@ -318,7 +318,7 @@ def provenance(
     origin = code_origin() if origin is None else origin
     dumped = None
     if scene is not None:
-        from analytic.scene_dump import scene_to_dict
+        from analytic.scene.dump import scene_to_dict
 
         dumped = scene_to_dict(scene)
     return {

@@ -572,7 +572,7 @@ def warming(
 
 def builtin_scenes() -> list[Scene]:
     """Every built-in scene (what ``tumble warmup`` without a scene compiles for)."""
-    from analytic.builtin_scenes import builtin_scene_names
+    from analytic.scene.builtin import builtin_scene_names
     from analytic.scene import load_scene
 
     return [load_scene(name) for name in builtin_scene_names()]

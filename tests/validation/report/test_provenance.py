@@ -23,7 +23,7 @@ from referencing import Registry, Resource
 
 from analytic.effects import SolverMethod
 from analytic.scene import load_scene, scene_from_dict
-from analytic.scene_dump import scene_to_dict
+from analytic.scene.dump import scene_to_dict
 from validation.report import provenance as pv
 from validation.report.provenance import (
     FileKind,
@@ -166,7 +166,7 @@ def test_library_versions_none_when_not_installed():
 def test_scene_dump_fills_every_default(tmp_path):
     """A scene file without [solver], [output] or [mujoco] tables: the dump has the defaults the
     loader used, the attitude as a unit quaternion, the masses' inertia as matrices, in the scene
-    file's own tables (tests/analytic/test_scene_dump.py: it loads back to the same scene)."""
+    file's own tables (tests/analytic/scene/test_dump.py: it loads back to the same scene)."""
     text = (SCENES_DIR / "paper_example1.toml").read_text(encoding="utf-8")
     kept, skip = [], False
     for line in text.splitlines():

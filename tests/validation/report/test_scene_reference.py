@@ -1,6 +1,6 @@
 """The scene format's reference (``docs/scene-format.md``) and the loader's key declarations.
 
-The loader reads every key through :data:`analytic.scene_keys.KEYS`, and the reference is rendered
+The loader reads every key through :data:`analytic.scene.schema.KEYS`, and the reference is rendered
 from it. These tests close the loop:
 
 * every key the loader reads is declared, and every declared key is read by the loader (found
@@ -25,8 +25,10 @@ import numpy as np
 import pytest
 
 from analytic import scene as S
-from analytic.builtin_scenes import builtin_scene_names
-from analytic.scene_keys import CHOICE_MEANINGS, KEYS, NO_DEFAULT, Kind, key_spec
+from analytic.scene import loading, parsers
+from analytic.scene.builtin import builtin_scene_names
+from analytic.scene.schema import CHOICE_MEANINGS, KEYS, NO_DEFAULT, Kind, key_spec
+from analytic.scene.table import Table
 from validation.cli import main
 from validation.report.scene_reference import GENERATOR, LIMIT_NAMES, MINIMAL_SCENE, render
 from validation.scenes import builtin_names, scene_path
@@ -57,10 +59,15 @@ def test_cli_prints_and_writes_the_reference(tmp_path, capsys):
 
 
 def _literal_keys_read_by_the_loader() -> set[str]:
-    """Every string literal the loader passes as a key to one of ``_Table``'s readers."""
-    tree = ast.parse(Path(S.__file__).read_text(encoding="utf-8"))
+    """Every string literal the loader passes as a key to one of ``Table``'s readers (in the
+    modules that read the tables: the top level and the per-table parsers)."""
     keys = set()
-    for node in ast.walk(tree):
+    nodes = (
+        node
+        for module in (loading, parsers)
+        for node in ast.walk(ast.parse(Path(module.__file__).read_text(encoding="utf-8")))
+    )
+    for node in nodes:
         if (
             isinstance(node, ast.Call)
             and isinstance(node.func, ast.Attribute)
@@ -129,14 +136,14 @@ def test_every_declared_key_is_read_while_loading_the_corpus(monkeypatch):
     """Recorded at run time: every (table, key) the loader looks up is declared (else it raises),
     and loading the corpus looks up every declared key."""
     seen: set[tuple[str, str]] = set()
-    spec = S._Table.spec
+    spec = Table.spec
 
     def recording(self, key, *kinds):
         k = spec(self, key, *kinds)
         seen.add((k.table, k.key))
         return k
 
-    monkeypatch.setattr(S._Table, "spec", recording)
+    monkeypatch.setattr(Table, "spec", recording)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the corpus has an off-manifold start and the like
         for raw in _branch_corpus():
@@ -145,13 +152,13 @@ def test_every_declared_key_is_read_while_loading_the_corpus(monkeypatch):
 
 
 def test_reading_an_undeclared_key_or_as_another_kind_is_a_programming_error():
-    t = S._Table({"mass": 1.0, "colour": "red"}, "body")
+    t = Table({"mass": 1.0, "colour": "red"}, "body")
     with pytest.raises(LookupError, match=r"body\.colour"):
         t.number("colour")
     with pytest.raises(TypeError, match=r"body\.mass"):
         t.vector("mass")
     with pytest.raises(LookupError, match="declared default"):
-        S._Table({}, "solver").number("rtol", 1e-6)
+        Table({}, "solver").number("rtol", 1e-6)
     assert key_spec("thresholds", "position_C").key == "<name>"
     assert key_spec("thresholds", "hard_x").key == "hard_<criterion>"
 

@@ -35,7 +35,7 @@ import numpy as np
 
 from analytic.effects import Effect, SpringModel
 from analytic.kinematics import udot_of
-from analytic.scene import Scene, scene_from_dict
+from analytic.scene.loading import Scene, scene_from_dict
 
 PLANT_EFFECTS = (
     Effect.GRAVITY,

@@ -1,6 +1,6 @@
 """A resolved :class:`~analytic.scene.Scene` written back in the scene file's own conventions.
 
-:func:`scene_to_dict` gives the scene as the tables of a scene file (:mod:`analytic.scene_keys`):
+:func:`scene_to_dict` gives the scene as the tables of a scene file (:mod:`analytic.scene.schema`):
 the same keys (``lambda``, ``k_linear``, ``[initial.attitude] quaternion``), 1-based mass and axis
 indices, every default filled in. :func:`scene_to_toml` writes that as TOML text, which
 :func:`analytic.scene.load_scene` reads back to an equal scene (every field, every array
@@ -30,8 +30,9 @@ from typing import Any
 
 import numpy as np
 
-from analytic.scene import QUAT_NORMALISE_TOL, Scene
-from analytic.scene_keys import DEFAULT_GRAVITY
+from analytic.scene.limits import QUAT_NORMALISE_TOL
+from analytic.scene.loading import Scene
+from analytic.scene.schema import DEFAULT_GRAVITY
 
 
 def _floats(a: Any) -> Any:

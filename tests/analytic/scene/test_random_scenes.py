@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from analytic.effects import CONTROL_EFFECTS, Effect
-from analytic.random_scenes import MassInertia, chain_scene, random_scene, random_scene_dict
+from analytic.scene.random_scenes import MassInertia, chain_scene, random_scene, random_scene_dict
 from validation.bench.timing import chain_scene as bench_chain_scene
 
 

@@ -1,6 +1,6 @@
 """A resolved scene written in the scene file's conventions loads back to the same scene.
 
-``analytic.scene_dump.scene_to_toml`` is what ``tumble validate`` writes beside its report as
+``analytic.scene.dump.scene_to_toml`` is what ``tumble validate`` writes beside its report as
 ``scene.toml``, and ``scene_to_dict`` the ``provenance.scene`` block of the JSON outputs: both in the
 TOML's own keys (``lambda``, 1-based ``indices``). Loaded back, every field is equal, arrays bit for
 bit (the loader keeps a unit axis, a unit quaternion and a rotation matrix it is given as they are,
@@ -18,9 +18,8 @@ from typing import Any
 import numpy as np
 import pytest
 
-from analytic import random_scenes
-from analytic.scene import Scene, load_scene, scene_from_dict
-from analytic.scene_dump import scene_to_dict, scene_to_toml
+from analytic.scene import Scene, load_scene, random_scenes, scene_from_dict
+from analytic.scene.dump import scene_to_dict, scene_to_toml
 from validation.report.provenance import FileKind, dumps, provenance
 from validation.scenes import builtin_names, resolve_scene
 

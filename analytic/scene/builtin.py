@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-BUILTIN_DIR = Path(__file__).resolve().parent / "scenes"
+BUILTIN_DIR = Path(__file__).resolve().parent.parent / "scenes"
 """Where the built-in scenes live (package data, ``pyproject.toml``)."""
 
 

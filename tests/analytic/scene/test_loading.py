@@ -21,6 +21,8 @@ from analytic import scene as S
 from analytic.effects import Effect
 from analytic.model import TumblingModel
 from analytic.scene import OutputSettings, load_scene, scene_from_dict
+from analytic.scene.overflow import derived_quantities, initial_fields
+from analytic.scene.rules import EFFECT_DATA
 from validation.scenes import resolve_scene, scene_path
 
 PAPER = [
@@ -392,11 +394,10 @@ def test_loader_bounds_match_mujoco_and_the_builder():
     from model_xml import builder
 
     assert S.MJ_MINVAL == mujoco.mjMINVAL
-    assert builder.POINT_INERTIA_REL is S.POINT_INERTIA_REL
-    assert builder.POINT_INERTIA_MIN is S.POINT_INERTIA_MIN
     for name in PAPER:
         sc = load_scene(scene_path(name))
         eps, count = S.twin_point_inertia(sc)
+        assert builder.point_inertia(sc) == eps  # the one formula, not a copy of it
         _, pad = builder.mass_inertias(sc)
         assert pad == eps * count
 
@@ -448,7 +449,7 @@ def test_load_scene_accepts_every_builtin_name_the_command_line_lists():
     """``analytic.load_scene(name)`` loads the same file as the command line's lookup, for every
     built-in name outside the hard-case suite (which is the validation layer's, ``hard/<name>``)."""
     from analytic import load_scene as api_load_scene
-    from analytic.builtin_scenes import builtin_scene_names
+    from analytic.scene.builtin import builtin_scene_names
     from validation.scenes import HARD_PREFIX, builtin_names
 
     names = builtin_scene_names()
@@ -469,7 +470,7 @@ def test_load_scene_accepts_every_builtin_name_the_command_line_lists():
 def test_builtin_names_are_looked_up_never_joined_onto_a_path(tmp_path, monkeypatch):
     """A name that walks out of the scenes' directory is no built-in scene; a file at the given
     path wins over a built-in of the same name."""
-    from analytic.builtin_scenes import BUILTIN_DIR, builtin_scene_path
+    from analytic.scene.builtin import BUILTIN_DIR, builtin_scene_path
 
     monkeypatch.chdir(tmp_path)
     for name in ("../scenes/paper_example1", "scenes/paper_example1", str(BUILTIN_DIR), "a\0b"):
@@ -650,7 +651,7 @@ def test_huge_finite_values_load_with_finite_initial_quantities_or_are_named(
             assert "\n" not in msg and msg.split(":")[0].split("[")[0] in _FIELD_NAMES, msg
             return
     with np.errstate(all="ignore"):
-        quantities = S._derived_quantities(sc, S._initial_fields(sc))
+        quantities = derived_quantities(sc, initial_fields(sc))
     assert all(np.all(np.isfinite(v)) for _, v in quantities.values())
     assert np.all(np.isfinite(sc.initial.q0())) and np.all(np.isfinite(sc.initial.qdot0()))
 
@@ -740,7 +741,7 @@ def test_a_key_given_where_it_does_not_apply_says_when_it_does():
 def _full_scene() -> dict:
     """Example 1 under control with every optional key of its tables that has a declared default
     written at that default (so that leaving the key out must load the same scene)."""
-    from analytic.scene_keys import KEYS, NO_DEFAULT, Kind, Need
+    from analytic.scene.schema import KEYS, NO_DEFAULT, Kind, Need
 
     raw = _raw("paper_example1_controlled")
     raw["stabilization"] = {}
@@ -774,7 +775,7 @@ def _without(raw: dict, dotted: str) -> dict:
         for e in raw["scene"]["effects"]
         if not any(
             d == g or d.startswith(g + ".")
-            for d, eff in S._EFFECT_DATA
+            for d, eff in EFFECT_DATA
             if eff.value == e
             for g in gone
         )
@@ -786,8 +787,8 @@ def test_every_optional_key_can_be_left_out_and_takes_its_declared_default():
     """From the declarations: a scene without any one optional key loads, and when the key has a
     declared default the scene is the one that gives it; a scene without a required key is refused
     naming it."""
-    from analytic.scene_keys import KEYS, NO_DEFAULT, Need
-    from tests.analytic.test_scene_dump import _differences
+    from analytic.scene.schema import KEYS, NO_DEFAULT, Need
+    from tests.analytic.scene.test_dump import _differences
 
     full = _full_scene()
     with warnings.catch_warnings():
