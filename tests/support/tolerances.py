@@ -304,6 +304,17 @@ COM_PARABOLA_ABS_M = Threshold(
     "that does not cancel between body and masses moves c by O(F t²/m_T), far above 1e-9 m.",
 )
 
+# --- trajectory files (tests/validation/judge) ---------------------------------------------------
+TRAJECTORY_FILE_ROUND_TRIP_REL = Threshold(
+    "TRAJECTORY_FILE_ROUND_TRIP_REL",
+    1e-15,
+    "1",
+    "A plant's trajectory written to a trajectory file (CSV: repr, the shortest text that reads "
+    "back to the same double; Parquet: doubles) and read back: C, p, v, ṗ, τ, F come back bit for "
+    "bit and the attitude angle is 0; ω is recomputed through u̇ = Hᵀω/(4|u|²) and H u̇, a few "
+    "roundings (~2e-16 relative measured). Relative to the largest value of each quantity.",
+)
+
 TOLERANCES: Mapping[str, Threshold] = {
     t.name: t for t in list(globals().values()) if isinstance(t, Threshold)
 }
