@@ -175,10 +175,10 @@ def _check_mass_indices(group: ColumnGroup, found: set[int], n: int, where: str)
         return
     k = max(found)
     if found == set(range(1, k + 1)):
+        names = f"{group.value}_1" + (f" … {group.value}_{k}" if k > 1 else "")
         masses = "1 mass" if k == 1 else f"{k} masses"
         raise TrajectoryFileError(
-            f"{where}: the file has {masses} ({group.value}_1 … {group.value}_{k}), "
-            f"the scene n = {n}"
+            f"{where}: the file has {masses} ({names}), the scene n = {n}"
         )
     gaps = set(range(1, min(k, n) + 1)) - found
     if gaps:

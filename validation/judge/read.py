@@ -1,7 +1,8 @@
 """``read_trajectory``: another engine's run of a scene, from a CSV or Parquet trajectory file.
 
-The file is read through :func:`analytic.safe_files.read_regular` (a regular file only: a link,
-FIFO or device is refused without blocking; at most :func:`size_limit` bytes), parsed as numbers
+The file is read through :func:`analytic.safe_files.read_regular` (a regular file only, as a
+scene file the user names: a symbolic link is followed to the file it names, a FIFO, device or
+directory is refused without blocking; at most :func:`size_limit` bytes), parsed as numbers
 and nothing else, and checked whole before anything is built from it: the header
 (:func:`validation.judge.columns.parse_header`), then the values
 (:func:`validation.judge.table.check_table`). Nothing in the file is evaluated or names a path.
@@ -55,7 +56,7 @@ def format_of(path: str | Path) -> TrajectoryFormat:
 
 def _read_bytes(path: Path, where: Where, limit: int) -> bytes:
     try:
-        return read_regular(path, limit)
+        return read_regular(path, limit, follow_links=True)
     except FileNotFoundError:
         raise TrajectoryFileError(f"{where.file}: no such file") from None
     except OSError as exc:  # a link, FIFO, device, directory; larger than the limit; permissions

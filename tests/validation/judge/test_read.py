@@ -170,6 +170,14 @@ BAD_CSV = {
              ROW1.replace(",11.25", ",11.25,0"), ROW2.replace(",12", ",12,0")),
         r"header: the file has 3 masses \(p_1 … p_3\), the scene n = 2",
     ),
+    "fewer_masses": (
+        _csv(*(",".join(x.split(",")[:9] + x.split(",")[10:]) for x in (HEAD, ROW0, ROW1, ROW2))),
+        r"header: the file has 1 mass \(p_1\), the scene n = 2",
+    ),
+    "gap_in_masses": (
+        _csv(HEAD.replace("p_2", "p_3"), ROW0, ROW1, ROW2),
+        r"header: column 'p_2' missing",
+    ),
     "non_monotone_t": (
         _csv(HEAD, ROW0, ROW1, ROW2.replace("0.02", "0.01", 1)),
         r"data row 3 \(line 4\), column 't': 0\.01 s is not after the previous row's 0\.01 s",
@@ -266,7 +274,7 @@ def test_parquet_with_more_rows_than_the_grid_refused_before_reading(tmp_path):
 
 
 @pytest.mark.faults
-def test_fifo_link_and_oversized_file_refused_without_reading(tmp_path):
+def test_fifo_and_oversized_file_refused_without_reading_a_link_followed(tmp_path):
     scene = _scene("paper_example1", 0.02)
     fifo = tmp_path / "pipe.csv"
     os.mkfifo(fifo)  # no writer: reading would block; the reader must not wait
@@ -275,9 +283,12 @@ def test_fifo_link_and_oversized_file_refused_without_reading(tmp_path):
     good = tmp_path / "good.csv"
     good.write_text(HAND)
     link = tmp_path / "link.csv"
-    link.symlink_to(good)
-    with pytest.raises(TrajectoryFileError, match=r"symbolic link, not a regular file"):
-        read_trajectory(link, scene, engine=Engine.ANALYTIC)
+    link.symlink_to(good)  # a file the user names: a link is followed to a regular file ...
+    assert read_trajectory(link, scene, engine=Engine.ANALYTIC).source == str(link)
+    link_to_fifo = tmp_path / "link_to_pipe.csv"
+    link_to_fifo.symlink_to(fifo)  # ... and never to a FIFO
+    with pytest.raises(TrajectoryFileError, match=r"link_to_pipe\.csv': a FIFO, not a regular"):
+        read_trajectory(link_to_fifo, scene, engine=Engine.ANALYTIC)
     big = tmp_path / "big.csv"
     big.write_text(HAND + " " * 200_000)
     with pytest.raises(TrajectoryFileError, match=r"'.*big\.csv': larger than [0-9,]+ bytes"):
