@@ -40,6 +40,7 @@ class ColumnGroup(StrEnum):
     ROD_VELOCITIES = "pdot"
     TORQUE = "tau"
     ROD_FORCES = "F"
+    WORK = "work"
 
     @property
     def required(self) -> bool:
@@ -87,6 +88,11 @@ class Column:
 
 
 _G = ColumnGroup
+_ANGULAR_IMPULSE = (
+    "angular impulse since t = 0 of the external moments about the system centre of mass c, "
+    "∫ S(u)(τ + τ_given) + (R − c) × F_C dt, x"
+)
+_LINEAR_IMPULSE = "impulse since t = 0 of the control force at C, ∫ F_C dt (zero for the paper's cost), x"
 COLUMNS: tuple[Column, ...] = (
     Column("t", _G.TIME, "s", "", "sample time, on the scene's output grid 0, 1/rate, …, t_end"),
     Column("R_x", _G.POSITION, "m", "inertial", "position of C, the centre of mass of BR, x"),
@@ -114,6 +120,19 @@ COLUMNS: tuple[Column, ...] = (
         "along the rod",
         "control force on mass i along the rod (between the rod and the mass)",
     ),
+    Column(
+        "W",
+        _G.WORK,
+        "J",
+        "",
+        "work done since t = 0 by the control (τ·ω + F·ṗ + F_C·Ṙ) and the scene's given torque",
+    ),
+    Column("I_L_x", _G.WORK, "N·m·s", "inertial", _ANGULAR_IMPULSE),
+    Column("I_L_y", _G.WORK, "N·m·s", "inertial", "angular impulse, y"),
+    Column("I_L_z", _G.WORK, "N·m·s", "inertial", "angular impulse, z"),
+    Column("I_P_x", _G.WORK, "N·s", "inertial", _LINEAR_IMPULSE),
+    Column("I_P_y", _G.WORK, "N·s", "inertial", "impulse of the force at C, y"),
+    Column("I_P_z", _G.WORK, "N·s", "inertial", "impulse of the force at C, z"),
 )
 """Every column, in the order a file written by this project has them (any order is read)."""
 

@@ -2,7 +2,7 @@
 
 The columns are :data:`validation.judge.columns.COLUMNS` for the scene's n: t, R, u and p from
 ``q`` (Eq. 44), ``v = Ṙ``, ``ω = H(u) u̇`` (body axes, Eq. 12), ``ṗ``, the control torque ``τ``
-(body axes) and the rod forces ``F``. Every value is written at full precision (CSV: ``repr``,
+(body axes), the rod forces ``F`` and the plant's quadratures (work, impulses). Every value is written at full precision (CSV: ``repr``,
 the shortest text that reads back to the same double; Parquet: doubles), so
 :func:`validation.judge.read.read_trajectory` gives back t, R, u, p, v, ω, ṗ, τ and F exactly.
 The table is checked as the reader checks a file (:func:`validation.judge.table.check_table`)
@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from analytic.effects import Effect
 from analytic.scene import Scene
 from analytic.trajectory import Trajectory
 from validation.judge.columns import ColumnGroup, TrajectoryFormat, header, parse_header
@@ -27,9 +28,23 @@ from validation.judge.table import check_table
 from validation.runs.atomic import write_bytes
 
 
-def _group_values(trajectory: Trajectory, group: ColumnGroup) -> np.ndarray:
+def _quadratures(trajectory: Trajectory, scene: Scene) -> np.ndarray:
+    """``[W, I_L, I_P]`` per sample, shape (N, 7) (:mod:`analytic.assemble`), from the invariants:
+    ``I_P = P_expected − P(0) − m_T g t`` undoes how :func:`analytic.invariants.compute_invariants`
+    builds ``P_expected`` (to round-off)."""
+    inv = trajectory.invariants
+    impulse = inv.linear_momentum_expected - inv.linear_momentum[0]
+    if scene.has(Effect.GRAVITY):
+        m_T = float(scene.body.mass) + float(np.sum(scene.masses.mass))
+        impulse = impulse - m_T * np.outer(trajectory.t - trajectory.t[0], scene.gravity)
+    return np.concatenate([inv.work[:, None], inv.angular_impulse, impulse], axis=1)
+
+
+def _group_values(trajectory: Trajectory, group: ColumnGroup, scene: Scene) -> np.ndarray:
     """The trajectory's samples of one column group, shape (N, k), in the group's column order."""
     tr = trajectory
+    if group is ColumnGroup.WORK:
+        return _quadratures(tr, scene)
     values = {
         ColumnGroup.TIME: tr.t[:, None],
         ColumnGroup.POSITION: tr.R,
@@ -45,13 +60,14 @@ def _group_values(trajectory: Trajectory, group: ColumnGroup) -> np.ndarray:
 
 
 def trajectory_table(
-    trajectory: Trajectory, groups: frozenset[ColumnGroup] | None = None
+    trajectory: Trajectory, scene: Scene, groups: frozenset[ColumnGroup] | None = None
 ) -> tuple[tuple[str, ...], np.ndarray]:
-    """``(header names, values (N, C))`` of a trajectory: the required groups and ``groups``
-    (default every optional group), in the order of :data:`~validation.judge.columns.COLUMNS`."""
+    """``(header names, values (N, C))`` of a trajectory of ``scene``: the required groups and
+    ``groups`` (default every optional group), in the order of
+    :data:`~validation.judge.columns.COLUMNS`."""
     names = header(trajectory.n, groups)
     chosen = [g for g in ColumnGroup if g.required or groups is None or g in groups]
-    values = np.concatenate([_group_values(trajectory, g) for g in chosen], axis=1)
+    values = np.concatenate([_group_values(trajectory, g, scene) for g in chosen], axis=1)
     return names, values
 
 
@@ -86,7 +102,7 @@ def write_trajectory(
             f"{where.file}: the trajectory has n = {trajectory.n} masses, the scene "
             f"{scene.name!r} n = {scene.n}"
         )
-    names, values = trajectory_table(trajectory, groups)
+    names, values = trajectory_table(trajectory, scene, groups)
     check_table(names, values, parse_header(names, scene.n, where.file), scene, where)
     if fmt is TrajectoryFormat.CSV:
         data = format_csv(names, values)

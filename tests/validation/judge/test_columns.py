@@ -15,6 +15,7 @@ def test_header_for_two_masses_is_the_documented_order():
         "t", "R_x", "R_y", "R_z", "u_w", "u_x", "u_y", "u_z", "p_1", "p_2",
         "v_x", "v_y", "v_z", "omega_x", "omega_y", "omega_z", "pdot_1", "pdot_2",
         "tau_x", "tau_y", "tau_z", "F_1", "F_2",
+        "W", "I_L_x", "I_L_y", "I_L_z", "I_P_x", "I_P_y", "I_P_z",
     )  # fmt: skip
     assert header(0, frozenset()) == ("t", "R_x", "R_y", "R_z", "u_w", "u_x", "u_y", "u_z")
 

@@ -35,7 +35,7 @@ DOC = Path(__file__).resolve().parents[3] / "docs" / "trajectory-format.md"
 
 def test_columns_in_any_order_read_the_same(controlled_run, tmp_path):
     scene, tr = controlled_run
-    names, values = trajectory_table(tr)
+    names, values = trajectory_table(tr, scene)
     order = np.random.default_rng(7).permutation(len(names))
     text = ",".join(names[i] for i in order) + "\n"
     text += "".join(",".join(repr(float(x)) for x in row[order]) + "\n" for row in values)
@@ -49,7 +49,7 @@ def test_columns_in_any_order_read_the_same(controlled_run, tmp_path):
 @pytest.mark.parametrize("flip", ["every_row", "alternate_rows"])
 def test_either_quaternion_sign_reads_to_the_same_attitude(controlled_run, tmp_path, flip):
     scene, tr = controlled_run
-    names, values = trajectory_table(tr)
+    names, values = trajectory_table(tr, scene)
     cols = [names.index(c) for c in ("u_w", "u_x", "u_y", "u_z")]
     rows = slice(None) if flip == "every_row" else slice(1, None, 2)
     values[rows, cols] *= -1.0

@@ -6,10 +6,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from analytic.invariants import Balance, relative_balance
 from analytic.scene import load_scene
 from analytic.trajectory import Engine
 from tests.support import tolerances as tol
 from validation.compare.checks import attitude_angle
+from validation.compare.thresholds import DEFAULTS
 from validation.judge import (
     ColumnGroup,
     ExternalTrajectory,
@@ -51,6 +53,15 @@ def test_plant_trajectory_round_trip_full_precision(controlled_run, tmp_path, fm
     assert _rel(back.rod_forces, tr.rod_forces) <= ROUND_TRIP
     # the plant's q is continuous from the scene's u(0): it reads back with its own sign
     np.testing.assert_array_equal(back.u, tr.u)
+    # the quadratures: each balance closes for the file's run as for the plant's (same verdict
+    # under the comparison's threshold), and its residual is the plant's to that threshold
+    assert _rel(back.invariants.work, tr.invariants.work) <= ROUND_TRIP
+    assert _rel(back.invariants.angular_impulse, tr.invariants.angular_impulse) <= ROUND_TRIP
+    for balance in Balance:
+        th = DEFAULTS[balance.value]
+        plants = relative_balance(tr.invariants, balance, th.floor)
+        mine = relative_balance(back.invariants, balance, th.floor)
+        assert plants <= th.value and mine <= th.value, (balance, plants, mine)
     # what no column holds is NaN, never a value a comparison could take for a result
     assert np.isnan(back.qddot).all() and np.isnan(back.force_at_C).all()
     assert np.isnan(back.residual_norm).all()
@@ -67,7 +78,7 @@ def test_csv_values_are_written_with_repr(controlled_run, tmp_path):
     assert tuple(lines[0].split(",")) == header(scene.n)
     assert len(lines) == len(tr.t) + 1
     row = [float(x) for x in lines[5].split(",")]
-    _, values = trajectory_table(tr)
+    _, values = trajectory_table(tr, scene)
     assert row == values[4].tolist()
 
 
