@@ -176,14 +176,14 @@ class HeaderLayout:
 
 
 def columns_text(n: int) -> str:
-    """Every column name for n masses, group by group: ``"t, R_x … R_z, u_w … u_z, p_1 … p_3, …"``."""
+    """Every column name for n masses, a per-mass group as a range: ``"t, R_x, …, p_1 … p_3, …"``."""
     parts = []
     for group in ColumnGroup:
         names = group_names(group, n)
-        if len(names) == 1:
-            parts.append(names[0])
-        elif names:
+        if group.per_mass and len(names) > 1:
             parts.append(f"{names[0]} … {names[-1]}")
+        else:
+            parts.extend(names)
     return ", ".join(parts)
 
 
