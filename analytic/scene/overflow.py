@@ -16,6 +16,7 @@ import numpy as np
 
 from analytic.effects import Effect
 from analytic.kinematics import S, udot_of
+from analytic.scene.schema import key_spec
 from analytic.scene.values import show
 
 if TYPE_CHECKING:
@@ -41,9 +42,9 @@ def initial_fields(scene: Scene) -> dict[str, np.ndarray]:
     }
     zeros3 = np.zeros(3)
     f["gravity.vector"] = np.array(scene.gravity, float) if scene.has(Effect.GRAVITY) else zeros3
-    for key, effect in (("k_linear", Effect.SPRINGS_LINEAR), ("k_cubic", Effect.SPRINGS_CUBIC)):
-        given = scene.has(effect)
-        f[f"springs.{key}"] = np.array(getattr(scene.springs, key), float) * (1.0 if given else 0.0)
+    for spec in (key_spec("springs", "k_linear"), key_spec("springs", "k_cubic")):
+        on = scene.has(spec.effect)  # (the effect that reads the key, as declared)
+        f[spec.dotted] = np.array(getattr(scene.springs, spec.key), float) * (1.0 if on else 0.0)
     ext = scene.external_torque if scene.has(Effect.EXTERNAL_TORQUE) else None
     f["external_torque.constant"] = np.array(ext.constant, float) if ext else zeros3
     f["external_torque.amplitude"] = np.array(ext.amplitude, float) if ext else zeros3
