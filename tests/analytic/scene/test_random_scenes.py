@@ -1,4 +1,4 @@
-"""The one random-scene generator (``analytic/random_scenes.py``): what kinds of scene it draws.
+"""The one random-scene generator (``analytic/scene/random_scenes.py``): what kinds of scene it draws.
 (What the scenes are for is tested where they are used: the engine, property and model tests.)"""
 
 from __future__ import annotations
