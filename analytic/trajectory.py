@@ -22,6 +22,7 @@ class Engine(StrEnum):
     ANALYTIC = "analytic"
     MUJOCO = "mujoco"
     PINOCCHIO = "pinocchio"
+    DRAKE = "drake"  # mj_bridge.drake_plant (optional, not among the default plants)
 
 
 class RunStatus(StrEnum):

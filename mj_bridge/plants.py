@@ -97,7 +97,7 @@ def plant(name: Engine | str) -> Plant:
     """The plant called ``name`` (``analytic``, ``mujoco``, ``pinocchio``)."""
     try:
         return PLANTS[Engine(name)]()
-    except ValueError:
+    except (ValueError, KeyError):  # KeyError: an engine not registered here (drake, for now)
         raise ValueError(
             f"plants: unknown plant {name!r} (known: {', '.join(e.value for e in PLANTS)})"
         ) from None
