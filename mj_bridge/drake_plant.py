@@ -52,7 +52,10 @@ rtol-2.5e-14 run by 1.1e-9 m with u as integrated and by 7.5e-9 m with û (the a
 
 Speed: Drake's own ``Simulator`` (``runge_kutta5``) needed accuracy 1e-13 and ~220x the analytic
 plant's evaluations to reach ~1e-9 m on the controlled Example 1 (measured outside the project); scipy's
-DOP853 at the scene's tolerances on ``EvalTimeDerivatives`` is the fast path.
+DOP853 at the scene's tolerances on ``EvalTimeDerivatives`` is the fast path. One evaluation costs
+12-19 µs on the paper scenes (n = 2; ~70 µs at n = 30, ~0.5 ms at n = 300: O(n), so no size limit),
+the 20 s controlled Example 1 ~0.9 s of integration, ~4.5x the analytic plant on the same scipy loop
+(:mod:`validation.bench.drake_goal`).
 """
 
 from __future__ import annotations
