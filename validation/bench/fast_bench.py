@@ -2,7 +2,8 @@
 
 ``python -m validation.bench.fast_bench`` prints, for ``validation.bench.timing.chain_scene(n)`` (controlled:
 ω and every mass tracked, Gauss weighting) with n = 2, 5, 10, 50, 1000, the median cost of one
-evaluation of the controlled dynamics in µs: the numpy path (``TumblingModel.acceleration``), the fast path
+evaluation of the controlled dynamics in µs of thread CPU time
+(:func:`validation.bench.timing.time_call`): the numpy path (``TumblingModel.acceleration``), the fast path
 (``FastModel.qddot``, the integrator's right-hand side, and ``FastModel.qddot_and_forces``, which also
 returns the control outputs) and MuJoCo's ``mj_forward`` on the twin built by
 ``model_xml.build_spec(scene).compile()`` (columns shown as n/a when the twin is not importable), the
@@ -43,7 +44,8 @@ def main(argv: list[str] | None = None) -> int:
     argparse.ArgumentParser(
         prog="python -m validation.bench.fast_bench",
         description="One evaluation of the controlled dynamics for n = 2 ... 1000 masses: the numpy "
-        "path, the compiled path and MuJoCo's mj_forward (median µs; printed, never asserted).",
+        "path, the compiled path and MuJoCo's mj_forward (median µs of thread CPU time; printed, "
+        "never asserted).",
     ).parse_args(argv)
     from analytic import fast
     from analytic.kernel import jit
@@ -58,7 +60,7 @@ def main(argv: list[str] | None = None) -> int:
     fm2.qddot(0.3, q, qd)
     print(f"first call (JIT compile or cache load): {time.perf_counter() - t0:.3f} s")
 
-    print("one evaluation of the controlled dynamics (median, µs)")
+    print("one evaluation of the controlled dynamics (median thread CPU time, µs)")
     hdr = f"{'n':>5} {'numpy':>10} {'fast qddot':>11} {'fast full':>10} {'mj_forward':>11}"
     print(hdr + f" {'fast/mj':>8} {'numpy/fast':>11}")
     fast_cost = {}

@@ -15,27 +15,30 @@ holds. Numbers are printed, never asserted (tests cover correctness, not speed).
 3. **60 s Example 1**: the controlled Example 1 over 60 s, analytic DOP853 at rtol 1e-12 (atol 1e-13):
    its error against a reference (DOP853 at rtol 2.5e-14) in the sweep's error measure
    (:func:`validation.studies.sweep.errors_against`); then MuJoCo RK4 with dt halving from 1e-3 s until its
-   error is at most the analytic one. Ratio = analytic wall / RK4 wall at exactly that accuracy:
-   the dt is interpolated between the last two runs by RK4's observed order and the wall time
-   linearly in the step count (the first run found as accurate is also printed). If none is
+   error is at most the analytic one. Ratio = analytic CPU time / RK4 CPU time at exactly that
+   accuracy (each run's integration, :class:`~validation.bench.timing.CpuMeter`): the dt is
+   interpolated between the last two runs by RK4's observed order and the time linearly in the
+   step count (the first run found as accurate is also printed). If none is
    reached within the time cap, the RK4 cost at the needed dt is extrapolated from its observed
    order and the ratio is marked as extrapolated. Holds when ≤ 1.
 4. **n scaling**: cost of one fast evaluation at n = 1000 / at n = 10. Holds when ≤ 150.
 5. **Pinocchio plant**: the controlled Example 1 over 20 s, DOP853 at rtol 1e-12 (atol 1e-13), on
    the Pinocchio plant / on the analytic plant, both through the plant protocol
    (``plant(name).simulate``). Each plant runs once first (compilation, cache loads), then the two
-   alternate for ``rounds`` repeats; the ratio is of the median walls (the integration, as each
-   plant measures it in ``info["wall_time_s"]``; the whole ``simulate`` call is printed too). Both
+   alternate for ``rounds`` repeats; the ratio is the median of the rounds' ratios of the
+   integrations' CPU time (each plant's ``info["wall_time_s"]`` times the share of a CPU the thread
+   had during it; the walls and the whole ``simulate`` call are printed too). Both
    plants step on scipy's loop (the analytic plant with ``stepper="scipy"``), so the ratio compares
    the plants, not the loops; one run of the analytic plant on its default (compiled) loop is
    printed beside it. Holds when ≤ 3. Skipped, with the reason printed, when Pinocchio (``pin``) is
    not installed; it takes a few seconds, so ``--skip-long`` keeps it.
 6. **compiled stepping**: the controlled Example 1 over 60 s, DOP853 at rtol 1e-12 (atol 1e-13), on
-   the analytic plant's compiled loop (:mod:`analytic.compiled_stepping`): its wall
-   (``info["wall_time_s"]``) / (its evaluations ``nfev`` x the cost of one evaluation of the compiled
+   the analytic plant's compiled loop (:mod:`analytic.compiled_stepping`): its CPU time
+   (``info["wall_time_s"]`` times the CPU share) / (its evaluations ``nfev`` x the thread CPU time of
+   one evaluation of the compiled
    right-hand side, :func:`analytic.fast_rhs.rhs_into` called from a compiled loop, ``nfev`` times,
    on 64 states of the run in turn). Runs and timing loops alternate for ``rounds`` repeats
-   (medians). The same ratio for scipy's loop (the before) is printed beside it. Holds when ≤ 1.5
+   (the median of the rounds' ratios). The same ratio for scipy's loop (the before) is printed beside it. Holds when ≤ 1.5
    (:data:`COMPILED_STEPPING_LIMIT`). Skipped, with the reason, when the compiled loop is
    unavailable (CyRK or numba missing). About 10 to 20 s.
 
@@ -44,16 +47,17 @@ in alternating ~5 ms batches (:func:`validation.bench.timing.interleaved`), by t
 not the wall clock: the time the scheduler gives to another process is not the code's cost, and
 where it lands follows the alternation, so wall-clock medians made one side look slower at random
 on a busy machine (:mod:`validation.bench.timing` has the measurements). The plant-level goals (5,
-6) time whole runs, alternating, and count the CPU time of each integration as its wall times the
-share of a CPU the thread had during it (:class:`validation.bench.timing.CpuMeter`). Each round
+6) and goal 3 time whole runs (5 and 6 alternating) and count the CPU time of each integration as
+its wall times the share of a CPU the thread had during it
+(:class:`validation.bench.timing.CpuMeter`). Each round
 gives one ratio: a goal's value is their median, its spread their interquartile range
 (:class:`validation.bench.verdicts.Spread`), printed with the share of a CPU the thread had. The
 verdict (:func:`validation.bench.verdicts.decide`) is HOLDS or FAILS when the rounds agree, and
 TOO_BUSY ("the machine was too busy for a verdict") when the spread is wider than
-:data:`validation.bench.verdicts.SPREAD_BOUND` of the limit or straddles it. Goal 3 is two single
-runs, far from its limit, timed by wall; the ``tumble validate`` goals time new processes (a pool
-of workers: their CPU time is not their wait), by wall, their three pairs giving the spread. One
-BLAS thread throughout.
+:data:`validation.bench.verdicts.SPREAD_BOUND` of the limit or straddles it. Goal 3 is a search of single
+runs (no spread: its verdict is its value's); the ``tumble validate`` goals time new processes (a
+pool of workers: their CPU time is not their wait), by wall, their three pairs giving the spread.
+One BLAS thread throughout.
 """
 
 from __future__ import annotations
@@ -242,27 +246,35 @@ def goal_example1_60s(
     sc = resolve_scene("paper_example1_controlled")
     progress(f"  reference (DOP853 rtol 2.5e-14, {t_end:g} s) ...")
     ref = ref_samples(reference_run(sc, t_end))
-    tr_a = analytic.simulate(
-        sc, method="DOP853", rtol=1e-12, atol=1e-13, t_end=t_end
-    ).raise_if_interrupted()
+    meter = CpuMeter()
+    with meter:
+        tr_a = analytic.simulate(
+            sc, method="DOP853", rtol=1e-12, atol=1e-13, t_end=t_end, progress=meter
+        ).raise_if_interrupted()
     e_a = errors_against(tr_a, ref)["error"]
-    w_a = float(tr_a.info["wall_time_s"])
-    progress(f"  analytic rtol 1e-12: error {e_a:.3g}, wall {w_a:.2f} s")
+    w_a = meter.cpu_of(float(tr_a.info["wall_time_s"]))  # CPU time: see the module docstring
+    progress(
+        f"  analytic rtol 1e-12: error {e_a:.3g}, {w_a:.2f} s (wall {tr_a.info['wall_time_s']:.2f} s)"
+    )
     interval = 1.0 / sc.output.rate
-    pts: list[tuple[float, float, float]] = []  # (dt, error, wall)
+    pts: list[tuple[float, float, float]] = []  # (dt, error, CPU time)
     k = round(interval / 1e-3)
     while True:
         dt = interval / k
-        tr = mj_bridge.simulate(sc, integrator="RK4", dt=dt, t_end=t_end).raise_if_interrupted()
+        meter = CpuMeter()
+        with meter:
+            tr = mj_bridge.simulate(
+                sc, integrator="RK4", dt=dt, t_end=t_end, progress=meter
+            ).raise_if_interrupted()
         e = errors_against(tr, ref)["error"] if tr.status.value == "ok" else math.inf
-        w = float(tr.info["wall_time_s"])
+        w = meter.cpu_of(float(tr.info["wall_time_s"]))
         pts.append((dt, e, w))
-        progress(f"  RK4 dt {dt:.4g}: error {e:.3g}, wall {w:.2f} s")
+        progress(f"  RK4 dt {dt:.4g}: error {e:.3g}, {w:.2f} s (wall {tr.info['wall_time_s']:.2f} s)")
         if e <= e_a:
             value, detail = w_a / w, ""
             if len(pts) >= 2 and math.isfinite(pts[-2][1]) and pts[-2][1] > e_a:
                 # the run found is more accurate than needed: interpolate the dt that just reaches
-                # e_a by the observed order, and its wall time linearly in the step count (1/dt)
+                # e_a by the observed order, and its CPU time linearly in the step count (1/dt)
                 (dt1, e1, w1), (dt2, e2, w2) = pts[-2], pts[-1]
                 order = math.log(e1 / e2) / math.log(dt1 / dt2)
                 dt_need = dt2 * (e_a / e2) ** (1.0 / order)
@@ -273,7 +285,7 @@ def goal_example1_60s(
                     f"reaches {e_a:.2e} in about {w_need:.2f} s (the ratio uses this)"
                 )
             return Goal(
-                "60 s controlled Example 1: analytic rtol 1e-12 wall / MuJoCo RK4 wall at the same"
+                "60 s controlled Example 1: analytic rtol 1e-12 / MuJoCo RK4 CPU time at the same"
                 " accuracy",
                 value,
                 1.0,
@@ -284,7 +296,7 @@ def goal_example1_60s(
         if 2 * w > cap_s or not math.isfinite(e):
             break
         k *= 2
-    # Extrapolate from the last two finite points: error ∝ dt^p, wall ∝ 1/dt.
+    # Extrapolate from the last two finite points: error ∝ dt^p, CPU time ∝ 1/dt.
     fin = [p for p in pts if math.isfinite(p[1]) and p[1] > 0]
     if len(fin) < 2:
         return Goal("60 s controlled Example 1", math.inf, 1.0, "RK4 runs failed", data={})
@@ -293,7 +305,7 @@ def goal_example1_60s(
     dt_need = dt2 * (e_a / e2) ** (1.0 / order) if order > 0 else 0.0
     w_need = w2 * dt2 / dt_need if dt_need > 0 else math.inf
     return Goal(
-        "60 s controlled Example 1: analytic rtol 1e-12 wall / MuJoCo RK4 wall at the same accuracy",
+        "60 s controlled Example 1: analytic rtol 1e-12 / MuJoCo RK4 CPU time at the same accuracy",
         w_a / w_need,
         1.0,
         f"analytic {w_a:.2f} s (error {e_a:.2e}); RK4 did not reach it within the {cap_s:g} s cap: "
@@ -332,7 +344,8 @@ def goal_scaling(rounds: int = 21) -> Goal:
 
 
 PINOCCHIO_GOAL = (
-    "Pinocchio plant: 20 s controlled Example 1 at rtol 1e-12, Pinocchio wall / analytic wall"
+    "Pinocchio plant: 20 s controlled Example 1 at rtol 1e-12, Pinocchio / analytic integration "
+    "CPU time"
 )
 PINOCCHIO_LIMIT = 3.0
 
@@ -343,9 +356,11 @@ def goal_pinocchio(
     scene_name: str = "paper_example1_controlled",
     progress: Callable[[str], None] = print,
 ) -> Goal:
-    """Goal 5 (see the module docstring): the Pinocchio plant's wall over the analytic plant's.
+    """Goal 5 (see the module docstring): the Pinocchio plant's integration CPU time over the
+    analytic plant's.
 
-    ``data`` holds every wall (``analytic_s``, ``pinocchio_s``: integration; ``*_call_s``: the whole
+    ``data`` holds every CPU time (``analytic_cpu_s``, ``pinocchio_cpu_s``) and their per-round
+    ratios (``ratios``), every wall (``analytic_s``, ``pinocchio_s``: integration; ``*_call_s``: the whole
     ``simulate`` call), their medians, the order of the rounds and the two plants' agreement (max
     distance between their positions of C, m) as a check that both ran the same motion.
     """
@@ -440,7 +455,7 @@ def goal_pinocchio(
 
 
 COMPILED_STEPPING_GOAL = (
-    "compiled stepping: 60 s controlled Example 1 at rtol 1e-12, wall / (nfev x one compiled "
+    "compiled stepping: 60 s controlled Example 1 at rtol 1e-12, CPU time / (nfev x one compiled "
     "right-hand side evaluation)"
 )
 COMPILED_STEPPING_LIMIT = 1.5
@@ -482,10 +497,11 @@ def goal_compiled_stepping(
     scene_name: str = "paper_example1_controlled",
     progress: Callable[[str], None] = print,
 ) -> Goal:
-    """Goal 6 (see the module docstring): the compiled loop's wall over the cost of the evaluations
-    it makes.
+    """Goal 6 (see the module docstring): the compiled loop's CPU time over the cost of the
+    evaluations it makes.
 
-    ``data``: every wall of the compiled loop and of scipy's (``compiled_s``, ``scipy_s``), the
+    ``data``: every wall and CPU time of the compiled loop and of scipy's (``compiled_s``,
+    ``scipy_s``, ``compiled_cpu_s``, ``scipy_cpu_s``), the per-round ratios (``ratios``), the
     per-evaluation cost of each timing round (``rhs_us``), their medians, ``nfev`` and ``nsteps`` of
     both loops, scipy's ratio (``ratio_scipy``) and the two loops' largest difference in the sweep's
     error measure (``loops_differ``, :func:`validation.studies.sweep.errors_against`), a check that both

@@ -1,7 +1,8 @@
 """Per-step cost of MuJoCo RK4 on the paper scenes, with and without the controller in the callback.
 
 Run: ``python -m validation.bench.mujoco_steps [--steps N] [--repeats R]``. Prints medians over R repeats of N
-steps (µs per step) and the ratio to MuJoCo's own step for:
+steps (µs of thread CPU time per step: what another process's time on the core costs is not
+counted, :mod:`validation.bench.timing`) and the ratio to MuJoCo's own step for:
 
 * ``mujoco``: ``mj_step`` alone (no Python callback; controlled scenes with ctrl = 0);
 * ``empty cb``: a Python ``mjcb_control`` that does nothing (the price of calling Python 4x a step);
@@ -35,9 +36,9 @@ def _per_step_us(tw: Twin, callback, steps: int, repeats: int) -> float:
         tw.d.ctrl[:] = 0.0
         with installed(control=callback, act_bias=None):
             mujoco.mj_step(tw.m, tw.d)  # warm-up (numba compile, caches)
-            t0 = time.perf_counter()
+            t0 = time.thread_time_ns()
             mujoco.mj_step(tw.m, tw.d, nstep=steps)
-            samples.append((time.perf_counter() - t0) / steps * 1e6)
+            samples.append((time.thread_time_ns() - t0) / steps * 1e-3)
     return statistics.median(samples)
 
 
@@ -49,9 +50,9 @@ def _native_per_step_us(tw: Twin, steps: int, repeats: int) -> float:
         tw.d.ctrl[:] = 0.0
         with tw.callbacks():
             tw.step(1)  # warm-up
-            t0 = time.perf_counter()
+            t0 = time.thread_time_ns()
             tw.step(steps)
-            samples.append((time.perf_counter() - t0) / steps * 1e6)
+            samples.append((time.thread_time_ns() - t0) / steps * 1e-3)
     return statistics.median(samples)
 
 
@@ -87,7 +88,8 @@ def main(argv: list[str] | None = None) -> int:
     rows = run(args.steps, args.repeats)
     cols = ["mujoco", "empty cb", "analytic", "analytic_fast", "native", "mujoco UK"]
     print(
-        f"MuJoCo {mujoco.__version__}, RK4, µs per step (median of {args.repeats} x {args.steps})"
+        f"MuJoCo {mujoco.__version__}, RK4, µs of thread CPU time per step (median of "
+        f"{args.repeats} x {args.steps})"
     )
     print(f"{'scene':28s} {'n':>2s} " + " ".join(f"{c:>14s}" for c in cols))
     for r in rows:

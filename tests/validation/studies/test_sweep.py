@@ -466,7 +466,7 @@ def _goal_with_made_up_walls(monkeypatch, cap_s):
     linear in the step count, so where the search stops and what it predicts do not depend on the
     machine's speed or load); the errors are the real ones."""
     import mj_bridge
-    from validation.bench.goals import goal_example1_60s
+    from validation.bench import goals
 
     real = mj_bridge.simulate
 
@@ -475,7 +475,10 @@ def _goal_with_made_up_walls(monkeypatch, cap_s):
         return dataclasses.replace(tr, info={**tr.info, "wall_time_s": RK4_COST_S / dt})
 
     monkeypatch.setattr(mj_bridge, "simulate", costed)
-    return goal_example1_60s(t_end=1.0, cap_s=cap_s, progress=lambda _s: None)
+    # the goal counts each run's wall times the share of a CPU the thread had during it: with the
+    # walls made up, the share is planted too (a whole CPU), so the costs are exactly those walls
+    monkeypatch.setattr(goals.CpuMeter, "share", property(lambda self: 1.0))
+    return goals.goal_example1_60s(t_end=1.0, cap_s=cap_s, progress=lambda _s: None)
 
 
 def _dt_reaching(e_target, pts):
