@@ -20,10 +20,13 @@ import json
 import os
 import sys
 import warnings
+from importlib import metadata
 from pathlib import Path
 from typing import NoReturn
 
 from validation.runs import interrupts
+from validation.runs.atomic import OutputError, write_bytes, write_text
+from validation.runs.progress import Progress, StageProgress, Status
 
 EXIT_FAILED = 1  # a run or a check failed, or its results could not be written
 EXIT_USAGE = 2  # bad input (scene, arguments), found before any work
@@ -66,15 +69,14 @@ def _add_scene_arg(p: argparse.ArgumentParser, default: str, builtin: list[str])
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
+    # deferred: after main's signal handlers (module docstring): numpy, MuJoCo, numba
     from analytic.simulate import simulate
     from analytic.trajectory import RunStatus
     from validation.compare.summary import drift_figures, summary_table
-    from validation.runs.atomic import write_bytes, write_text
     from validation.runs.outputs import default_out_dir, output_run
-    from validation.runs.progress import Progress
-    from validation.scenes import DEFAULT_SCENE, resolve_scene
+    from validation.scenes import resolve_scene
 
-    scene = resolve_scene(args.scene, DEFAULT_SCENE)
+    scene = resolve_scene(args.scene)
     t_end = args.t_end or scene.output.t_end
     out = Path(args.out) if args.out else default_out_dir("simulate_", scene.name)
     with output_run(out, "simulate") as run:
@@ -117,32 +119,29 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
 
 def cmd_validate(args: argparse.Namespace) -> int:
+    from validation.compare.referee import VerdictKind
+    from validation.compare.summary import check_sentence
     from validation.runs.outputs import default_out_dir
-    from validation.runs.progress import StageProgress, Status
-    from validation.scenes import DEFAULT_SCENE, resolve_scene
-    from validation.validate import run_validation
-
-    scene = resolve_scene(args.scene, DEFAULT_SCENE)
-    out = Path(args.out) if args.out else default_out_dir("validate_", scene.name)
-    t_end = args.t_end or scene.output.t_end
     from validation.runs.warmup import warming
+    from validation.scenes import resolve_scene
+    from validation.validate import run_request, validation_request
 
-    chosen = _checked_plants(scene, args)
+    scene = resolve_scene(args.scene, check_thresholds=False)  # validation_request checks them
+    out = Path(args.out) if args.out else default_out_dir("validate_", scene.name)
+    request = validation_request(  # every input checked once, here: run_request trusts it
+        scene,
+        plants=args.plants,
+        integrator=args.integrator,
+        dt=args.dt,
+        t_end=args.t_end,
+        figure_formats=args.figure_format,
+    )
     res = None
     # the analytic plant's last kernels may still compile while the plants start (warming)
-    with warming(scene, chosen, Status()):
-        progress = StageProgress(f"validate {scene.name}", t_end)
+    with warming(scene, request.plants, Status()):
+        progress = StageProgress(f"validate {scene.name}", request.horizon)
         try:
-            res = run_validation(
-                scene,
-                out,
-                integrator=args.integrator,
-                dt=args.dt,
-                t_end=args.t_end,
-                progress=progress,
-                plants=args.plants,
-                figure_formats=args.figure_format,
-            )
+            res = run_request(request, out, progress=progress)
         finally:
             progress.close(walls=res.wall_times if res is not None else None, stopped=res is None)
     applicable = [c for c in res.checks if c.applicable]
@@ -155,13 +154,9 @@ def cmd_validate(args: argparse.Namespace) -> int:
     )
     if res.failure:
         print(f"  run failed: {res.failure}")
-    from validation.compare.summary import check_sentence
-
     for c in res.checks:
         if not c.passed:
             print(f"  failed: {check_sentence(c, reason=False)}")
-    from validation.compare.referee import VerdictKind
-
     for v in res.verdicts:
         if v.kind is not VerdictKind.AGREE:
             print(f"  referee: {v.text}")
@@ -174,30 +169,12 @@ _CLOSING_FILES = (("report", "report.md"), ("recording", "run.rrd"))
 """The files ``tumble validate``'s closing line names, each only when the run wrote it."""
 
 
-def _checked_plants(scene, args: argparse.Namespace) -> list:
-    """The input checks of :func:`validation.validate.run_validation` (bad input is refused before
-    anything is compiled); returns the chosen plants."""
-    from analytic.trajectory import Engine
-    from mj_bridge.plants import plant
-    from validation.preflight import check_validation_inputs, validation_plants
-
-    chosen = validation_plants(args.plants, scene)
-    mujoco = Engine.MUJOCO in chosen
-    check_validation_inputs(
-        scene, integrator=args.integrator, dt=args.dt, t_end=args.t_end, mujoco=mujoco
-    )
-    for e in chosen:
-        plant(e).check_scene(scene)
-    return chosen
-
-
 def cmd_export_mjcf(args: argparse.Namespace) -> int:
     from model_xml import to_mjcf
-    from validation.runs.atomic import write_text
     from validation.runs.outputs import default_out_file
-    from validation.scenes import DEFAULT_SCENE, resolve_scene
+    from validation.scenes import resolve_scene
 
-    scene = resolve_scene(args.scene, DEFAULT_SCENE)
+    scene = resolve_scene(args.scene)
     out = Path(args.out) if args.out else default_out_file(scene.name, ".xml")
     if out.is_dir():
         raise ValueError(f"--out {out}: is a directory; give a file name")
@@ -248,10 +225,10 @@ def cmd_hard_cases(args: argparse.Namespace) -> int:
 
 def cmd_sweep(args: argparse.Namespace) -> int:
     from validation.runs.outputs import default_out_dir
-    from validation.scenes import DEFAULT_SCENE, resolve_scene
+    from validation.scenes import resolve_scene
     from validation.studies.sweep import run_sweep
 
-    scene = resolve_scene(args.scene, DEFAULT_SCENE)
+    scene = resolve_scene(args.scene)
     out = Path(args.out) if args.out else default_out_dir("sweep_", scene.name)
 
     def progress(line: str) -> None:
@@ -296,7 +273,6 @@ def cmd_warmup(args: argparse.Namespace) -> int:
 
 def cmd_scene_reference(args: argparse.Namespace) -> int:
     from validation.report.scene_reference import render
-    from validation.runs.atomic import write_text
 
     if args.out:
         write_text(Path(args.out), render())
@@ -308,8 +284,6 @@ def cmd_scene_reference(args: argparse.Namespace) -> int:
 
 def _version() -> str:
     """The installed distribution's version ("unknown" when run from a bare checkout)."""
-    from importlib import metadata
-
     try:
         return metadata.version("tumbling-testbed")
     except metadata.PackageNotFoundError:
@@ -527,8 +501,6 @@ def main(argv: list[str] | None = None) -> int:
             print(f"tumble: error: {_out_of_memory(exc)}", file=sys.stderr)
             return EXIT_FAILED
         except OSError as exc:
-            from validation.runs.atomic import OutputError
-
             if isinstance(exc, OutputError):  # the run happened; its results could not be written
                 print(f"tumble: error: {exc}", file=sys.stderr)
                 return EXIT_FAILED

@@ -4,7 +4,9 @@
 otherwise be found only after the analytic plant has run (or after both have): a bad or unknown
 ``[thresholds]`` entry, a horizon or MuJoCo time step that does not fit the output grid, an
 integrator MuJoCo does not have, a run too long to hold. :func:`validation_plants` refuses a
-choice of plants that leaves nothing to compare (one plant, or one plant named twice).
+choice of plants that leaves nothing to compare (one plant, or one plant named twice). Both are
+steps of :func:`validation.validate.validation_request`, the one function that checks a
+validation's whole input, once per boundary.
 """
 
 from __future__ import annotations
@@ -15,7 +17,8 @@ from typing import Any
 
 from analytic.scene import Scene
 from analytic.trajectory import Engine
-from validation.compare.thresholds import thresholds_for
+from mj_bridge.plan import plan_steps
+from mj_bridge.plants import installed_plants, parse_plants, plant, plants_for_scene
 
 
 def check_validation_inputs(
@@ -30,15 +33,14 @@ def check_validation_inputs(
     validated; build nothing and run nothing.
 
     Args:
-        scene: a loaded scene (its fields are checked by the loader already).
+        scene: a loaded scene (its fields checked by the loader; its ``[thresholds]`` are checked
+            by :func:`validation_request`).
         integrator, dt, t_end: the overrides of :func:`validation.validate.run_validation`.
         mujoco: whether the MuJoCo plant runs (its integrator, step and grid are checked then).
     """
-    thresholds_for(scene)  # names and values of the scene's [thresholds]
     scene.output.with_t_end(t_end, "t_end")  # the output grid every plant samples
     if not mujoco:
         return
-    from mj_bridge.plan import plan_steps  # light: numpy and the scene, not MuJoCo
 
     plan_steps(scene, integrator, dt, t_end)  # MuJoCo's steps on that grid
 
@@ -55,13 +57,10 @@ def validation_plants(
         ValueError: naming ``plants`` and the value: an unknown or missing plant, a plant named
             twice, or fewer than two (a validation compares plants with each other).
     """
-    from mj_bridge.plants import installed_plants, parse_plants, plant
-
     if plants is None:
         installed = installed_plants()
         if scene is None:
             return installed
-        from mj_bridge.plants import plants_for_scene
 
         chosen = plants_for_scene(scene, installed)
         for e in installed:

@@ -9,10 +9,12 @@ command line also accepts them, as ``hard/<name>``.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
-from analytic.scene.builtin import BUILTIN_DIR, builtin_scene_names, builtin_scene_path
 from analytic.scene import Scene, load_scene
+from analytic.scene.builtin import BUILTIN_DIR, builtin_scene_names, builtin_scene_path
 from validation.compare.thresholds import thresholds_for
 
 SCENES_DIR = BUILTIN_DIR
@@ -60,15 +62,40 @@ def scene_path(name_or_path: str) -> Path:
     )
 
 
-def resolve_scene(name_or_path: str | None, default: str = DEFAULT_SCENE) -> Scene:
-    """Load a scene given by path or built-in name (``default`` when None).
+def resolve_scene(
+    name_or_path: Scene | str | Path | None,
+    default: str = DEFAULT_SCENE,
+    *,
+    check_thresholds: bool = True,
+) -> Scene:
+    """The one resolver of a scene: a :class:`Scene` as given, else a file by path or a built-in
+    or hard-case scene by name (:func:`scene_path`; ``default`` when None or empty), loaded.
 
     Everything in it is checked here, before any work: its fields by the loader, and the names
-    and values of its ``[thresholds]`` against :data:`validation.compare.thresholds.DEFAULTS`. Messages
-    name a file as the user gave it.
+    and values of its ``[thresholds]`` against :data:`validation.compare.thresholds.DEFAULTS`.
+    Messages name a file as the user gave it. ``check_thresholds=False`` leaves the thresholds
+    to a caller that checks them itself, once (:func:`validation.preflight.validation_request`).
+
+    Raises:
+        ValueError: naming the field (``scene``, ``thresholds.<name>``, the loader's) and the value.
     """
-    given = name_or_path or default
-    p = scene_path(given)
-    scene = load_scene(given if p == Path(given) else p)
-    thresholds_for(scene)
+    if isinstance(name_or_path, Scene):
+        scene = name_or_path
+    else:
+        given = str(name_or_path) if name_or_path else default
+        p = scene_path(given)
+        scene = load_scene(given if p == Path(given) else p)
+    if check_thresholds:
+        thresholds_for(scene)
     return scene
+
+
+def with_threshold_overrides(scene: Scene, overrides: Mapping[str, Any] | None) -> Scene:
+    """``scene`` with ``overrides`` (name -> number or ``{value, reason}``) laid over its
+    ``[thresholds]`` table; not checked here (:func:`validation.compare.thresholds.thresholds_for`
+    of the result checks every entry)."""
+    if not overrides:
+        return scene
+    extra = dict(scene.extra or {})
+    extra["thresholds"] = {**dict(extra.get("thresholds") or {}), **dict(overrides)}
+    return scene.replace(extra=extra)

@@ -12,6 +12,11 @@ names is in the committed directory, whole (:func:`_check_committed`); a file th
 written (a full disk, in this process or a worker) is an :class:`OutputError`: no verdict, the
 previous contents of ``out_dir`` kept. A stage whose worker process was lost (killed) is done
 again here, and the report says so. The teaching demo is :mod:`validation.studies.demo`.
+
+Inputs are checked once per boundary: :func:`validation_request` checks everything (scene,
+thresholds, plants, overrides, figure formats) into a frozen :class:`ValidationRequest`, which
+:func:`run_request` trusts; :func:`run_validation` is the two, and ``tumble validate`` calls them
+apart (it names its output directory after the scene in between).
 """
 
 from __future__ import annotations
@@ -21,16 +26,19 @@ import inspect
 import math
 import time
 import traceback
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from analytic.scene import Scene, load_scene
+from analytic.scene import Scene
 from analytic.scene.dump import scene_to_toml
+from analytic.threshold import Threshold
 from analytic.trajectory import Engine, RunStatus, Trajectory
+from mj_bridge.plants import MujocoRunSettings, PinocchioPlant, plant
 from validation.compare.checks import Check, Comparison, compare_plants
 from validation.compare.referee import Verdict, referee
+from validation.compare.thresholds import thresholds_for
 from validation.preflight import check_validation_inputs, validation_plants
 from validation.report.figures import (
     DEFAULT_FORMATS,
@@ -38,6 +46,7 @@ from validation.report.figures import (
     FigureContext,
     FigureFormat,
     parse_formats,
+    prepare_drawing,
 )
 from validation.report.report import (
     RunVerdict,
@@ -49,10 +58,12 @@ from validation.report.report import (
 from validation.runs import workers
 from validation.runs.atomic import OutputError, write_text
 from validation.runs.interrupts import interrupt_name, raise_pending
-from validation.runs.outputs import OutputRun, output_run
-from validation.scenes import DEFAULT_SCENE
-
-SCENES = Path(__file__).resolve().parent / "scenes"
+from validation.runs.outputs import OutputRun, output_run, parse_manifest
+from validation.scenes import (  # DEFAULT_SCENE re-exported: the one default of every command
+    DEFAULT_SCENE,
+    resolve_scene,
+    with_threshold_overrides,
+)
 
 Progress = Callable[[str, float], None] | Callable[[float], None]
 """``progress(stage, t)`` (stage ``analytic`` or ``mujoco``) or ``progress(t)``: t is the simulated
@@ -107,13 +118,29 @@ class ValidationResult:
         return tuple(c for c in self.checks if not c.passed)
 
 
-def _scene(scene: Scene | str | Path) -> Scene:
-    if isinstance(scene, Scene):
-        return scene
-    p = Path(scene)
-    if not p.exists() and (SCENES / f"{scene}.toml").exists():
-        p = SCENES / f"{scene}.toml"
-    return load_scene(p)
+@dataclass(frozen=True)
+class ValidationRequest:
+    """A validation's input, checked whole by :func:`validation_request` before any plant runs.
+
+    Attributes:
+        scene: the scene (checked: fields, ``[thresholds]``; every plant accepts it).
+        thresholds: name -> threshold in force (the comparison's).
+        plants: the plants, in report order, at least two, each once.
+        integrator: MuJoCo integrator override (None: the scene's).
+        dt: MuJoCo time step override, s (None: the scene's).
+        t_end: horizon override, s (None: the scene's).
+        horizon: the horizon in force, s.
+        figure_formats: the figures' file formats, each once.
+    """
+
+    scene: Scene
+    thresholds: Mapping[str, Threshold]
+    plants: tuple[Engine, ...]
+    integrator: Any
+    dt: float | None
+    t_end: float | None
+    horizon: float
+    figure_formats: tuple[FigureFormat, ...]
 
 
 def _figure_formats(formats: Sequence[FigureFormat | str] | str) -> tuple[FigureFormat, ...]:
@@ -126,14 +153,59 @@ def _figure_formats(formats: Sequence[FigureFormat | str] | str) -> tuple[Figure
     return out
 
 
+def validation_request(
+    scene: Scene | str | Path | None,
+    *,
+    plants: Sequence[Engine | str] | str | None = None,
+    integrator: Any = None,
+    dt: float | None = None,
+    t_end: float | None = None,
+    figure_formats: Sequence[FigureFormat | str] | str = DEFAULT_FORMATS,
+    thresholds: Mapping[str, Any] | None = None,
+) -> ValidationRequest:
+    """Check a validation's whole input, once: the scene (a :class:`Scene` as given, else
+    :func:`validation.scenes.resolve_scene`) with ``thresholds`` (overrides, name -> number or
+    ``{value, reason}``) laid over its ``[thresholds]``, and those thresholds
+    (:func:`validation.compare.thresholds.thresholds_for`); the plants
+    (:func:`validation_plants`); the overrides (:func:`check_validation_inputs`); the figure
+    formats; and that every plant accepts the scene (its ``check_scene``). Builds nothing and runs
+    nothing.
+
+    Raises:
+        ValueError: naming the field and the value (scene, thresholds, plants, integrator, dt,
+            t_end, figure_format).
+    """
+    if not isinstance(scene, Scene):
+        scene = resolve_scene(scene, check_thresholds=False)  # checked below, once
+    sc = with_threshold_overrides(scene, thresholds)
+    checked_thresholds = thresholds_for(sc)
+    chosen = validation_plants(plants, sc)
+    check_validation_inputs(
+        sc, integrator=integrator, dt=dt, t_end=t_end, mujoco=Engine.MUJOCO in chosen
+    )
+    formats = _figure_formats(figure_formats)
+    if t_end is not None and not (t_end > 0):
+        raise ValueError(f"t_end: must be a positive time in s (got {t_end!r})")
+    for e in chosen:
+        plant(e).check_scene(sc)
+    return ValidationRequest(
+        scene=sc,
+        thresholds=checked_thresholds,
+        plants=tuple(chosen),
+        integrator=integrator,
+        dt=dt,
+        t_end=t_end,
+        horizon=float(t_end) if t_end is not None else sc.output.t_end,
+        figure_formats=formats,
+    )
+
+
 def _one_line(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {exc}".splitlines()[0]
 
 
 def _plant_settings(engine: Engine, sc: Scene, integrator: Any, dt: float | None) -> Any:
     """Each plant's settings: the scene's, with the MuJoCo overrides of the command line."""
-    from mj_bridge.plants import MujocoRunSettings, plant
-
     if engine is Engine.MUJOCO:
         return MujocoRunSettings(
             sc.mujoco.integrator if integrator is None else integrator,
@@ -190,24 +262,41 @@ def run_validation(
             and no verdict is given. Also when a file the result names is not found whole in
             the committed directory.
     """
-    from mj_bridge.plants import plant
-
-    sc = _scene(scene)
-    chosen = validation_plants(plants, sc)
-    check_validation_inputs(  # before any plant runs
-        sc, integrator=integrator, dt=dt, t_end=t_end, mujoco=Engine.MUJOCO in chosen
+    request = validation_request(  # the Python boundary: every input checked once, here
+        scene,
+        plants=plants,
+        integrator=integrator,
+        dt=dt,
+        t_end=t_end,
+        figure_formats=figure_formats,
     )
-    formats = _figure_formats(figure_formats)
-    if t_end is not None and not (t_end > 0):
-        raise ValueError(f"t_end: must be a positive time in s (got {t_end!r})")
-    horizon = float(t_end) if t_end is not None else sc.output.t_end
-    runs = []
-    for e in chosen:
-        pl = plant(e)
-        pl.check_scene(sc)
-        runs.append((pl, _plant_settings(e, sc, integrator, dt)))
+    return run_request(request, out_dir, progress=progress, concurrent=concurrent)
+
+
+def run_request(
+    request: ValidationRequest,
+    out_dir: str | Path,
+    progress: Progress | None = None,
+    concurrent: bool = True,
+) -> ValidationResult:
+    """:func:`run_validation` of an input checked already (:func:`validation_request`, at the
+    command line's or the Python API's boundary): nothing is checked again. Same result, files and
+    errors otherwise."""
+    sc = request.scene
+    runs = [
+        (plant(e), _plant_settings(e, sc, request.integrator, request.dt)) for e in request.plants
+    ]
     with output_run(out_dir, "validate") as run:
-        res = _validate_into(run, sc, runs, horizon, progress, formats, concurrent)
+        res = _validate_into(
+            run,
+            sc,
+            runs,
+            request.horizon,
+            progress,
+            request.figure_formats,
+            concurrent,
+            thresholds=request.thresholds,
+        )
     files = {name: run.final(name) for name in res.files}
     files["manifest.json"] = run.final("manifest.json")
     _check_committed(run.target, files)
@@ -223,8 +312,6 @@ def _check_committed(target: Path, files: dict[str, Path]) -> None:
         OutputError: the manifest is not readable, or a file is missing or not the size its
             manifest records.
     """
-    from validation.runs.outputs import parse_manifest
-
     try:
         listed = parse_manifest((target / "manifest.json").read_bytes())
     except (OSError, ValueError) as exc:
@@ -267,6 +354,7 @@ def _plant_task(pl: Any, settings: Any, sc: Scene, horizon: float, *, report) ->
 def _recording_task(
     path: Path, sc: Scene, plants, cmp, run_id: str, *, report
 ) -> tuple[Any, float]:
+    # deferred: rerun and scipy.spatial, ~0.25 s (python -X importtime), in the worker
     from validation.recording.recording import write_recording
 
     t0 = time.perf_counter()
@@ -326,8 +414,6 @@ def _prepare_figures() -> None:
     """matplotlib imported and one throw-away figure drawn (:func:`validation.report.figures.prepare_drawing`):
     the fonts and caches the first figure needs are loaded (in an evidence worker, before it is
     given its inputs)."""
-    from validation.report.figures import prepare_drawing
-
     try:
         prepare_drawing()
     except Exception:  # an optimisation only: the figures, drawn later, report their own errors
@@ -467,8 +553,6 @@ def _worker_result(job: workers.Job, redo: Callable[[], Any], redone: list[str])
 def _referee_note(sc: Scene) -> str:
     """Why a run of fewer than three plants has no referee: Pinocchio not installed, unable to
     run this scene (its reason), or not chosen."""
-    from mj_bridge.plants import PinocchioPlant
-
     if PinocchioPlant.unavailable():
         return (
             "the referee (Pinocchio) is not installed: pip install 'pin>=4.1' (the [pinocchio] extra)"
@@ -530,6 +614,7 @@ def _validate_into(
     progress: Progress | None,
     formats: Sequence[FigureFormat] = DEFAULT_FORMATS,
     concurrent: bool = True,
+    thresholds: Mapping[str, Threshold] | None = None,
 ) -> ValidationResult:
     """:func:`run_validation`'s work, writing into the staging directory ``run.path``.
 
@@ -589,7 +674,7 @@ def _validate_into(
             on_started=start_evidence,
         )
         if trajectories and trajectories[0].t.size and not interrupted:
-            cmp, verdicts = _compare(trajectories, sc, horizon, names, walls, failures)
+            cmp, verdicts = _compare(trajectories, sc, horizon, names, walls, failures, thresholds)
     except KeyboardInterrupt:
         interrupted = True
     except BaseException:
@@ -680,12 +765,13 @@ def _compare(
     names: dict[str, str],
     walls: dict[str, float],
     failures: list[str],
+    thresholds: Mapping[str, Threshold] | None = None,
 ) -> tuple[Comparison | None, tuple[Verdict, ...]]:
     """Every pair compared and the referee's rulings; a comparison that raises is a failure
     said in the report (an interrupt goes on)."""
     try:
         t0 = time.perf_counter()
-        cmp = compare_plants(trajectories, sc, t_end=horizon)
+        cmp = compare_plants(trajectories, sc, t_end=horizon, thresholds=thresholds)
         walls["compare"] = time.perf_counter() - t0
         return cmp, tuple(referee(cmp, names))
     except Exception as exc:
@@ -779,6 +865,9 @@ def _keep_only(out: Path, files: dict[str, Path]) -> None:
 
 __all__ = [
     "DEFAULT_SCENE",
+    "ValidationRequest",
     "ValidationResult",
+    "run_request",
     "run_validation",
+    "validation_request",
 ]

@@ -243,6 +243,7 @@ def narrative_for(
 
 
 def _trail_range():
+    # deferred: rerun ~0.25 s (python -X importtime), only when a recording is made
     import rerun.blueprint as rrb
 
     return rrb.VisibleTimeRanges(

@@ -123,6 +123,7 @@ def plots_for(prefix: str, scene: Any, comparison: Comparison | None) -> list[Pl
 
 
 def _send_scalars(rec, path: str, t: np.ndarray, values: np.ndarray, per_row: int = 1) -> bool:
+    # deferred: rerun ~0.25 s (python -X importtime), only when a recording is made
     import rerun as rr
 
     if t.size == 0:

@@ -88,6 +88,7 @@ def log_run(
         :class:`Legend` (``legend.arrows`` are the arrow scales; ``legend_markdown(legend)`` the
         text appended to the narrative).
     """
+    # deferred: rerun ~0.25 s (python -X importtime), only when a recording is made
     import rerun as rr
 
     p0 = entity_root(prefix)

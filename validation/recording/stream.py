@@ -13,10 +13,13 @@ from __future__ import annotations
 
 import contextlib
 import uuid
+import warnings
 from collections.abc import Iterator
 from enum import StrEnum
 from pathlib import Path
 from typing import Any
+
+from validation.runs.atomic import write_bytes
 
 RRD_FLUSH_TIMEOUT_S = 120.0
 """Longest wait for Rerun's batcher to hand over a recording's bytes (memory only, no disk): a
@@ -37,6 +40,7 @@ class AppId(StrEnum):
 def new_stream(app_id: str = AppId.VALIDATE, recording_id: str | None = None):
     """An explicit stream (not the global one) without the wall-clock timeline, under Rerun
     application id ``app_id`` (an :class:`AppId`: one per kind of file)."""
+    # deferred: rerun ~0.25 s (python -X importtime), only when a recording is made
     import rerun as rr
 
     rec = rr.RecordingStream(app_id, recording_id=recording_id or str(uuid.uuid4()))
@@ -64,8 +68,6 @@ def rrd_bytes(rec, sink) -> bytes:
 
 def check_rrd(path: str | Path) -> None:
     """Raise ``ValueError`` unless ``path`` is a whole ``.rrd`` (it reads back, footer included)."""
-    import warnings
-
     from rerun.chunk import RrdReader
 
     try:
@@ -93,8 +95,6 @@ def atomic_stream(
     viewer opens the file in it, whatever layout it remembers for ``app_id``, and *Reset to
     default blueprint* returns to it.
     """
-    from validation.runs.atomic import write_bytes
-
     path = Path(path)
     rec, sink = binary_stream(app_id, recording_id)
     if blueprint is not None:

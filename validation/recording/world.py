@@ -268,6 +268,7 @@ class _Look:
 
 
 def _log_shape(rec, body: str, scene: Any, look: _Look) -> None:
+    # deferred: rerun ~0.25 s (python -X importtime), only when a recording is made
     import rerun as rr
 
     FillMode = rr.components.FillMode

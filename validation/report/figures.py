@@ -181,6 +181,7 @@ class Drawing:
         """The figure's file content in ``fmt``: no time stamp, and SVG element ids drawn from a
         fixed salt rather than a random one, so equal figures give equal files; text rasterised
         as :data:`TEXT_RASTER` says."""
+        # deferred: matplotlib ~0.4 s (python -X importtime): the report imports this module, a worker draws
         import matplotlib as mpl
 
         if self.figure is None:

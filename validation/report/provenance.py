@@ -318,6 +318,7 @@ def provenance(
     origin = code_origin() if origin is None else origin
     dumped = None
     if scene is not None:
+        # deferred: numpy ~80 ms (python -X importtime); this module is standard library only
         from analytic.scene.dump import scene_to_dict
 
         dumped = scene_to_dict(scene)

@@ -49,6 +49,9 @@ from importlib import metadata
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from validation.runs.atomic import write_text
+from validation.runs.workers import flush_std_streams
+
 if TYPE_CHECKING:
     from analytic.scene import Scene
 
@@ -131,6 +134,7 @@ class Task:
 
     @property
     def title(self) -> str:
+        # deferred: analytic, mj_bridge: numpy ~45 ms, numba ~0.2 s (-X importtime); a warm start needs neither
         from analytic.kernel.entry import Solver
 
         solve = "M⁻²" if self.solver == int(Solver.MINV2) else "Gauss"
@@ -252,7 +256,6 @@ def stamp_warm(keys: Sequence[str]) -> None:
     """Record ``keys`` as warm (atomically; a stamp that cannot be written is no error), and the
     hashes of numba's cache files as they are now (:func:`analytic.kernel.cache_check.record`)."""
     from analytic.kernel import cache_check
-    from validation.runs.atomic import write_text
 
     path = _stamp_path()
     if path is None:
@@ -433,8 +436,6 @@ def _pool(workers: int, fork: bool | None = None) -> ProcessPoolExecutor:
         methods = multiprocessing.get_all_start_methods()
         fork = sys.platform == "linux" and "fork" in methods and threading.active_count() == 1
     if fork:
-        from validation.runs.workers import flush_std_streams
-
         flush_std_streams()  # nothing buffered here is written twice
     context = multiprocessing.get_context("fork" if fork else "spawn")
     return ProcessPoolExecutor(max_workers=workers, mp_context=context)
@@ -572,8 +573,8 @@ def warming(
 
 def builtin_scenes() -> list[Scene]:
     """Every built-in scene (what ``tumble warmup`` without a scene compiles for)."""
+    from analytic.scene import load_scene  # the built-in names' own loader (runs sits below scenes)
     from analytic.scene.builtin import builtin_scene_names
-    from analytic.scene import load_scene
 
     return [load_scene(name) for name in builtin_scene_names()]
 

@@ -33,6 +33,7 @@ interrupted, :func:`wait` tells every running child at once and gives them
 from __future__ import annotations
 
 import contextlib
+import multiprocessing as mp
 import os
 import signal
 import sys
@@ -40,7 +41,12 @@ import threading
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from multiprocessing.connection import wait as mp_wait
 from typing import Any
+
+from validation.runs import interrupts
+from validation.runs.atomic import OutputError
+from validation.runs.interrupts import keep_swallowed
 
 ENV_SWITCH = "TUMBLE_WORKERS"
 """Set to ``0`` to run every stage in this process."""
@@ -94,8 +100,6 @@ def available_cpus() -> int:
 
 def can_fork() -> bool:
     """Whether :func:`start` forks here (module docstring)."""
-    import multiprocessing as mp
-
     if os.environ.get(ENV_SWITCH, "").strip() == "0":
         return False
     if not sys.platform.startswith("linux") or "fork" not in mp.get_all_start_methods():
@@ -158,8 +162,6 @@ def signals_held(on_signal: Callable[[], None] | None = None, raise_after: bool 
     The signal is not blocked, only noted: ``on_signal()`` runs as soon as it arrives (telling the
     plants' workers to stop), so the job stops promptly. Main thread only; elsewhere the block
     runs as it is."""
-    from validation.runs import interrupts
-
     caught: list[int] = []
 
     def note(signum, frame) -> None:
@@ -212,8 +214,6 @@ def _first_interrupt_only(signum, frame):  # pragma: no cover - in a child
 def _child_signals() -> None:  # pragma: no cover - in a child
     """The child's signal handling (module docstring): the first interrupt counts, once, and one
     that compiled code swallows is kept for the task's next progress report."""
-    from validation.runs.interrupts import keep_swallowed
-
     keep_swallowed()
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, _first_interrupt_only)
@@ -222,8 +222,6 @@ def _child_signals() -> None:  # pragma: no cover - in a child
 def _send_error(conn, exc: BaseException) -> None:  # pragma: no cover - in a child
     """Send the task's exception: an interrupt as interrupted, a file that could not be written
     as an ``OutputError`` (path and reason), anything else by its type name and first line."""
-    from validation.runs.atomic import OutputError
-
     if isinstance(exc, KeyboardInterrupt):
         msg = ("err", type(exc).__name__, _one_line(exc) or "interrupted", True)
     elif isinstance(exc, OutputError):
@@ -360,8 +358,6 @@ class Job:
         if kind == "ok":
             return self.outcome[1]
         if kind == "output":
-            from validation.runs.atomic import OutputError
-
             _, path, reason, code = self.outcome
             raise OutputError(path, OSError(code, reason))
         if kind == "err":
@@ -413,7 +409,6 @@ def start(
     job = Job(name, task, _LATER if later else args, on_message, prepare)
     if not (fork and can_fork()):
         return job
-    import multiprocessing as mp
 
     ctx = mp.get_context("fork")
     conn, child_conn = ctx.Pipe(duplex=False)
@@ -446,8 +441,6 @@ def wait(jobs: Sequence[Job], first: bool = False, interrupted: bool = False) ->
     :data:`INTERRUPT_GRACE_S`; a child that has not sent by then is ended and its job marked
     interrupted (a second Ctrl-C stops waiting and is raised).
     """
-    from multiprocessing.connection import wait as mp_wait
-
     deadline = None
     pending = [j for j in jobs if j.forked and not j.done]
     if interrupted:

@@ -24,10 +24,22 @@ import numpy as np
 
 from analytic.effects import CONTROL_EFFECTS, Effect
 from analytic.scene import Scene
+from analytic.simulate import simulate
 from analytic.trajectory import RunStatus, Trajectory
-from validation.compare.checks import Comparison, Subject, compare
+from validation.compare.checks import Comparison, Group, Subject, compare
+from validation.recording.layout import views_3d
 from validation.recording.recording import AppId, atomic_stream, log_run, narrative_for
-from validation.runs.atomic import write_text
+from validation.recording.style import (
+    log10_nonzero,
+    plant_color,
+    shade,
+    slug,
+    unit_text,
+    viewer_text,
+)
+from validation.recording.world import difference_factors
+from validation.report.figures import Drawing, FigureFormat
+from validation.runs.atomic import write_bytes, write_text
 from validation.runs.outputs import OutputRun, output_run
 from validation.scenes import resolve_scene
 
@@ -393,11 +405,8 @@ def step_layout(
     from the analytic body exaggerated by the factor the recording logs, from ``comparison`` and
     ``trajectories``) over the narrative on the left; on the right the key plot with two thirds
     of the height (the whole column when alone), the other plots below it."""
+    # deferred: rerun ~0.3 s, matplotlib ~0.25 s (python -X importtime): only to write
     import rerun.blueprint as rrb
-
-    from validation.recording.layout import views_3d
-    from validation.recording.style import viewer_text
-    from validation.recording.world import difference_factors
 
     p0 = f"/{step.prefix}"
     plots = step_plots(step, scene, two_plants)
@@ -574,8 +583,6 @@ def _drift_curves(run: StepRun) -> tuple[Curves, ...]:
     """log10 of each plant's drift of each balance, divided by its check's scale (relative, as
     checked), and of the quaternion norm error: a hue per quantity, other plants lighter; one
     grey line per distinct threshold, naming the quantities it bounds."""
-    from validation.recording.style import log10_nonzero
-
     cmp = run.comparison
     series = {s.key: s for s in cmp.series}
     checks = {c.series: c for c in cmp.checks if c.series}
@@ -616,8 +623,6 @@ def _comparison_curves(run: StepRun, group) -> tuple[Curves, ...]:
     """The comparison's series of ``group`` (tracking errors, differences) as log10, in their
     plant's (or pair's) shades as :func:`validation.recording.plots.log_plots` draws them, each with
     its unit; one grey line per threshold."""
-    from validation.recording.style import log10_nonzero, plant_color, shade, slug, unit_text
-
     cmp = run.comparison
     checks = {c.series: c for c in cmp.checks if c.series}
     names_by_unit: dict[str, list[str]] = {}
@@ -656,8 +661,6 @@ def _comparison_curves(run: StepRun, group) -> tuple[Curves, ...]:
 
 def _force_curves(run: StepRun, torque: bool) -> tuple[Curves, ...]:
     """Each plant's control torque (body axes) or rod forces, in its shades."""
-    from validation.recording.style import plant_color, shade
-
     out = []
     for k, tr in enumerate(run.plants):
         name = tr.engine.value
@@ -674,8 +677,6 @@ def _force_curves(run: StepRun, torque: bool) -> tuple[Curves, ...]:
 def step_curves(run: StepRun, plot: Plot) -> tuple[Curves, ...]:
     """What ``plot`` of ``run``'s tab draws: the recording's curves (logged by the demo for
     :data:`DEMO_PLOTS`) and the figure's, one list for both."""
-    from validation.compare.checks import Group
-
     if plot is Plot.OMEGA:
         return _omega_curves(run)
     if plot is Plot.MASS_POSITIONS:
@@ -693,8 +694,6 @@ def _log_curves(rec, origin: str, curves: Sequence[Curves]) -> None:
     """Each :class:`Curves` as scalars under ``origin/entity``, one named, coloured line per
     column (nothing for an empty one)."""
     import rerun as rr
-
-    from validation.recording.style import viewer_text
 
     for c in curves:
         if not c.t.size:
@@ -737,8 +736,6 @@ def step_figure(run: StepRun):
     tab's order, the key plot first with twice the height, each titled as in the recording, every
     curve named in a legend beside its panel."""
     from matplotlib.figure import Figure
-
-    from validation.report.figures import Drawing
 
     plots = step_plots(run.step, run.scene, run.two_plants)
     ratios = [2.0] + [1.0] * (len(plots) - 1)
@@ -804,9 +801,6 @@ def _scale_lines(ax) -> str:
 
 def write_step_figures(out: Path, runs: Sequence[StepRun]) -> tuple[Path, ...]:
     """Each step's figure as ``{prefix}.png`` in ``out``, written atomically; their paths."""
-    from validation.report.figures import FigureFormat
-    from validation.runs.atomic import write_bytes
-
     return tuple(
         write_bytes(out / f"{r.step.prefix}.png", step_figure(r).render(FigureFormat.PNG))
         for r in runs
@@ -825,8 +819,6 @@ def run_steps(
 
     Returns the runs, in step order, and the wall time of each run, s. A run that fails raises
     RuntimeError naming the step."""
-    from analytic.simulate import simulate
-
     mj_simulate = None
     if mujoco:
         try:
@@ -860,8 +852,6 @@ def _baseline(
     step: DemoStep, runs: Sequence[StepRun], t_end: float, rtol: float, walls: dict[str, float]
 ) -> Trajectory:
     """The analytic run of ``step``'s scene with every effect: an earlier step's, or run now."""
-    from analytic.simulate import simulate
-
     earlier = next(
         (r for r in runs if r.step.scene == step.scene and not r.step.switched_off), None
     )

@@ -15,7 +15,17 @@ from pathlib import Path
 from typing import Any
 
 from validation.runs.atomic import write_text
-from validation.studies.demo import EXERCISES, LEARNING_GOALS, PAPER, STEPS, StepRun, step_narrative
+from validation.studies.demo import (
+    EXERCISES,
+    LEARNING_GOALS,
+    PAPER,
+    STEPS,
+    StepRun,
+    log_step,
+    step_figure,
+    step_layout,
+    step_narrative,
+)
 
 NOTEBOOK_APP_ID = "tumble_demo_notebook"
 """The Rerun application id of the notebook's recordings (the viewer remembers layouts per id)."""
@@ -25,12 +35,11 @@ VIEWER_HEIGHT_PX = 640  # the embedded viewer's height; its width follows the ce
 def show_step(run: StepRun) -> None:
     """Show one step in a notebook: its tab in Rerun's notebook viewer (the step logged into a
     recording of its own, the tab's layout active), then its figure (PNG)."""
+    # deferred: rerun ~0.6 s with its notebook widget, IPython (python -X importtime); optional
     import rerun as rr
     import rerun.blueprint as rrb
     from IPython.display import Image, display
     from rerun.notebook import Viewer
-
-    from validation.studies.demo import log_step, step_figure, step_layout
 
     layout = step_layout(run.step, run.scene, run.two_plants, run.comparison, run.plants)
     blueprint = rrb.Blueprint(layout, rrb.TimePanel(state="expanded"))

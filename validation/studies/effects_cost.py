@@ -21,12 +21,16 @@ Run alone: ``python -m validation.studies.effects_cost [SCENE]``.
 
 from __future__ import annotations
 
+import argparse
 import statistics
 import time
 from collections.abc import Callable
 from typing import Any
 
+from analytic.model import TumblingModel
 from analytic.scene import Scene
+from analytic.simulate import evaluator
+from validation.scenes import DEFAULT_SCENE, resolve_scene
 
 COST_COLUMNS = ("analytic_numpy", "analytic_fast", "mj_forward", "mj_forward_ctrl")
 
@@ -41,10 +45,9 @@ def _batch(fn) -> int:
 
 def evaluation_callables(scene: Scene) -> dict[str, Callable[[], Any]]:
     """One zero-argument callable per column of :data:`COST_COLUMNS`, warmed up."""
+    # deferred: MuJoCo ~0.2 s (python -X importtime); the sweep's markdown imports this module
     import mujoco
 
-    from analytic.model import TumblingModel
-    from analytic.simulate import evaluator
     from mj_bridge.twin import Twin
     from model_xml import build_spec
 
@@ -170,12 +173,8 @@ def effects_markdown(rows: list[dict[str, Any]]) -> list[str]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    import argparse
-
-    from validation.scenes import resolve_scene
-
     ap = argparse.ArgumentParser(prog="python -m validation.studies.effects_cost")
-    ap.add_argument("scene", nargs="?", default="paper_example1_controlled")
+    ap.add_argument("scene", nargs="?", default=DEFAULT_SCENE)
     ap.add_argument("--repeats", type=int, default=15)
     args = ap.parse_args(argv)
     rows = effects_cost(resolve_scene(args.scene), repeats=args.repeats)

@@ -27,16 +27,24 @@ import errno
 import fnmatch
 import hashlib
 import hmac
+import itertools
 import os
+import pickle
 import re
 import secrets
 import stat
+import statistics
+import subprocess
 import sys
+import tempfile
+import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import pytest
+
+from validation.testing.agree import PAIR_CHECKS, describe_check, load
 
 MARKER = "tumble"
 RUN_ITEM = "run"
@@ -165,8 +173,6 @@ def _load_signed(store: Path, secret: bytes) -> Any:
     """The run another worker of this session stored at ``store``, or None when there is none, it
     is not a regular file, or its signature does not match (never unpickled then: a pickle
     planted by anyone without the session's secret is not trusted)."""
-    import pickle
-
     if not secret:
         return None
     try:
@@ -189,6 +195,7 @@ class SceneFile(pytest.File):
         sess = self.config.stash[_SESSION]
         try:
             plants = sess.plants()
+            # deferred: numpy, the scenes, the plants: ~80 ms (python -X importtime)
             from validation.scenes import resolve_scene
 
             scene = resolve_scene(str(self.path))
@@ -217,7 +224,6 @@ class CheckItem(pytest.Item):
         outcome = self.config.stash[_SESSION].outcome(self.parent.path)
         if isinstance(outcome, str):
             raise CheckFailed(f"the scene could not run: {outcome}")
-        from validation.testing.agree import describe_check
 
         result = outcome
         where = f"report: {result.files.get('report.md', result.out_dir)}"
@@ -251,11 +257,8 @@ class CheckItem(pytest.Item):
 def expected_labels(scene: Any, plants: tuple[str, ...]) -> list[str]:
     """The labels of the checks :func:`validation.validate.run_validation` makes for ``scene`` on
     ``plants`` (report order), known before it runs: what the items are named."""
-    import itertools
-
     from analytic.effects import Effect
     from validation.compare.checks import Subject
-    from validation.testing.agree import PAIR_CHECKS
 
     def own(p: str) -> list[str]:
         names = []
@@ -319,8 +322,6 @@ class _Session:
         return self._plants
 
     def key(self, content: bytes, plants: tuple[str, ...], t_end: float | None) -> str:
-        import hashlib
-
         h = hashlib.sha256(content)
         h.update(repr((plants, t_end, self.config.getoption("tumble_out"))).encode())
         return h.hexdigest()
@@ -347,7 +348,6 @@ class _Session:
         factory = getattr(self.config, "_tmp_path_factory", None)
         if factory is not None:
             return Path(factory.getbasetemp())
-        import tempfile
 
         return Path(tempfile.mkdtemp(prefix="tumble-"))
 
@@ -390,8 +390,6 @@ class _Session:
         return res
 
     def _run_shared(self, shared: Path, key: str, *args: Any) -> Any:
-        import pickle
-
         store = shared / f"{key}.pickle"
         try:
             import fcntl
@@ -444,7 +442,6 @@ def tumble_validation(request: pytest.FixtureRequest):
 
     def get(scene: Any, plants: Any = None, t_end: float | None = None) -> Any:
         from validation.scenes import scene_path
-        from validation.testing.agree import load
 
         if plants is None:
             chosen = sess.plants()
@@ -475,10 +472,6 @@ def tumble_validation(request: pytest.FixtureRequest):
 
 
 def _bench(repeats: int = 15) -> None:  # pragma: no cover - a measurement, run by hand
-    import statistics
-    import subprocess
-    import tempfile
-    import time
 
     py = sys.executable
     env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}

@@ -11,6 +11,7 @@ import math
 from collections.abc import Mapping, Sequence
 from typing import Any
 
+from validation.studies.effects_cost import effects_markdown
 from validation.studies.sweep.config import (
     ANALYTIC,
     ENGINES,
@@ -351,7 +352,6 @@ def sweep_markdown(res: SweepResult, cfg: SweepConfig, *, image: str | None = FI
             f"{s['quat_norm_error_max']:.2e} | {s['quat_norm_error_at_steps_max']:.2e} |"
         )
     L += ["", "## Cost of one dynamics evaluation with each effect off", ""]
-    from validation.studies.effects_cost import effects_markdown
 
     L += effects_markdown(list(res.effects))
     L.append("")

@@ -17,6 +17,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from validation.compare.checks import attitude_angle
+from validation.compare.summary import drift_figures
+
 ERROR_MEASURE = (
     "max over the trajectory of: position of C relative to its largest displacement, attitude "
     "angle (rad), rod positions relative to the largest |p| (all against the reference)"
@@ -69,8 +72,6 @@ def errors_against(tr, ref: RefSamples) -> dict[str, float]:
     NaN everywhere when the run has no finite samples in common with the reference; inf for a
     measure that is not finite somewhere.
     """
-    from validation.compare.checks import attitude_angle
-
     n = min(len(tr.t), len(ref.t))
     keys = ("pos", "att", "rod")
     if n < 2 or not np.allclose(tr.t[:n], ref.t[:n], rtol=0, atol=SAMPLE_TIME_ATOL):
@@ -98,8 +99,6 @@ def errors_against(tr, ref: RefSamples) -> dict[str, float]:
 
 def drifts(tr) -> dict[str, float]:
     """The invariant drifts of :func:`validation.compare.summary.drift_figures` ({} when not computable)."""
-    from validation.compare.summary import drift_figures
-
     try:
         return {k: float(v) for k, v in drift_figures(tr).items()}
     except (ValueError, FloatingPointError):

@@ -48,9 +48,13 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import scipy
 
+import analytic
 from analytic import safe_files
 from analytic.scene import Scene, SolverSettings
+from validation.compare import checks as compare
+from validation.compare import summary
 from validation.runs.atomic import write_bytes
 from validation.studies.sweep import metrics
 from validation.studies.sweep.config import (
@@ -117,8 +121,6 @@ class Reference:
 
 def reference_run(scene: Scene, t_end: float, max_step: float = math.inf):
     """The analytic engine at the reference tolerance (DOP853), steps capped at ``max_step``."""
-    import analytic
-
     sc = scene.replace(
         solver=SolverSettings(
             method=REFERENCE_METHOD, rtol=REFERENCE_RTOL, atol=REFERENCE_ATOL, max_step=max_step
@@ -227,12 +229,6 @@ def scene_fingerprint(scene: Scene) -> Any:
 def code_fingerprint() -> str:
     """SHA-256 of the code the reference depends on: ``analytic/*.py``, the error measure and its
     helpers, and the versions of Python, numpy, scipy and numba."""
-    import scipy
-
-    import analytic
-    from validation.compare import checks as compare
-    from validation.compare import summary
-
     h = hashlib.sha256()
     files = sorted(Path(analytic.__file__).parent.glob("*.py"))
     files += [Path(__file__), Path(metrics.__file__), Path(compare.__file__)]
@@ -241,6 +237,7 @@ def code_fingerprint() -> str:
         h.update(f.name.encode())
         h.update(f.read_bytes())
     try:
+        # deferred: optional (absent: no version), and ~0.13 s (python -X importtime)
         import numba
 
         numba_version = numba.__version__

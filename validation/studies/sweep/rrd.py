@@ -63,6 +63,7 @@ def write_rrd(
 ) -> None:
     """Write ``sweep.rrd`` atomically (:func:`validation.recording.recording.atomic_stream`), with its
     blueprint."""
+    # deferred: rerun ~0.25 s (python -X importtime), only when the recording is written
     import rerun as rr
     import rerun.blueprint as rrb
 

@@ -19,7 +19,10 @@ from collections.abc import Callable
 from concurrent.futures import Executor, ProcessPoolExecutor
 from typing import Any
 
+import analytic
+import mj_bridge
 from analytic.scene import Scene
+from mj_bridge.plants import PinocchioPlant, PinocchioSettings, plant
 from validation.studies.sweep.config import PINOCCHIO, RTOL_ENGINES, SweepConfig
 
 MAX_WORKERS = 4
@@ -70,8 +73,6 @@ def within_budget(run: Callable[[Callable[[float], None] | None], Any], budget: 
 
 def analytic_run(scene: Scene, method: str, rtol: float, atol: float, t_end: float, budget=None):
     """One run of the analytic engine (scipy ``method``), within ``budget`` s (:func:`within_budget`)."""
-    import analytic
-
     return within_budget(
         lambda progress: analytic.simulate(
             scene, method=method, rtol=rtol, atol=atol, t_end=t_end, progress=progress
@@ -83,8 +84,6 @@ def analytic_run(scene: Scene, method: str, rtol: float, atol: float, t_end: flo
 def pinocchio_run(scene: Scene, method: str, rtol: float, atol: float, t_end: float, budget=None):
     """One run of the Pinocchio plant through the plant protocol; ``budget`` as for
     :func:`analytic_run`."""
-    from mj_bridge.plants import PinocchioSettings, plant
-
     settings = PinocchioSettings(method, rtol, atol)
     return within_budget(
         lambda progress: plant(PINOCCHIO).simulate(scene, settings, t_end=t_end, progress=progress),
@@ -94,8 +93,6 @@ def pinocchio_run(scene: Scene, method: str, rtol: float, atol: float, t_end: fl
 
 def mujoco_run(scene: Scene, integrator: str, dt: float, t_end: float, budget=None):
     """One MuJoCo run; ``budget`` as for :func:`analytic_run`."""
-    import mj_bridge
-
     return within_budget(
         lambda progress: mj_bridge.simulate(
             scene, integrator=integrator, dt=dt, t_end=t_end, progress=progress
@@ -124,8 +121,6 @@ def run_setting(
 
 def pinocchio_unavailable() -> str:
     """Why the Pinocchio series cannot run here ("" when ``pin`` is installed)."""
-    from mj_bridge.plants import PinocchioPlant
-
     return PinocchioPlant.unavailable()
 
 

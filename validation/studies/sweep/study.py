@@ -23,10 +23,11 @@ from typing import Any
 from analytic.scene import Scene
 from validation.runs.atomic import write_bytes, write_text
 from validation.runs.outputs import output_run
+from validation.scenes import resolve_scene
+from validation.studies.effects_cost import effects_cost
 from validation.studies.sweep import running
 from validation.studies.sweep.config import (
     ANALYTIC,
-    DEFAULT_SCENE,
     FLOOR_FACTOR,
     MUJOCO,
     PINOCCHIO,
@@ -50,12 +51,9 @@ together."""
 
 
 def resolve(scene: Scene | str | None) -> Scene:
-    """A Scene as given, else the built-in scene or file of that name (None: the default)."""
-    if isinstance(scene, Scene):
-        return scene
-    from validation.scenes import resolve_scene
-
-    return resolve_scene(scene, default=DEFAULT_SCENE)
+    """A Scene as given, else the built-in scene or file of that name (None: the default scene,
+    :data:`validation.scenes.DEFAULT_SCENE`): :func:`validation.scenes.resolve_scene`."""
+    return resolve_scene(scene)
 
 
 def run_sweep(
@@ -146,8 +144,6 @@ def _sweep_into(
     workers = running.default_workers() if own else None
     series = _series_of(cfg, skipped)
     try:
-        from validation.studies.effects_cost import effects_cost
-
         # effects_cost binds MuJoCo's process-wide control callback: in the sweep's own pool it
         # is a task like any other (one task per process at a time); a user's executor may run
         # it in a thread beside a MuJoCo series, so there it runs here, after the pool

@@ -26,6 +26,7 @@ from typing import Any
 import mujoco
 import numpy as np
 
+import mj_bridge
 from analytic import fundamental
 from analytic.effects import CONTROL_EFFECTS, SolverMethod
 from analytic.kinematics import omega_of
@@ -33,6 +34,8 @@ from analytic.model import TumblingModel
 from analytic.scene import Scene
 from analytic.stepping import Stepped, step_and_sample
 from analytic.trajectory import Engine, Trajectory
+from mj_bridge.pinocchio_model import pinocchio_to_paper_acc
+from mj_bridge.pinocchio_plant import PinocchioDynamics
 from model_xml.coordinates import mujoco_to_paper_acc
 
 N_STATES = 6
@@ -112,8 +115,6 @@ def pinocchio_law(dyn: Any, t: float, q, qd, rows: list[Row], b: np.ndarray) -> 
     ``dyn``: a ``PinocchioDynamics`` of the scene without its control effects. Pinocchio's body
     frame is BR's principal axes, so an ``("omega", axis)`` row is ``ω̇_axis``; returns the paper
     ``q̈``."""
-    from mj_bridge.pinocchio_model import pinocchio_to_paper_acc
-
     pin = dyn.pin
     y = dyn.state_from_paper(q, qd)
     tau = dyn.generalized_force(t, y)
@@ -134,13 +135,9 @@ def engine_laws(
     each engine plant of ``plants``."""
     laws: dict[str, Callable[[float, Any, Any, np.ndarray], np.ndarray]] = {}
     if Engine.MUJOCO.value in plants:
-        import mj_bridge
-
         tw = mj_bridge.Twin(scene)
         laws[Engine.MUJOCO.value] = lambda t, q, qd, b: mujoco_law(tw, t, q, qd, rows, b)
     if Engine.PINOCCHIO.value in plants:
-        from mj_bridge.pinocchio_plant import PinocchioDynamics
-
         dyn = PinocchioDynamics(scene.with_effects(scene.effects - CONTROL_EFFECTS))
         laws[Engine.PINOCCHIO.value] = lambda t, q, qd, b: pinocchio_law(dyn, t, q, qd, rows, b)
     return laws
