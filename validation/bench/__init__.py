@@ -2,7 +2,8 @@
 
 * :mod:`.command`: ``tumble bench`` (= ``python -m validation.bench``);
 * :mod:`.goals`: the speed goals, each a ``Goal``;
-* :mod:`.timing`: the chain scene and the timing loop the goals share;
+* :mod:`.verdicts`: a goal's spread over its rounds and its verdict (``Verdict``, ``SPREAD_BOUND``);
+* :mod:`.timing`: the chain scene and the timing loop the goals share (thread CPU time);
 * :mod:`.fast_bench`: the compiled kernel against the numpy reference and ``mj_forward``;
 * :mod:`.mujoco_steps`: MuJoCo RK4's per-step cost with and without the controller.
 """
@@ -10,7 +11,11 @@
 from validation._lazy import lazy_exports
 
 _PUBLIC = {
+    "CpuMeter": "validation.bench.timing",
     "Goal": "validation.bench.goals",
+    "SPREAD_BOUND": "validation.bench.verdicts",
+    "Spread": "validation.bench.verdicts",
+    "Verdict": "validation.bench.verdicts",
     "chain_scene": "validation.bench.timing",
     "time_call": "validation.bench.timing",
 }
