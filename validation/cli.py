@@ -20,13 +20,10 @@ import json
 import os
 import sys
 import warnings
-from importlib import metadata
 from pathlib import Path
 from typing import NoReturn
 
 from validation.runs import interrupts
-from validation.runs.atomic import OutputError, write_bytes, write_text
-from validation.runs.progress import Progress, StageProgress, Status
 
 EXIT_FAILED = 1  # a run or a check failed, or its results could not be written
 EXIT_USAGE = 2  # bad input (scene, arguments), found before any work
@@ -73,7 +70,9 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     from analytic.simulate import simulate
     from analytic.trajectory import RunStatus
     from validation.compare.summary import drift_figures, summary_table
+    from validation.runs.atomic import write_bytes, write_text
     from validation.runs.outputs import default_out_dir, output_run
+    from validation.runs.progress import Progress
     from validation.scenes import resolve_scene
 
     scene = resolve_scene(args.scene)
@@ -122,6 +121,7 @@ def cmd_validate(args: argparse.Namespace) -> int:
     from validation.compare.referee import VerdictKind
     from validation.compare.summary import check_sentence
     from validation.runs.outputs import default_out_dir
+    from validation.runs.progress import StageProgress, Status
     from validation.runs.warmup import warming
     from validation.scenes import resolve_scene
     from validation.validate import run_request, validation_request
@@ -171,6 +171,7 @@ _CLOSING_FILES = (("report", "report.md"), ("recording", "run.rrd"))
 
 def cmd_export_mjcf(args: argparse.Namespace) -> int:
     from model_xml import to_mjcf
+    from validation.runs.atomic import write_text
     from validation.runs.outputs import default_out_file
     from validation.scenes import resolve_scene
 
@@ -273,6 +274,7 @@ def cmd_warmup(args: argparse.Namespace) -> int:
 
 def cmd_scene_reference(args: argparse.Namespace) -> int:
     from validation.report.scene_reference import render
+    from validation.runs.atomic import write_text
 
     if args.out:
         write_text(Path(args.out), render())
@@ -284,6 +286,8 @@ def cmd_scene_reference(args: argparse.Namespace) -> int:
 
 def _version() -> str:
     """The installed distribution's version ("unknown" when run from a bare checkout)."""
+    from importlib import metadata  # deferred: ~15 ms (-X importtime), after main's handlers
+
     try:
         return metadata.version("tumbling-testbed")
     except metadata.PackageNotFoundError:
@@ -501,6 +505,8 @@ def main(argv: list[str] | None = None) -> int:
             print(f"tumble: error: {_out_of_memory(exc)}", file=sys.stderr)
             return EXIT_FAILED
         except OSError as exc:
+            from validation.runs.atomic import OutputError
+
             if isinstance(exc, OutputError):  # the run happened; its results could not be written
                 print(f"tumble: error: {exc}", file=sys.stderr)
                 return EXIT_FAILED

@@ -29,11 +29,9 @@ import hashlib
 import hmac
 import itertools
 import os
-import pickle
 import re
 import secrets
 import stat
-import statistics
 import subprocess
 import sys
 import tempfile
@@ -43,8 +41,6 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-
-from validation.testing.agree import PAIR_CHECKS, describe_check, load
 
 MARKER = "tumble"
 RUN_ITEM = "run"
@@ -173,6 +169,9 @@ def _load_signed(store: Path, secret: bytes) -> Any:
     """The run another worker of this session stored at ``store``, or None when there is none, it
     is not a regular file, or its signature does not match (never unpickled then: a pickle
     planted by anyone without the session's secret is not trusted)."""
+    # deferred: ~2 ms (python -X importtime) in every pytest session; only xdist's shared runs
+    import pickle
+
     if not secret:
         return None
     try:
@@ -224,6 +223,8 @@ class CheckItem(pytest.Item):
         outcome = self.config.stash[_SESSION].outcome(self.parent.path)
         if isinstance(outcome, str):
             raise CheckFailed(f"the scene could not run: {outcome}")
+        # deferred: ~2.5 ms (python -X importtime) in every pytest session; only with scene files
+        from validation.testing.agree import describe_check
 
         result = outcome
         where = f"report: {result.files.get('report.md', result.out_dir)}"
@@ -259,6 +260,7 @@ def expected_labels(scene: Any, plants: tuple[str, ...]) -> list[str]:
     ``plants`` (report order), known before it runs: what the items are named."""
     from analytic.effects import Effect
     from validation.compare.checks import Subject
+    from validation.testing.agree import PAIR_CHECKS
 
     def own(p: str) -> list[str]:
         names = []
@@ -396,6 +398,8 @@ class _Session:
         except ImportError:  # pragma: no cover - not POSIX: each worker runs what it is given
             return self._run(key, *args)
         secret = bytes.fromhex(self.config.workerinput.get(_SHARE_KEY, ""))
+        import pickle
+
         with open(shared / f"{key}.lock", "wb") as lock:
             fcntl.flock(lock, fcntl.LOCK_EX)
             try:
@@ -442,6 +446,7 @@ def tumble_validation(request: pytest.FixtureRequest):
 
     def get(scene: Any, plants: Any = None, t_end: float | None = None) -> Any:
         from validation.scenes import scene_path
+        from validation.testing.agree import load
 
         if plants is None:
             chosen = sess.plants()
@@ -472,6 +477,7 @@ def tumble_validation(request: pytest.FixtureRequest):
 
 
 def _bench(repeats: int = 15) -> None:  # pragma: no cover - a measurement, run by hand
+    import statistics  # deferred: ~3 ms (python -X importtime), for this measurement only
 
     py = sys.executable
     env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
