@@ -119,6 +119,32 @@ class ValidationResult:
 
 
 @dataclass(frozen=True)
+class JoinedRuns:
+    """Runs made elsewhere that join the plants' results as more plants (:mod:`validation.judge`:
+    another engine's trajectory file, a reference pack's trajectory): compared, refereed,
+    reported, drawn and recorded as the plants are.
+
+    Attributes:
+        trajectories: each a complete run of the request's scene on its output grid, its
+            ``engine`` a plant name of its own (none of the running plants'), in report order
+            after the plants that run.
+        names: plant name -> how the report and the referee's sentences name it.
+        amend: applied to the comparison before the referee rules (the judge marks the checks a
+            file cannot support "not judged"); None: the comparison as made.
+        meta: more entries of the report's run metadata (where each joined run came from).
+    """
+
+    trajectories: tuple[Trajectory, ...] = ()
+    names: Mapping[str, str] = field(default_factory=dict)
+    amend: Callable[[Comparison], Comparison] | None = None
+    meta: Mapping[str, Any] = field(default_factory=dict)
+
+
+NO_JOINED = JoinedRuns()
+"""No run joins: :func:`run_validation`'s plants alone."""
+
+
+@dataclass(frozen=True)
 class ValidationRequest:
     """A validation's input, checked whole by :func:`validation_request` before any plant runs.
 
@@ -278,15 +304,19 @@ def run_request(
     out_dir: str | Path,
     progress: Progress | None = None,
     concurrent: bool = True,
+    joined: JoinedRuns = NO_JOINED,
+    command: str = "validate",
 ) -> ValidationResult:
     """:func:`run_validation` of an input checked already (:func:`validation_request`, at the
     command line's or the Python API's boundary): nothing is checked again. Same result, files and
-    errors otherwise."""
+    errors otherwise. ``joined``: runs made elsewhere that join the plants' (:class:`JoinedRuns`;
+    ``request.plants`` may then be fewer than two, or none); ``command``: the output set's
+    command (its manifest)."""
     sc = request.scene
     runs = [
         (plant(e), _plant_settings(e, sc, request.integrator, request.dt)) for e in request.plants
     ]
-    with output_run(out_dir, "validate") as run:
+    with output_run(out_dir, command) as run:
         res = _validate_into(
             run,
             sc,
@@ -296,6 +326,7 @@ def run_request(
             request.figure_formats,
             concurrent,
             thresholds=request.thresholds,
+            joined=joined,
         )
     files = {name: run.final(name) for name in res.files}
     files["manifest.json"] = run.final("manifest.json")
@@ -571,11 +602,13 @@ def _meta(
     names: dict[str, str],
     horizon: float,
     verdicts: Sequence[Verdict],
+    joined: JoinedRuns = NO_JOINED,
 ) -> dict[str, Any]:
-    """The run's metadata for the report (the wall times are added when they are known)."""
+    """The run's metadata for the report (the wall times are added when they are known); the
+    ``joined`` runs are plants too, named as ``joined.names`` says, with ``joined.meta``."""
     mj = next((st for pl, st in runs if pl.engine is Engine.MUJOCO), None)
-    referee_note = "" if len(runs) >= 3 else _referee_note(sc)
-    return {
+    referee_note = "" if len(runs) + len(joined.trajectories) >= 3 else _referee_note(sc)
+    meta = {
         "run_id": run.run_id,
         "scene": {
             "name": sc.name,
@@ -604,6 +637,11 @@ def _meta(
         "referee_note": referee_note,
         "versions": versions(),
     }
+    meta["plants"] += [
+        {"engine": str(tr.engine), "settings": names.get(str(tr.engine), str(tr.engine))}
+        for tr in joined.trajectories
+    ]
+    return meta | dict(joined.meta)
 
 
 def _validate_into(
@@ -615,8 +653,10 @@ def _validate_into(
     formats: Sequence[FigureFormat] = DEFAULT_FORMATS,
     concurrent: bool = True,
     thresholds: Mapping[str, Threshold] | None = None,
+    joined: JoinedRuns = NO_JOINED,
 ) -> ValidationResult:
-    """:func:`run_validation`'s work, writing into the staging directory ``run.path``.
+    """:func:`run_validation`'s work, writing into the staging directory ``run.path``; the
+    ``joined`` runs follow the plants' (:class:`JoinedRuns`).
 
     With ``concurrent`` (and where :func:`validation.runs.workers.can_fork`), the plants run side by
     side in workers, and two more workers import rerun and matplotlib meanwhile, then write the
@@ -673,14 +713,18 @@ def _validate_into(
             redone,
             on_started=start_evidence,
         )
+        trajectories += joined.trajectories
+        names.update(joined.names)
         if trajectories and trajectories[0].t.size and not interrupted:
-            cmp, verdicts = _compare(trajectories, sc, horizon, names, walls, failures, thresholds)
+            cmp, verdicts = _compare(
+                trajectories, sc, horizon, names, walls, failures, thresholds, joined.amend
+            )
     except KeyboardInterrupt:
         interrupted = True
     except BaseException:
         workers.stop(jobs)
         raise
-    meta = _meta(run, sc, runs, names, horizon, verdicts)
+    meta = _meta(run, sc, runs, names, horizon, verdicts, joined)
     # the scene as it ran, in the scene file's conventions: `tumble validate OUT/scene.toml` reruns it
     files: dict[str, Path] = {"scene.toml": write_text(out / "scene.toml", scene_to_toml(sc))}
     drawn: Sequence[list] = ([], [], [])
@@ -707,9 +751,9 @@ def _validate_into(
     if redone:
         meta["redone"] = list(redone)
     failure = "; ".join(failures)
-    if len(runs) < 2 and not failure:
+    if len(runs) + len(joined.trajectories) < 2 and not failure:
         failure = "only one plant: nothing to compare it with"
-    if len(trajectories) < len(runs) and not failure:
+    if len(trajectories) < len(runs) + len(joined.trajectories) and not failure:
         failure = "a plant has no trajectory"
     walls["total"] = time.perf_counter() - t_all
     meta["wall_times_s"] = dict(walls)
@@ -766,12 +810,15 @@ def _compare(
     walls: dict[str, float],
     failures: list[str],
     thresholds: Mapping[str, Threshold] | None = None,
+    amend: Callable[[Comparison], Comparison] | None = None,
 ) -> tuple[Comparison | None, tuple[Verdict, ...]]:
-    """Every pair compared and the referee's rulings; a comparison that raises is a failure
-    said in the report (an interrupt goes on)."""
+    """Every pair compared (then ``amend``-ed, :class:`JoinedRuns`) and the referee's rulings; a
+    comparison that raises is a failure said in the report (an interrupt goes on)."""
     try:
         t0 = time.perf_counter()
         cmp = compare_plants(trajectories, sc, t_end=horizon, thresholds=thresholds)
+        if amend is not None:
+            cmp = amend(cmp)
         walls["compare"] = time.perf_counter() - t0
         return cmp, tuple(referee(cmp, names))
     except Exception as exc:

@@ -12,6 +12,7 @@ the data row (1-based, the header not counted; a CSV message adds the line numbe
 
 from __future__ import annotations
 
+import hashlib
 from pathlib import Path
 
 from analytic.safe_files import read_regular
@@ -68,7 +69,7 @@ def read_trajectory(
     path: str | Path,
     scene: Scene,
     *,
-    engine: Engine,
+    engine: Engine | str,
     format: TrajectoryFormat | None = None,
 ) -> ExternalTrajectory:
     """Read and check a trajectory file of ``scene`` (``docs/trajectory-format.md``).
@@ -77,13 +78,13 @@ def read_trajectory(
         path: the file (read only; a regular file).
         scene: the scene it is a run of: its mass count n and its output grid
             (``scene.output.times()``; shorten the horizon with ``scene.output.with_t_end``).
-        engine: the :class:`Engine` the run stands in for (``Trajectory.engine``): the file's
-            run is none of the built-in plants; the caller says which slot it fills.
+        engine: the plant name the run goes by (``Trajectory.engine``): the file's run is none
+            of the built-in plants; the caller names it (``tumble judge --label``).
         format: CSV or Parquet; default from the suffix (:func:`format_of`).
 
     Returns:
         the :class:`ExternalTrajectory`: the run in the paper's coordinates on the scene's grid,
-        and the optional column groups present.
+        the optional column groups present, and the SHA-256 of the bytes read.
 
     Raises:
         TrajectoryFileError (a ValueError): one line naming the file and, where it applies, the
@@ -97,7 +98,8 @@ def read_trajectory(
     limit = size_limit(scene)
     if fmt is TrajectoryFormat.CSV:
         where = Where(str(path), header_lines=1)
-        names, values = parse_csv(_read_bytes(path, where, limit), where)
+        data = _read_bytes(path, where, limit)
+        names, values = parse_csv(data, where)
     else:
         where = Where(str(path))
         data = _read_bytes(path, where, limit)
@@ -110,7 +112,8 @@ def read_trajectory(
         for g in ColumnGroup
         if g.required or g in layout.present
     }
-    return external_trajectory(scene, engine, groups, fmt, str(path))
+    digest = hashlib.sha256(data).hexdigest()
+    return external_trajectory(scene, str(engine), groups, fmt, str(path), sha256=digest)
 
 
 __all__ = ["BYTES_PER_VALUE", "SUFFIXES", "format_of", "read_trajectory", "size_limit"]

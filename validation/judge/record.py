@@ -54,12 +54,14 @@ class ExternalTrajectory:
         present: the optional column groups the file holds (:data:`OPTIONAL_GROUPS`).
         format: CSV or Parquet.
         source: the file as given, for messages and reports.
+        sha256: the SHA-256 of the file's bytes as read (hex; "" when not read from a file).
     """
 
     trajectory: Trajectory
     present: frozenset[ColumnGroup]
     format: TrajectoryFormat
     source: str
+    sha256: str = ""
 
     @property
     def absent(self) -> frozenset[ColumnGroup]:
@@ -88,25 +90,32 @@ def canonical_signs(u: np.ndarray, u0: np.ndarray) -> np.ndarray:
     return u * signs[:, None]
 
 
+def does_work(scene: Scene) -> bool:
+    """Whether something does work on the system in ``scene`` (control, a given torque): then the
+    balances need the file's ``work`` columns; else the quadratures are exact zeros."""
+    return scene.controlled or scene.has(Effect.EXTERNAL_TORQUE)
+
+
 def _nan(*shape: int) -> np.ndarray:
     return np.full(shape, np.nan)
 
 
 def external_trajectory(
     scene: Scene,
-    engine: Engine,
+    engine: Engine | str,
     groups: dict[ColumnGroup, np.ndarray],
     format: TrajectoryFormat,
     source: str,
+    sha256: str = "",
 ) -> ExternalTrajectory:
     """The record of a checked table.
 
     Args:
         scene: the scene the file is a run of (its n, its grid, its requirements).
-        engine: the :class:`Engine` the run stands in for in a comparison (``Trajectory.engine``).
+        engine: the plant name the run goes by in a comparison (``Trajectory.engine``).
         groups: each group present -> its columns, shape (N, k) (N, 1 for t), the required groups
             always; t already checked against the scene's grid.
-        format, source: as :class:`ExternalTrajectory`.
+        format, source, sha256: as :class:`ExternalTrajectory`.
     """
     n = scene.n
     t = scene.output.times()
@@ -131,8 +140,7 @@ def external_trajectory(
     if ColumnGroup.WORK in groups:
         quad = groups[ColumnGroup.WORK].reshape(N, 7)
     else:
-        idle = not scene.controlled and not scene.has(Effect.EXTERNAL_TORQUE)
-        quad = np.full((N, 7), 0.0 if idle else np.nan)
+        quad = np.full((N, 7), np.nan if does_work(scene) else 0.0)
     invariants = compute_invariants(
         model,
         t,
@@ -144,7 +152,7 @@ def external_trajectory(
     )
     present = frozenset(groups) & OPTIONAL_GROUPS
     trajectory = Trajectory(
-        engine=engine,
+        engine=str(engine),
         scene=scene.name,
         t=t,
         q=q,
@@ -164,9 +172,12 @@ def external_trajectory(
             "file": source,
             "format": format.value,
             "groups": sorted(g.value for g in present),
+            **({"sha256": sha256} if sha256 else {}),
         },
     )
-    return ExternalTrajectory(trajectory=trajectory, present=present, format=format, source=source)
+    return ExternalTrajectory(
+        trajectory=trajectory, present=present, format=format, source=source, sha256=sha256
+    )
 
 
-__all__ = ["ExternalTrajectory", "canonical_signs", "external_trajectory"]
+__all__ = ["ExternalTrajectory", "canonical_signs", "does_work", "external_trajectory"]
