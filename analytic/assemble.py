@@ -23,7 +23,7 @@ import numpy as np
 from analytic.invariants import compute_invariants, tracking_errors
 from analytic.kinematics import omega_of
 from analytic.model import ControlOutput, TumblingModel
-from analytic.trajectory import Engine, RunStatus, Trajectory
+from analytic.trajectory import RunStatus, Trajectory
 
 N_AUX = 7
 """Quadratures integrated along with the motion: ``W``, ``I_L`` (3), ``I_P`` (3)."""
@@ -31,7 +31,7 @@ N_AUX = 7
 
 def assemble(
     model: TumblingModel,
-    engine: Engine,
+    engine: str,
     t: np.ndarray,
     q: np.ndarray,
     qdot: np.ndarray,
@@ -47,7 +47,7 @@ def assemble(
 
     Args:
         model: the scene's model (constants, requirements of the controller).
-        engine: the plant that ran.
+        engine: the name of the plant that ran.
         t: sample times, s, shape (N,).
         q, qdot, qddot: the samples in the paper's coordinates (Eq. 44), shape (N, n+7) each.
         controls: the controller's output at each sample (N entries), None where there is none

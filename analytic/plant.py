@@ -14,7 +14,8 @@ settings for reports); each engine fills in :meth:`Plant._simulate` in its own m
 
 Every plant returns its trajectory in the paper's coordinates ``q = [R (3), u (4, w first), p (n)]``
 (Eq. 44) on the scene's output grid, so every comparison is engine-agnostic. ``mj_bridge.plants``
-holds the registry of all three (this layer does not import the engines).
+holds the registry: the three built-ins and the plants installed as plugins (entry-point group
+``tumbling_testbed.plants``, ``docs/plugins.md``); this layer does not import the engines.
 """
 
 from __future__ import annotations
@@ -77,16 +78,21 @@ class Plant(abc.ABC):
     """One engine behind the protocol (see the module docstring).
 
     Class attributes a subclass sets:
-        engine: its :class:`Engine` (the name used on the command line and in reports).
+        engine: its name, a ``str`` (the name used on the command line, in reports, keys and
+            entity paths; a built-in's is an :class:`Engine` value, a plugin's its entry point's).
         label: how reports name it (``"MuJoCo"``).
         effects: the :class:`Effect` members it can simulate.
         settings_type: its frozen settings dataclass.
+        default: whether it is among the plants a run uses when none are named
+            (``mj_bridge.plants.installed_plants``); False keeps an optional engine out of
+            default runs, to be asked for by name (``--plants analytic,drake``).
     """
 
-    engine: ClassVar[Engine]
+    engine: ClassVar[str]
     label: ClassVar[str]
     effects: ClassVar[frozenset[Effect]] = frozenset(Effect)
     settings_type: ClassVar[type]
+    default: ClassVar[bool] = True
 
     @classmethod
     def unavailable(cls) -> str:
@@ -112,7 +118,7 @@ class Plant(abc.ABC):
         missing = sorted(e.value for e in scene.effects - self.effects)
         if missing:
             raise ValueError(
-                f"scene.effects: the {self.engine.value} plant cannot simulate {', '.join(missing)}"
+                f"scene.effects: the {self.engine} plant cannot simulate {', '.join(missing)}"
             )
 
     def simulate(
@@ -144,7 +150,7 @@ class Plant(abc.ABC):
             settings = self.default_settings(scene)
         elif not isinstance(settings, self.settings_type):
             raise ValueError(
-                f"settings: the {self.engine.value} plant takes {self.settings_type.__name__} "
+                f"settings: the {self.engine} plant takes {self.settings_type.__name__} "
                 f"(got {type(settings).__name__})"
             )
         try:
@@ -187,7 +193,7 @@ class AnalyticSettings:
 class AnalyticPlant(Plant):
     """The paper's model (:func:`analytic.simulate.simulate`)."""
 
-    engine = Engine.ANALYTIC
+    engine = Engine.ANALYTIC.value
     label = "analytic"
     settings_type = AnalyticSettings
 

@@ -19,10 +19,13 @@ import numpy as np
 
 
 class Engine(StrEnum):
+    """The names of the three built-in plants. A plant's name is an open ``str``: these, the
+    plants installed as plugins (``mj_bridge.plants``, ``docs/plugins.md``) and any label a
+    trajectory read from a file is given."""
+
     ANALYTIC = "analytic"
     MUJOCO = "mujoco"
     PINOCCHIO = "pinocchio"
-    DRAKE = "drake"  # mj_bridge.drake_plant (optional, not among the default plants)
 
 
 class RunStatus(StrEnum):
@@ -90,7 +93,9 @@ class Trajectory:
     """A run of one scene on one engine.
 
     Attributes:
-        engine: which plant produced it.
+        engine: the name of the plant that produced it (a plain ``str``: a built-in's
+            :class:`Engine` value, a plugin's name or a label; an :class:`Engine` given is
+            stored as its value).
         scene: the scene's name.
         t: sample times, s, shape (N,).
         q, qdot, qddot: coordinates and derivatives (Eq. 44), shape (N, n+7).
@@ -105,7 +110,7 @@ class Trajectory:
         info: engine metadata (solver, tolerances, evaluation counts, wall time ...).
     """
 
-    engine: Engine
+    engine: str
     scene: str
     t: np.ndarray
     q: np.ndarray
@@ -121,6 +126,11 @@ class Trajectory:
     status: RunStatus = RunStatus.OK
     message: str = ""
     info: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.engine, str) or not self.engine:
+            raise ValueError(f"engine: must be a non-empty plant name (got {self.engine!r})")
+        object.__setattr__(self, "engine", str.__str__(self.engine))  # plain str, not an Engine
 
     @property
     def n(self) -> int:
@@ -179,7 +189,7 @@ class Trajectory:
     def npz_bytes(self) -> bytes:
         """The arrays of :meth:`to_arrays` and the metadata (``meta_json``) as ``.npz`` bytes."""
         meta = {
-            "engine": self.engine.value,
+            "engine": self.engine,
             "scene": self.scene,
             "status": self.status.value,
             "message": self.message,

@@ -3,8 +3,9 @@
 :class:`~analytic.trajectory.Trajectory` record as the other plants (paper coordinates, Eq. 44).
 
 Drake (PyPI ``drake`` >= 1.51) is optional: it is imported when a :class:`DrakeDynamics` is built.
-The plant is :class:`DrakePlant` (``DrakePlant().simulate(scene)``); it is not among the default
-plants of :mod:`mj_bridge.plants`.
+The plant is :class:`DrakePlant` (``DrakePlant().simulate(scene)``), a plant plugin registered by the
+project's own entry point (``pyproject.toml``, group ``tumbling_testbed.plants``: ``drake``); it is
+not among the default plants (``default = False``): ``--plants analytic,mujoco,drake`` runs it.
 
 State integrated by scipy (one ``OdeSolver`` step at a time, :func:`analytic.stepping.step_and_sample`,
 the analytic and Pinocchio plants' loop)::
@@ -74,7 +75,7 @@ from analytic.model import ControlOutput, TumblingModel
 from analytic.plant import Plant
 from analytic.scene import OutputSettings, Scene
 from analytic.stepping import NonFinite, step_and_sample
-from analytic.trajectory import Engine, RunStatus, Trajectory
+from analytic.trajectory import RunStatus, Trajectory
 from mj_bridge.drake_model import build_model, drake_to_paper_batch, import_drake, paper_to_drake
 from mj_bridge.drake_settings import DrakeSettings, drake_unavailable
 from mj_bridge.pinocchio_plant import MODE_GIVEN, stage_for, work_layout
@@ -471,7 +472,7 @@ def _assemble(
     q, qd, qdd, omega = drake_to_paper_batch(_drake_q(Y[:, :nq]), Y[:, nq : nq + nv], vdot)
     return assemble(
         plant.analytic,
-        Engine.DRAKE,
+        DrakePlant.engine,
         t,
         q,
         qd,
@@ -491,10 +492,11 @@ def _assemble(
 
 
 class DrakePlant(Plant):
-    """The same body in Drake (optional engine; not registered among the default plants)."""
+    """The same body in Drake (optional engine; a plugin, not among the default plants)."""
 
-    engine = Engine.DRAKE
+    engine = "drake"
     label = "Drake"
+    default = False
     effects = SUPPORTED_EFFECTS
     settings_type = DrakeSettings
 

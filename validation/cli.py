@@ -97,7 +97,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         summary = {
             "run_id": run.run_id,
             "scene": scene.name,
-            "engine": tr.engine.value,
+            "engine": tr.engine,
             "status": tr.status.value,
             "message": tr.message,
             "info": tr.info,

@@ -47,7 +47,7 @@ def check_validation_inputs(
 
 def validation_plants(
     plants: Sequence[Engine | str] | str | None, scene: Scene | None = None
-) -> tuple[Engine, ...]:
+) -> tuple[str, ...]:
     """The plants a validation runs, in report order: when ``plants`` is None, every installed one
     that can run ``scene`` (a plant whose ``check_scene`` refuses it, such as Pinocchio beyond its
     mass limit, is left out with one warning naming why); else those named (engine names, or
@@ -68,16 +68,16 @@ def validation_plants(
                 try:
                     plant(e).check_scene(scene)
                 except ValueError as exc:
-                    warnings.warn(f"{e.value} plant left out: {exc}", stacklevel=2)
+                    warnings.warn(f"{e} plant left out: {exc}", stacklevel=2)
         if len(chosen) < 2:
             raise ValueError(
                 f"plants: fewer than two of the installed plants can run {scene.name!r} "
-                f"({', '.join(e.value for e in chosen) or 'none'}); nothing to compare"
+                f"({', '.join(chosen) or 'none'}); nothing to compare"
             )
         return chosen
     text = plants if isinstance(plants, str) else ",".join(str(getattr(p, "value", p)) for p in plants)
-    named = [plant(n.strip()).engine for n in text.split(",") if n.strip()]
-    twice = sorted({e.value for e in named if named.count(e) > 1})
+    named = [plant(n.strip()).engine for n in text.split(",") if n.strip() not in ("", "all")]
+    twice = sorted({e for e in named if named.count(e) > 1})
     if twice:
         raise ValueError(f"plants: {', '.join(twice)} named twice (got {text!r})")
     chosen = parse_plants(text)

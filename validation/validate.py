@@ -161,7 +161,7 @@ class ValidationRequest:
 
     scene: Scene
     thresholds: Mapping[str, Threshold]
-    plants: tuple[Engine, ...]
+    plants: tuple[str, ...]
     integrator: Any
     dt: float | None
     t_end: float | None
@@ -230,9 +230,9 @@ def _one_line(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {exc}".splitlines()[0]
 
 
-def _plant_settings(engine: Engine, sc: Scene, integrator: Any, dt: float | None) -> Any:
+def _plant_settings(engine: str, sc: Scene, integrator: Any, dt: float | None) -> Any:
     """Each plant's settings: the scene's, with the MuJoCo overrides of the command line."""
-    if engine is Engine.MUJOCO:
+    if engine == Engine.MUJOCO:
         return MujocoRunSettings(
             sc.mujoco.integrator if integrator is None else integrator,
             sc.mujoco.timestep if dt is None else dt,
@@ -479,7 +479,7 @@ def _run_plants(
         while queue or running:
             while queue and len(running) < slots and not interrupted:
                 k, (pl, settings) = queue.pop(0)
-                name = pl.engine.value
+                name = pl.engine
                 report = _stage_progress(progress, name)  # None: the messages are dropped
                 job = workers.start(
                     name, _plant_task, pl, settings, sc, horizon, on_message=report, fork=fork
@@ -510,7 +510,7 @@ def _run_plants(
                 done[k] = tr
                 interrupted |= tr.status is RunStatus.INTERRUPTED
                 if tr.status is not RunStatus.OK:
-                    failures.append(f"{pl.engine.value} plant stopped early: {tr.message}")
+                    failures.append(f"{pl.engine} plant stopped early: {tr.message}")
     except BaseException:
         workers.stop([job for *_, job in running])
         raise
@@ -521,7 +521,7 @@ def _redo_plant(
     pl: Any, settings: Any, sc: Scene, horizon: float, progress: Progress | None
 ) -> Callable[[], tuple[Any, float]]:
     """The plant's run done here (its worker was lost): ``() -> (trajectory, wall)``."""
-    report = _stage_progress(progress, pl.engine.value) or _drop
+    report = _stage_progress(progress, pl.engine) or _drop
     return lambda: _plant_task(pl, settings, sc, horizon, report=report)
 
 
@@ -563,7 +563,7 @@ def _plant_outcome(
     except Exception as exc:
         failures.append(f"{pl.label} plant: {_one_line(exc)}")
         return None
-    walls[pl.engine.value] = wall
+    walls[pl.engine] = wall
     return tr
 
 
@@ -606,7 +606,7 @@ def _meta(
 ) -> dict[str, Any]:
     """The run's metadata for the report (the wall times are added when they are known); the
     ``joined`` runs are plants too, named as ``joined.names`` says, with ``joined.meta``."""
-    mj = next((st for pl, st in runs if pl.engine is Engine.MUJOCO), None)
+    mj = next((st for pl, st in runs if pl.engine == Engine.MUJOCO), None)
     referee_note = "" if len(runs) + len(joined.trajectories) >= 3 else _referee_note(sc)
     meta = {
         "run_id": run.run_id,
@@ -619,7 +619,7 @@ def _meta(
         "horizon_s": horizon,
         "output_rate_hz": sc.output.rate,
         "plants": [
-            {"engine": pl.engine.value, "settings": names[pl.engine.value]} for pl, _ in runs
+            {"engine": pl.engine, "settings": names[pl.engine]} for pl, _ in runs
         ],
         "analytic_solver": {
             "method": sc.solver.method.value,
@@ -677,7 +677,7 @@ def _validate_into(
     trajectories: list[Trajectory] = []
     cmp: Comparison | None = None
     verdicts: tuple[Verdict, ...] = ()
-    names = {pl.engine.value: pl.describe(settings) for pl, settings in runs}
+    names = {pl.engine: pl.describe(settings) for pl, settings in runs}
     interrupted = False
 
     def start_evidence(plant_jobs: Sequence[workers.Job] = ()) -> None:
@@ -892,9 +892,9 @@ def _interrupted_sentence(trajectories: Sequence[Trajectory], runs: Sequence[tup
     """``interrupted by SIGTERM: analytic reached t = 3.2 s, mujoco t = 1.1 s, pinocchio not run``."""
     reached = {tr.engine: float(tr.t[-1]) if tr.t.size else 0.0 for tr in trajectories}
     parts = [
-        f"{pl.engine.value} reached t = {reached[pl.engine]:.6g} s"
+        f"{pl.engine} reached t = {reached[pl.engine]:.6g} s"
         if pl.engine in reached
-        else f"{pl.engine.value} has no trajectory"
+        else f"{pl.engine} has no trajectory"
         for pl, _ in runs
     ]
     return f"interrupted by {interrupt_name()}: " + ", ".join(parts)

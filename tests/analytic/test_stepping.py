@@ -115,7 +115,7 @@ def test_assemble_fills_what_a_plant_leaves_out():
         model, Engine.PINOCCHIO, t, q, qd, np.zeros((N, nq)), [None] * N, quad,
         RunStatus.FAILED, "why", {"k": 1},
     )  # fmt: skip
-    assert tr.engine is Engine.PINOCCHIO and tr.status is RunStatus.FAILED
+    assert tr.engine == Engine.PINOCCHIO and tr.status is RunStatus.FAILED
     assert tr.message == "why" and tr.info == {"k": 1} and tr.scene == scene.name
     for a in (tr.QC, tr.torque, tr.rod_forces, tr.force_at_C, tr.residual_norm):
         assert a.shape[0] == N and not a.any()

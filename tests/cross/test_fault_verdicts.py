@@ -162,7 +162,7 @@ if mode == "enospc":  # the disk fills up while a worker writes errors.png
 elif mode == "kill":  # the MuJoCo plant's worker is killed on its first call
     real_task = V._plant_task
     def task(pl, *a, **k):
-        if os.getpid() != parent and pl.engine.value == "mujoco":
+        if os.getpid() != parent and pl.engine == "mujoco":
             os.kill(os.getpid(), signal.SIGKILL)
         return real_task(pl, *a, **k)
     V._plant_task = task

@@ -86,10 +86,9 @@ def test_ctrl_c_in_any_plant_stops_the_suite(tmp_path, monkeypatch, engine):
     """Each plant keeps what it reached when interrupted and returns it (status interrupted); the
     suite turns that back into KeyboardInterrupt, so Ctrl-C stops the whole suite (not only the
     current case, which would otherwise become a FAIL row), leaving an incomplete table."""
-    from analytic.trajectory import Engine
     from mj_bridge.plants import PLANTS
 
-    cls = PLANTS[Engine(engine)]
+    cls = PLANTS[engine]
     if cls.unavailable():
         pytest.skip(cls.unavailable())
     original = cls.simulate

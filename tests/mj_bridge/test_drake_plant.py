@@ -20,7 +20,7 @@ from analytic.kinematics import S as S_of
 from analytic.kinematics import omega_of
 from analytic.model import TumblingModel, spring_energy
 from analytic.scene import Scene, scene_from_dict
-from analytic.trajectory import Engine, RunStatus
+from analytic.trajectory import RunStatus
 from mj_bridge.drake_model import (
     build_model,
     drake_to_mujoco_layout,
@@ -259,7 +259,7 @@ def test_controlled_example1_agrees_with_the_analytic_plant_at_rtol_1e12():
     assert (scene.solver.rtol, scene.solver.atol) == (1e-12, 1e-13)
     ana = analytic_simulate(scene)
     dr = DrakePlant().simulate(scene)
-    assert dr.engine is Engine.DRAKE and dr.status is RunStatus.OK, dr.message
+    assert dr.engine == "drake" and dr.status is RunStatus.OK, dr.message
     np.testing.assert_array_equal(dr.t, ana.t)
     for f in ("q", "qdot", "qddot", "QC", "torque", "rod_forces", "force_at_C", "residual_norm"):
         assert getattr(dr, f).shape == getattr(ana, f).shape, f
@@ -317,7 +317,7 @@ def test_short_runs_under_other_weightings_agree():
 
 def test_plant_protocol_settings_and_effects():
     pl = DrakePlant()
-    assert pl.engine is Engine.DRAKE and pl.effects == frozenset(Effect)
+    assert pl.engine == "drake" and pl.effects == frozenset(Effect)
     assert pl.unavailable() == drake_unavailable() == ""
     scene = paper_scene("paper_example1_controlled")
     pl.check_scene(scene)  # every effect is supported
@@ -336,12 +336,18 @@ def test_plant_protocol_settings_and_effects():
         pl.simulate(scene, t_end=-1.0)
 
 
-def test_not_among_the_default_plants():
-    """Registration comes later: the default plants and the names ``plant()`` knows are as they
-    were; asking for ``drake`` by name is an unknown plant, a ValueError."""
-    assert "drake" not in {e.value for e in installed_plants()}
-    with pytest.raises(ValueError, match="plants: unknown plant 'drake'"):
-        plant("drake")
+def test_registered_as_a_plugin_but_not_a_default_plant():
+    """The project's own entry point registers Drake (group ``tumbling_testbed.plants``): ``plant``
+    and ``--plants`` know it, it sorts after the built-ins, but it is not among the default plants
+    (``default = False``), so a run that names no plants is the three built-ins' as before."""
+    from mj_bridge.plants import parse_plants, plugin_errors, registered
+
+    assert registered()["drake"] is DrakePlant
+    assert not [e for e in plugin_errors() if e.name == "drake"]
+    assert "drake" not in installed_plants()
+    assert isinstance(plant("drake"), DrakePlant)
+    assert parse_plants("drake, analytic") == ("analytic", "drake")
+    assert "drake" in parse_plants("all")
 
 
 def test_unavailable_says_how_to_install(monkeypatch):

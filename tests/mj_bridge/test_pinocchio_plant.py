@@ -469,7 +469,7 @@ def test_trajectory_record_and_short_agreement_controlled_example1():
     scene = paper_scene("paper_example1_controlled")
     ana = analytic_simulate(scene, t_end=2.0)
     pn = simulate(scene, t_end=2.0)
-    assert pn.engine is Engine.PINOCCHIO and pn.status is RunStatus.OK, pn.message
+    assert pn.engine == Engine.PINOCCHIO and pn.status is RunStatus.OK, pn.message
     np.testing.assert_array_equal(pn.t, ana.t)
     for f in ("q", "qdot", "qddot", "QC", "torque", "rod_forces", "force_at_C", "residual_norm"):
         assert getattr(pn, f).shape == getattr(ana, f).shape, f

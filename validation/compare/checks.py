@@ -27,7 +27,7 @@ import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from enum import StrEnum
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -63,36 +63,95 @@ class Difference(StrEnum):
     ROD_FORCES = "rod_forces"
 
 
-class Subject(StrEnum):
-    """Whose quantity a series or check is: the difference of two plants, or one plant."""
+PAIR_SEPARATOR = " vs "
 
-    BOTH = "analytic vs mujoco"
-    ANALYTIC_PINOCCHIO = "analytic vs pinocchio"
-    MUJOCO_PINOCCHIO = "mujoco vs pinocchio"
-    ANALYTIC = "analytic"
-    MUJOCO = "mujoco"
-    PINOCCHIO = "pinocchio"
+
+class Subject(str):
+    """Whose quantity a series or check is: one plant (its name, ``"mujoco"``) or the difference of
+    two (``"analytic vs mujoco"``, the two in report order: :func:`mj_bridge.registry.order_key`).
+
+    Open: any plant name, a built-in's, a plugin's or another label (ordered last). A ``str``, so
+    it equals, hashes and serialises as its text; compare subjects with ``==``, not ``is``. The
+    built-in plants and their pairs are the class constants :attr:`ANALYTIC`, :attr:`MUJOCO`,
+    :attr:`PINOCCHIO`, :attr:`BOTH` (the reference pair, analytic vs MuJoCo),
+    :attr:`ANALYTIC_PINOCCHIO` and :attr:`MUJOCO_PINOCCHIO`.
+    """
+
+    __slots__ = ()
+
+    ANALYTIC: ClassVar[Subject]
+    MUJOCO: ClassVar[Subject]
+    PINOCCHIO: ClassVar[Subject]
+    BOTH: ClassVar[Subject]
+    ANALYTIC_PINOCCHIO: ClassVar[Subject]
+    MUJOCO_PINOCCHIO: ClassVar[Subject]
+
+    def __new__(cls, text: str) -> Subject:
+        text = str(text)
+        parts = text.split(PAIR_SEPARATOR)
+        if len(parts) > 2 or not all(p and p == p.strip() for p in parts):
+            raise ValueError(
+                f"subject: a plant name or 'a vs b', each a non-empty name (got {text!r})"
+            )
+        return super().__new__(cls, text)
+
+    @classmethod
+    def plant(cls, name: str) -> Subject:
+        """The subject of plant ``name`` alone (``ValueError`` for a name holding ``" vs "``)."""
+        s = cls(name)
+        if s.is_pair:
+            raise ValueError(f"subject: a plant name cannot hold {PAIR_SEPARATOR!r} (got {name!r})")
+        return s
 
     @classmethod
     def pair(cls, a: str, b: str) -> Subject:
-        """The subject of the difference of plants ``a`` and ``b`` (engine names, either order)."""
-        order = [e.value for e in Engine]
-        first, second = sorted((str(a), str(b)), key=order.index)
-        return cls(f"{first} vs {second}")
+        """The subject of the difference of plants ``a`` and ``b`` (names, either order), the
+        two in report order."""
+        from mj_bridge.registry import order_key
+
+        first, second = sorted((str(cls.plant(a)), str(cls.plant(b))), key=order_key)
+        if first == second:
+            raise ValueError(f"subject: a pair of two different plants (got {a!r} twice)")
+        return cls(f"{first}{PAIR_SEPARATOR}{second}")
+
+    @property
+    def value(self) -> str:
+        """The text, a plain ``str`` (as an enum member's ``value``)."""
+        return str.__str__(self)
 
     @property
     def is_pair(self) -> bool:
-        return " vs " in self.value
+        return PAIR_SEPARATOR in self
 
     @property
     def plants(self) -> tuple[str, ...]:
-        """The engine names this subject is about (two for a pair)."""
-        return tuple(self.value.split(" vs "))
+        """The plant names this subject is about (two for a pair)."""
+        return tuple(self.value.split(PAIR_SEPARATOR))
 
     @property
     def slug(self) -> str:
         """``analytic_vs_mujoco``: the subject in keys, labels and entity paths."""
-        return self.value.replace(" vs ", "_vs_")
+        return self.value.replace(PAIR_SEPARATOR, "_vs_")
+
+    def __repr__(self) -> str:
+        return f"Subject({self.value!r})"
+
+
+Subject.ANALYTIC = Subject(Engine.ANALYTIC.value)
+Subject.MUJOCO = Subject(Engine.MUJOCO.value)
+Subject.PINOCCHIO = Subject(Engine.PINOCCHIO.value)
+Subject.BOTH = Subject("analytic vs mujoco")
+Subject.ANALYTIC_PINOCCHIO = Subject("analytic vs pinocchio")
+Subject.MUJOCO_PINOCCHIO = Subject("mujoco vs pinocchio")
+
+
+def subject_order_key(subject: str) -> tuple:
+    """Sort key of subjects in report order: the plants first (in report order), then the pairs
+    (by their first plant, then their second)."""
+    from mj_bridge.registry import order_key
+
+    s = Subject(subject)
+    return (len(s.plants), *(order_key(p) for p in s.plants))
 
 
 def _frozen(a: Any) -> np.ndarray:
@@ -152,6 +211,8 @@ class Series:
     values: np.ndarray
 
     def __post_init__(self) -> None:
+        if not isinstance(self.subject, Subject):
+            object.__setattr__(self, "subject", Subject(self.subject))
         object.__setattr__(self, "t", _frozen(self.t))
         object.__setattr__(self, "values", _frozen(self.values))
         if self.t.shape != self.values.shape or self.t.ndim != 1:
@@ -214,6 +275,10 @@ class Check:
     bound: str = ""
     applicable: bool = True
 
+    def __post_init__(self) -> None:
+        if not isinstance(self.subject, Subject):
+            object.__setattr__(self, "subject", Subject(self.subject))
+
     @property
     def state(self) -> CheckState:
         """PASS, FAIL or NOT_APPLICABLE."""
@@ -225,7 +290,7 @@ class Check:
     def label(self) -> str:
         """``position_C`` (analytic vs MuJoCo), ``analytic_vs_pinocchio.position_C``,
         ``mujoco.energy``: unique within a comparison."""
-        if self.subject is Subject.BOTH:
+        if self.subject == Subject.BOTH:
             return self.name
         return f"{self.subject.slug}.{self.name}"
 
@@ -361,15 +426,15 @@ def _common(a: Trajectory, b: Trajectory) -> int:
 
 def pair_subject(a: Trajectory, b: Trajectory) -> Subject:
     """The subject of ``a`` vs ``b``; two runs of one engine are compared as the reference pair."""
-    if a.engine is b.engine:
+    if a.engine == b.engine:
         return Subject.BOTH
-    return Subject.pair(a.engine.value, b.engine.value)
+    return Subject.pair(a.engine, b.engine)
 
 
 def diff_key(subject: Subject, name: str) -> str:
     """Key of a difference series: ``diff.<name>`` for analytic vs MuJoCo (the two-plant report's
     keys), ``diff_<pair slug>.<name>`` for any other pair."""
-    return f"diff.{name}" if subject is Subject.BOTH else f"diff_{subject.slug}.{name}"
+    return f"diff.{name}" if subject == Subject.BOTH else f"diff_{subject.slug}.{name}"
 
 
 def difference_series(a: Trajectory, b: Trajectory) -> tuple[Series, ...]:
@@ -481,7 +546,7 @@ def _tracking_law(traj: Trajectory, scene: Any) -> tuple[np.ndarray | None, np.n
 
 def plant_series(traj: Trajectory, scene: Any = None) -> tuple[Series, ...]:
     """One plant's tracking errors, invariants' balances and control forces (module docstring)."""
-    subj = Subject(traj.engine.value)
+    subj = Subject.plant(traj.engine)
     t = traj.t
     inv = traj.invariants
     out: list[Series] = []
@@ -593,7 +658,7 @@ def _completed_check(traj: Trajectory, t_end: float | None) -> Check:
         if ok
         else f"the run did not finish: {traj.message or traj.status.value}"
     )
-    return Check("completed", Subject(traj.engine.value), reached, horizon, "s", bool(ok), reason)
+    return Check("completed", Subject.plant(traj.engine), reached, horizon, "s", bool(ok), reason)
 
 
 def _scale_max(x: np.ndarray) -> float:
@@ -640,9 +705,9 @@ def compare(
         checks.append(_completed_check(p, t_end))
         if p.status is not RunStatus.OK:
             notes.append(
-                f"{p.engine.value} run failed: {p.message} (compared up to t = {p.t[-1]:.6g} s)"
+                f"{p.engine} run failed: {p.message} (compared up to t = {p.t[-1]:.6g} s)"
                 if p.t.size
-                else f"{p.engine.value} run failed before its first sample: {p.message}"
+                else f"{p.engine} run failed before its first sample: {p.message}"
             )
 
     if mujoco is not None:
@@ -690,7 +755,7 @@ def compare(
         ps = plant_series(p, scene)
         series.extend(ps)
         by = {s.name: s for s in ps}
-        subj = Subject(p.engine.value)
+        subj = Subject.plant(p.engine)
         if "e_omega_law" in by:
             checks.append(_bound_check(th["tracking_omega"], subj, by["e_omega_law"]))
         if "e_p_law" in by:
@@ -737,12 +802,12 @@ def compare_plants(
             continue
         c = compare(plants[i], plants[j], scene, first.thresholds, t_end)
         pair = pair_subject(plants[i], plants[j])
-        series += [x for x in c.series if x.subject is pair]
-        checks += [x for x in c.checks if x.subject is pair]
+        series += [x for x in c.series if x.subject == pair]
+        checks += [x for x in c.checks if x.subject == pair]
         if i == 0:  # plant j's own series and checks, once
-            own = Subject(plants[j].engine.value)
-            series += [x for x in c.series if x.subject is own]
-            checks += [x for x in c.checks if x.subject is own]
+            own = Subject.plant(plants[j].engine)
+            series += [x for x in c.series if x.subject == own]
+            checks += [x for x in c.checks if x.subject == own]
             notes += [n for n in c.notes if n not in notes]
     return dataclasses.replace(
         first, series=tuple(series), checks=tuple(checks), notes=tuple(notes)
@@ -750,6 +815,7 @@ def compare_plants(
 
 
 __all__ = [
+    "PAIR_SEPARATOR",
     "Check",
     "Comparison",
     "Difference",
@@ -768,4 +834,5 @@ __all__ = [
     "omega_error_reference",
     "pair_subject",
     "plant_series",
+    "subject_order_key",
 ]

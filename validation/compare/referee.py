@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 from enum import StrEnum
 from typing import Any
 
-from validation.compare.checks import Check, Comparison, Difference, Subject
+from validation.compare.checks import Check, Comparison, Difference, Subject, subject_order_key
 from validation.compare.thresholds import REFEREE_NOISE_FRACTION, REFEREE_SEPARATION
 
 QUANTITIES = tuple(d.value for d in Difference)
@@ -161,7 +161,7 @@ def rule(
     d1, d2, d3 = size(c1), size(c2), size(c3)
     unit, threshold = c1.unit, c1.threshold
     floor = noise_floor(threshold)
-    values = {p.value: checks[p].value for p in sorted(checks, key=list(Subject).index)}
+    values = {p.value: checks[p].value for p in sorted(checks, key=subject_order_key)}
     label = LABELS.get(quantity, quantity)
     plants = {e for p, _ in items for e in p.plants}
     y, z = p1.plants

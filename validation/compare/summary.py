@@ -88,7 +88,7 @@ def drift_figures(tr: Trajectory) -> dict[str, float]:
 def summary_table(tr: Trajectory) -> str:
     """A short human-readable table."""
     lines = [
-        f"scene {tr.scene} on {tr.engine.value}: {tr.status.value.upper()}"
+        f"scene {tr.scene} on {tr.engine}: {tr.status.value.upper()}"
         + (f" ({tr.message})" if tr.message else ""),
         f"  samples {len(tr.t)}, t = {tr.t[0]:g} .. {tr.t[-1]:g} s",
     ]

@@ -24,13 +24,13 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from analytic.trajectory import Trajectory
-from validation.compare.checks import Comparison, Subject
+from validation.compare.checks import Comparison
 from validation.compare.summary import check_sentence
 from validation.recording.plots import Plot, Tab, plots_for
 from validation.recording.style import (
-    PLANT_COLOR_NAME,
     TIMELINE,
     entity_root,
+    plant_color_name,
     power_of_ten,
     viewer_text,
 )
@@ -51,10 +51,7 @@ def _and(names: Sequence[str]) -> str:
 
 
 def _colour(name: str) -> str:
-    try:
-        return PLANT_COLOR_NAME.get(Subject(name), "grey")
-    except ValueError:
-        return "grey"
+    return plant_color_name(name)
 
 
 def overlay_title(plants: Sequence[str]) -> str:
@@ -92,7 +89,7 @@ def legend_for(
     scene: Any, plants: Sequence[Trajectory], comparison: Comparison | None = None
 ) -> Legend:
     """The :class:`Legend` of a run (the same numbers the logged entities use)."""
-    names = tuple(tr.engine.value for tr in plants if tr.t.shape[0])
+    names = tuple(tr.engine for tr in plants if tr.t.shape[0])
     factors = difference_factors(scene, comparison, names, plants)
     largest = largest_differences(scene, comparison, names, plants)
     return Legend(names, arrow_scales(scene, plants), factors, largest)

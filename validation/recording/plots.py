@@ -195,7 +195,7 @@ def log_plots(
     entities: list[str] = []
     for plot in control_plots(prefix, plants[0].n if plants else 0):
         for tr in plants:
-            name = tr.engine.value
+            name = tr.engine
             if plot.origin.endswith("torque"):
                 values, comps = tr.torque, ["τ_x", "τ_y", "τ_z"]
             else:

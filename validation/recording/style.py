@@ -3,7 +3,10 @@
 
 Every plant keeps one colour everywhere (its body in the 3D views, its trail, its curves in the
 plots): analytic blue, MuJoCo orange, Pinocchio green, as in the report's figures (matplotlib's
-``tab10``); a pair of plants has a colour of its own.
+``tab10``); a pair of plants has a colour of its own. Beyond the built-ins (a plugin, a label read
+from a file), a plant takes :data:`EXTRA_PLANT_COLORS` ``[(rank - 3) % 8]`` by its report rank
+(:func:`mj_bridge.registry.rank`: the plugins by name, then any other label), and a pair with such a
+plant the mean of its two plants' colours at 80 % brightness (:func:`plant_color`).
 """
 
 from __future__ import annotations
@@ -33,6 +36,19 @@ PLANT_COLOR_NAME: dict[Subject, str] = {
     Subject.MUJOCO: "orange",
     Subject.PINOCCHIO: "green",
 }
+EXTRA_PLANT_COLORS: tuple[tuple[str, RGBA], ...] = (
+    ("pink", (227, 119, 194, 255)),
+    ("olive", (188, 189, 34, 255)),
+    ("cyan", (23, 190, 207, 255)),
+    ("indigo", (57, 59, 121, 255)),
+    ("gold", (189, 158, 57, 255)),
+    ("plum", (123, 65, 115, 255)),
+    ("moss", (99, 121, 57, 255)),
+    ("brick", (173, 73, 74, 255)),
+)
+"""The colours of the plants after the three built-ins, in rank order, repeating after eight:
+``tab10``'s pink, olive and cyan, then ``tab20b``'s darkest shades (none is a built-in plant's or
+pair's colour, nor grey, the colour of thresholds)."""
 
 # The reference plant's parts; the others are drawn in their plant's colour (rrd_world).
 ROD_RGBA: RGBA = (150, 150, 160, 255)
@@ -44,12 +60,40 @@ GHOST_ALPHA = 110
 """Opacity (of 255) of the other plants' masses, rods and arrows over the reference plant's."""
 
 
+def _extra(name: str) -> tuple[str, RGBA]:
+    from mj_bridge.registry import rank
+
+    return EXTRA_PLANT_COLORS[(rank(name) - 3) % len(EXTRA_PLANT_COLORS)]
+
+
 def plant_color(name: str) -> RGBA:
-    """The colour of plant ``name`` (an engine name) or pair (``"analytic vs mujoco"``)."""
+    """The colour of plant ``name`` (any plant name) or pair (``"analytic vs mujoco"``): the
+    built-ins' and their pairs' from :data:`PLANT_COLOR`, any other plant's from
+    :data:`EXTRA_PLANT_COLORS` by its rank, any other pair the mean of its plants' colours at 80 %
+    brightness; grey for a text that is no subject."""
     try:
-        return PLANT_COLOR[Subject(name)]
+        subject = Subject(name)
     except ValueError:
         return (127, 127, 127, 255)
+    if subject in PLANT_COLOR:
+        return PLANT_COLOR[subject]
+    if subject.is_pair:
+        a, b = (plant_color(p) for p in subject.plants)
+        r, g, b_ = (int(0.4 * (x + y)) for x, y in zip(a[:3], b[:3], strict=True))
+        return (r, g, b_, 255)
+    return _extra(subject)[1]
+
+
+def plant_color_name(name: str) -> str:
+    """The name of plant ``name``'s colour, as a narrative says it (``"blue"``; ``"grey"`` for a
+    pair or a text that is no plant)."""
+    try:
+        subject = Subject(name)
+    except ValueError:
+        return "grey"
+    if subject in PLANT_COLOR_NAME:
+        return PLANT_COLOR_NAME[subject]
+    return "grey" if subject.is_pair else _extra(subject)[0]
 
 
 def shade(rgba: RGBA, j: int) -> RGBA:
@@ -229,6 +273,7 @@ def viewer_text(text: str, newlines: bool = False) -> str:
 
 
 __all__ = [
+    "EXTRA_PLANT_COLORS",
     "GHOST_ALPHA",
     "MASS_RGBA",
     "OMEGA_RGBA",
@@ -243,6 +288,7 @@ __all__ = [
     "entity_root",
     "log10_nonzero",
     "plant_color",
+    "plant_color_name",
     "power_of_ten",
     "shade",
     "slug",

@@ -137,7 +137,7 @@ def largest_difference(
     by = {
         s.name: s.values
         for s in comparison.series
-        if s.subject is pair and s.group is Group.DIFFERENCE
+        if s.subject == pair and s.group is Group.DIFFERENCE
     }
     if Difference.POSITION_C not in by:
         return None
@@ -171,7 +171,7 @@ def _largest_difference_of(scene: Any, ref: Trajectory, other: Trajectory) -> fl
 def _names(
     comparison: Comparison | None, plants: Sequence[str] | None, trajectories: Sequence[Trajectory]
 ) -> list[str]:
-    names = list(plants or [tr.engine.value for tr in trajectories])
+    names = list(plants or [tr.engine for tr in trajectories])
     if not names and comparison is not None:
         names = list(plant_order(comparison))
     return names
@@ -189,7 +189,7 @@ def largest_differences(
     when neither has it. ``plants``: engine names, the reference first (default: the
     trajectories' order, or the comparison's)."""
     names = _names(comparison, plants, trajectories)
-    by_name = {tr.engine.value: tr for tr in trajectories}
+    by_name = {tr.engine: tr for tr in trajectories}
     out: dict[str, float] = {}
     for other in names[1:]:
         if other == names[0]:
@@ -429,7 +429,7 @@ def log_world(
     rec.log(f"{p0}/world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
     plants = [tr for tr in plants if tr.t.shape[0]]
     for k, tr in enumerate(plants):
-        name = tr.engine.value
+        name = tr.engine
         look = _Look(plant_color(name), solid=k == 0)
         body = f"{p0}/world/{name}/body"
         _log_body(send, body, scene, tr.t, tr.q, look)
@@ -438,8 +438,8 @@ def log_world(
     if len(plants) > 1:
         ref = plants[0]
         for tr in plants[1:]:
-            name = tr.engine.value
-            if name not in factors or name == ref.engine.value:
+            name = tr.engine
+            if name not in factors or name == ref.engine:
                 continue
             n = min(ref.t.shape[0], tr.t.shape[0])
             t, k = ref.t[:n], factors[name]

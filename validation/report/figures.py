@@ -72,7 +72,32 @@ PLANT_STYLE: Mapping[Subject, Mapping[str, Any]] = {
     Subject.ANALYTIC_PINOCCHIO: {"color": "tab:purple", "linestyle": "--", "marker": "s"},
     Subject.MUJOCO_PINOCCHIO: {"color": "tab:cyan", "linestyle": "-.", "marker": "^"},
 }
-"""Colour, line style and marker of each plant and each pair of plants."""
+"""Colour, line style and marker of the built-in plants and their pairs (:func:`plant_style`
+for any other)."""
+
+LINESTYLES = ("-", "--", ":", "-.")
+MARKERS = ("o", "s", "^", "D", "v", "P", "X", "*")
+
+
+def plant_style(subject: str) -> dict[str, Any]:
+    """Colour, line style and marker of plant or pair ``subject``: :data:`PLANT_STYLE` for the
+    built-ins and their pairs; for any other, the recording's colour
+    (:func:`validation.recording.style.plant_color`: one palette for both) and, by the report rank
+    of its (last) plant (:func:`mj_bridge.registry.rank`), the line style and marker of
+    :data:`LINESTYLES` and :data:`MARKERS` in turn."""
+    from mj_bridge.registry import rank
+    from validation.recording.style import plant_color
+
+    subject = Subject(subject)
+    if subject in PLANT_STYLE:
+        return dict(PLANT_STYLE[subject])
+    r = rank(subject.plants[-1]) + (len(subject.plants) - 1)
+    rgba = plant_color(subject)
+    return {
+        "color": tuple(c / 255 for c in rgba),
+        "linestyle": LINESTYLES[r % len(LINESTYLES)],
+        "marker": MARKERS[r % len(MARKERS)],
+    }
 
 THRESHOLD_STYLE = {"color": "k", "linestyle": ":", "linewidth": 1.2}
 _SUBSCRIPT = str.maketrans("0123456789", "₀₁₂₃₄₅₆₇₈₉")
@@ -436,7 +461,7 @@ def _markevery(n: int, k: int) -> tuple[int, int]:
 
 
 def _line(ax, t: np.ndarray, v: np.ndarray, subject: Subject, k: int, label: str, **kw):
-    style = dict(PLANT_STYLE[subject])
+    style = plant_style(subject)
     style.update(kw)
     return ax.plot(
         t,
@@ -759,7 +784,7 @@ def figure_control(
     per_other = int(has_tau) + int(has_f)  # one distance panel per force kind and other plant
     nrows = int(has_tau) + int(has_f) + per_other * len(others)
     fig, axes = _figure(nrows, f"{ctx.scene}: control forces", side_legends=True)
-    refname = ref.engine.value
+    refname = ref.engine
     colors = [f"C{j}" for j in range(10)]
     row = 0
     units = []
@@ -825,7 +850,7 @@ def figure_control(
             _log_axis(ax, [*curves, np.asarray([limit], float)])
             for j, (v, lab) in enumerate(zip(curves, labels, strict=True)):
                 if not np.any(v):
-                    zero_rows.append(f"{lab} of {other.engine.value}")
+                    zero_rows.append(f"{lab} of {other.engine}")
                     continue
                 color = "tab:brown" if th_name == "control_torque" else colors[(3 + j) % 10]
                 ax.plot(t, np.where(v > 0, v, np.nan), color=color, linewidth=1.0, label=lab)
@@ -833,7 +858,7 @@ def figure_control(
             ax.set_ylabel("1 (relative)")
             _title(
                 ax,
-                f"{other.engine.value} − {refname}: {what}, relative to the {refname} plant's "
+                f"{other.engine} − {refname}: {what}, relative to the {refname} plant's "
                 "largest",
             )
             ax.grid(True, which="major", alpha=0.3)
@@ -887,4 +912,5 @@ __all__ = [
     "figure_invariants",
     "figure_tracking",
     "parse_formats",
+    "plant_style",
 ]

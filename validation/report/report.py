@@ -590,7 +590,7 @@ def _report_doc(
         },
         "plants": [
             {
-                "engine": p.engine.value,
+                "engine": p.engine,
                 "status": p.status.value,
                 "message": p.message,
                 "samples": int(p.t.shape[0]),

@@ -590,7 +590,7 @@ def _drift_curves(run: StepRun) -> tuple[Curves, ...]:
     bounds: dict[float, list[tuple[str, str]]] = {}
     for (name, sym), hue in zip(DRIFT_QUANTITIES, SERIES_HUES, strict=False):
         for k, tr in enumerate(run.plants):
-            plant = tr.engine.value
+            plant = tr.engine
             s = series.get(f"{plant}.{name}")
             if s is None:
                 continue
@@ -663,7 +663,7 @@ def _force_curves(run: StepRun, torque: bool) -> tuple[Curves, ...]:
     """Each plant's control torque (body axes) or rod forces, in its shades."""
     out = []
     for k, tr in enumerate(run.plants):
-        name = tr.engine.value
+        name = tr.engine
         values, comps = (
             (tr.torque, ["τ_x", "τ_y", "τ_z"])
             if torque

@@ -276,7 +276,7 @@ def expected_labels(scene: Any, plants: tuple[str, ...]) -> list[str]:
     def pair(a: str, b: str) -> list[str]:
         s = Subject.pair(a, b)
         names = [n for n in PAIR_CHECKS if n != "rod_forces" or scene.n]
-        return [n if s is Subject.BOTH else f"{s.slug}.{n}" for n in names]
+        return [n if s == Subject.BOTH else f"{s.slug}.{n}" for n in names]
 
     out = [f"{p}.completed" for p in plants[:2]]
     if len(plants) > 1:

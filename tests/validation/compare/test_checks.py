@@ -159,13 +159,13 @@ def test_omega_reference_with_a_coupled_gain_matches_one_exponential_per_time(gr
 
 def test_self_comparison_gives_zero_differences(scene, traj):
     c = compare(traj, as_mujoco(traj), scene, t_end=T_END)
-    diffs = [s for s in c.series if s.subject is Subject.BOTH]
+    diffs = [s for s in c.series if s.subject == Subject.BOTH]
     assert {s.name for s in diffs} == {d.value for d in Difference}  # every compared quantity
     for s in diffs:
         assert s.t.shape == traj.t.shape
         assert np.all(s.values == 0.0), s.key
     for ch in c.checks:
-        if ch.subject is Subject.BOTH:
+        if ch.subject == Subject.BOTH:
             assert ch.value == 0.0 and ch.passed, ch.label
     assert c.passed
 

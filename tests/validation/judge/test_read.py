@@ -43,7 +43,7 @@ def test_columns_in_any_order_read_the_same(controlled_run, tmp_path):
     back = read_trajectory(tmp_path / "shuffled.csv", scene, engine=Engine.MUJOCO).trajectory
     np.testing.assert_array_equal(back.q, tr.q)
     np.testing.assert_array_equal(back.torque, tr.torque)
-    assert back.engine is Engine.MUJOCO
+    assert back.engine == Engine.MUJOCO
 
 
 @pytest.mark.parametrize("flip", ["every_row", "alternate_rows"])

@@ -129,6 +129,7 @@ class Applies(StrEnum):
     OTHERS = "every plant but the analytic one"
     ANALYTIC = "the analytic plant"
     SCIPY = "the plants integrated by scipy"
+    ENGINE_LAW = "the engine plants whose own matrices give the law (MuJoCo, Pinocchio)"
 
 
 @dataclass(frozen=True)
@@ -254,7 +255,7 @@ MEASURES: Mapping[tuple[Measure, Reference], MeasureInfo] = {
     (_M.ENGINE_LAW, _R.PINV_LAW): MeasureInfo(
         "1",
         "max |q̈_law - q̈_dup| / |q̈_dup|: the law from the engine's own M and forces",
-        Applies.OTHERS,
+        Applies.ENGINE_LAW,
     ),
 }
 """The measures a scene file may name, per reference (``docs/hard_cases.md`` lists them)."""
@@ -378,7 +379,14 @@ class Criterion:
 # Reading
 # ----------------------------------------------------------------------------------------------
 
-PLANTS = tuple(e.value for e in Engine)
+def known_plants() -> tuple[str, ...]:
+    """The plant names a criterion may name: the built-ins and every installed plant plugin's
+    (:mod:`mj_bridge.registry`, names only: nothing is imported)."""
+    from mj_bridge.registry import BUILTIN, plugin_names
+
+    return BUILTIN + plugin_names()
+
+
 _TOP_KEYS = {
     "criterion",
     "fast",
@@ -566,8 +574,9 @@ def _not_applicable(v: Any) -> dict[str, str]:
     out = {}
     for plant, why in v.items():
         name = f"hard_case.not_applicable.{plant}"
-        if plant not in PLANTS:
-            raise ValueError(f"{name}: unknown plant (allowed: {', '.join(PLANTS)})")
+        known = known_plants()
+        if plant not in known:
+            raise ValueError(f"{name}: unknown plant (allowed: {', '.join(known)})")
         if plant == Engine.ANALYTIC.value:
             raise ValueError(f"{name}: the analytic plant is the reference of every case")
         if not isinstance(why, str) or not why.strip():
@@ -656,7 +665,7 @@ def _check_bounds_used(c: Criterion) -> None:
         if k in used:
             continue
         rest = k.removeprefix(HARD_PREFIX)
-        plant = next((p for p in PLANTS if rest.startswith(f"{p}_")), None)
+        plant = next((p for p in known_plants() if rest.startswith(f"{p}_")), None)
         if plant is not None and f"{HARD_PREFIX}{rest.removeprefix(plant + '_')}" in used:
             continue
         raise ValueError(f"thresholds.{k}: no [[hard_case.check]] uses this bound")

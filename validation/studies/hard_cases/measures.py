@@ -48,8 +48,9 @@ ANALYTIC = Engine.ANALYTIC.value
 
 
 def label(engine: str) -> str:
-    """How reports name a plant (``MuJoCo``)."""
-    return _plants.PLANTS[Engine(engine)].label
+    """How reports name a plant (``MuJoCo``; a plant in no registry by its name)."""
+    cls = _plants.registered().get(str(engine))
+    return cls.label if cls is not None else str(engine)
 
 
 def run_plant(
@@ -222,7 +223,7 @@ class CaseRuns:
             self.checks.append(
                 Check(
                     "completed (conflicting rows)",
-                    Subject(ANALYTIC),
+                    Subject.plant(ANALYTIC),
                     reached,
                     found.t_end,
                     "s",

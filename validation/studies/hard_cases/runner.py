@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from analytic.scene import Scene, load_scene
-from analytic.trajectory import Engine, RunStatus
+from analytic.trajectory import RunStatus
 from mj_bridge import plants as _plants
 from validation.compare.checks import Check, Subject, completed_check, judge
 from validation.runs.outputs import output_run
@@ -37,6 +37,7 @@ from validation.studies.hard_cases.criterion import (
     parse_criterion,
 )
 from validation.studies.hard_cases.measures import ANALYTIC, CaseRuns, finite, label, measure
+from validation.studies.hard_cases.references.pinv_law import ENGINE_LAW_PLANTS
 from validation.studies.hard_cases.references.solvers import SCIPY_PLANTS
 from validation.studies.hard_cases.table import (
     HardCaseRow,
@@ -83,14 +84,13 @@ def suite_plants(plants: Iterable[str] | None = None) -> tuple[tuple[str, ...], 
     those named (report order); ``ValueError`` naming ``plants`` for an unknown or missing one or
     one without the analytic plant (the reference of every case)."""
     not_installed = {
-        e.value: why for e, cls in _plants.PLANTS.items() if (why := cls.unavailable())
+        e: why for e, cls in _plants.registered().items() if cls.default and (why := cls.unavailable())
     }
     if plants is None:
-        chosen = tuple(e.value for e in _plants.installed_plants())
+        chosen = _plants.installed_plants()
     else:
         names = [str(p) for p in plants]
         chosen = _plants.parse_plants(",".join(names)) if names else ()
-        chosen = tuple(Engine(e).value for e in chosen)
     if ANALYTIC not in chosen:
         raise ValueError(f"plants: the hard cases need the analytic plant (got {list(chosen)})")
     return chosen, not_installed
@@ -104,18 +104,20 @@ def _applies(spec: CheckSpec, plant: str) -> bool:
         return plant == ANALYTIC
     if applies is Applies.SCIPY:
         return plant in SCIPY_PLANTS
+    if applies is Applies.ENGINE_LAW:
+        return plant in ENGINE_LAW_PLANTS
     return True
 
 
 def _subject(spec: CheckSpec, plant: str) -> Subject:
     if spec.against in (Reference.ANALYTIC, Reference.ANALYTIC_MIRROR):
         return Subject.pair(ANALYTIC, plant)
-    return Subject(plant)
+    return Subject.plant(plant)
 
 
 def _run_checks(runs: CaseRuns, plant: str) -> list[Check]:
     """``completed`` and ``finite`` of every run made on ``plant``."""
-    out = [c for c in runs.checks if c.subject is Subject(plant)]
+    out = [c for c in runs.checks if c.subject == plant]
     for r in runs.runs:
         if r.plant != plant:
             continue
@@ -126,7 +128,7 @@ def _run_checks(runs: CaseRuns, plant: str) -> list[Check]:
         out.append(
             judge(
                 f"finite{tag}",
-                Subject(plant),
+                Subject.plant(plant),
                 0.0 if ok else 1.0,
                 0.0,
                 "1",

@@ -128,6 +128,11 @@ def pinocchio_law(dyn: Any, t: float, q, qd, rows: list[Row], b: np.ndarray) -> 
     return pinocchio_to_paper_acc(q_pin, v_pin, pinv_law(M, F, A, b))
 
 
+ENGINE_LAW_PLANTS = frozenset({Engine.MUJOCO.value, Engine.PINOCCHIO.value})
+"""The plants :func:`engine_laws` gives a law for (from their own engine's matrices); the measure
+``engine_law`` is made on these only."""
+
+
 def engine_laws(
     scene: Scene, plants: Sequence[str], rows: list[Row]
 ) -> dict[str, Callable[[float, Any, Any, np.ndarray], np.ndarray]]:
@@ -261,6 +266,7 @@ def _integrate_conflict(
 
 __all__ = [
     "ATOL",
+    "ENGINE_LAW_PLANTS",
     "N_STATES",
     "RTOL",
     "STATE_RUN_S",
