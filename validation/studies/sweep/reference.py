@@ -227,14 +227,16 @@ def scene_fingerprint(scene: Scene) -> Any:
 
 
 def code_fingerprint() -> str:
-    """SHA-256 of the code the reference depends on: ``analytic/*.py``, the error measure and its
-    helpers, and the versions of Python, numpy, scipy and numba."""
+    """SHA-256 of the code the reference depends on: every module of ``analytic`` (its
+    subpackages too: the scene format in ``analytic/scene/``, the kernel in ``analytic/kernel/``),
+    the error measure and its helpers, and the versions of Python, numpy, scipy and numba."""
     h = hashlib.sha256()
-    files = sorted(Path(analytic.__file__).parent.glob("*.py"))
+    root = Path(analytic.__file__).parent
+    files = sorted(root.rglob("*.py"))
     files += [Path(__file__), Path(metrics.__file__), Path(compare.__file__)]
     files += [Path(summary.__file__)]
     for f in files:
-        h.update(f.name.encode())
+        h.update((f.relative_to(root).as_posix() if f.is_relative_to(root) else f.name).encode())
         h.update(f.read_bytes())
     try:
         # deferred: optional (absent: no version), and ~0.13 s (python -X importtime)
