@@ -169,6 +169,80 @@ _CLOSING_FILES = (("report", "report.md"), ("recording", "run.rrd"))
 """The files ``tumble validate``'s closing line names, each only when the run wrote it."""
 
 
+def cmd_judge(args: argparse.Namespace) -> int:
+    from validation.compare.referee import VerdictKind
+    from validation.compare.summary import check_sentence
+    from validation.judge.judge import judge_request, run_judge
+    from validation.runs.outputs import default_out_dir
+    from validation.runs.progress import StageProgress, Status
+    from validation.runs.warmup import warming
+
+    request = judge_request(  # the scene, the file, the label, the plants, the pack: checked once
+        args.scene,
+        args.trajectory,
+        label=args.label,
+        plants=args.plants,
+        reference=args.reference,
+        figure_formats=args.figure_format,
+    )
+    scene = request.validation.scene
+    out = Path(args.out) if args.out else default_out_dir("judge_", scene.name)
+    res = None
+    with warming(scene, request.validation.plants, Status()):
+        progress = StageProgress(f"judge {request.label} on {scene.name}", request.validation.horizon)
+        try:
+            res = run_judge(request, out, progress=progress)
+        finally:
+            progress.close(walls=res.wall_times if res is not None else None, stopped=res is None)
+    judged = [c for c in res.checks if c.applicable]
+    n_fail = sum(1 for c in judged if not c.passed)
+    idle = len(res.checks) - len(judged)
+    verdict = "PASS" if res.passed else "FAIL"
+    na = f" ({idle} not judged or not applicable)" if idle else ""
+    print(
+        f"{verdict}: {len(judged) - n_fail}/{len(judged)} checks passed{na} for {request.label} "
+        f"on {scene.name}"
+    )
+    if res.failure:
+        print(f"  run failed: {res.failure}")
+    for c in res.checks:
+        if not c.passed:
+            print(f"  failed: {check_sentence(c, reason=False)}")
+    for why in sorted({c.reason for c in res.checks if c.reason.startswith("not judged")}):
+        print(f"  {why}")
+    for v in res.verdicts:
+        if v.kind is not VerdictKind.AGREE:
+            print(f"  referee: {v.text}")
+    named = [f"{what}: {res.files[name]}" for what, name in _CLOSING_FILES if name in res.files]
+    print("  ".join(named))
+    return 0 if res.passed else EXIT_FAILED
+
+
+def cmd_reference(args: argparse.Namespace) -> int:
+    from validation.judge.reference_pack import ACCURACY_MARGIN, write_pack
+    from validation.runs.outputs import default_out_dir
+    from validation.scenes import resolve_scene
+
+    scene = resolve_scene(args.scene)
+    out = Path(args.out) if args.out else default_out_dir("reference_", scene.name)
+    pack = write_pack(scene, out)
+    worst = max(
+        (a for a in pack.accuracy if a.estimate == a.estimate),
+        key=lambda a: a.estimate / a.threshold,
+        default=None,
+    )
+    if worst is not None:
+        print(
+            f"reference error estimate: at most {worst.estimate / worst.threshold:.1e} × its "
+            f"threshold ({worst.quantity}); the pack needs {ACCURACY_MARGIN:g}"
+        )
+    if not pack.accurate_enough:
+        bad = ", ".join(a.quantity for a in pack.accuracy if not a.ok)
+        print(f"  not accurate enough for: {bad} (said in README.md and reference.json)")
+    print(f"wrote the reference pack {pack.out_dir} ({', '.join(pack.files)})")
+    return 0
+
+
 def cmd_export_mjcf(args: argparse.Namespace) -> int:
     from model_xml import to_mjcf
     from validation.runs.atomic import write_text
@@ -363,6 +437,59 @@ def build_parser() -> argparse.ArgumentParser:
         help="comma-separated figure formats: png, svg, pdf (default: png; e.g. png,svg for a paper)",
     )
     p.set_defaults(func=cmd_validate)
+
+    p = sub.add_parser(
+        "judge",
+        help="judge another engine's trajectory file of a scene beside the built-in plants",
+        description="Read FILE, another engine's run of the scene on its output grid "
+        "(docs/trajectory-format.md), run the built-in plants beside it as referees (or, with "
+        "--reference, take a reference pack's trajectory instead), and compare every pair with "
+        "the same checks, referee, report, figures and recording as validate, the file being one "
+        "more plant. A check needing columns the file lacks is 'not judged'. Exits 0 when every "
+        "judged check passes, 1 when one fails, 2 for bad input (a bad file: its row and column).",
+    )
+    _add_scene_arg(p, DEFAULT_SCENE, builtin_names())
+    p.add_argument(
+        "--trajectory", required=True, metavar="FILE", help="the trajectory file (.csv, .parquet)"
+    )
+    p.add_argument(
+        "--label",
+        help="the file's plant name in the report (default: from the file name; lower-case "
+        "letters, digits and _, not a plant's name)",
+    )
+    p.add_argument(
+        "--plants",
+        help="comma-separated built-in plants to run beside the file (default: every installed "
+        "one that can run the scene)",
+    )
+    p.add_argument(
+        "--reference",
+        metavar="DIR",
+        help="a reference pack (tumble reference): judge against its trajectory, running no plant",
+    )
+    p.add_argument("--out", help="output directory (default: out/judge_<scene slug>)")
+    p.add_argument(
+        "--figure-format",
+        default="png",
+        help="comma-separated figure formats: png, svg, pdf (default: png)",
+    )
+    p.set_defaults(func=cmd_judge)
+
+    p = sub.add_parser(
+        "reference",
+        help="write a reference pack: the scene, a tight reference trajectory, README with the "
+        "controller and thresholds",
+        description="Write what an engineer needs to test an engine in any language: "
+        "OUT/scene.toml, OUT/reference.csv (the analytic plant at DOP853 rtol 1e-13, every "
+        "column incl. the controller's outputs tau and F), OUT/reference.json (its error "
+        "estimated by self-convergence against rtol 1e-14, beside every threshold) and "
+        "OUT/README.md (the problem, the controller's equations with the paper's numbers, the "
+        "error definitions and acceptance thresholds). Judge a run against it with "
+        "tumble judge SCENE --trajectory FILE --reference OUT.",
+    )
+    _add_scene_arg(p, DEFAULT_SCENE, builtin_names())
+    p.add_argument("--out", help="output directory (default: out/reference_<scene slug>)")
+    p.set_defaults(func=cmd_reference)
 
     p = sub.add_parser(
         "export-mjcf",

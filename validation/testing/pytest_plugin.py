@@ -15,6 +15,10 @@ nothing until a scene is collected:
   under a file lock, so a scene never runs twice whatever the distribution mode;
 * output goes to a temporary directory, or with ``--tumble-out DIR`` to ``DIR/<slug of the scene
   file's path>`` (the report, ``report.json``, figures and ``run.rrd``: CI artefacts).
+* a ``test_*.toml`` with a ``[judge]`` table instead (:mod:`validation.judge.spec_file`: a scene,
+  a trajectory file beside it, optionally a label, plants or a reference pack) judges another
+  engine's run (:class:`JudgeFile`): the judge's checks are its items, each check the file cannot
+  support skipped as ``not judged: no ... columns``.
 
 This module imports pytest and the standard library only; the plants, numpy and MuJoCo are imported
 when the first scene file is collected. ``python -m validation.testing.pytest_plugin --bench`` measures
@@ -45,6 +49,7 @@ import pytest
 MARKER = "tumble"
 RUN_ITEM = "run"
 _SCENE_TABLE = re.compile(rb"^[ \t]*\[[ \t]*scene[ \t]*\][ \t]*(#.*)?\r?$", re.MULTILINE)
+_JUDGE_TABLE = re.compile(rb"^[ \t]*\[[ \t]*judge[ \t]*\][ \t]*(#.*)?\r?$", re.MULTILINE)
 
 RUNS: list[str] = []
 """Scene runs made by this process (one cache key each, in order): what tests count."""
@@ -125,6 +130,8 @@ def _read_head(path: Path, limit: int) -> bytes:
 
 
 def pytest_collect_file(file_path: Path, parent: pytest.Collector) -> SceneFile | None:
+    """A scene file (a ``[scene]`` table) or a judge file (a ``[judge]`` table: another engine's
+    trajectory file judged, :class:`JudgeFile`)."""
     if file_path.suffix != ".toml":
         return None
     named = file_path.name.startswith("test_")
@@ -137,6 +144,8 @@ def pytest_collect_file(file_path: Path, parent: pytest.Collector) -> SceneFile 
         except OSError:  # also a FIFO or device named test_*.toml: never opened to block
             return None
         if not _SCENE_TABLE.search(head):
+            if _JUDGE_TABLE.search(head):
+                return JudgeFile.from_parent(parent, path=file_path)
             return None  # a test_*.toml that is not a scene: not ours
     return SceneFile.from_parent(parent, path=file_path)
 
@@ -201,6 +210,9 @@ class SceneFile(pytest.File):
             labels = expected_labels(scene, plants)
         except ValueError as exc:
             raise self.CollectError(f"{self.path.name}: {exc}") from None
+        yield from self._items(labels)
+
+    def _items(self, labels: list[str]) -> Iterator[pytest.Item]:
         self.labels = tuple(labels)
         group = pytest.mark.xdist_group(self.nodeid)
         for label in [*labels, RUN_ITEM]:
@@ -208,6 +220,47 @@ class SceneFile(pytest.File):
             item.add_marker(MARKER)
             item.add_marker(group)
             yield item
+
+    def outcome(self) -> Any:
+        """This file's run (ValidationResult, or the one-line reason it could not run)."""
+        return self.config.stash[_SESSION].outcome(self.path)
+
+
+class JudgeFile(SceneFile):
+    """A ``test_*.toml`` with a ``[judge]`` table (:mod:`validation.judge.spec_file`): another
+    engine's trajectory file of a scene, judged (:func:`validation.judge.judge.judge`); the
+    judge's checks are the items, a check the file cannot support skipped as ``not judged``. A
+    bad table or path is one collection error naming the key."""
+
+    spec: Any = None
+
+    def collect(self) -> Iterator[pytest.Item]:
+        sess = self.config.stash[_SESSION]
+        try:
+            # deferred: numpy, the scenes, the plants (as for a scene file)
+            from validation.judge.judge import REFERENCE_PLANT, plant_label
+            from validation.judge.spec_file import parse_spec
+            from validation.scenes import builtin_names, resolve_scene
+
+            spec = parse_spec(_read_head(self.path, 1 << 20), self.path.parent, builtin_names())
+            scene = resolve_scene(str(spec.scene))
+            if spec.reference is not None:
+                plants: tuple[str, ...] = (REFERENCE_PLANT,)
+            elif spec.plants is not None:
+                from mj_bridge.plants import parse_plants
+
+                plants = tuple(parse_plants(spec.plants))
+            else:
+                plants = sess.plants()
+            label = plant_label(spec.label, spec.trajectory, plants)
+            labels = expected_labels(scene, (*plants, label))
+        except (ValueError, OSError) as exc:
+            raise self.CollectError(f"{self.path.name}: {exc}") from None
+        self.spec = spec
+        yield from self._items(labels)
+
+    def outcome(self) -> Any:
+        return self.config.stash[_SESSION].judged(self.path, self.spec)
 
 
 class CheckFailed(Exception):
@@ -220,7 +273,7 @@ class CheckItem(pytest.Item):
     parent: SceneFile
 
     def runtest(self) -> None:
-        outcome = self.config.stash[_SESSION].outcome(self.parent.path)
+        outcome = self.parent.outcome()
         if isinstance(outcome, str):
             raise CheckFailed(f"the scene could not run: {outcome}")
         # deferred: ~2.5 ms (python -X importtime) in every pytest session; only with scene files
@@ -370,6 +423,36 @@ class _Session:
         except OSError as exc:  # not a regular file (a FIFO is never opened to block)
             return f"ValueError: scene: cannot read {str(path)!r} ({exc.strerror or exc})"
         return self.run(content, plants, None, path=path, scene=None)
+
+    def judged(self, path: Path, spec: Any) -> Any:
+        """The judge of the ``[judge]`` file ``path`` (its checked ``spec``): a ValidationResult,
+        or the one-line reason it could not run; once per session per file content and
+        trajectory file content."""
+        try:
+            h = hashlib.sha256(_read_head(path, 1 << 20))
+            h.update(_read_head(spec.trajectory, 1 << 30))
+        except OSError as exc:
+            return f"ValueError: judge: cannot read {str(path)!r} ({exc.strerror or exc})"
+        key = h.hexdigest()
+        if key in self._memo:
+            return self._memo[key]
+        from validation.judge.judge import judge
+
+        RUNS.append(key)
+        out = self._out_dir(path, key, "judge")
+        try:
+            res = judge(
+                str(spec.scene),
+                spec.trajectory,
+                out,
+                label=spec.label,
+                plants=None if spec.reference is not None else (spec.plants or self.plants()),
+                reference=spec.reference,
+            )
+        except (ValueError, OSError) as exc:
+            res = f"{type(exc).__name__}: {exc}".splitlines()[0]
+        self._memo[key] = res
+        return res
 
     def run(
         self,
@@ -528,4 +611,12 @@ if __name__ == "__main__":  # pragma: no cover
         print("usage: python -m validation.testing.pytest_plugin --bench")
 
 
-__all__ = ["MARKER", "RUNS", "CheckItem", "SceneFile", "expected_labels", "tumble_validation"]
+__all__ = [
+    "MARKER",
+    "RUNS",
+    "CheckItem",
+    "JudgeFile",
+    "SceneFile",
+    "expected_labels",
+    "tumble_validation",
+]
