@@ -275,7 +275,7 @@ def cmd_hard_cases(args: argparse.Namespace) -> int:
     if args.plants:
         from mj_bridge.plants import parse_plants
 
-        plants = [e.value for e in parse_plants(args.plants)]
+        plants = list(parse_plants(args.plants))
 
     def progress(case: str, i: int, total: int) -> None:
         if sys.stderr.isatty():
@@ -342,7 +342,7 @@ def cmd_warmup(args: argparse.Namespace) -> int:
     from validation.scenes import resolve_scene
 
     scenes = [resolve_scene(args.scene)] if args.scene else builtin_scenes()
-    engines = [e.value for e in installed_plants()]
+    engines = list(installed_plants())
     return 0 if warm_up_command(scenes, engines, out=lambda s: print(s, flush=True)) else 1
 
 
@@ -428,8 +428,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--t-end", type=_positive_float, help="horizon in seconds")
     p.add_argument(
         "--plants",
-        help="comma-separated plants to run (default: every installed one of "
-        "analytic,mujoco,pinocchio; with all three the referee names an outlier)",
+        help="comma-separated plants to run: built-ins (analytic, mujoco, pinocchio) and "
+        "installed plant plugins (drake; docs/plugins.md) by name, or 'all' for every installed "
+        "one (default: every installed default plant, analytic,mujoco,pinocchio; with three or "
+        "more the referee names an outlier)",
     )
     p.add_argument(
         "--figure-format",
@@ -524,7 +526,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--case", action="append", help="run only this case (repeatable)")
     p.add_argument(
         "--plants",
-        help="comma-separated plants (default: every installed one of analytic,mujoco,pinocchio)",
+        help="comma-separated plants, plugins included, or 'all' (default: every installed "
+        "default plant, analytic,mujoco,pinocchio)",
     )
     p.set_defaults(func=cmd_hard_cases)
 
@@ -617,6 +620,20 @@ def _out_of_memory(exc: MemoryError) -> str:
     return f"out of memory ({text})" if text else "out of memory"
 
 
+def warn_skipped_plugins(file=None) -> None:
+    """One line per plant plugin left out (``tumble: warning: plant plugin 'x' skipped: <why>``,
+    :func:`mj_bridge.plants.plugin_errors`), before a command that runs plants; the others run."""
+    from mj_bridge.plants import plugin_errors
+
+    for err in plugin_errors():
+        print(f"tumble: warning: {err}", file=file or sys.stderr)
+
+
+_PLANT_COMMANDS = frozenset({"validate", "judge", "reference", "hard-cases", "sweep", "warmup"})
+"""The commands that choose among the registered plants (their plugins are loaded, and the ones
+left out named)."""
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run one ``tumble`` command; returns the exit status (see the module docstring)."""
     with interrupts.handled():
@@ -624,6 +641,8 @@ def main(argv: list[str] | None = None) -> int:
             with user_warnings():
                 parser = build_parser()
                 args = parser.parse_args(argv)
+                if getattr(args, "command", None) in _PLANT_COMMANDS:
+                    warn_skipped_plugins()
                 status = args.func(args)
         except ValueError as exc:  # bad input (also OutputBusy: another run holds the directory)
             print(f"tumble: error: {exc}", file=sys.stderr)

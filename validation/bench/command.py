@@ -126,6 +126,11 @@ def measure_and_print(skip_long: bool = False, out=print) -> tuple[bool, dict[st
         )
     out("\nspeed goals, each a ratio measured in this process")
     measured = goals.measure(skip_long, progress=out)
+    if not skip_long:  # ~15 s; skipped, with the reason, where Drake is not installed
+        from validation.bench.drake_goal import goal_drake
+
+        measured.append(goal_drake(progress=out))
+        out(measured[-1].line())
     load_after = load_average()
     out("\nsummary")
     for g in measured:

@@ -621,9 +621,10 @@ estimate; ``tumble warmup`` pays it ahead, e.g. when a Docker image is built).""
 
 
 def _plant_names() -> tuple[str, ...]:
-    from analytic.trajectory import Engine
+    """Every plant name of this installation (the stages of a run that are plants)."""
+    from mj_bridge.registry import BUILTIN, plugin_names
 
-    return tuple(e.value for e in Engine)
+    return BUILTIN + plugin_names()
 
 
 def _validate_once(out: str, env: dict[str, str]) -> tuple[float, dict[str, float]]:

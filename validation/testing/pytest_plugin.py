@@ -373,7 +373,7 @@ class _Session:
                 raise ValueError(
                     f"--tumble-plants: give at least two plants to compare (got {text!r})"
                 )
-            self._plants = tuple(e.value for e in chosen)
+            self._plants = tuple(chosen)
         return self._plants
 
     def key(self, content: bytes, plants: tuple[str, ...], t_end: float | None) -> str:
@@ -537,7 +537,7 @@ def tumble_validation(request: pytest.FixtureRequest):
             from mj_bridge.plants import parse_plants
 
             text = plants if isinstance(plants, str) else ",".join(map(str, plants))
-            chosen = tuple(e.value for e in parse_plants(text))
+            chosen = tuple(parse_plants(text))
         if isinstance(scene, str | os.PathLike):
             path = scene_path(os.fspath(scene))
             sc = load(path) if t_end is not None else None

@@ -26,7 +26,7 @@ from validation.studies.hard_cases.criterion import parse_criterion
 from validation.studies.hard_cases.references import centre_of_mass, euler
 from validation.studies.hard_cases.table import jsonable
 
-INSTALLED = tuple(e.value for e in installed_plants())
+INSTALLED = installed_plants()
 
 
 class KnownFinding(Exception):

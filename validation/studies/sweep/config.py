@@ -40,7 +40,9 @@ STAGES = {"RK4": 4, "Euler": 1, "implicitfast": 1, "implicit": 1}
 
 
 class Plant(enum.StrEnum):
-    """The plants of the sweep, in report order (as ``mj_bridge.plants.PLANTS``)."""
+    """The plants of the sweep, in report order: the built-ins (``mj_bridge.plants.PLANTS``), whose
+    settings grids it knows (scipy rtols, MuJoCo time steps); a plant plugin is not swept
+    (``docs/plugins.md``)."""
 
     ANALYTIC = "analytic"
     MUJOCO = "mujoco"

@@ -1,0 +1,252 @@
+"""The plant registry: built-ins, plant plugins (entry-point group ``tumbling_testbed.plants``), the
+ones left out with one line each, and report order; a real plugin package installed from
+``tests/support/plugin_example`` and run by ``tumble validate`` beside the built-ins."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+
+import mj_bridge.plants as plants_mod
+import mj_bridge.registry as registry
+from analytic.plant import Plant
+from mj_bridge.plants import (
+    PLANTS,
+    installed_plants,
+    parse_plants,
+    plant,
+    plugin_errors,
+    registered,
+)
+from validation.compare.checks import Subject, subject_order_key
+
+EXAMPLE = Path(__file__).resolve().parents[1] / "support" / "plugin_example"
+VENV_BIN = Path(sys.executable).parent
+
+BROKEN_MODULE = "tpx_broken_plugins"
+BROKEN = {  # entry point name -> (object it names, what its one line must say)
+    "noimport": (f"{BROKEN_MODULE}_absent:Nothing", "cannot import"),
+    "notaplant": (f"{BROKEN_MODULE}:NotAPlant", "is not a subclass of analytic.plant.Plant"),
+    "mujoco": (f"{BROKEN_MODULE}:Impostor", "takes the built-in plant name 'mujoco'"),
+    "misnamed": (f"{BROKEN_MODULE}:Misnamed", "not the entry point's name 'misnamed'"),
+    "undescribed": (f"{BROKEN_MODULE}:Undescribed", "does not implement describe"),
+    "Bad-Name": (f"{BROKEN_MODULE}:Misnamed", "is not a plant name"),
+}
+
+
+def _broken_distribution(root: Path) -> Path:
+    """A directory holding a distribution (a real ``.dist-info`` with ``entry_points.txt``) that
+    declares every plugin of :data:`BROKEN`, and the module they name."""
+    root.mkdir(parents=True, exist_ok=True)
+    (root / f"{BROKEN_MODULE}.py").write_text(
+        textwrap.dedent(
+            """
+            from analytic.plant import AnalyticPlant, AnalyticSettings, Plant
+
+
+            class NotAPlant:
+                engine = "notaplant"
+
+
+            class Impostor(AnalyticPlant):
+                engine = "mujoco"
+
+
+            class Misnamed(AnalyticPlant):
+                engine = "something_else"
+
+
+            class Undescribed(Plant):  # no describe
+                engine = "undescribed"
+                label = "Undescribed"
+                settings_type = AnalyticSettings
+
+                def default_settings(self, scene):
+                    return AnalyticSettings()
+
+                def _simulate(self, scene, settings, t_end, progress):
+                    raise NotImplementedError
+            """
+        )
+    )
+    info = root / "tpx_broken_plugins-0.1.dist-info"
+    info.mkdir(exist_ok=True)
+    (info / "METADATA").write_text("Metadata-Version: 2.1\nName: tpx-broken-plugins\nVersion: 0.1\n")
+    lines = ["[tumbling_testbed.plants]"] + [f"{k} = {v}" for k, (v, _) in BROKEN.items()]
+    (info / "entry_points.txt").write_text("\n".join(lines) + "\n")
+    return root
+
+
+def _install(project: Path, target: Path) -> Path:
+    """Install a pure-Python, single-module project into ``target`` as an installer does: its
+    modules (``[tool.setuptools] py-modules``) and a ``<name>-<version>.dist-info`` with
+    ``METADATA`` and the ``entry_points.txt`` of its ``[project.entry-points]``; ``target`` on
+    ``PYTHONPATH`` then shows it to ``importlib.metadata``. (``pip install --target`` needs a
+    build backend with ``bdist_wheel``, which the test environment does not promise offline.)"""
+    import shutil
+    import tomllib
+
+    meta = tomllib.loads((project / "pyproject.toml").read_text())
+    proj = meta["project"]
+    target.mkdir(parents=True)
+    for mod in meta["tool"]["setuptools"]["py-modules"]:
+        shutil.copy(project / f"{mod}.py", target / f"{mod}.py")
+    info = target / f"{proj['name'].replace('-', '_')}-{proj['version']}.dist-info"
+    info.mkdir()
+    (info / "METADATA").write_text(
+        f"Metadata-Version: 2.1\nName: {proj['name']}\nVersion: {proj['version']}\n"
+    )
+    groups = [
+        f"[{group}]\n" + "".join(f"{k} = {v}\n" for k, v in eps.items())
+        for group, eps in proj["entry-points"].items()
+    ]
+    (info / "entry_points.txt").write_text("\n".join(groups))
+    return target
+
+
+def _reload_registry() -> None:
+    registry.entry_points.cache_clear()
+    plants_mod._load.cache_clear()
+
+
+@pytest.fixture
+def broken_plugins(tmp_path, monkeypatch):
+    monkeypatch.syspath_prepend(str(_broken_distribution(tmp_path / "broken")))
+    _reload_registry()
+    yield
+    sys.modules.pop(BROKEN_MODULE, None)
+    monkeypatch.undo()
+    _reload_registry()
+
+
+def test_builtins_come_first_and_drake_is_a_plugin_outside_the_defaults():
+    assert list(PLANTS) == ["analytic", "mujoco", "pinocchio"]
+    names = list(registered())
+    assert names[:3] == ["analytic", "mujoco", "pinocchio"]
+    for name, cls in registered().items():
+        assert issubclass(cls, Plant) and cls.engine == name and type(cls.engine) is str
+    assert "drake" in names  # the project's own entry point (pyproject.toml)
+    assert "drake" not in installed_plants()
+    assert installed_plants()[:2] == ("analytic", "mujoco")
+    assert all(type(n) is str for n in installed_plants())
+
+
+def test_parse_plants_orders_refuses_and_knows_all():
+    assert parse_plants("drake, mujoco ,analytic") == ("analytic", "mujoco", "drake")
+    with pytest.raises(ValueError, match=r"^plants: unknown plant 'bullet' \(known: analytic, "):
+        parse_plants("analytic,bullet")
+    with pytest.raises(ValueError, match=r"^plants: 'all' stands alone"):
+        parse_plants("all,analytic")
+    everything = parse_plants("all")
+    assert everything[: len(installed_plants())] == installed_plants()
+    assert set(everything) >= set(installed_plants())
+
+
+def test_report_order_and_subjects_of_any_plant():
+    """Built-ins in their order, then plugins by name, then any other label by name: a label
+    sorting before a plugin's name alphabetically still comes after it."""
+    assert registry.report_order(["zeta", "drake", "aaa", "mujoco", "analytic"]) == (
+        "analytic",
+        "mujoco",
+        "drake",
+        "aaa",
+        "zeta",
+    )
+    assert Subject.pair("drake", "mujoco") == "mujoco vs drake"
+    assert Subject.pair("aaa", "drake") == "drake vs aaa"
+    assert Subject.pair("mujoco", "analytic") == Subject.BOTH
+    s = Subject.pair("echo", "analytic")
+    assert s.is_pair and s.plants == ("analytic", "echo") and s.slug == "analytic_vs_echo"
+    assert s.value == "analytic vs echo" and type(s.value) is str
+    assert json.dumps({"subject": s}) == '{"subject": "analytic vs echo"}'
+    subjects = [Subject("mujoco vs drake"), Subject("drake"), Subject("analytic vs mujoco")]
+    assert sorted(subjects, key=subject_order_key) == ["drake", "analytic vs mujoco", "mujoco vs drake"]
+    for bad in ("", " a", "a vs b vs c", "a vs "):
+        with pytest.raises(ValueError, match="subject"):
+            Subject(bad)
+    with pytest.raises(ValueError, match="subject"):
+        Subject.pair("analytic", "analytic")
+
+
+def test_colours_beyond_the_built_ins_are_distinct_and_stable():
+    from validation.recording.style import EXTRA_PLANT_COLORS, PLANT_COLOR, plant_color
+    from validation.report.figures import plant_style
+
+    builtin = {plant_color(n) for n in PLANTS}
+    assert len(builtin) == 3
+    extra = [plant_color(n) for n in ("drake", "some_label", "other_label")]
+    assert plant_color("drake") == EXTRA_PLANT_COLORS[0][1]  # the first plugin by name
+    assert not (set(extra) & (builtin | set(PLANT_COLOR.values())))
+    assert plant_color("some_label") == plant_color("some_label")
+    pair = plant_color("analytic vs drake")
+    assert pair not in (plant_color("analytic"), plant_color("drake"))
+    style = plant_style("drake")
+    assert style["color"] == tuple(c / 255 for c in plant_color("drake"))
+    assert plant_style("analytic vs drake")["marker"]
+
+
+def test_broken_plugins_are_named_in_one_line_and_the_others_run(broken_plugins, capsys):
+    errors = {e.name: e for e in plugin_errors()}
+    assert set(errors) == set(BROKEN)
+    for name, (_, says) in BROKEN.items():
+        line = str(errors[name])
+        assert "\n" not in line and says in line, line
+        assert line.startswith(f"plant plugin {name!r} skipped: ")
+    assert list(registered())[:3] == ["analytic", "mujoco", "pinocchio"]
+    assert registered()["mujoco"] is PLANTS["mujoco"]  # a plugin cannot take a built-in's name
+    assert "drake" in registered()
+    assert installed_plants()[:2] == ("analytic", "mujoco")
+    with pytest.raises(ValueError, match=r"^plants: plant plugin 'notaplant' skipped: "):
+        plant("notaplant")
+    with pytest.raises(ValueError, match="plant plugin 'noimport' skipped: cannot import"):
+        parse_plants("analytic,noimport")
+
+    from validation.cli import warn_skipped_plugins
+
+    warn_skipped_plugins()
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == len(BROKEN)
+    assert all(line.startswith("tumble: warning: plant plugin '") for line in err)
+
+
+def test_a_plugin_package_installed_from_tests_runs_in_tumble_validate(tmp_path):
+    """The example package installed from its own pyproject.toml (:func:`_install`), then ``tumble validate --plants analytic,mujoco,echo`` in a subprocess that sees it and a
+    distribution of broken plugins: the broken ones are named in one line each, the run passes,
+    and the report holds the plugin as a plant, every pair compared."""
+    site = _install(EXAMPLE, tmp_path / "site")
+    eps = list(site.glob("tumble_plugin_example-*.dist-info/entry_points.txt"))
+    assert eps and "echo = tumble_plugin_example:EchoPlant" in eps[0].read_text()
+    broken = _broken_distribution(tmp_path / "broken")
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(site), str(broken)]))
+    out = tmp_path / "out"
+    res = subprocess.run(
+        [str(VENV_BIN / "tumble"), "validate", "paper_example1_controlled", "--t-end", "0.5",
+         "--plants", "analytic,mujoco,echo", "--out", str(out)],
+        capture_output=True,
+        text=True,
+        env=env,
+        cwd=tmp_path,
+        timeout=600,
+    )
+    assert res.returncode == 0, res.stderr
+    warnings = [line for line in res.stderr.splitlines() if "plant plugin" in line]
+    assert len(warnings) == len(BROKEN), res.stderr
+    for name, (_, says) in BROKEN.items():
+        mine = [w for w in warnings if w.startswith(f"tumble: warning: plant plugin {name!r} skipped: ")]
+        assert len(mine) == 1 and says in mine[0], (name, warnings)
+    doc = json.loads((out / "report.json").read_text())
+    assert [p["engine"] for p in doc["plants"]] == ["analytic", "mujoco", "echo"]
+    pairs = {c["subject"] for c in doc["checks"] if " vs " in c["subject"]}
+    assert pairs == {"analytic vs mujoco", "analytic vs echo", "mujoco vs echo"}
+    echo = [c for c in doc["checks"] if c["subject"] == "echo"]
+    assert echo and all(c["passed"] for c in echo)
+    assert all(c["passed"] for c in doc["checks"] if c["subject"] == "analytic vs echo")
+    assert "echo" in (out / "report.md").read_text()
+    assert (out / "run.rrd").stat().st_size > 0
+
