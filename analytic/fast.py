@@ -25,8 +25,9 @@ What runs where:
   product-then-solve cost about cond(M) in accuracy and kept this path switched off until it was
   replaced). Against a 40-digit solve over 1728 random states the kernel's worst error was 5.9e-10
   where the dense numpy reference's was 7.4e-8. Compiled only when a scene asks for this weighting.
-* **Identity weighting**: not structured here; falls back to the numpy path (the dense
-  ``(n+7)²`` solve of :func:`analytic.fundamental.solve`). Counted in ``FastModel.fallbacks``.
+* **Identity weighting (N = I)**: the kernel, ``O(n k²)``: ``Q_c = Z (ZᵀZ)⁻¹ r`` from a Householder
+  QR of ``Z = K A_cᵀ`` with unit columns, never forming ``ZᵀZ`` (which squares the conditioning;
+  see :mod:`analytic.kernel.identity`). Compiled only when a scene asks for this weighting.
 * **A Schur complement or the bordered constraint matrix not numerically positive definite** (the
   motion is then not unique, or barely so): falls back to the numpy path, which raises or applies its
   own rank decision. Counted in ``FastModel.fallbacks``.
@@ -39,7 +40,9 @@ positive definite on ``a_m⊥`` (its only null direction is ``a_m``), so ``A_c K
 ``Zᵀ M² Z`` are all positive definite. The fast path therefore always reports ``rank = k``. The numpy
 path's Moore-Penrose cut-off (``fundamental.PINV_RCOND`` = 1e-10 relative eigenvalue) can only drop
 a direction when the Gram matrix's condition number exceeds 1e10, i.e. when the reference solution is
-itself accurate to no better than ~1e-6; in that case the two paths legitimately differ.
+itself accurate to no better than ~1e-6; in that case the two paths legitimately differ (the
+identity weighting's kernel declines such a state instead, :data:`analytic.kernel.layout.
+IDENTITY_RANK_TOL`, and the numpy path answers it).
 
 numba's on-disk cache: see :mod:`analytic.kernel.jit`. In short, ``NUMBA_CACHE_DIR`` if set,
 else ``__pycache__`` beside the source, else (a read-only install) ``tumbling-testbed/numba`` in the
@@ -51,7 +54,7 @@ from __future__ import annotations
 import numpy as np
 
 from analytic.effects import Effect, Weighting
-from analytic.kernel import gauss, halves, minv2
+from analytic.kernel import gauss, halves, identity, minv2
 from analytic.kernel import layout as L
 from analytic.kernel.entry import Solver, solver_of
 from analytic.kernel.halves import KernelHalf
@@ -123,9 +126,11 @@ def pack(model: TumblingModel) -> tuple[np.ndarray, np.ndarray]:
     ip[L.I_SLIN] = sc.has(Effect.SPRINGS_LINEAR)
     ip[L.I_SCUB] = sc.has(Effect.SPRINGS_CUBIC)
     ip[L.I_TORQ] = sc.has(Effect.EXTERNAL_TORQUE)
-    ip[L.I_WEIGHT] = {Weighting.M_INV: L.W_GAUSS, Weighting.M_INV2: L.W_MINV2}.get(
-        model.weighting, -1
-    )
+    ip[L.I_WEIGHT] = {
+        Weighting.M_INV: L.W_GAUSS,
+        Weighting.M_INV2: L.W_MINV2,
+        Weighting.IDENTITY: L.W_IDENTITY,
+    }[model.weighting]
     if model.omega_track:
         ip[L.I_COMP : L.I_COMP + kw] = model.omega_track.components
     if model.mass_track:
@@ -145,8 +150,7 @@ class FastModel:
 
     Attributes:
         n, nq, k: masses, coordinates (n + 7) and control rows (k_ω + k_p).
-        compiled: True when calls go to the kernel (numba present and the weighting is structured:
-            ``M^-1``, ``M^-2``, or no control at all).
+        compiled: True when calls go to the kernel (numba present; every weighting is compiled).
         solver: the compiled solve this scene uses (:class:`analytic.kernel.entry.Solver`; only
             that one is compiled).
         fallbacks: number of calls answered by the numpy path so far.
@@ -160,9 +164,7 @@ class FastModel:
         self.k = self.model.k
         self.fp, self._ip = pack(self.model)
         self._bound = False  # ip's addresses of the compiled halves not written yet
-        self.compiled = available() and (
-            self.k == 0 or self.model.weighting in (Weighting.M_INV, Weighting.M_INV2)
-        )
+        self.compiled = available()
         self.fallbacks = 0
         self._nout = L.output_length(self.n, self.k)
         self.solver = solver_of(self._ip)
@@ -170,6 +172,8 @@ class FastModel:
             self._evaluate = self._qddot_into = None
         elif self.solver is Solver.MINV2:
             self._evaluate, self._qddot_into = minv2.evaluate, minv2.qddot_into
+        elif self.solver is Solver.IDENTITY:
+            self._evaluate, self._qddot_into = identity.evaluate, identity.qddot_into
         else:  # the Gauss kernel writes q̈ alone when given an array of length nq
             self._evaluate = self._qddot_into = gauss.evaluate
 
@@ -180,8 +184,7 @@ class FastModel:
         from numba's cache, on the first access; what every compiled caller is given."""
         if not self._bound:
             if self.compiled:
-                minv2_solve = self.solver is Solver.MINV2
-                self._ip[L.I_FN_SYSTEM], self._ip[L.I_FN_SOLVE] = halves.addresses(minv2_solve)
+                self._ip[L.I_FN_SYSTEM], self._ip[L.I_FN_SOLVE] = halves.addresses(self.solver)
             self._bound = True
         return self._ip
 
@@ -272,13 +275,12 @@ def compile_half(scene: Scene, half: KernelHalf | str) -> bool:
 
     The kernel's callers call the two halves by address, so two processes can compile one half
     each at the same time (:mod:`validation.runs.warmup`, a first run), and the callers compile without
-    either. Returns False when there is nothing to compile (numba absent, or a weighting the
-    kernel does not serve).
+    either. Returns False when there is nothing to compile (numba absent).
     """
     fm = FastModel(scene)  # its ip (and so the other half) is not touched
     if not fm.compiled:
         return False
-    halves.compiled(half, fm.solver is Solver.MINV2)
+    halves.compiled(half, fm.solver)
     return True
 
 

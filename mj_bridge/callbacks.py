@@ -23,11 +23,13 @@ _lock = threading.Lock()
 _active = False
 
 # MuJoCo warnings after which the step is not the model's dynamics (MuJoCo resets or zeroes silently).
+# Each says what MuJoCo found ("Nan, Inf or huge value", its own words: "the simulation is
+# unstable") and what it did about it.
 BAD_WARNINGS = {
-    mujoco.mjtWarning.mjWARN_BADQPOS: "bad qpos (MuJoCo reset the state)",
-    mujoco.mjtWarning.mjWARN_BADQVEL: "bad qvel (MuJoCo reset the state)",
-    mujoco.mjtWarning.mjWARN_BADQACC: "bad qacc (MuJoCo reset the state)",
-    mujoco.mjtWarning.mjWARN_BADCTRL: "bad ctrl (MuJoCo zeroed every control)",
+    mujoco.mjtWarning.mjWARN_BADQPOS: "unstable: bad qpos (MuJoCo reset the state)",
+    mujoco.mjtWarning.mjWARN_BADQVEL: "unstable: bad qvel (MuJoCo reset the state)",
+    mujoco.mjtWarning.mjWARN_BADQACC: "unstable: bad qacc (MuJoCo reset the state)",
+    mujoco.mjtWarning.mjWARN_BADCTRL: "unstable: bad ctrl (MuJoCo zeroed every control)",
 }
 
 

@@ -12,8 +12,8 @@ Its status is the kernel's: anything but ``STATUS_OK`` makes the caller fall bac
 for that stage.
 
 One compiled stage per solve (:class:`analytic.kernel.entry.Solver`): :func:`stage_for` gives the
-one a scene needs (``stage_gauss``, ``stage_minv2``), so a Gauss scene never compiles the M⁻² solve;
-:data:`stage` serves any scene (both solves compiled in).
+one a scene needs (``stage_gauss``, ``stage_minv2``, ``stage_identity``), so a Gauss scene never
+compiles the other weightings' solves; :data:`stage` serves any scene (every solve compiled in).
 """
 
 from __future__ import annotations
@@ -108,8 +108,9 @@ def _compiled(solver: Solver):
 
 stage_gauss = _compiled(Solver.GAUSS)
 stage_minv2 = _compiled(Solver.MINV2)
+stage_identity = _compiled(Solver.IDENTITY)
 stage = _compiled(Solver.ANY)
-"""The compiled stage for any scene (embeds both solves; compiled on first call)."""
+"""The compiled stage for any scene (embeds every solve; compiled on first call)."""
 
 
 def argument_types() -> tuple:
@@ -142,7 +143,11 @@ def stage_for(ip: np.ndarray):
 
 def _by_solver(solver: Solver):
     """The compiled stage embedding ``solver`` (:data:`stage` for ``Solver.ANY``)."""
-    return {Solver.GAUSS: stage_gauss, Solver.MINV2: stage_minv2}.get(solver, stage)
+    return {
+        Solver.GAUSS: stage_gauss,
+        Solver.MINV2: stage_minv2,
+        Solver.IDENTITY: stage_identity,
+    }.get(solver, stage)
 
 
 def geometry(model) -> np.ndarray:

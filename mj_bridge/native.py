@@ -34,7 +34,7 @@ through the Python callback and compares every output bit for bit; on any differ
 Python callback and says so in one warning.
 
 When the kernel declines a stage (``status != 0``: a Schur complement not numerically positive
-definite), the callback cannot call the numpy model (no interpreter in the loop). It counts the
+definite, or, under the identity weighting, control rows numerically dependent), the callback cannot call the numpy model (no interpreter in the loop). It counts the
 failure and leaves ``ctrl`` as it was; :class:`mj_bridge.stepper.Stepper` checks the count after
 every ``mj_step``/``mj_forward`` and reruns that batch of steps from its saved start with the Python
 callback, which answers such stages with the numpy model.
@@ -167,12 +167,13 @@ if HAVE_NUMBA:
         return sig, codegen
 
 
-_GAUSS, _MINV2 = int(Solver.GAUSS), int(Solver.MINV2)
+_GAUSS, _MINV2, _IDENTITY = int(Solver.GAUSS), int(Solver.MINV2), int(Solver.IDENTITY)
 
 
 def _make_native_stage(deps: int, solver: int):
     """:func:`_native_stage` closing over ``deps`` (see :data:`DEPS`) and the solve it embeds
-    (``solver``, a :class:`Solver`: ``fast_stage.stage_gauss``, ``stage_minv2`` or ``stage``)."""
+    (``solver``, a :class:`Solver`: ``fast_stage.stage_gauss``, ``stage_minv2``,
+    ``stage_identity`` or ``stage``)."""
 
     def _native_stage(m_addr, d_addr, ctx_addr):  # pragma: no cover - compiled
         """One ``mjcb_control`` call: what ``Stages.stage_callback`` does, from the bound arrays."""
@@ -219,6 +220,10 @@ def _make_native_stage(deps: int, solver: int):
             status = fast_stage.stage_minv2(
                 t, qpos, qvel, ctrl, tq, fi, fp, ip, out, q, qd, tau_g, geo, inv_gear, w, acc
             )
+        elif solver == _IDENTITY:
+            status = fast_stage.stage_identity(
+                t, qpos, qvel, ctrl, tq, fi, fp, ip, out, q, qd, tau_g, geo, inv_gear, w, acc
+            )
         else:
             status = fast_stage.stage(
                 t, qpos, qvel, ctrl, tq, fi, fp, ip, out, q, qd, tau_g, geo, inv_gear, w, acc
@@ -251,6 +256,7 @@ def _inlined_stage(solver: Solver):
 # (not cached on their own)
 native_stage_gauss = _inlined_stage(Solver.GAUSS)
 native_stage_minv2 = _inlined_stage(Solver.MINV2)
+native_stage_identity = _inlined_stage(Solver.IDENTITY)
 native_stage = _inlined_stage(Solver.ANY)
 
 
@@ -307,6 +313,8 @@ if HAVE_NUMBA:
                 native_stage_gauss(_addr(m), _addr(d), _ctx_addr())
             elif solver == _MINV2:
                 native_stage_minv2(_addr(m), _addr(d), _ctx_addr())
+            elif solver == _IDENTITY:
+                native_stage_identity(_addr(m), _addr(d), _ctx_addr())
             else:
                 native_stage(_addr(m), _addr(d), _ctx_addr())
 

@@ -33,7 +33,7 @@ the integrator, at that stage's state):
 The controller is the analytic one (Eq. 89), evaluated at the paper state mapped from Pinocchio's
 (``u`` = the normalised quaternion, ``u̇ = ¼ Hᵀ ω``): by default the compiled kernel
 (:mod:`analytic.kernel`), with the numpy model answering where the kernel declines
-or does not apply (identity weighting, no numba); ``ControllerSource.ANALYTIC`` uses the numpy model
+or does not apply (no numba); ``ControllerSource.ANALYTIC`` uses the numpy model
 always. The mapping, the controller, the springs, the given torque, the quaternion and position
 rates and the quadratures are one compiled call (:func:`_make_stage`); ``pin.aba`` is a second call,
 and a third compiled call (:func:`_finish`) maps its result into ``ẏ`` and checks it is finite. The
@@ -310,12 +310,14 @@ def _finish(acc, work, ydot):  # pragma: no cover - compiled
 DEPS = source_fingerprint(*KERNEL_SOURCES, _aux)
 stage_gauss = jit(_make_stage(DEPS, int(Solver.GAUSS)))
 stage_minv2 = jit(_make_stage(DEPS, int(Solver.MINV2)))
-stage = jit(_make_stage(DEPS, int(Solver.ANY)))  # any scene: both solves compiled in
+stage_identity = jit(_make_stage(DEPS, int(Solver.IDENTITY)))
+stage = jit(_make_stage(DEPS, int(Solver.ANY)))  # any scene: every solve compiled in
 
 
 def stage_for(ip: np.ndarray):
     """The compiled stage embedding only the solve the packed scene ``ip`` needs."""
-    return stage_minv2 if solver_of(ip) is Solver.MINV2 else stage_gauss
+    solver = solver_of(ip)
+    return {Solver.MINV2: stage_minv2, Solver.IDENTITY: stage_identity}.get(solver, stage_gauss)
 
 
 finish = jit(_finish)

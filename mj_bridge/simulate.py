@@ -105,21 +105,23 @@ def simulate(
         try:
             for i, k in enumerate(ksteps, start=1):
                 tw.step(int(k))
-                if tw.needs_control_cb and acc.calls != stages * k:
-                    raise RuntimeError(
-                        f"controller called {acc.calls} times in {k} steps; expected {stages} per "
-                        f"step for {tw.integrator.value}"
-                    )
                 nsteps += int(k)
+                # MuJoCo's own verdict first: after a bad qacc it resets the state and evaluates it
+                # again (one more controller call), so the count below is off whenever it warned
                 bad = bad_warnings(d)
                 if bad:
                     status = RunStatus.FAILED
                     message = f"MuJoCo warning before t = {times[i]:.6g} s: {'; '.join(bad)}"
                     break
-                d.time = float(times[i])
                 if not (np.all(np.isfinite(d.qpos)) and np.all(np.isfinite(d.qvel))):
                     status, message = RunStatus.FAILED, f"non-finite state at t = {times[i]:.6g} s"
                     break
+                if tw.needs_control_cb and acc.calls != stages * k:
+                    raise RuntimeError(
+                        f"controller called {acc.calls} times in {k} steps; expected {stages} per "
+                        f"step for {tw.integrator.value}"
+                    )
+                d.time = float(times[i])
                 sample(float(times[i]))
                 if progress is not None:
                     progress(float(times[i]))

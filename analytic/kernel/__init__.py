@@ -15,6 +15,7 @@ Modules, in the order an evaluation runs through them:
   :mod:`~analytic.kernel.bordered` (stage 8), :mod:`~analytic.kernel.gauss` (stage 9, the second
   half, and ``evaluate``);
 * :mod:`~analytic.kernel.minv2`: N = M⁻² (Eq. B13), compiled only for scenes that ask for it;
+* :mod:`~analytic.kernel.identity`: N = I (Eq. B10 with W = I), likewise;
 * :mod:`~analytic.kernel.abi`, :mod:`~analytic.kernel.halves`: the two halves as C callbacks, each
   compiled once and cached on its own, and how compiled callers call them by address;
 * :mod:`~analytic.kernel.entry`: which solve a scene needs; ``evaluate`` for any scene.
@@ -31,6 +32,5 @@ no heap allocation on the Gauss path (one stack workspace carved
 by ``layout.WS_*``; the rod rows of ``Q`` and ``b_c`` live in ``out``); closed forms for ``L_a(u)``,
 ``L̇_a u̇`` and ``H(u)ᵀx`` instead of the (3, 4, 4) tensor contractions; no square roots on the Gauss
 path (LDLᵀ); cos and sin of one argument in one block (one ``sincos`` call) and reused while the
-mass-track λ repeats; indices read from ``ip`` masked (``layout.IX``). The identity weighting is not
-compiled (:mod:`analytic.fast` uses the numpy path for it).
+mass-track λ repeats; indices read from ``ip`` masked (``layout.IX``). Every weighting is compiled.
 """

@@ -3,8 +3,9 @@
 A compiled caller (the integrator's right-hand side, the MuJoCo stage, ...) embeds one kernel. It
 is built once per :class:`Solver` with the solver as a closure constant, so numba prunes the other
 branch before compiling: a Gauss scene never compiles the M⁻² solve (:mod:`analytic.kernel.minv2`)
-and the reverse. :data:`Solver.ANY` keeps both and chooses per call from ``ip`` (for callers that
-serve every scene with one compiled function).
+or the identity weighting's (:mod:`analytic.kernel.identity`), and so on. :data:`Solver.ANY` keeps
+all three and chooses per call from ``ip`` (for callers that serve every scene with one compiled
+function).
 """
 
 from __future__ import annotations
@@ -13,36 +14,49 @@ from enum import IntEnum
 
 import numpy as np
 
-from analytic.kernel import gauss, minv2
+from analytic.kernel import gauss, identity, minv2
 from analytic.kernel.jit import inline_always, jit_entry
-from analytic.kernel.layout import I_KP, I_KW, I_WEIGHT, STATUS_UNSUPPORTED, W_GAUSS, W_MINV2
+from analytic.kernel.layout import (
+    I_KP,
+    I_KW,
+    I_WEIGHT,
+    STATUS_UNSUPPORTED,
+    W_GAUSS,
+    W_IDENTITY,
+    W_MINV2,
+)
 
 
 class Solver(IntEnum):
     """The solve a compiled caller embeds: ``GAUSS`` (:mod:`analytic.kernel.gauss`, also every
-    uncontrolled scene), ``MINV2`` (:mod:`analytic.kernel.minv2`), or ``ANY`` (both, chosen per
-    call)."""
+    uncontrolled scene), ``MINV2`` (:mod:`analytic.kernel.minv2`), ``IDENTITY``
+    (:mod:`analytic.kernel.identity`), or ``ANY`` (all three, chosen per call)."""
 
     GAUSS = W_GAUSS
     MINV2 = W_MINV2
+    IDENTITY = W_IDENTITY
     ANY = -1
 
 
 def solver_of(ip: np.ndarray) -> Solver:
-    """The solve a packed scene needs: M⁻² when it is controlled under that weighting, else Gauss
-    (the identity weighting is not compiled; its calls return ``STATUS_UNSUPPORTED`` either way)."""
+    """The solve a packed scene needs: its weighting's when it is controlled, else Gauss (an
+    uncontrolled scene has no control force to weigh)."""
     controlled = int(ip[I_KW]) + int(ip[I_KP]) > 0
-    return Solver.MINV2 if controlled and int(ip[I_WEIGHT]) == W_MINV2 else Solver.GAUSS
+    return Solver(int(ip[I_WEIGHT])) if controlled else Solver.GAUSS
 
 
 def _make_evaluate(deps: int):
     def evaluate(t, q, qd, fp, ip, out):
-        """:func:`analytic.kernel.gauss.evaluate` or :func:`analytic.kernel.minv2.evaluate`, as the
-        scene in ``ip`` needs (both are compiled with this function)."""
+        """:func:`analytic.kernel.gauss.evaluate`, :func:`analytic.kernel.minv2.evaluate` or
+        :func:`analytic.kernel.identity.evaluate`, as the scene in ``ip`` needs (all three are
+        compiled with this function)."""
         if deps < 0:  # never true: ties numba's cache key to the kernel's sources
             return STATUS_UNSUPPORTED
-        if ip[I_KW] + ip[I_KP] > 0 and ip[I_WEIGHT] == W_MINV2:
-            return minv2.evaluate(t, q, qd, fp, ip, out)
+        if ip[I_KW] + ip[I_KP] > 0:
+            if ip[I_WEIGHT] == W_MINV2:
+                return minv2.evaluate(t, q, qd, fp, ip, out)
+            if ip[I_WEIGHT] == W_IDENTITY:
+                return identity.evaluate(t, q, qd, fp, ip, out)
         return gauss.evaluate(t, q, qd, fp, ip, out)
 
     return evaluate
@@ -52,7 +66,7 @@ evaluate = jit_entry(_make_evaluate)
 """The kernel for any packed scene: ``[q̈, Q^C, τ, residual]`` into ``out`` (see
 :func:`analytic.kernel.gauss.evaluate`), status returned."""
 
-_GAUSS, _MINV2 = int(Solver.GAUSS), int(Solver.MINV2)
+_GAUSS, _MINV2, _IDENTITY = int(Solver.GAUSS), int(Solver.MINV2), int(Solver.IDENTITY)
 
 
 @inline_always
@@ -66,4 +80,6 @@ def evaluate_as(solver, t, q, qd, fp, ip, out):
         return gauss.join(t, q, qd, fp, ip, out)
     if solver == _MINV2:
         return minv2.join(t, q, qd, fp, ip, out)
+    if solver == _IDENTITY:
+        return identity.join(t, q, qd, fp, ip, out)
     return evaluate(t, q, qd, fp, ip, out)

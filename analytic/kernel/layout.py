@@ -48,7 +48,7 @@ I_GRAV = 3  # 1: gravity on
 I_SLIN = 4  # 1: linear springs on
 I_SCUB = 5  # 1: cubic springs on
 I_TORQ = 6  # 1: given torque on (Remark 2)
-I_WEIGHT = 7  # W_GAUSS, W_MINV2, or -1 (not compiled)
+I_WEIGHT = 7  # W_GAUSS, W_MINV2 or W_IDENTITY
 I_COMP = 8  # 3 slots: the tracked ω components (0-based)
 I_FN_SYSTEM = 11  # address of the compiled stages 1-6 in this process (analytic.kernel.halves)
 I_FN_SOLVE = 12  # address of the compiled solve of this scene's weighting, in this process
@@ -56,6 +56,14 @@ I_TRACK = 13  # n: 1 for a tracked mass; then the k_p tracked indices
 
 W_GAUSS = 0  # N = M⁻¹, the paper's Eq. (89)
 W_MINV2 = 1  # N = M⁻² (Eq. B13)
+W_IDENTITY = 2  # N = I (the Euclidean norm of the control force, Eq. B10 with W = I)
+
+IDENTITY_RANK_TOL = 1e-5
+"""The identity weighting's rank decision (:mod:`analytic.kernel.identity`): the kernel declines
+(the numpy path answers, with its own Moore-Penrose rank decision) when a column of ``Z = K A_cᵀ``,
+scaled to unit length, lies within this distance of the span of the others. It is
+``sqrt(analytic.fundamental.PINV_RCOND)``: that cut-off is on eigenvalues of the Jacobi-scaled Gram
+matrix ``ZᵀZ``, whose eigenvalues are squares of the singular values of the scaled ``Z``."""
 
 IX = 0x7FFFFFFF
 """Mask for sizes and indices read from ``ip`` inside the kernel. The values are small and
@@ -64,7 +72,7 @@ drop numba's negative-index wrap-around code, which otherwise tripled the cost o
 
 STATUS_OK = 0
 STATUS_NOT_PD = 1  # a Schur complement or the bordered Gram matrix is not numerically PD
-STATUS_UNSUPPORTED = 2  # a weighting this kernel does not compile (identity)
+STATUS_UNSUPPORTED = 2  # not this solve's scene, output too short, or halves not bound
 
 
 def tail_offsets(n: int, kp: int) -> tuple[int, int, int, int, int, int, int, int, int, int, int]:

@@ -11,9 +11,9 @@ Where it is not (ill-conditioned scenes: the dense Cholesky of ``M_α`` loses di
 structured solve keeps), both are compared with an extended-precision (mpmath, 40 digits) solution of
 the same equations, and the fast path must be the one within 1e-12 of it.
 
-The identity weighting (W = N = I) is not compiled: the fast engine falls back to the numpy model,
-and both are compared with an independent dense solve of the optimality (KKT) conditions of that
-weighting's cost (``identity_kkt_reference``), within ``KKT_TOL``.
+Under the identity weighting (W = N = I) both paths are also compared with an independent dense
+solve of the optimality (KKT) conditions of that weighting's cost (``identity_kkt_reference``),
+within ``KKT_TOL``.
 """
 
 from __future__ import annotations
@@ -26,6 +26,7 @@ import pytest
 
 from analytic import fast
 from analytic.effects import Weighting
+from analytic.kernel.entry import Solver
 from analytic.kernel.layout import STATUS_NOT_PD
 from analytic.model import TumblingModel
 from tests.support import tolerances as tol
@@ -34,8 +35,7 @@ from tests.support.scene_strategies import FORCE_EFFECTS, random_scene_dict, ran
 pytestmark = pytest.mark.skipif(not fast.available(), reason="numba not installed")
 
 TOL = tol.FAST_VS_NUMPY_REL.value
-# W = I (the numpy path, which the fast engine falls back to) against the dense KKT solve below:
-# measured worst 1.6e-7 relative over test_random_small_scenes_every_effect_combination's scenes
+# W = I, the numpy path against the dense KKT solve below: measured worst 1.6e-7 relative over test_random_small_scenes_every_effect_combination's scenes
 # (masses over six decades; the weighted Gram matrix ZᵀZ squares the conditioning, while the KKT
 # solve agreed with a 40-digit mpmath solve of the same system to 2e-11), median ~1e-14; 1e-6 allows
 # a decade for other CPUs and BLAS builds.
@@ -182,7 +182,7 @@ def compare(scene, rng, n_states=3, stats=None):
     """Fast vs numpy at random states; returns the max relative differences per output."""
     model = TumblingModel(scene)
     fm = fast.FastModel(scene, model)
-    assert fm.compiled == (scene.control.weighting != Weighting.IDENTITY or model.k == 0)
+    assert fm.compiled  # every weighting is compiled
     worst = dict.fromkeys(NAMES, 0.0)
     for _ in range(n_states):
         q, qd = random_state(rng, scene.n)
@@ -191,13 +191,14 @@ def compare(scene, rng, n_states=3, stats=None):
         qdd, c = model.acceleration(t, q, qd)
         ref = (qdd, c.torque, c.rod_forces, c.force_at_C, c.QC)
         errs = {nm: rel(g, r) for nm, g, r in zip(NAMES, got, ref, strict=True)}
-        if not fm.compiled:  # the numpy fallback (W = I): both against an independent KKT solve
+        if scene.control.weighting is Weighting.IDENTITY and model.k:
+            # W = I: both also against an independent KKT solve of that weighting's problem
             x = identity_kkt_reference(model, t, q, qd)
             for nm, g, r, xr in zip(NAMES, got, ref, x, strict=True):
                 assert rel(g, xr) <= KKT_TOL and rel(r, xr) <= KKT_TOL, (nm, rel(g, xr), rel(r, xr))
                 if stats is not None:
                     stats["numpy_vs_kkt"] = max(stats.get("numpy_vs_kkt", 0.0), rel(r, xr))
-            continue
+        assert fm.fallbacks == 0  # the kernel answered
         assert c.rank == model.k  # the numpy reference never dropped a direction here
         if max(errs.values()) > TOL:
             # the reference lost digits: both against the extended-precision solution. The fast
@@ -257,12 +258,13 @@ def test_random_small_scenes_every_effect_combination(weighting):
     assert stats["direct"] > stats["extended"]
 
 
-@pytest.mark.parametrize("weighting", ["M^-1", "M^-2"])
+@pytest.mark.parametrize("weighting", ["M^-1", "M^-2", "identity"])
 def test_large_n(weighting):
     rng = np.random.default_rng(7)
-    # M^-2 squares the conditioning: at n = 200 with six decades of masses the two paths differ by
-    # ~6e-8 (unresolved here which is closer; at small n the extended-precision check above favours
-    # the fast path), so that combination is left out
+    # M^-2 and identity square the conditioning (the numpy path's Gram matrices ZᵀM²Z, ZᵀZ): at
+    # n = 200 with six decades of masses the two paths differ by ~6e-8 (unresolved here which is
+    # closer; at small n the extended-precision check above favours the fast path), so that
+    # combination is left out
     for mass_span in (0.0, 2.0, 6.0) if weighting == "M^-1" else (0.0, 2.0):
         sc = make_scene(
             rng,
@@ -293,7 +295,7 @@ def test_large_n(weighting):
 
 def test_singular_M_rigid_body_and_masses_at_C():
     rng = np.random.default_rng(3)
-    for weighting in ("M^-1", "M^-2"):
+    for weighting in ("M^-1", "M^-2", "identity"):
         # n = 0: a rigid body, M u = 0
         sc = make_scene(rng, 0, FORCE_EFFECTS, omega=True, masses=False, weighting=weighting)
         compare(sc, rng)
@@ -356,25 +358,73 @@ def test_uncontrolled_and_paper_scenes():
         compare(sc, rng)
 
 
-def test_identity_weighting_falls_back_and_counts():
+def test_identity_weighting_is_compiled_and_solves_its_own_problem():
     rng = np.random.default_rng(5)
     sc = make_scene(rng, 3, FORCE_EFFECTS, omega=True, masses=True, weighting="identity")
     fm = fast.FastModel(sc)
-    assert not fm.compiled
+    assert fm.compiled and fm.solver is Solver.IDENTITY
     q, qd = random_state(rng, 3)
     got = fm.qddot_and_forces(0.0, q, qd)
-    assert fm.fallbacks == 1
-    # the fallback answers the W = I problem (an independent KKT solve of it), which is not the
+    assert fm.fallbacks == 0
+    # the kernel answers the W = I problem (an independent KKT solve of it), which is not the
     # Gauss (W = M) one: a weighting dropped on the way would fail here
     model = TumblingModel(sc)
     x = identity_kkt_reference(model, 0.0, q, qd)
     for nm, g, xr in zip(NAMES, got, x, strict=True):
         assert rel(g, xr) <= KKT_TOL, (nm, rel(g, xr))
+    assert np.any(got[3] != 0.0)  # W = I puts a force at C (Gauss's is structurally zero)
     gauss = make_scene(
         np.random.default_rng(5), 3, FORCE_EFFECTS, omega=True, masses=True, weighting="M^-1"
     )  # the same scene (the same draws) with the Gauss weighting
     _, c_gauss = TumblingModel(gauss).acceleration(0.0, q, qd)
     assert rel(c_gauss.QC, x[4]) > 1e-3
+    # q̈ alone (the integrator's call) is the full output's q̈, bit for bit (the same compiled body)
+    np.testing.assert_array_equal(fm.qddot(0.0, q, qd), got[0])
+
+
+def test_identity_min_norm_solve_against_lstsq_and_its_rank_decision():
+    """The identity kernel's ``Z (ZᵀZ)⁻¹ r`` (Householder QR with unit columns) is the
+    minimum-norm solution of ``Zᵀ x = r`` (the same formula evaluated with 40 digits), also with
+    column lengths over eight decades; a column within ``IDENTITY_RANK_TOL`` of the span of the
+    others (relative to its length) makes it decline; one just outside does not."""
+    import mpmath as mp
+
+    from analytic.kernel.identity import min_norm_solve
+    from analytic.kernel.layout import IDENTITY_RANK_TOL
+
+    mp.mp.dps = 40
+    rng = np.random.default_rng(17)
+    for nq, k in ((7, 1), (9, 4), (15, 11), (24, 17)):
+        Z = rng.normal(size=(nq, k)) * 10.0 ** rng.uniform(-4, 4, k)  # columns over eight decades
+        r = rng.normal(size=k)
+        Zm = mp.matrix(Z.tolist())
+        x = Zm * mp.lu_solve(Zm.T * Zm, mp.matrix(r.tolist()))
+        want = np.array([float(v) for v in x])
+        got = np.empty(nq)
+        assert min_norm_solve(Z.copy(), nq, k, r.copy(), got)
+        assert rel(got, want) <= TOL, (nq, k, rel(got, want))
+    Z = rng.normal(size=(9, 3))
+    Z /= np.linalg.norm(Z, axis=0)
+    e = rng.normal(size=9)
+    e -= Z[:, :2] @ np.linalg.lstsq(Z[:, :2], e, rcond=None)[0]  # orthogonal to columns 0, 1
+    e /= np.linalg.norm(e)
+    for dist, ok in ((0.5 * IDENTITY_RANK_TOL, False), (0.0, False), (2.0 * IDENTITY_RANK_TOL, True)):
+        Zd = Z.copy()
+        Zd[:, 2] = 0.6 * Z[:, 0] - 0.8 * Z[:, 1]
+        Zd[:, 2] += dist * np.linalg.norm(Zd[:, 2]) * e  # this far from span(col 0, col 1)
+        assert min_norm_solve(Zd * 1e3, 9, 3, np.ones(3), np.empty(9)) is ok, dist
+    bad = Z.copy()
+    bad[0, 1] = np.nan
+    assert not min_norm_solve(bad, 9, 3, np.ones(3), np.empty(9))
+
+
+def test_identity_rank_tolerance_is_the_square_root_of_the_numpy_cut_off():
+    """The kernel declines where the numpy path's Moore-Penrose cut-off (on eigenvalues of the
+    Jacobi-scaled Gram matrix ZᵀZ, i.e. squared singular values of the scaled Z) would act."""
+    from analytic.fundamental import PINV_RCOND
+    from analytic.kernel.layout import IDENTITY_RANK_TOL
+
+    assert IDENTITY_RANK_TOL == pytest.approx(np.sqrt(PINV_RCOND), rel=1e-12)
 
 
 def test_qddot_matches_acceleration():
@@ -386,7 +436,7 @@ def test_qddot_matches_acceleration():
     np.testing.assert_array_equal(fm.qddot(0.4, q, qd), fm.qddot_and_forces(0.4, q, qd)[0])
 
 
-@pytest.mark.parametrize("weighting", ["M^-1", "M^-2"])
+@pytest.mark.parametrize("weighting", ["M^-1", "M^-2", "identity"])
 def test_the_halves_are_called_only_through_addresses_this_process_wrote(weighting):
     """The kernel's callers call its two compiled halves by the addresses in ``ip``
     (analytic.kernel.abi). An ``ip`` without them (straight from ``pack``, or a pickled model in
@@ -395,13 +445,13 @@ def test_the_halves_are_called_only_through_addresses_this_process_wrote(weighti
     contiguous one."""
     import pickle
 
-    from analytic.kernel import gauss, minv2
+    from analytic.kernel import gauss, identity, minv2
     from analytic.kernel.layout import I_FN_SOLVE, I_FN_SYSTEM, STATUS_OK, STATUS_UNSUPPORTED
 
     rng = np.random.default_rng(21)
     sc = make_scene(rng, 4, FORCE_EFFECTS, omega=True, masses=True, weighting=weighting)
     fm = fast.FastModel(sc)
-    evaluate = minv2.evaluate if weighting == "M^-2" else gauss.evaluate
+    evaluate = {"M^-2": minv2.evaluate, "identity": identity.evaluate}.get(weighting, gauss.evaluate)
     q, qd = random_state(rng, 4)
     want = np.empty(fm._nout)
     assert evaluate(0.2, q, qd, fm.fp, fm.ip, want) == STATUS_OK
@@ -437,9 +487,10 @@ def _rhs_pair(sc):
 def test_compiled_rhs_is_the_python_rhs_to_the_last_bit():
     """ẏ = [q̇, q̈, Ẇ, İ_L, İ_P] from analytic.fast_rhs equals the Python composition (same kernel,
     same order of operations) bit for bit, over every force-effect combination incl. a given
-    torque, controlled (Gauss's and the M⁻² weighting, whose control has a force at C) and not."""
+    torque, controlled (Gauss's, and the M⁻² and identity weightings, whose control has a force at
+    C) and not."""
     rng = np.random.default_rng(11)
-    for effects, weighting in itertools.product(EFFECT_SUBSETS, ("M^-1", "M^-2")):
+    for effects, weighting in itertools.product(EFFECT_SUBSETS, ("M^-1", "M^-2", "identity")):
         for omega, masses in ((True, True), (False, False)):
             n = int(rng.integers(1, 7))
             sc = make_scene(rng, n, effects, omega=omega, masses=masses, weighting=weighting)

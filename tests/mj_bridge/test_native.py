@@ -94,15 +94,16 @@ def test_native_run_is_bit_identical_to_python_callback(name):
     _same(a, b)
 
 
-def test_native_with_a_force_at_C():
-    """The M⁻² weighting's control has a force at C: the native stage writes it to BR's
-    xfrc_applied as the Python stage does."""
+@pytest.mark.parametrize("weighting", ["M^-2", "identity"])
+def test_native_with_a_force_at_C(weighting):
+    """The M⁻² and identity weightings' control has a force at C: the native stage writes it to
+    BR's xfrc_applied as the Python stage does."""
     import dataclasses
 
     from analytic.effects import Weighting
 
     sc = random_scene(np.random.default_rng(3), 3, external_torque=True)
-    sc = sc.replace(control=dataclasses.replace(sc.control, weighting=Weighting.M_INV2))
+    sc = sc.replace(control=dataclasses.replace(sc.control, weighting=Weighting(weighting)))
     a = simulate(sc, dt=1e-3, t_end=0.2, native_callback=False)
     b = simulate(sc, dt=1e-3, t_end=0.2)
     assert b.info["native_callback"]

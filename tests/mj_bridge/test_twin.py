@@ -280,6 +280,42 @@ def test_simulate_reports_mujoco_bad_warning_as_failed(monkeypatch):
     assert 0.04 <= tr.t[-1] < 0.2
 
 
+def test_an_unstable_run_fails_with_mujocos_instability_not_the_call_count(monkeypatch):
+    """A control that blows up in finite time (a singular control) without making ``ctrl`` bad:
+    a force at C (``xfrc_applied``, which MuJoCo does not check) of 1e17 N from t = 0.02 s makes
+    qacc huge, MuJoCo warns (bad qacc: "the simulation is unstable"), resets the state and
+    evaluates it again, one controller call more than RK4's four per step. The run must end
+    failed with that warning named, not raise about the controller's call count."""
+    import sys
+
+    sim = sys.modules["mj_bridge.simulate"]
+    twin_module = sys.modules["mj_bridge.twin"]  # simulate() takes Twin from there when it runs
+
+    class BlowUpTwin(Twin):
+        def __init__(self, *a, **kw):
+            kw["controller"] = ControllerSource.ANALYTIC
+            super().__init__(*a, **kw)
+            model = self.model
+
+            def blow_up(t, q, qd):
+                qdd, c = model.acceleration(t, q, qd)
+                extra = 0.0 if t < 0.02 else 1e17  # N: qacc ~ 1e17 / 4.6e5 kg, above mjMAXVAL
+                return qdd, c.__class__(
+                    QC=c.QC, torque=c.torque, rod_forces=c.rod_forces,
+                    force_at_C=c.force_at_C + extra, residual=c.residual, rank=c.rank,
+                )  # fmt: skip
+
+            self.stages.controller_fn = blow_up
+
+    monkeypatch.setattr(twin_module, "Twin", BlowUpTwin)
+    with pytest.warns(UserWarning, match="unstable"):
+        tr = sim.simulate(paper_scene("paper_example1_controlled"), dt=1e-3, t_end=0.1)
+    assert tr.status.value == "failed"
+    assert "mjWARN_BADQACC" in tr.message and "unstable" in tr.message, tr.message
+    assert "controller called" not in tr.message
+    assert 0.01 <= tr.t[-1] <= 0.02
+
+
 def test_module_level_functions():
     scene = paper_scene("paper_example2_controlled")
     q, qd = scene.initial.q0(), scene.initial.qdot0()
@@ -483,8 +519,8 @@ def test_controller_sources_give_the_same_trajectory():
 @pytest.mark.parametrize("weighting", ["M^-1", "M^-2", "identity"])
 def test_balances_with_given_torque_and_other_weightings(weighting):
     """A random controlled scene with a given torque: energy, angular and linear momentum balances
-    hold with the stage-integrated work and impulses (compiled stage, or the numpy fallback for
-    the identity weighting, which also puts a force at C)."""
+    hold with the stage-integrated work and impulses (the compiled stage, as a native callback,
+    for every weighting; M⁻² and identity also put a force at C)."""
     import dataclasses
 
     from analytic.effects import Weighting
@@ -495,6 +531,7 @@ def test_balances_with_given_torque_and_other_weightings(weighting):
         control=dataclasses.replace(scene.control, weighting=Weighting(weighting))
     )
     tr = simulate(scene, dt=2e-3, t_end=1.0)
+    assert tr.info["native_callback"] and tr.info["native_redos"] == 0
     inv = tr.invariants
     E_scale = np.max(np.abs(inv.energy)) + np.max(np.abs(inv.work))
     L_scale = np.max(np.linalg.norm(inv.angular_momentum, axis=1))

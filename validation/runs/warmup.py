@@ -65,7 +65,7 @@ class Job(StrEnum):
     SYSTEM = "system"
     """The analytic kernel's stages 1-6 (:mod:`analytic.kernel.system`), a ``cfunc``."""
     SOLVE = "solve"
-    """The analytic kernel's solve for the scene's weighting (Gauss or M⁻²), a ``cfunc``."""
+    """The analytic kernel's solve for the scene's weighting (Gauss, M⁻² or identity), a ``cfunc``."""
     RHS = "rhs"
     """The analytic plant's compiled right-hand side (:mod:`analytic.compiled_rhs`)."""
     MUJOCO_STAGE = "mujoco-stage"
@@ -137,7 +137,9 @@ class Task:
         # deferred: analytic, mj_bridge: numpy ~45 ms, numba ~0.2 s (-X importtime); a warm start needs neither
         from analytic.kernel.entry import Solver
 
-        solve = "M⁻²" if self.solver == int(Solver.MINV2) else "Gauss"
+        solve = {int(Solver.MINV2): "M⁻²", int(Solver.IDENTITY): "identity"}.get(
+            self.solver, "Gauss"
+        )
         return TITLES[self.job].format(solve=solve, engine=self.engine, scene=self.scene.name)
 
 
@@ -276,8 +278,7 @@ def stamp_warm(keys: Sequence[str]) -> None:
 
 def compiled_solver(scene: Scene) -> int | None:
     """The solve (an :class:`analytic.kernel.entry.Solver` value) the scene's compiled kernel uses,
-    without compiling anything; None when the kernel does not serve the scene (numba absent, or a
-    weighting it does not compile)."""
+    without compiling anything; None when there is no compiled kernel (numba absent)."""
     from analytic import fast
 
     if not fast.available():
@@ -326,7 +327,7 @@ def _compile_half(task: Task) -> None:
     from analytic.kernel import halves
     from analytic.kernel.entry import Solver
 
-    halves.compiled(halves.KernelHalf(task.job.value), task.solver == int(Solver.MINV2))
+    halves.compiled(halves.KernelHalf(task.job.value), Solver(task.solver))
 
 
 def _compile_rhs(task: Task) -> None:
