@@ -820,7 +820,7 @@ def _compare(
         if amend is not None:
             cmp = amend(cmp)
         walls["compare"] = time.perf_counter() - t0
-        return cmp, tuple(referee(cmp, names))
+        return cmp, tuple(referee(cmp, names, trajectories))
     except Exception as exc:
         failures.append(f"comparison: {_one_line(exc)}")
         traceback.print_exc()

@@ -162,7 +162,31 @@ not the scatter of three errors of one size (which stay within a factor of ~3 of
 REFEREE_NOISE_FRACTION = 1e-3
 """Pairwise differences below this fraction of the quantity's threshold count as agreement: three
 plants that all agree a thousand times better than the threshold asks have no outlier worth
-naming, and round-off-level differences (1e-12 m beside a 1e-6 m bound) do not decide verdicts."""
+naming, and round-off-level differences (1e-12 m beside a 1e-6 m bound) do not decide verdicts.
+It is the threshold part of the referee's noise floor; the round-off part below takes over where a
+quantity's own scale makes its round-off larger (:class:`validation.compare.referee.NoiseFloor`)."""
+
+REFEREE_ROUNDOFF_FORCE = 1e5
+"""The round-off part of the noise floor of the control torque and rod forces, in float64 epsilons
+(2.2e-16) of the largest control force of the run across the plants (``|τ|`` in N·m and ``|F_i|``
+in N as one SI vector, as the controller's solve computes them together, analytic/fundamental.py).
+A force zero in exact arithmetic comes out of that solve as a cancellation residue of the large
+ones: with the rod through C and only the masses controlled (identity weighting) the torque is zero,
+yet the analytic plant gives up to 1.6e4 ε × max |F| (measured over 2 s on 40 variants of
+``hard/rod_through_C`` with random rod axes, mass ratios over four decades and inertias 1e2-1e6
+kg·m², max |F| 5e6-2e7 N: from 14 ε to 1.6e4 ε; 0.7 ε on the scene itself), while MuJoCo and
+Pinocchio stay near 1e-11 N·m. 1e5 ε (2.2e-11 relative) leaves a factor 6 above the largest; it
+decides only when the torque is over 45 times smaller than the rod forces (or they than it), where
+a difference below 2.2e-11 of the largest force is round-off, not a modelling slip."""
+
+REFEREE_ROUNDOFF_STATE = 1e3
+"""The round-off part of the noise floor of a state (position of C, rod positions, velocities,
+angular velocity, attitude), in float64 epsilons of its largest magnitude over the run across the
+plants (``max |R|``, ``max |p_i|``, ...; 1 for the attitude's unit quaternion). Each step of an
+integrator rounds the state at ε/2 of its magnitude; over the 1e4-1e6 steps of a run those
+roundings add up like a random walk to about sqrt(1e6) = 1e3 of them. It decides only for large
+magnitudes (|R| over 4.5 km against the default 1e-6 m threshold's floor of 1e-9 m): no built-in
+scene reaches it."""
 
 
 # Keys of a scene's [thresholds] table that belong to the hard-case suite, not to the comparison.
@@ -231,6 +255,8 @@ def _override(base: Threshold, spec: Any) -> Threshold:
 __all__ = [
     "DEFAULTS",
     "REFEREE_NOISE_FRACTION",
+    "REFEREE_ROUNDOFF_FORCE",
+    "REFEREE_ROUNDOFF_STATE",
     "REFEREE_SEPARATION",
     "Threshold",
     "ThresholdSource",

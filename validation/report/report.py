@@ -220,21 +220,26 @@ def _referee_lines(verdicts: Sequence[Verdict], meta: Mapping[str, Any]) -> list
     if plants:
         lines += ["Plants: " + "; ".join(_md(p["settings"]) for p in plants) + ".", ""]
     lines += [f"- {_md(t)}" for t in summary_lines(verdicts)]
-    pairs = list(verdicts[0].values)
+    pairs = list(dict.fromkeys(p for v in verdicts for p in v.values))
     lines += [
         "",
         "| quantity | "
         + " | ".join(_cell(p) for p in pairs)
-        + " | threshold | noise floor | unit | verdict | decided by |",
-        "|---|" + "---|" * (len(pairs) + 5),
+        + " | threshold | noise floor | floor set by | unit | verdict | decided by |",
+        "|---|" + "---|" * (len(pairs) + 6),
     ]
     for v in verdicts:
         cells = " | ".join(_fmt(v.values.get(p, math.nan)) for p in pairs)
-        who = f"{v.kind.value}: {v.outlier}" if v.outlier else v.kind.value
+        who = v.kind.value
+        if v.outliers:  # each outlier with its distance to the group
+            who += ": " + ", ".join(f"{o.plant} ({_fmt(o.distance)})" for o in v.outliers)
+        elif v.groups:
+            who += ": " + " vs ".join(", ".join(g) for g in v.groups)
         by = v.clause.value if v.clause else "–"
+        set_by = v.floor_set_by.value if v.floor_set_by else "–"
         lines.append(
             f"| {_cell(v.quantity)} | {cells} | {_fmt(v.threshold)} | {_fmt(v.floor)} | "
-            f"{_cell(v.unit)} | {_cell(who)} | {_cell(by)} |"
+            f"{_cell(set_by)} | {_cell(v.unit)} | {_cell(who)} | {_cell(by)} |"
         )
     lines += ["", rule_text(), ""]
     return lines
