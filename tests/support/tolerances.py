@@ -357,6 +357,17 @@ TRAJECTORY_FILE_ROUND_TRIP_REL = Threshold(
     "bit and the attitude angle is 0; ω is recomputed through u̇ = Hᵀω/(4|u|²) and H u̇, a few "
     "roundings (~2e-16 relative measured). Relative to the largest value of each quantity.",
 )
+JUDGED_FILE_CHECK_FRACTION = Threshold(
+    "JUDGED_FILE_CHECK_FRACTION",
+    1e-6,
+    "1",
+    "A plant's run written to a trajectory file and judged (tumble judge) against the same "
+    "check of that run in run_validation, as a fraction of the check's threshold: the file holds "
+    "the plant's doubles, so position, attitude, rod and velocity differences come out equal; "
+    "only ω (through u̇ = Hᵀω/(4|u|²)) and the momenta and energy built from the velocities are "
+    "recomputed, a few roundings (measured ≤ 1.2e-8 of the threshold, the energy balance of "
+    "MuJoCo on paper_example2 over 1 s). A wrong column or frame moves a value by O(1) of it.",
+)
 
 TOLERANCES: Mapping[str, Threshold] = {
     t.name: t for t in list(globals().values()) if isinstance(t, Threshold)
