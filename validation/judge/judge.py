@@ -42,6 +42,7 @@ from validation.compare.thresholds import thresholds_for
 from validation.judge.columns import ColumnGroup
 from validation.judge.read import read_trajectory
 from validation.judge.record import ExternalTrajectory, does_work
+from validation.judge.reference_pack import REFERENCE_PLANT, read_pack
 from validation.preflight import check_validation_inputs
 from validation.report.figures import DEFAULT_FORMATS, FigureFormat
 from validation.scenes import resolve_scene, with_threshold_overrides
@@ -53,9 +54,6 @@ from validation.validate import (
     _figure_formats,
     run_request,
 )
-
-REFERENCE_PLANT = "reference"
-"""The plant name of a reference pack's trajectory (:mod:`validation.judge.reference_pack`)."""
 
 LABEL_PATTERN = NAME_PATTERN
 """A plant label is a plant name (:data:`mj_bridge.registry.NAME_PATTERN`): a lower-case letter,
@@ -230,8 +228,6 @@ def judge_request(
         ValueError: one line naming the field and the value, or the file's row and column
             (:class:`~validation.judge.errors.TrajectoryFileError`), or the pack's file.
     """
-    from validation.judge.reference_pack import read_pack  # the pack reads this module's names
-
     if not isinstance(scene, Scene):
         scene = resolve_scene(scene, check_thresholds=False)  # checked below, once
     if t_end is not None:

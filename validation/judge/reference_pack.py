@@ -55,6 +55,8 @@ RECORD_FILE = "reference.json"
 README_FILE = "README.md"
 PACK_FORMAT = 1
 """The version of the pack's layout (``reference.json``'s ``pack_format``)."""
+REFERENCE_PLANT = "reference"
+"""The plant name of a pack's trajectory when a file is judged against it."""
 
 REFERENCE_SETTINGS = AnalyticSettings(SolverMethod.DOP853, rtol=1e-13, atol=1e-14)
 """The reference run: DOP853 (the compiled stepper where it applies) at rtol 1e-13, atol 1e-14,
@@ -256,8 +258,6 @@ def read_pack(pack: str | Path, scene: Scene) -> ExternalTrajectory:
             not the file ``reference.json`` records (its SHA-256), or a bad ``reference.csv``
             (its row and column).
     """
-    from validation.judge.judge import REFERENCE_PLANT
-
     pack = Path(pack)
     where = f"reference pack {str(pack)!r}"
     if not pack.is_dir():
@@ -293,6 +293,7 @@ __all__ = [
     "ACCURACY_MARGIN",
     "CHECK_SETTINGS",
     "PACK_FORMAT",
+    "REFERENCE_PLANT",
     "REFERENCE_SETTINGS",
     "Accuracy",
     "PackResult",
