@@ -13,7 +13,7 @@ Which loop runs (:func:`choose`, the ``stepper`` setting, :class:`~analytic.effe
 * ``scipy``: scipy's loop, the reference.
 * ``compiled``: this loop, or ``ValueError`` naming ``stepper`` where it cannot apply: a method
   other than DOP853 and RK45 (:data:`COMPILED_METHODS`), a right-hand side that is not compiled
-  (backend ``numpy``, numba missing, the identity weighting, see :class:`analytic.fast.FastModel`),
+  (backend ``numpy``, numba missing, see :class:`analytic.fast.FastModel`),
   or CyRK not usable (:func:`unavailable` says why).
 * ``auto`` (the default): ``compiled`` where it applies, else ``scipy``.
 

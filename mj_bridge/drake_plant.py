@@ -26,8 +26,8 @@ Every derivative evaluation:
    state the controller gets: ``q = [R, u, p]``, ``q̇ = [Ṙ, ½ u ⊗ (0, ω), ṗ]`` with u **as
    integrated** (not normalised), as the analytic plant's controller sees its own state;
 2. the analytic controller (Eq. 89) at that state: the compiled kernel
-   (:meth:`analytic.fast.FastModel.qddot_and_forces`, the numpy model where it declines, e.g. the
-   identity weighting) or, with ``ControllerSource.ANALYTIC``, the numpy model;
+   (:meth:`analytic.fast.FastModel.qddot_and_forces`, the numpy model where it declines) or,
+   with ``ControllerSource.ANALYTIC``, the numpy model;
 3. the Pinocchio plant's compiled stage (:func:`mj_bridge.pinocchio_plant.stage_for`, given that
    control), shared so that the springs ``F^S = −∂U_s/∂p`` of Eq. (38), the given torque of Remark 2,
    the quaternion rate and the rates of :mod:`analytic.aux_rates` are the code the Pinocchio plant

@@ -302,8 +302,8 @@ def test_twenty_seconds_random_scenes_and_spacecraft_agree(seed_n):
 
 
 def test_short_runs_under_other_weightings_agree():
-    """2 s of random controlled scenes under M^-2 (a force at C) and identity (the numpy
-    controller) at rtol 1e-12: C within DRAKE_CONTROLLED_EX1_M of the analytic plant."""
+    """2 s of random controlled scenes under M^-2 (a force at C) and identity (compiled too) at
+    rtol 1e-12: C within DRAKE_CONTROLLED_EX1_M of the analytic plant."""
     for w in ("M^-2", "identity"):
         scene = _scene(850, 3, controlled=True, weighting=w)
         ana = analytic_simulate(scene, t_end=2.0)
@@ -311,8 +311,7 @@ def test_short_runs_under_other_weightings_agree():
         assert dr.status is RunStatus.OK, dr.message
         dist = _distances(dr, ana)
         assert dist["C"] <= tol.DRAKE_CONTROLLED_EX1_M.value, (w, dist)
-        if w == "identity":
-            assert dr.info["controller_fallbacks"] == dr.info["nfev"]
+        assert dr.info["controller_fallbacks"] == 0  # every weighting is compiled
 
 
 def test_plant_protocol_settings_and_effects():
