@@ -3,9 +3,10 @@
 :class:`~analytic.trajectory.Trajectory` record as the other plants (paper coordinates, Eq. 44).
 
 Drake (PyPI ``drake`` >= 1.51) is optional: it is imported when a :class:`DrakeDynamics` is built.
-The plant is :class:`DrakePlant` (``DrakePlant().simulate(scene)``), a plant plugin registered by the
-project's own entry point (``pyproject.toml``, group ``tumbling_testbed.plants``: ``drake``); it is
-not among the default plants (``default = False``): ``--plants analytic,mujoco,drake`` runs it.
+The plant is :class:`mj_bridge.drake_plugin.DrakePlant` (``DrakePlant().simulate(scene)``, which runs
+:func:`simulate` here), a plant plugin registered by the project's own entry point
+(``pyproject.toml``, group ``tumbling_testbed.plants``: ``drake``); it is not among the default
+plants (``default = False``): ``--plants analytic,mujoco,drake`` runs it.
 
 State integrated by scipy (one ``OdeSolver`` step at a time, :func:`analytic.stepping.step_and_sample`,
 the analytic and Pinocchio plants' loop)::
@@ -67,24 +68,20 @@ from collections.abc import Callable
 import numpy as np
 
 from analytic.assemble import N_AUX, assemble
-from analytic.effects import Effect
 from analytic.fast import FastModel
 from analytic.kernel import compile_lock
 from analytic.kernel.jit import jit
 from analytic.model import ControlOutput, TumblingModel
-from analytic.plant import Plant
 from analytic.scene import OutputSettings, Scene
 from analytic.stepping import NonFinite, step_and_sample
 from analytic.trajectory import RunStatus, Trajectory
 from mj_bridge.drake_model import build_model, drake_to_paper_batch, import_drake, paper_to_drake
-from mj_bridge.drake_settings import DrakeSettings, drake_unavailable
+from mj_bridge.drake_settings import DrakeSettings
 from mj_bridge.pinocchio_plant import MODE_GIVEN, stage_for, work_layout
 from mj_bridge.stages import ControllerSource
 
-SUPPORTED_EFFECTS = frozenset(Effect)
-"""Every effect of :class:`analytic.effects.Effect`: gravity is Drake's gravity field, the mass
-inertias are the bodies' inertias, the springs, the given torque and the control (ω and/or any
-subset of the masses, any weighting) are generalized forces."""
+ENGINE = "drake"
+"""The plant's name in its trajectories: :attr:`mj_bridge.drake_plugin.DrakePlant.engine`."""
 
 COMPILE_LOCK = "drake-stage"
 """The :mod:`analytic.kernel.compile_lock` name held while the maps below (and the Pinocchio stage
@@ -472,7 +469,7 @@ def _assemble(
     q, qd, qdd, omega = drake_to_paper_batch(_drake_q(Y[:, :nq]), Y[:, nq : nq + nv], vdot)
     return assemble(
         plant.analytic,
-        DrakePlant.engine,
+        ENGINE,
         t,
         q,
         qd,
@@ -486,40 +483,10 @@ def _assemble(
     )
 
 
-# ----------------------------------------------------------------------------------------------
-# The plant behind the protocol
-# ----------------------------------------------------------------------------------------------
-
-
-class DrakePlant(Plant):
-    """The same body in Drake (optional engine; a plugin, not among the default plants)."""
-
-    engine = "drake"
-    label = "Drake"
-    default = False
-    effects = SUPPORTED_EFFECTS
-    settings_type = DrakeSettings
-
-    @classmethod
-    def unavailable(cls) -> str:
-        return drake_unavailable()
-
-    def default_settings(self, scene: Scene) -> DrakeSettings:
-        return DrakeSettings(scene.solver.method, scene.solver.rtol, scene.solver.atol)
-
-    def describe(self, settings: DrakeSettings) -> str:
-        rtol = "the scene's" if settings.rtol is None else f"{settings.rtol:g}"
-        return f"Drake {settings.method.value} rtol {rtol}"
-
-    def _simulate(self, scene, settings, t_end, progress) -> Trajectory:
-        return simulate(scene, settings, t_end=t_end, progress=progress)
-
-
 __all__ = [
     "COMPILE_LOCK",
-    "SUPPORTED_EFFECTS",
+    "ENGINE",
     "DrakeDynamics",
-    "DrakePlant",
     "DrakeSettings",
     "NonFinite",
     "simulate",

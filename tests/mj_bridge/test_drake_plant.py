@@ -27,7 +27,8 @@ from mj_bridge.drake_model import (
     drake_to_paper_batch,
     paper_to_drake,
 )
-from mj_bridge.drake_plant import DrakeDynamics, DrakePlant, DrakeSettings
+from mj_bridge.drake_plant import DrakeDynamics, DrakeSettings
+from mj_bridge.drake_plugin import DrakePlant
 from mj_bridge.drake_settings import DRAKE_MISSING, drake_unavailable
 from mj_bridge.plants import installed_plants, plant
 from mj_bridge.stages import ControllerSource

@@ -1,7 +1,7 @@
 """The Drake plant's speed goal, for ``tumble bench`` (:mod:`validation.bench.goals` wires it).
 
 **Drake plant**: the controlled Example 1 over 20 s, DOP853 at rtol 1e-12 (atol 1e-13), on the Drake
-plant (:class:`mj_bridge.drake_plant.DrakePlant`) / on the analytic plant, both through the plant
+plant (:class:`mj_bridge.drake_plugin.DrakePlant`) / on the analytic plant, both through the plant
 protocol. At this tolerance the two are equally accurate (each is within ~1e-9 m of its own
 rtol-2.5e-14 run: Drake 1.1e-9 m, analytic 2.6e-9 m, measured), and they agree to 1.7e-9 m; the
 distance of their positions of C is recorded as the check that both ran the same motion. As for the
@@ -45,7 +45,7 @@ def goal_drake(
     ``simulate`` call), the CPU times and per-round ratios, the order of the rounds, the evaluations,
     the two plants' largest distance in C (m) and the analytic plant's wall on its default loop.
     """
-    from mj_bridge.drake_plant import DrakePlant, DrakeSettings
+    from mj_bridge.drake_plugin import DrakePlant, DrakeSettings
     from mj_bridge.plants import AnalyticSettings, plant
     from validation.scenes import resolve_scene
 

@@ -362,7 +362,7 @@ def test_round_off_scale_is_the_largest_force_across_plants():
 def test_registry_and_protocol():
     assert list(PLANTS) == [Engine.ANALYTIC, Engine.MUJOCO, Engine.PINOCCHIO]
     for e, cls in PLANTS.items():
-        assert issubclass(cls, Plant) and cls.engine is e
+        assert issubclass(cls, Plant) and cls.engine == e
         assert dataclasses.is_dataclass(cls.settings_type)
     assert installed_plants()[:2] == (Engine.ANALYTIC, Engine.MUJOCO)
     assert parse_plants("mujoco, analytic") == (Engine.ANALYTIC, Engine.MUJOCO)
@@ -581,7 +581,7 @@ def test_four_plants_name_the_perturbed_one_with_its_distance():
     Drake is the control torque's outlier, at its smallest pair value; the other three are the
     group."""
     pytest.importorskip("pydrake")
-    from mj_bridge.drake_plant import DrakePlant
+    from mj_bridge.drake_plugin import DrakePlant
 
     scene = paper_scene("paper_example1_controlled")
     body = dataclasses.replace(scene.body, inertia=scene.body.inertia * (1 + 1e-4))
