@@ -362,7 +362,7 @@ def test_round_off_scale_is_the_largest_force_across_plants():
 def test_registry_and_protocol():
     assert list(PLANTS) == [Engine.ANALYTIC, Engine.MUJOCO, Engine.PINOCCHIO]
     for e, cls in PLANTS.items():
-        assert issubclass(cls, Plant) and cls.engine is e
+        assert issubclass(cls, Plant) and cls.engine == e
         assert dataclasses.is_dataclass(cls.settings_type)
     assert installed_plants()[:2] == (Engine.ANALYTIC, Engine.MUJOCO)
     assert parse_plants("mujoco, analytic") == (Engine.ANALYTIC, Engine.MUJOCO)
