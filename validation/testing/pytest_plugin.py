@@ -362,8 +362,12 @@ class _Session:
     def plants(self) -> tuple[str, ...]:
         """The chosen plants, checked (``ValueError`` naming ``--tumble-plants``)."""
         if self._plants is None:
-            from mj_bridge.plants import installed_plants, parse_plants
+            import warnings
 
+            from mj_bridge.plants import installed_plants, parse_plants, plugin_errors
+
+            for err in plugin_errors():  # one line each in pytest's warnings summary; others run
+                warnings.warn(f"tumble: {err}", pytest.PytestWarning, stacklevel=1)
             text = self.config.getoption("tumble_plants")
             try:
                 chosen = parse_plants(text) if text else installed_plants()
