@@ -541,3 +541,17 @@ def test_docs_list_every_measure():
     for (m, r), info in MEASURES.items():
         if (m, r) not in IMPLICIT:
             assert f"| `{r.value}` | `{m.value}` | {info.unit} |" in doc, (r, m)
+
+
+def test_a_plugin_no_check_applies_to_is_not_applicable_not_an_error():
+    """A plant beyond the built-ins that none of a case's measures can judge (``engine_law`` needs
+    an engine's own matrices) is N/A with the reason; where a measure applies to every plant (the
+    mirror checks), the plugin is judged as a built-in is."""
+    from validation.studies.hard_cases.runner import _unjudged_plugins
+
+    cases = hc.cases()
+    chosen = ("analytic", "mujoco", "some_plugin")
+    na = _unjudged_plugins(cases["conflicting_requirements"], chosen, {})
+    assert list(na) == ["some_plugin"] and "no check of this case applies" in na["some_plugin"]
+    assert _unjudged_plugins(cases["negative_w"], chosen, {}) == {}
+    assert _unjudged_plugins(cases["conflicting_requirements"], ("analytic", "mujoco"), {}) == {}

@@ -230,6 +230,23 @@ def evaluate(case: HardCase, plants: tuple[str, ...]) -> Evaluation:
     )
 
 
+def _unjudged_plugins(
+    case: HardCase, chosen: tuple[str, ...], not_applicable: Mapping[str, str]
+) -> dict[str, str]:
+    """The plants beyond the built-ins (plugins) that none of the case's checks and reports
+    applies to (e.g. ``engine_law`` needs an engine's own matrices), N/A with that reason; a
+    built-in plant judged on nothing stays an ERROR (a bug of the case)."""
+    from mj_bridge.registry import BUILTIN
+
+    specs = (*case.criterion.checks, *case.criterion.reports)
+    return {
+        e: "no check of this case applies to this plant (its measures need what the plugin "
+        "does not provide: an engine's own matrices or scipy's methods)"
+        for e in chosen
+        if e not in BUILTIN and e not in not_applicable and not any(_applies(s, e) for s in specs)
+    }
+
+
 def run_case(name: str, plants: Iterable[str] | None = None) -> HardCaseRow:
     """Run one hard case on ``plants`` (default every installed plant); an exception becomes an
     ``ERROR`` row carrying its message (the user's Ctrl-C stops the suite)."""
@@ -239,6 +256,7 @@ def run_case(name: str, plants: Iterable[str] | None = None) -> HardCaseRow:
     chosen, _ = suite_plants(plants)
     case = known[name]
     not_applicable = {e: why for e, why in case.criterion.not_applicable.items() if e in chosen}
+    not_applicable |= _unjudged_plugins(case, chosen, not_applicable)
     applicable = tuple(e for e in chosen if e not in not_applicable)
     wall0 = time.perf_counter()
     error = ""
