@@ -25,9 +25,10 @@ rule is (:class:`Clause`; :func:`rule_text` prints it under the report's table):
 With three plants, ``d1 ≤ d2 ≤ d3``, clauses 1-2 are the three-plant rule: all agree when
 ``d3 ≤ f``; the plant outside the closest pair is the outlier when ``d2 ≥ k · max(d1, f)`` (a pair
 is the only group a majority of three can be, and only the closest pair can be separated); three
-plants never split. The only difference from the three-plant rule as first written: when every
-distance is infinite (no plant's values could be compared) no plant is named, where that rule named
-one by the pairs' order.
+plants never split. The differences from the three-plant rule as first written are degenerate
+cases where that rule named a plant by the pairs' order: every distance infinite (no plant's values
+could be compared), or a floor of 0 (a threshold of 0 and no round-off scale) with the two smallest
+distances 0 (the "outlier" would sit at distance 0 from a member); here no plant is named.
 
 The noise floor (:class:`NoiseFloor`) is the larger of two parts, each in the quantity's unit:
 ``REFEREE_NOISE_FRACTION × threshold`` (distances a thousand times inside the threshold decide
@@ -284,7 +285,8 @@ def _separated_groups(
             if not math.isfinite(s):
                 continue
             bound = k * max(s, floor)
-            if all(d[_key(o, m)] >= bound and d[_key(o, m)] > s for o in plants if o not in g for m in g):
+            far = (d[_key(o, m)] for o in plants if o not in g for m in g)
+            if all(x >= bound and x > s for x in far):  # "> s" matters only for s = floor = 0
                 out[g] = s
     return list(out.items())
 

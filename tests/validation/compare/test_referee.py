@@ -118,6 +118,14 @@ def test_nothing_computed_names_no_plant():
     assert v.kind is VerdictKind.DISAGREE and v.outlier == ""
 
 
+def test_a_plant_at_distance_zero_is_no_outlier():
+    """A floor of 0 (threshold 0, no round-off scale) and a at distance 0 from b and c: the
+    three-plant rule as first written named b or c by the pairs' order; no plant is named."""
+    d = {("a", "b"): 0.0, ("a", "c"): 0.0, ("b", "c"): 1e-9}
+    r = decide("abc", d, {p: True for p in d}, 0.0)
+    assert r.kind is VerdictKind.AGREE and r.outliers == ()
+
+
 def test_rule_needs_every_pair():
     with pytest.raises(ValueError, match=r"^checks: the referee needs every pair"):
         rule("position_C", _checks({P_AM: 1.0, P_AP: 1.0}))
