@@ -172,7 +172,7 @@ _CLOSING_FILES = (("report", "report.md"), ("recording", "run.rrd"))
 def cmd_judge(args: argparse.Namespace) -> int:
     from validation.compare.referee import VerdictKind
     from validation.compare.summary import check_sentence
-    from validation.judge.judge import judge_request, run_judge
+    from validation.external.judge import judge_request, run_judge
     from validation.runs.outputs import default_out_dir
     from validation.runs.progress import StageProgress, Status
     from validation.runs.warmup import warming
@@ -219,7 +219,7 @@ def cmd_judge(args: argparse.Namespace) -> int:
 
 
 def cmd_reference(args: argparse.Namespace) -> int:
-    from validation.judge.reference_pack import ACCURACY_MARGIN, write_pack
+    from validation.external.reference_pack import ACCURACY_MARGIN, write_pack
     from validation.runs.outputs import default_out_dir
     from validation.scenes import resolve_scene
 

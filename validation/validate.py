@@ -120,7 +120,7 @@ class ValidationResult:
 
 @dataclass(frozen=True)
 class JoinedRuns:
-    """Runs made elsewhere that join the plants' results as more plants (:mod:`validation.judge`:
+    """Runs made elsewhere that join the plants' results as more plants (:mod:`validation.external`:
     another engine's trajectory file, a reference pack's trajectory): compared, refereed,
     reported, drawn and recorded as the plants are.
 

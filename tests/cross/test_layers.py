@@ -52,7 +52,7 @@ WINGS: tuple[tuple[str, ...], ...] = (
     ("compare",),  # differences, checks, thresholds, the referee
     ("scenes", "preflight"),  # a scene name resolved; a run's inputs checked, once
     ("report", "recording"),  # the evidence a run leaves
-    ("validate", "judge"),  # the jobs: N plants compared; another engine's file judged
+    ("validate", "external"),  # the jobs: N plants compared; another engine's file judged
     ("studies", "testing", "bench"),  # many runs; the pytest face; the speed goals
     ("cli", "__main__"),  # parse and dispatch
 )

@@ -347,7 +347,7 @@ COM_PARABOLA_ABS_M = Threshold(
     "that does not cancel between body and masses moves c by O(F t²/m_T), far above 1e-9 m.",
 )
 
-# --- trajectory files (tests/validation/judge) ---------------------------------------------------
+# --- trajectory files (tests/validation/external) ---------------------------------------------------
 TRAJECTORY_FILE_ROUND_TRIP_REL = Threshold(
     "TRAJECTORY_FILE_ROUND_TRIP_REL",
     1e-15,

@@ -15,7 +15,7 @@ nothing until a scene is collected:
   under a file lock, so a scene never runs twice whatever the distribution mode;
 * output goes to a temporary directory, or with ``--tumble-out DIR`` to ``DIR/<slug of the scene
   file's path>`` (the report, ``report.json``, figures and ``run.rrd``: CI artefacts).
-* a ``test_*.toml`` with a ``[judge]`` table instead (:mod:`validation.judge.spec_file`: a scene,
+* a ``test_*.toml`` with a ``[judge]`` table instead (:mod:`validation.external.spec_file`: a scene,
   a trajectory file beside it, optionally a label, plants or a reference pack) judges another
   engine's run (:class:`JudgeFile`): the judge's checks are its items, each check the file cannot
   support skipped as ``not judged: no ... columns``.
@@ -227,8 +227,8 @@ class SceneFile(pytest.File):
 
 
 class JudgeFile(SceneFile):
-    """A ``test_*.toml`` with a ``[judge]`` table (:mod:`validation.judge.spec_file`): another
-    engine's trajectory file of a scene, judged (:func:`validation.judge.judge.judge`); the
+    """A ``test_*.toml`` with a ``[judge]`` table (:mod:`validation.external.spec_file`): another
+    engine's trajectory file of a scene, judged (:func:`validation.external.judge.judge`); the
     judge's checks are the items, a check the file cannot support skipped as ``not judged``. A
     bad table or path is one collection error naming the key."""
 
@@ -238,8 +238,8 @@ class JudgeFile(SceneFile):
         sess = self.config.stash[_SESSION]
         try:
             # deferred: numpy, the scenes, the plants (as for a scene file)
-            from validation.judge.judge import REFERENCE_PLANT, plant_label
-            from validation.judge.spec_file import parse_spec
+            from validation.external.judge import REFERENCE_PLANT, plant_label
+            from validation.external.spec_file import parse_spec
             from validation.scenes import builtin_names, resolve_scene
 
             spec = parse_spec(_read_head(self.path, 1 << 20), self.path.parent, builtin_names())
@@ -440,7 +440,7 @@ class _Session:
         key = h.hexdigest()
         if key in self._memo:
             return self._memo[key]
-        from validation.judge.judge import judge
+        from validation.external.judge import judge
 
         RUNS.append(key)
         out = self._out_dir(path, key, "judge")

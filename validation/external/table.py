@@ -4,7 +4,7 @@ A table is the file's header (names) and its samples as one float array, shape (
 per data row, columns in file order. :func:`check_table` refuses, in this order, the first
 non-finite value, a time that does not increase, a time column that is not the scene's output
 grid, and a quaternion that is not unit; every message names the data row and the column
-(:class:`~validation.judge.errors.Where`).
+(:class:`~validation.external.errors.Where`).
 """
 
 from __future__ import annotations
@@ -14,8 +14,8 @@ from collections.abc import Sequence
 import numpy as np
 
 from analytic.scene import Scene
-from validation.judge.columns import ColumnGroup, HeaderLayout
-from validation.judge.errors import TrajectoryFileError, Where
+from validation.external.columns import ColumnGroup, HeaderLayout
+from validation.external.errors import TrajectoryFileError, Where
 
 QUAT_NORM_TOL = 1e-6
 """Largest ``| |u| − 1 |`` a row's quaternion may have. The file's u is kept as written (an
@@ -105,7 +105,7 @@ def check_table(
     Args:
         names: header names in file order, C of them.
         values: the samples, shape (N, C), file order.
-        layout: where each group is (:func:`validation.judge.columns.parse_header`).
+        layout: where each group is (:func:`validation.external.columns.parse_header`).
         scene: the scene whose grid and mass count the file must have.
         where: how messages name the file and rows.
     """

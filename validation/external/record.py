@@ -1,12 +1,12 @@
 """The record of a trajectory read from a file, and how it becomes a :class:`Trajectory`.
 
 A file gives the motion ``q = [R, u, p]`` (Eq. 44) and, optionally, the velocities, the control
-torque and the rod forces (:mod:`validation.judge.columns`). :func:`external_trajectory` puts them
+torque and the rod forces (:mod:`validation.external.columns`). :func:`external_trajectory` puts them
 in a :class:`~analytic.trajectory.Trajectory` in the paper's coordinates, as a plant would, and
 fills what the file cannot give with **NaN**, so a comparison tells "absent" from any value:
 
 * ``q``: R, u, p as written, except the quaternion's sign (below); the file's time column is
-  replaced by the scene's grid it was checked against (:data:`validation.judge.table.GRID_TOL`).
+  replaced by the scene's grid it was checked against (:data:`validation.external.table.GRID_TOL`).
 * ``qdot = [Ṙ, u̇, ṗ]``: ``Ṙ`` from ``v``, ``u̇ = H(u)ᵀω / (4|u|²)`` from ``ω`` (Eq. 12 inverted on
   the tangent space, ``analytic.kinematics.udot_of``), ``ṗ`` from ``pdot``; NaN where absent.
 * ``qddot``, ``residual_norm``, ``force_at_C``: NaN (no column holds them).
@@ -41,7 +41,7 @@ from analytic.kinematics import udot_of
 from analytic.model import TumblingModel
 from analytic.scene import Scene
 from analytic.trajectory import Engine, RunStatus, Trajectory
-from validation.judge.columns import OPTIONAL_GROUPS, ColumnGroup, TrajectoryFormat
+from validation.external.columns import OPTIONAL_GROUPS, ColumnGroup, TrajectoryFormat
 
 
 @dataclass(frozen=True)

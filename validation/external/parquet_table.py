@@ -1,6 +1,6 @@
 """Parquet bytes of a trajectory table, through pyarrow (imported when first needed).
 
-The file holds the same columns as the CSV form (:mod:`validation.judge.columns`), each a
+The file holds the same columns as the CSV form (:mod:`validation.external.columns`), each a
 ``double`` (integer and float32 columns are read too, as float64); a null is refused like a NaN.
 The row and column counts are read from the file's metadata and refused before any data is
 decompressed, so a small file cannot expand to more rows than the scene's grid.
@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from validation.judge.errors import TrajectoryFileError, Where
+from validation.external.errors import TrajectoryFileError, Where
 
 
 def _pyarrow(where: str) -> tuple[Any, Any]:

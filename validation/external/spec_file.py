@@ -14,7 +14,7 @@ Every path is relative to the directory of the TOML file and stays inside it: no
 no ``..``, and nothing (a symbolic link included) that resolves outside that directory. Nothing in
 the file is evaluated; an unknown key, a value of another type, or a table besides ``[judge]`` is
 one collection error naming it. This module reads and checks the table only (standard library);
-the pytest plugin (:mod:`validation.testing.pytest_plugin`) runs :func:`validation.judge.judge.judge`.
+the pytest plugin (:mod:`validation.testing.pytest_plugin`) runs :func:`validation.external.judge.judge`.
 """
 
 from __future__ import annotations

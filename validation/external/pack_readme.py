@@ -1,4 +1,4 @@
-"""The ``README.md`` of a reference pack (:mod:`validation.judge.reference_pack`): the problem, the
+"""The ``README.md`` of a reference pack (:mod:`validation.external.reference_pack`): the problem, the
 controller's equations for a controlled scene (the paper's equation numbers, Koganti & Udwadia,
 JGCD 40(3), 2017, with ``docs/errata.md``), the error definitions and the acceptance thresholds,
 and the reference's own accuracy. Text only: every number comes from the scene, the thresholds in

@@ -1,11 +1,11 @@
 """``write_trajectory``: a plant's :class:`Trajectory` as a trajectory file (CSV or Parquet).
 
-The columns are :data:`validation.judge.columns.COLUMNS` for the scene's n: t, R, u and p from
+The columns are :data:`validation.external.columns.COLUMNS` for the scene's n: t, R, u and p from
 ``q`` (Eq. 44), ``v = Ṙ``, ``ω = H(u) u̇`` (body axes, Eq. 12), ``ṗ``, the control torque ``τ``
 (body axes), the rod forces ``F`` and the plant's quadratures (work, impulses). Every value is written at full precision (CSV: ``repr``,
 the shortest text that reads back to the same double; Parquet: doubles), so
-:func:`validation.judge.read.read_trajectory` gives back t, R, u, p, v, ω, ṗ, τ and F exactly.
-The table is checked as the reader checks a file (:func:`validation.judge.table.check_table`)
+:func:`validation.external.read.read_trajectory` gives back t, R, u, p, v, ω, ṗ, τ and F exactly.
+The table is checked as the reader checks a file (:func:`validation.external.table.check_table`)
 before anything is written, so what is written can be read; the file is written atomically
 (:func:`validation.runs.atomic.write_bytes`).
 """
@@ -19,12 +19,12 @@ import numpy as np
 from analytic.effects import Effect
 from analytic.scene import Scene
 from analytic.trajectory import Trajectory
-from validation.judge.columns import ColumnGroup, TrajectoryFormat, header, parse_header
-from validation.judge.csv_text import format_csv
-from validation.judge.errors import TrajectoryFileError, Where
-from validation.judge.parquet_table import format_parquet
-from validation.judge.read import format_of
-from validation.judge.table import check_table
+from validation.external.columns import ColumnGroup, TrajectoryFormat, header, parse_header
+from validation.external.csv_text import format_csv
+from validation.external.errors import TrajectoryFileError, Where
+from validation.external.parquet_table import format_parquet
+from validation.external.read import format_of
+from validation.external.table import check_table
 from validation.runs.atomic import write_bytes
 
 
@@ -64,7 +64,7 @@ def trajectory_table(
 ) -> tuple[tuple[str, ...], np.ndarray]:
     """``(header names, values (N, C))`` of a trajectory of ``scene``: the required groups and
     ``groups`` (default every optional group), in the order of
-    :data:`~validation.judge.columns.COLUMNS`."""
+    :data:`~validation.external.columns.COLUMNS`."""
     names = header(trajectory.n, groups)
     chosen = [g for g in ColumnGroup if g.required or groups is None or g in groups]
     values = np.concatenate([_group_values(trajectory, g, scene) for g in chosen], axis=1)

@@ -1,4 +1,4 @@
-"""The ``[judge]`` table of a test_*.toml (validation/judge/spec_file.py) and the pytest plugin's
+"""The ``[judge]`` table of a test_*.toml (validation/external/spec_file.py) and the pytest plugin's
 judge form (validation/testing/pytest_plugin.py, JudgeFile): paths stay inside the TOML's
 directory; the judge's checks are the items, a check the file cannot support skipped as not
 judged."""
@@ -14,10 +14,10 @@ import pytest
 from analytic.scene import load_scene
 from analytic.scene.dump import scene_to_toml
 from mj_bridge.plants import plant
-from validation.judge import ColumnGroup
-from validation.judge.columns import OPTIONAL_GROUPS
-from validation.judge.spec_file import parse_spec
-from validation.judge.write import write_trajectory
+from validation.external import ColumnGroup
+from validation.external.columns import OPTIONAL_GROUPS
+from validation.external.spec_file import parse_spec
+from validation.external.write import write_trajectory
 from validation.scenes import builtin_names
 
 BUILTIN = builtin_names()

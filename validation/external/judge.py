@@ -1,11 +1,11 @@
 """``judge``: another engine's run of a scene, judged beside the built-in plants.
 
-The file (``docs/trajectory-format.md``, :func:`validation.judge.read.read_trajectory`) becomes one
+The file (``docs/trajectory-format.md``, :func:`validation.external.read.read_trajectory`) becomes one
 more plant, named by its label; the chosen built-in plants (default: every installed one that can
 run the scene) run beside it as referees, through the stages of
 :func:`validation.validate.run_request` (:class:`validation.validate.JoinedRuns`): every pair
 compared, each plant checked, the referee, ``report.md``/``report.json``, the figures and
-``run.rrd``. With a reference pack (:mod:`validation.judge.reference_pack`) no plant runs: the
+``run.rrd``. With a reference pack (:mod:`validation.external.reference_pack`) no plant runs: the
 pack's trajectory is the other plant, named ``reference``.
 
 A check that needs a column group the file does not hold is **not judged** (:data:`NEEDS`): its
@@ -39,10 +39,10 @@ from mj_bridge.plants import (
 from mj_bridge.registry import NAME_PATTERN
 from validation.compare.checks import Check, Comparison
 from validation.compare.thresholds import thresholds_for
-from validation.judge.columns import ColumnGroup
-from validation.judge.read import read_trajectory
-from validation.judge.record import ExternalTrajectory, does_work
-from validation.judge.reference_pack import REFERENCE_PLANT, read_pack
+from validation.external.columns import ColumnGroup
+from validation.external.read import read_trajectory
+from validation.external.record import ExternalTrajectory, does_work
+from validation.external.reference_pack import REFERENCE_PLANT, read_pack
 from validation.preflight import check_validation_inputs
 from validation.report.figures import DEFAULT_FORMATS, FigureFormat
 from validation.scenes import resolve_scene, with_threshold_overrides
@@ -76,7 +76,7 @@ NEEDS: Mapping[str, tuple[ColumnGroup, ...]] = {
 }
 """Check name -> the optional column groups it needs from a file (the momenta and the energy
 need every velocity; their balances need the ``work`` group too when something does work on the
-system, :func:`validation.judge.record.does_work`). Checks not named here (completed, position
+system, :func:`validation.external.record.does_work`). Checks not named here (completed, position
 of C, attitude, rod positions, quaternion norm) need the required columns only."""
 
 _BALANCES = frozenset({"linear_momentum", "angular_momentum", "energy"})
@@ -226,7 +226,7 @@ def judge_request(
 
     Raises:
         ValueError: one line naming the field and the value, or the file's row and column
-            (:class:`~validation.judge.errors.TrajectoryFileError`), or the pack's file.
+            (:class:`~validation.external.errors.TrajectoryFileError`), or the pack's file.
     """
     if not isinstance(scene, Scene):
         scene = resolve_scene(scene, check_thresholds=False)  # checked below, once

@@ -1,11 +1,11 @@
-"""The column schema (validation/judge/columns.py): the header it makes, and the documented table."""
+"""The column schema (validation/external/columns.py): the header it makes, and the documented table."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
-from validation.judge import COLUMNS
-from validation.judge.columns import header
+from validation.external import COLUMNS
+from validation.external.columns import header
 
 DOC = Path(__file__).resolve().parents[3] / "docs" / "trajectory-format.md"
 

@@ -14,7 +14,7 @@
   it is not (``accurate_enough``);
 * ``README.md``: the problem, the controller's equations (for a controlled scene, with the paper's
   equation numbers), the error definitions and the acceptance thresholds
-  (:mod:`validation.judge.pack_readme`).
+  (:mod:`validation.external.pack_readme`).
 
 :func:`read_pack` reads a pack back for ``tumble judge --reference DIR``: the three files at their
 fixed names in ``DIR`` (regular files, not links; nothing in the pack names a path), the pack's
@@ -42,10 +42,10 @@ from analytic.trajectory import RunStatus
 from mj_bridge.plants import plant
 from validation.compare.checks import compare
 from validation.compare.thresholds import thresholds_for
-from validation.judge.columns import OPTIONAL_GROUPS
-from validation.judge.read import read_trajectory, size_limit
-from validation.judge.record import ExternalTrajectory
-from validation.judge.write import write_trajectory
+from validation.external.columns import OPTIONAL_GROUPS
+from validation.external.read import read_trajectory, size_limit
+from validation.external.record import ExternalTrajectory
+from validation.external.write import write_trajectory
 from validation.runs.atomic import write_text
 from validation.runs.outputs import output_run
 
@@ -167,7 +167,7 @@ def write_pack(scene: Scene | str | Path | None, out_dir: str | Path) -> PackRes
         ValueError: a bad scene, naming its field; an output directory that is not the tool's.
         OutputError: a file could not be written (``out_dir`` keeps its previous contents).
     """
-    from validation.judge.pack_readme import render_readme
+    from validation.external.pack_readme import render_readme
     from validation.scenes import resolve_scene
 
     sc = scene if isinstance(scene, Scene) else resolve_scene(scene)

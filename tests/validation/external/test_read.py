@@ -1,4 +1,4 @@
-"""read_trajectory (validation/judge/read.py): a hand-written file read to known values, either
+"""read_trajectory (validation/external/read.py): a hand-written file read to known values, either
 quaternion sign to one attitude, columns in any order, and every bad file refused in one line
 naming its data row (1-based; CSV: and its line) and column (docs/trajectory-format.md)."""
 
@@ -15,9 +15,9 @@ from analytic.scene import load_scene
 from analytic.trajectory import Engine
 from tests.support import tolerances as tol
 from validation.compare.checks import attitude_angle
-from validation.judge import ColumnGroup, TrajectoryFileError, read_trajectory
-from validation.judge.columns import OPTIONAL_GROUPS
-from validation.judge.write import trajectory_table
+from validation.external import ColumnGroup, TrajectoryFileError, read_trajectory
+from validation.external.columns import OPTIONAL_GROUPS
+from validation.external.write import trajectory_table
 
 ROUND_TRIP = tol.TRAJECTORY_FILE_ROUND_TRIP_REL.value
 

@@ -17,7 +17,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from validation.judge.errors import TrajectoryFileError, Where
+from validation.external.errors import TrajectoryFileError, Where
 
 _NUMBER = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?\Z")
 _NON_FINITE = {"nan", "inf", "infinity"}

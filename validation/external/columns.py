@@ -18,7 +18,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from enum import StrEnum
 
-from validation.judge.errors import TrajectoryFileError
+from validation.external.errors import TrajectoryFileError
 
 
 class TrajectoryFormat(StrEnum):

@@ -1,4 +1,4 @@
-"""write_trajectory (validation/judge/write.py): a plant's run written as CSV and Parquet reads back
+"""write_trajectory (validation/external/write.py): a plant's run written as CSV and Parquet reads back
 to full precision; absent groups stay absent; what the reader would refuse is never written."""
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ from analytic.trajectory import Engine
 from tests.support import tolerances as tol
 from validation.compare.checks import attitude_angle
 from validation.compare.thresholds import DEFAULTS
-from validation.judge import (
+from validation.external import (
     ColumnGroup,
     ExternalTrajectory,
     TrajectoryFileError,
@@ -20,8 +20,8 @@ from validation.judge import (
     read_trajectory,
     write_trajectory,
 )
-from validation.judge.columns import OPTIONAL_GROUPS, header
-from validation.judge.write import trajectory_table
+from validation.external.columns import OPTIONAL_GROUPS, header
+from validation.external.write import trajectory_table
 
 ROUND_TRIP = tol.TRAJECTORY_FILE_ROUND_TRIP_REL.value
 

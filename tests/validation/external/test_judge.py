@@ -1,4 +1,4 @@
-"""judge (validation/judge/judge.py) and ``tumble judge``: a built-in plant's run written to a file
+"""judge (validation/external/judge.py) and ``tumble judge``: a built-in plant's run written to a file
 gets that plant's verdicts; a run of a scene with a perturbed inertia is named the outlier; columns
 a file lacks make their checks "not judged", never passed; a bad file is one line and exit 2."""
 
@@ -19,10 +19,10 @@ from tests.support import tolerances as tol
 from tests.support.guards import forbid_plant_runs
 from validation.cli import EXIT_USAGE, main
 from validation.compare.referee import VerdictKind
-from validation.judge import ColumnGroup
-from validation.judge.columns import OPTIONAL_GROUPS
-from validation.judge.judge import judge, needed_groups, plant_label
-from validation.judge.write import trajectory_table, write_trajectory
+from validation.external import ColumnGroup
+from validation.external.columns import OPTIONAL_GROUPS
+from validation.external.judge import judge, needed_groups, plant_label
+from validation.external.write import trajectory_table, write_trajectory
 from validation.validate import run_validation
 
 PAIR = (
@@ -137,11 +137,12 @@ def test_labels():
 
 
 def test_validation_judge_is_the_judge():
-    """``validation.judge(...)`` calls the judge whether the name holds the lazily exported
-    function or the package (which Python's import puts there once a submodule is loaded)."""
-    importlib.import_module("validation.judge.read")
-    assert callable(validation.judge)
-    assert validation.judge.__call__ is not None
+    """``validation.judge`` is the judge function, also once the wing's modules are loaded (the
+    wing is ``validation.external``, so no package shadows the name)."""
+    importlib.import_module("validation.external.read")
+    from validation.external.judge import judge
+
+    assert validation.judge is judge
 
 
 def test_a_bad_file_exits_2_with_one_line_before_any_plant(scene, tmp_path, monkeypatch, capsys):

@@ -1,4 +1,4 @@
-"""Reference packs (validation/judge/reference_pack.py, ``tumble reference``): written and read
+"""Reference packs (validation/external/reference_pack.py, ``tumble reference``): written and read
 back; the reference agrees with an independent run of the plant; judging against a pack runs no
 plant and exits 0 or 1 on the verdict; a pack of another scene, a tampered or linked file, plants
 beside a pack are each refused in one line."""
@@ -19,10 +19,10 @@ from tests.support.guards import forbid_plant_runs
 from validation.cli import EXIT_FAILED, main
 from validation.compare.checks import compare
 from validation.compare.thresholds import thresholds_for
-from validation.judge.columns import OPTIONAL_GROUPS
-from validation.judge.judge import judge
-from validation.judge.reference_pack import ACCURACY_MARGIN, read_pack
-from validation.judge.write import write_trajectory
+from validation.external.columns import OPTIONAL_GROUPS
+from validation.external.judge import judge
+from validation.external.reference_pack import ACCURACY_MARGIN, read_pack
+from validation.external.write import write_trajectory
 
 
 def _scene(t_end: float = 1.0):

@@ -4,9 +4,9 @@ The file is read through :func:`analytic.safe_files.read_regular` (a regular fil
 scene file the user names: a symbolic link is followed to the file it names, a FIFO, device or
 directory is refused without blocking; at most :func:`size_limit` bytes), parsed as numbers
 and nothing else, and checked whole before anything is built from it: the header
-(:func:`validation.judge.columns.parse_header`), then the values
-(:func:`validation.judge.table.check_table`). Nothing in the file is evaluated or names a path.
-Every refusal is one :class:`~validation.judge.errors.TrajectoryFileError` line naming the file,
+(:func:`validation.external.columns.parse_header`), then the values
+(:func:`validation.external.table.check_table`). Nothing in the file is evaluated or names a path.
+Every refusal is one :class:`~validation.external.errors.TrajectoryFileError` line naming the file,
 the data row (1-based, the header not counted; a CSV message adds the line number) and the column.
 """
 
@@ -18,12 +18,12 @@ from pathlib import Path
 from analytic.safe_files import read_regular
 from analytic.scene import Scene
 from analytic.trajectory import Engine
-from validation.judge.columns import ColumnGroup, TrajectoryFormat, header, parse_header
-from validation.judge.csv_text import parse_csv
-from validation.judge.errors import TrajectoryFileError, Where
-from validation.judge.parquet_table import parse_parquet
-from validation.judge.record import ExternalTrajectory, external_trajectory
-from validation.judge.table import check_table
+from validation.external.columns import ColumnGroup, TrajectoryFormat, header, parse_header
+from validation.external.csv_text import parse_csv
+from validation.external.errors import TrajectoryFileError, Where
+from validation.external.parquet_table import parse_parquet
+from validation.external.record import ExternalTrajectory, external_trajectory
+from validation.external.table import check_table
 
 BYTES_PER_VALUE = 64
 """Bytes per value a file may spend on average (:func:`size_limit`): ``repr`` of a double is at
