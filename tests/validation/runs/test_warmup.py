@@ -312,7 +312,7 @@ def test_first_run_compiles_once_and_says_so(tmp_path):
     first = _validate(tmp_path, env, timeout=1800)
     assert first.returncode == 0, first.stderr
     lines = first.stderr.splitlines()
-    plants = [p.value for p in installed_plants()]  # validate's default: every installed plant
+    plants = list(installed_plants())  # validate's default: every installed plant
     n_kernels = len({j for p in plants for j in warmup.KERNELS[p]})
     head = f"tumble: compiling {n_kernels} numba kernels once per machine (~"
     assert lines[0].startswith(head), lines
