@@ -33,6 +33,7 @@ if "NO_COLOR" not in _os.environ and not _os.isatty(2):
 _LAZY = {
     "assert_agree": "validation.testing.agree",
     "Check": "validation.compare.checks",
+    "fuzz": "validation.studies.fuzz.campaign",
     "judge": "validation.external.judge",
     "resolve_scene": "validation.scenes",
     "run_validation": "validation.validate",

@@ -310,7 +310,15 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         if sys.stderr.isatty():
             print(line, file=sys.stderr)
 
-    res = run_sweep(scene, out, quick=args.quick, progress=progress, t_end=args.t_end)
+    if args.scheduler is None and args.dask_workers is None:
+        res = run_sweep(scene, out, quick=args.quick, progress=progress, t_end=args.t_end)
+    else:  # a Dask cluster's executor (validation.studies.sweep.running.executor_for)
+        from validation.studies.sweep.running import executor_for
+
+        with executor_for(None, args.scheduler, args.dask_workers) as (ex, _width):
+            res = run_sweep(
+                scene, out, quick=args.quick, progress=progress, t_end=args.t_end, executor=ex
+            )
     print(f"sweep of {scene.name}: {len(res.runs)} runs in {res.wall_time_s:.1f} s")
     by_id = {r["run_id"]: r for r in res.runs}
     print("  cheapest setting reaching each accuracy level:")
@@ -321,6 +329,56 @@ def cmd_sweep(args: argparse.Namespace) -> int:
             print(f"    {engine:<9} error <= {float(lvl):.0e}: {pick}")
     print(f"table: {res.out_dir / 'sweep.md'}  figure: {res.out_dir / 'work_precision.png'}")
     return 0
+
+
+def cmd_fuzz(args: argparse.Namespace) -> int:
+    from validation.studies.fuzz.campaign import fuzz
+
+    plants = [x.strip() for x in args.plants.split(",") if x.strip()] if args.plants else None
+    out = Path(args.out) if args.out else Path("out") / f"fuzz_seed{args.seed}"
+
+    def progress(line: str) -> None:
+        if sys.stderr.isatty():
+            print(line, file=sys.stderr)
+
+    res = fuzz(
+        out,
+        budget=args.budget,
+        minutes=args.minutes,
+        seed=args.seed,
+        plants=plants,
+        horizon=args.horizon,
+        scheduler=args.scheduler,
+        dask_workers=args.dask_workers,
+        progress=progress,
+    )
+    new = sum(not e.known for e in res.counterexamples)
+    print(
+        f"fuzz seed {res.config.seed}: {len(res.scenes)} scenes in {res.wall_s:.1f} s, "
+        f"{len(res.counterexamples)} minimal counterexamples ({new} new); "
+        f"report in {res.out_dir / 'campaign.md'}"
+    )
+    return EXIT_FAILED if new else 0
+
+
+def _add_dask_args(p: argparse.ArgumentParser) -> None:
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--scheduler", help="a Dask scheduler's address (tcp://host:8786)")
+    g.add_argument(
+        "--dask-workers",
+        type=_positive_int,
+        help="run on a local Dask cluster of N single-threaded worker processes",
+    )
+
+
+def _positive_int(s: str) -> int:
+    try:
+        v = int(s)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a whole number (got {s!r})") from None
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"must be ≥ 1 (got {s!r})")
+    return v
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
@@ -548,7 +606,30 @@ def build_parser() -> argparse.ArgumentParser:
         help="a small grid over a 0.5 s horizon (~10 s on an idle 2-core machine)",
     )
     p.add_argument("--t-end", type=_positive_float, help="horizon in seconds (default 20)")
+    _add_dask_args(p)
     p.set_defaults(func=cmd_sweep)
+
+    p = sub.add_parser(
+        "fuzz",
+        help="differential fuzzing: random scenes on every plant, disagreements shrunk",
+        description="Draw seeded random scenes across the whole scene format, run each on every "
+        "chosen plant under the same controller, judge it with the comparison's checks and the "
+        "referee, and shrink every new disagreement to a minimal scene file "
+        "(OUT/counterexamples/*.toml); write OUT/campaign.md, campaign.json, campaign.png. "
+        "Run again with the same --out to resume. Exits 1 when a new (not known) disagreement "
+        "was found (docs/fuzzing.md).",
+    )
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--budget", type=_positive_int, help="scenes to judge (default 40)")
+    g.add_argument("--minutes", type=_positive_float, help="judge scenes for this long")
+    p.add_argument("--seed", type=int, default=0, help="the campaign's seed (default 0)")
+    p.add_argument("--plants", help="comma-separated plant names (default: every installed one)")
+    p.add_argument(
+        "--horizon", type=_positive_float, default=0.5, help="each scene's horizon, s (default 0.5)"
+    )
+    p.add_argument("--out", help="output directory (default: out/fuzz_seed<seed>)")
+    _add_dask_args(p)
+    p.set_defaults(func=cmd_fuzz)
 
     p = sub.add_parser(
         "bench",

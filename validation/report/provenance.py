@@ -61,6 +61,7 @@ class FileKind(enum.StrEnum):
     SWEEP = "sweep"  # tumble sweep: OUT/sweep.json
     HARD_CASES = "hard_cases"  # tumble hard-cases: OUT/hard_cases.json
     BENCH = "bench"  # tumble bench --out / python -m validation.bench.command --out: bench.json
+    CAMPAIGN = "campaign"  # tumble fuzz: OUT/campaign.json
 
 
 SCHEMA_VERSIONS: dict[FileKind, int] = {
@@ -68,6 +69,7 @@ SCHEMA_VERSIONS: dict[FileKind, int] = {
     FileKind.SWEEP: 2,  # 2: the same
     FileKind.HARD_CASES: 1,
     FileKind.BENCH: 1,
+    FileKind.CAMPAIGN: 1,
 }
 """The schema version of each file kind (the ``const`` of ``provenance.schema_version`` in its
 schema; tests/validation/report/test_provenance.py checks both agree)."""

@@ -15,8 +15,9 @@ import multiprocessing
 import os
 import time
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from concurrent.futures import Executor, ProcessPoolExecutor
+from contextlib import contextmanager
 from typing import Any
 
 import analytic
@@ -157,12 +158,69 @@ def default_executor() -> Executor:
     )
 
 
+@contextmanager
+def executor_for(
+    executor: Executor | None = None,
+    scheduler: str | None = None,
+    dask_workers: int | None = None,
+) -> Iterator[tuple[Executor, int]]:
+    """The executor a study's runs go to, and how many run at once; shut down on exit when made
+    here.
+
+    ``executor`` as given (left running; its width counted as :func:`default_workers`); else a
+    Dask cluster's executor: the scheduler at ``scheduler`` (``tcp://host:8786``), or a
+    ``LocalCluster`` of ``dask_workers`` single-threaded worker processes; else the local process
+    pool of :func:`default_executor`. Dask is imported only when asked for (``pip install
+    "dask[distributed]"``); ``ValueError`` naming ``scheduler`` / ``dask_workers`` for both given,
+    a bad count, or Dask not installed.
+    """
+    if scheduler is not None and dask_workers is not None:
+        raise ValueError("scheduler: give either --scheduler or --dask-workers, not both")
+    if dask_workers is not None and (
+        isinstance(dask_workers, bool) or not isinstance(dask_workers, int) or dask_workers < 1
+    ):
+        raise ValueError(f"dask_workers: must be a whole number ≥ 1 (got {dask_workers!r})")
+    if executor is not None:
+        yield executor, default_workers()
+        return
+    if scheduler is None and dask_workers is None:
+        ex = default_executor()
+        try:
+            yield ex, default_workers()
+        finally:
+            ex.shutdown(wait=True, cancel_futures=True)
+        return
+    try:
+        from distributed import Client, LocalCluster
+    except ImportError:
+        what = "scheduler" if scheduler is not None else "dask_workers"
+        raise ValueError(
+            f'{what}: Dask is not installed (pip install "dask[distributed]")'
+        ) from None
+    cluster = None
+    if scheduler is None:
+        cluster = LocalCluster(
+            n_workers=dask_workers, threads_per_worker=1, processes=True, dashboard_address=None
+        )
+        client = Client(cluster)
+    else:
+        client = Client(scheduler)
+    try:
+        width = sum(w.get("nthreads", 1) for w in client.scheduler_info()["workers"].values())
+        yield client.get_executor(), max(1, width)
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
 __all__ = [
     "MAX_WORKERS",
     "BudgetExceeded",
     "analytic_run",
     "default_executor",
     "default_workers",
+    "executor_for",
     "mujoco_run",
     "pinocchio_run",
     "pinocchio_unavailable",

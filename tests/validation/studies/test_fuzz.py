@@ -1,0 +1,177 @@
+"""tumble fuzz: the scene space, judging, shrinking against a planted wrong plant, the minimal
+scene files, resume, determinism across executors, the report and its schema, the CLI."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+import pytest
+
+from analytic.plant import AnalyticPlant
+from analytic.scene import load_scene, scene_from_dict
+from analytic.trajectory import Engine
+from validation.studies.fuzz import campaign as campaign_mod
+from validation.studies.fuzz.campaign import SerialExecutor, fuzz
+from validation.studies.fuzz.judge import Disagreement, Kind, judge_scene
+from validation.studies.fuzz.known import recognise
+from validation.studies.fuzz.shrink import MIN_HORIZON_S, round_sig
+from validation.studies.fuzz.space import draw_scene_dict, drivers
+
+SHIFT_M = 1e-3
+"""The planted plant's error: C displaced by 1 mm (the position_C threshold is far below)."""
+
+
+class ShiftedPlant(AnalyticPlant):
+    """A wrong plant (test only): the analytic plant's run with C displaced by SHIFT_M along x,
+    under MuJoCo's name. Every scene shows it on ``position_C``, so the minimal scene must be the
+    simplest one of the space."""
+
+    engine = Engine.MUJOCO
+    label = "shifted"
+
+    def _simulate(self, scene, settings, t_end, progress):
+        tr = super()._simulate(scene, settings, t_end, progress)
+        q = np.array(tr.q)
+        q[:, 0] += SHIFT_M
+        return dataclasses.replace(tr, q=q, engine=Engine.MUJOCO)
+
+
+PLANTS = ("analytic", ShiftedPlant())
+TARGET = Disagreement(Kind.CHECK, "position_C")
+
+
+def test_space_is_seeded_per_scene_and_valid():
+    a = [draw_scene_dict(7, i, 0.5) for i in range(60)]
+    assert a[3] == draw_scene_dict(7, 3, 0.5)  # the same scene whatever was drawn before
+    assert draw_scene_dict(8, 3, 0.5) != a[3]
+    for d in a:
+        scene_from_dict(d)  # every draw is a valid scene file
+    dr = [drivers(d) for d in a]
+    assert any(x.n == 0 for x in dr) and any(x.n > 10 for x in dr)
+    assert any(x.offset == 0.0 for x in dr)
+    assert any(d["initial"]["attitude"]["quaternion"][0] < 0 for d in a)
+    assert any("gravity" in d for d in a) and any("gravity" not in d for d in a)
+    assert any("control" in d for d in a) and any("external_torque" in d for d in a)
+    assert max(x.mass_ratio for x in dr) > 1e4  # mass ratios over several decades
+
+
+def test_round_sig():
+    assert round_sig(0.123456) == 0.1 and round_sig(-2870.0) == -3000.0 and round_sig(0.0) == 0.0
+
+
+def test_planted_wrong_plant_shrinks_to_the_simplest_scene(tmp_path):
+    res = fuzz(tmp_path, budget=2, seed=0, plants=PLANTS, executor=SerialExecutor())
+    keys = {e.disagreement.key: e for e in res.counterexamples}
+    assert TARGET.key in keys
+    ex = keys[TARGET.key]
+    # a displaced C shows on every scene: the shrinker must reach the simplest one
+    assert drivers(ex.data).n == 0
+    assert ex.data["scene"]["effects"] == []
+    assert ex.horizon < 2 * MIN_HORIZON_S
+    assert ex.data["rod"]["offset"] == [0.0, 0.0, 0.0]
+    assert sorted(abs(x) for x in ex.data["rod"]["axis"]) == [0.0, 0.0, 1.0]
+    assert ex.data["initial"]["attitude"]["quaternion"] == [1.0, 0.0, 0.0, 0.0]
+    assert ex.outcome.shows(TARGET)
+    # the minimal scene file reproduces it, read back as a file
+    out = judge_scene(_file_dict(ex.path), PLANTS, ex.horizon)
+    assert out.shows(TARGET)
+    assert recognise(ex.data, TARGET) == ""  # a new finding, not a known one
+
+
+def _file_dict(path):
+    import tomllib
+
+    return tomllib.loads(path.read_text())
+
+
+def test_minimal_scene_is_accepted_by_validate_plugin_and_hard_case_runner(tmp_path):
+    res = fuzz(tmp_path, budget=1, seed=0, plants=PLANTS, executor=SerialExecutor())
+    path = res.counterexamples[0].path
+    text = path.read_text()
+    assert text.startswith("# Minimal counterexample")
+    assert "Reproduce: tumble validate" in text
+    load_scene(path)  # tumble validate and the plugin read it through the loader
+    from validation.studies.hard_cases.runner import load_case
+
+    case = load_case(path)
+    assert case.criterion.checks
+    from validation.testing.pytest_plugin import _SCENE_TABLE
+
+    assert _SCENE_TABLE.search(path.read_bytes())  # the plugin sees a scene file
+
+
+def _strip(outcome_dict):
+    return {k: v for k, v in outcome_dict.items() if k != "walls"}
+
+
+def test_same_verdicts_on_every_executor(tmp_path):
+    a = fuzz(tmp_path / "a", budget=3, seed=1, plants=["analytic", ShiftedPlant()],
+             executor=SerialExecutor(), report=False)
+    with ThreadPoolExecutor(2) as pool:
+        b = fuzz(tmp_path / "b", budget=3, seed=1, plants=["analytic", ShiftedPlant()],
+                 executor=pool, report=False)
+    assert [_strip(r.outcome.to_dict()) for r in a.scenes] == [
+        _strip(r.outcome.to_dict()) for r in b.scenes
+    ]
+    assert [e.data for e in a.counterexamples] == [e.data for e in b.counterexamples]
+
+
+def test_resume_keeps_what_was_found(tmp_path, monkeypatch):
+    fuzz(tmp_path, budget=2, seed=0, plants=PLANTS, executor=SerialExecutor(), report=False)
+    calls = []
+    real = campaign_mod.judge_index
+    monkeypatch.setattr(
+        campaign_mod, "judge_index", lambda *a: calls.append(a[1]) or real(*a)
+    )
+    res = fuzz(tmp_path, budget=3, seed=0, plants=PLANTS, executor=SerialExecutor())
+    assert calls == [2]  # scenes 0 and 1 were read back, only scene 2 judged
+    assert len(res.scenes) == 3 and res.complete
+    with pytest.raises(ValueError, match=r"^out: "):
+        fuzz(tmp_path, budget=1, seed=5, plants=PLANTS, executor=SerialExecutor())
+
+
+def test_report_matches_its_schema(tmp_path):
+    from tests.validation.report.test_provenance import validator
+
+    res = fuzz(tmp_path, budget=2, seed=0, plants=PLANTS, executor=SerialExecutor())
+    doc = json.loads(res.files["json"].read_text())
+    validator("campaign").validate(doc)
+    assert doc["scenes"] == 2 and doc["counterexamples"][0]["command"].startswith("tumble validate")
+    assert res.files["png"].read_bytes()[:4] == b"\x89PNG"
+    assert "## New findings" in res.files["md"].read_text()
+
+
+def test_known_findings_are_recognised():
+    data = draw_scene_dict(0, 0, 0.5)
+    data["rod"]["offset"] = [0.0, 0.0, 0.0]
+    assert recognise(data, Disagreement(Kind.OUTLIER, "rod_positions", "pinocchio")) == "rod_through_C"
+    assert recognise(data, Disagreement(Kind.OUTLIER, "rod_positions", "mujoco")) == ""
+    data["initial"]["omega"] = [0.0, 200.0, 0.0]
+    assert recognise(data, Disagreement(Kind.OUTLIER, "attitude", "analytic")) == "fast_spin_analytic"
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "field"),
+    [
+        ({"budget": 0}, "budget"),
+        ({"minutes": -1.0}, "minutes"),
+        ({"horizon": 0.0}, "horizon"),
+        ({"seed": -1}, "seed"),
+        ({"plants": ["analytic"]}, "plants"),
+        ({"plants": ["analytic", "nope"]}, "plants"),
+    ],
+)
+def test_bad_input_names_the_field(tmp_path, kwargs, field):
+    with pytest.raises(ValueError, match=f"^{field}: "):
+        fuzz(tmp_path, executor=SerialExecutor(), **kwargs)
+
+
+def test_cli_bad_plant_is_one_line(tmp_path, capsys):
+    from validation.cli import main
+
+    rc = main(["fuzz", "--budget", "1", "--plants", "analytic,nope", "--out", str(tmp_path)])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc != 0 and len(err) == 1 and "plants" in err[0]

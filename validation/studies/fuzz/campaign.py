@@ -1,0 +1,285 @@
+"""The campaign: seeded scenes through one executor, each judged, every new disagreement shrunk.
+
+Order of work:
+
+1. ``OUT/campaign_config.json`` is written (or, on resume, read and compared: a directory holding
+   another campaign is refused, naming ``out``);
+2. scene ``i`` of the seed (:func:`validation.studies.fuzz.space.draw_scene_dict`) goes to the
+   executor as :func:`judge_index` (a module-level task: process pool, Dask), at most
+   ``2 × workers`` at a time, until the budget (scenes) or the time (minutes) is spent;
+3. results are taken **in index order** (whatever order they finish in): each is written at once
+   to ``OUT/scenes/<i>.json``; a scene's first disagreement not seen before (a plant failing, else a
+   referee outlier, else a failed check) is shrunk here (:mod:`validation.studies.fuzz.shrink`)
+   and written at once as ``OUT/counterexamples/<key>.toml`` (:mod:`validation.studies.fuzz.toml`);
+4. ``campaign.md``, ``campaign.json``, ``campaign.png`` (:mod:`validation.studies.fuzz.report`).
+
+Taking results in index order makes everything after the plants deterministic: a seed gives the
+same scenes, verdicts and counterexamples on a serial run, a process pool and Dask. An interrupted
+campaign keeps every scene and counterexample written; run again with the same ``out``, it skips
+the scenes already judged and the disagreements already shrunk.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Callable, Sequence
+from concurrent.futures import Executor, Future
+from pathlib import Path
+from typing import Any
+
+from analytic.plant import Plant
+from validation.runs.atomic import write_text
+from validation.studies.fuzz.judge import Kind, Outcome, judge_scene, plant_name
+from validation.studies.fuzz.known import recognise
+from validation.studies.fuzz.records import (
+    CampaignResult,
+    Counterexample,
+    FuzzConfig,
+    SceneRecord,
+)
+from validation.studies.fuzz.shrink import MAX_EVALUATIONS, shrink
+from validation.studies.fuzz.space import draw_scene_dict
+from validation.studies.fuzz.toml import counterexample_toml, slug
+
+DEFAULT_BUDGET = 40
+"""Scenes of a campaign given neither a budget nor minutes."""
+DEFAULT_HORIZON_S = 0.5
+"""Horizon of every scene, s: short (50 output samples), so a campaign covers many scenes."""
+CONFIG_FILE = "campaign_config.json"
+SCENES_DIR = "scenes"
+COUNTEREXAMPLES_DIR = "counterexamples"
+PRIORITY = {Kind.RAISED: 0, Kind.STOPPED: 1, Kind.OUTLIER: 2, Kind.CHECK: 3}
+"""Which of a scene's disagreements is shrunk: a plant failing first, then an outlier, a check."""
+
+
+def judge_index(seed: int, index: int, plants: Sequence[Plant | str], horizon: float) -> dict:
+    """Scene ``index`` of ``seed`` judged on ``plants`` (the executor's task): the outcome as a
+    dict (plain data: it travels back from any worker)."""
+    return judge_scene(draw_scene_dict(seed, index, horizon), plants, horizon).to_dict()
+
+
+class SerialExecutor(Executor):
+    """Every task run at once, here (an ``Executor`` for a serial campaign and for tests)."""
+
+    def submit(self, fn, /, *args, **kwargs):
+        f: Future = Future()
+        try:
+            f.set_result(fn(*args, **kwargs))
+        except BaseException as exc:
+            if isinstance(exc, KeyboardInterrupt):
+                raise
+            f.set_exception(exc)
+        return f
+
+
+def _default_plants() -> tuple[str, ...]:
+    from mj_bridge.plants import installed_plants
+
+    return tuple(plant_name(p) for p in installed_plants())
+
+
+def _check_config(out: Path, cfg: FuzzConfig) -> None:
+    path = out / CONFIG_FILE
+    if path.exists():
+        old = json.loads(path.read_text())
+        if old != cfg.to_dict():
+            raise ValueError(
+                f"out: {str(out)!r} holds another campaign ({old}); give a new directory"
+            )
+    else:
+        write_text(path, json.dumps(cfg.to_dict(), indent=2) + "\n")
+
+
+def _scene_file(out: Path, index: int) -> Path:
+    return out / SCENES_DIR / f"{index:06d}.json"
+
+
+def _load_scene_record(out: Path, cfg: FuzzConfig, index: int) -> SceneRecord | None:
+    path = _scene_file(out, index)
+    if not path.exists():
+        return None
+    d = json.loads(path.read_text())
+    return SceneRecord(index, draw_scene_dict(cfg.seed, index, cfg.horizon), Outcome.from_dict(d))
+
+
+def _load_counterexample(out: Path, key: str) -> dict[str, Any] | None:
+    path = out / COUNTEREXAMPLES_DIR / f"{slug(key)}.json"
+    return json.loads(path.read_text()) if path.exists() else None
+
+
+def fuzz(
+    out_dir: str | Path,
+    *,
+    budget: int | None = None,
+    minutes: float | None = None,
+    seed: int = 0,
+    plants: Sequence[Plant | str] | None = None,
+    horizon: float = DEFAULT_HORIZON_S,
+    executor: Executor | None = None,
+    scheduler: str | None = None,
+    dask_workers: int | None = None,
+    shrink_evaluations: int = MAX_EVALUATIONS,
+    progress: Callable[[str], None] | None = None,
+    report: bool = True,
+) -> CampaignResult:
+    """Run a differential fuzzing campaign into ``out_dir`` (module docstring).
+
+    Args:
+        budget: scenes to judge (default :data:`DEFAULT_BUDGET` unless ``minutes`` is given).
+        minutes: stop submitting scenes after this much wall time (with ``budget``: whichever
+            comes first).
+        seed: the campaign's seed.
+        plants: names (any registered plant) or :class:`analytic.plant.Plant` instances, in the
+            comparison's order (default every installed plant).
+        horizon: of every scene, s.
+        executor: where the scenes are judged (any ``concurrent.futures.Executor``); else a Dask
+            cluster at ``scheduler`` or a local one of ``dask_workers`` workers, else a local
+            process pool (:func:`validation.studies.sweep.running.executor_for`).
+        shrink_evaluations: most scene evaluations per shrink.
+        progress: called with one line per finding.
+        report: write campaign.md / campaign.json / campaign.png at the end.
+
+    Raises:
+        ValueError: naming the argument for a bad budget, minutes, horizon, plants or ``out``.
+    """
+    from validation.studies.sweep.running import executor_for
+
+    if budget is not None and (isinstance(budget, bool) or not isinstance(budget, int) or budget < 1):
+        raise ValueError(f"budget: must be a whole number ≥ 1 (got {budget!r})")
+    if minutes is not None and not (isinstance(minutes, int | float) and 0 < minutes < 1e6):
+        raise ValueError(f"minutes: must be a positive number (got {minutes!r})")
+    if not (isinstance(horizon, int | float) and 0 < horizon < 1e6):
+        raise ValueError(f"horizon: must be a positive number of seconds (got {horizon!r})")
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise ValueError(f"seed: must be a whole number ≥ 0 (got {seed!r})")
+    if budget is None and minutes is None:
+        budget = DEFAULT_BUDGET
+    chosen: tuple[Plant | str, ...] = tuple(plants) if plants is not None else _default_plants()
+    if len(chosen) < 2:
+        raise ValueError(f"plants: a campaign compares at least two plants (got {chosen!r})")
+    names = tuple(plant_name(p) for p in chosen)
+    if len(set(names)) != len(names):
+        raise ValueError(f"plants: each plant once (got {', '.join(names)})")
+    for p in chosen:  # an unknown name is refused here, before any work
+        if isinstance(p, str):
+            from mj_bridge.plants import plant
+
+            plant(p)
+    cfg = FuzzConfig(seed, names, float(horizon))
+    out = Path(out_dir)
+    (out / SCENES_DIR).mkdir(parents=True, exist_ok=True)
+    (out / COUNTEREXAMPLES_DIR).mkdir(exist_ok=True)
+    _check_config(out, cfg)
+    say = progress or (lambda _m: None)
+    t0 = time.perf_counter()
+    deadline = t0 + 60.0 * minutes if minutes is not None else None
+    records: dict[int, SceneRecord] = {}
+    examples: dict[str, Counterexample] = {}
+    occurrences: dict[str, int] = {}
+
+    def evaluate(data: dict[str, Any], h: float) -> Outcome:
+        return judge_scene(data, chosen, h)
+
+    def take(rec: SceneRecord) -> None:
+        records[rec.index] = rec
+        for d in rec.outcome.disagreements:
+            occurrences[d.key] = occurrences.get(d.key, 0) + 1
+        fresh = [d for d in rec.outcome.disagreements if d.key not in examples]
+        if not fresh:
+            return
+        target = min(fresh, key=lambda d: (PRIORITY[d.kind], d))
+        done = _load_counterexample(out, target.key)
+        if done is not None:  # shrunk before an interruption: kept as it was written
+            ex = Counterexample(
+                target,
+                int(done["found_in"]),
+                done["scene"],
+                float(done["horizon"]),
+                Outcome.from_dict(done["outcome"]),
+                int(done["evaluations"]),
+                str(done["known"]),
+                out / COUNTEREXAMPLES_DIR / done["file"],
+            )
+        else:
+            say(f"scene {rec.index}: {target.key}: shrinking")
+            s = shrink(rec.data, cfg.horizon, target, evaluate, shrink_evaluations, rec.outcome)
+            path = out / COUNTEREXAMPLES_DIR / f"{slug(target.key)}.toml"
+            ex = Counterexample(
+                target, rec.index, s.data, s.horizon, s.outcome, s.evaluations,
+                recognise(s.data, target), path,
+            )
+            write_text(path, counterexample_toml(ex, cfg))
+            write_text(path.with_suffix(".json"), json.dumps(ex.to_dict(), indent=2) + "\n")
+            say(f"  -> {path.name} ({s.evaluations} evaluations{', known: ' + ex.known if ex.known else ''})")
+        examples[target.key] = ex
+
+    def more(i: int) -> bool:
+        if budget is not None and i >= budget:
+            return False
+        return deadline is None or time.perf_counter() < deadline
+
+    complete = False
+    with executor_for(executor, scheduler, dask_workers) as (ex, workers):
+        pending: dict[int, Future] = {}
+        index = 0
+        window = 2 * max(1, workers)
+        try:
+            while True:
+                while len(pending) < window and more(index):
+                    rec = _load_scene_record(out, cfg, index)
+                    if rec is not None:  # resumed: judged before
+                        f: Future = Future()
+                        f.set_result(rec)
+                        pending[index] = f
+                    else:
+                        pending[index] = ex.submit(judge_index, seed, index, chosen, cfg.horizon)
+                    index += 1
+                if not pending:
+                    complete = True
+                    break
+                first = min(pending)
+                res = pending.pop(first).result()
+                if isinstance(res, SceneRecord):
+                    take(res)
+                    continue
+                outcome = Outcome.from_dict(res)
+                write_text(_scene_file(out, first), json.dumps(res, indent=2) + "\n")
+                take(SceneRecord(first, draw_scene_dict(seed, first, cfg.horizon), outcome))
+        finally:
+            for f in pending.values():
+                f.cancel()
+    for key, ex_ in list(examples.items()):
+        examples[key] = _with_occurrences(ex_, occurrences.get(key, 1))
+    result = CampaignResult(
+        cfg,
+        out,
+        tuple(records[i] for i in sorted(records)),
+        tuple(examples[k] for k in sorted(examples)),
+        time.perf_counter() - t0,
+        complete,
+    )
+    if report:
+        from validation.studies.fuzz.report import write_campaign
+
+        result = write_campaign(result)
+    return result
+
+
+def _with_occurrences(ex: Counterexample, k: int) -> Counterexample:
+    from dataclasses import replace
+
+    return replace(ex, occurrences=k)
+
+
+__all__ = [
+    "DEFAULT_BUDGET",
+    "DEFAULT_HORIZON_S",
+    "CampaignResult",
+    "Counterexample",
+    "FuzzConfig",
+    "SceneRecord",
+    "SerialExecutor",
+    "fuzz",
+    "judge_index",
+]

@@ -1,0 +1,92 @@
+"""The campaign's records: its configuration, a judged scene, a minimal counterexample, the
+result (plain frozen data; :mod:`validation.studies.fuzz.campaign` makes them)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from validation.studies.fuzz.judge import Disagreement, Outcome
+
+
+@dataclass(frozen=True)
+class FuzzConfig:
+    """What a campaign is: its seed, plants and horizon (a resumed campaign must match them).
+
+    Attributes:
+        seed: the campaign's seed (scene ``i`` is drawn from ``[seed, i]``).
+        plants: the plants' names, in the order given (the first is the comparison's reference).
+        horizon: s.
+    """
+
+    seed: int
+    plants: tuple[str, ...]
+    horizon: float
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"seed": self.seed, "plants": list(self.plants), "horizon": self.horizon}
+
+
+@dataclass(frozen=True)
+class SceneRecord:
+    """One judged scene: its index, the scene file's dict, its outcome."""
+
+    index: int
+    data: dict[str, Any]
+    outcome: Outcome
+
+
+@dataclass(frozen=True)
+class Counterexample:
+    """A minimal scene showing one disagreement.
+
+    Attributes:
+        disagreement: what it shows.
+        found_in: the index of the campaign scene it was shrunk from.
+        data, horizon: the minimal scene file's dict, its horizon (s).
+        outcome: its judgement.
+        evaluations: scene evaluations the shrink made.
+        known: the known finding it is (:mod:`validation.studies.fuzz.known`), "" when new.
+        path: its TOML file.
+        occurrences: campaign scenes showing the same disagreement.
+    """
+
+    disagreement: Disagreement
+    found_in: int
+    data: dict[str, Any]
+    horizon: float
+    outcome: Outcome
+    evaluations: int
+    known: str
+    path: Path
+    occurrences: int = 1
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "disagreement": self.disagreement.to_dict(),
+            "found_in": self.found_in,
+            "horizon": self.horizon,
+            "evaluations": self.evaluations,
+            "known": self.known,
+            "file": self.path.name,
+            "occurrences": self.occurrences,
+            "outcome": self.outcome.to_dict(),
+            "scene": self.data,
+        }
+
+
+@dataclass(frozen=True)
+class CampaignResult:
+    """What a campaign found (:func:`fuzz`); ``files``: kind -> path of the files written."""
+
+    config: FuzzConfig
+    out_dir: Path
+    scenes: tuple[SceneRecord, ...]
+    counterexamples: tuple[Counterexample, ...]
+    wall_s: float
+    complete: bool
+    files: dict[str, Path] = field(default_factory=dict)
+
+
+__all__ = ["CampaignResult", "Counterexample", "FuzzConfig", "SceneRecord"]
