@@ -30,7 +30,7 @@ from typing import Any
 
 from analytic.plant import Plant
 from validation.runs.atomic import write_text
-from validation.studies.fuzz.judge import Kind, Outcome, judge_scene, plant_name
+from validation.studies.fuzz.judge import RUN_BUDGET_S, Kind, Outcome, judge_scene, plant_name
 from validation.studies.fuzz.known import recognise
 from validation.studies.fuzz.records import (
     CampaignResult,
@@ -46,6 +46,11 @@ DEFAULT_BUDGET = 40
 """Scenes of a campaign given neither a budget nor minutes."""
 DEFAULT_HORIZON_S = 0.5
 """Horizon of every scene, s: short (50 output samples), so a campaign covers many scenes."""
+SHRINK_BUDGET_FACTOR = 5.0
+SHRINK_BUDGET_MIN_S = 2.0
+"""A shrink candidate's plant run gets this many times the slowest plant run of the scene it was
+found in (at least SHRINK_BUDGET_MIN_S s, at most judge.RUN_BUDGET_S) before it counts as over
+budget (not taken)."""
 CONFIG_FILE = "campaign_config.json"
 SCENES_DIR = "scenes"
 COUNTEREXAMPLES_DIR = "counterexamples"
@@ -178,8 +183,10 @@ def fuzz(
     examples: dict[str, Counterexample] = {}
     occurrences: dict[str, int] = {}
 
+    shrink_budget = [RUN_BUDGET_S]
+
     def evaluate(data: dict[str, Any], h: float) -> Outcome:
-        return judge_scene(data, chosen, h)
+        return judge_scene(data, chosen, h, budget_s=shrink_budget[0])
 
     def take(rec: SceneRecord) -> None:
         records[rec.index] = rec
@@ -203,6 +210,10 @@ def fuzz(
             )
         else:
             say(f"scene {rec.index}: {target.key}: shrinking")
+            # a simpler scene costs less than the one found: a candidate taking far longer (a
+            # stiffer variant) is over budget, hence not taken, instead of stalling the campaign
+            slowest = max(rec.outcome.walls.values(), default=0.0)
+            shrink_budget[0] = min(RUN_BUDGET_S, max(SHRINK_BUDGET_MIN_S, SHRINK_BUDGET_FACTOR * slowest))
             s = shrink(rec.data, cfg.horizon, target, evaluate, shrink_evaluations, rec.outcome)
             path = out / COUNTEREXAMPLES_DIR / f"{slug(target.key)}.toml"
             ex = Counterexample(
