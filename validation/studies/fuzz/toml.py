@@ -46,7 +46,7 @@ def with_hard_case(data: dict[str, Any], criterion: str) -> dict[str, Any]:
                 "what": m,
                 "against": "analytic",
                 "bound": f"hard_{m}",
-                "why": f"the comparison's own {m} threshold ({th[m].reason})"[:300],
+                "why": f"the comparison's own {m} threshold (validation.compare.thresholds)",
             }
             for m in measures
         ],
@@ -63,6 +63,7 @@ def counterexample_toml(ex: Counterexample, cfg: FuzzConfig) -> str:
     d = ex.disagreement
     data = copy.deepcopy(ex.data)
     data["scene"]["name"] = f"fuzz/{slug(d.key)}"
+    data.setdefault("output", {})["t_end"] = ex.horizon  # the shrunk horizon is the file's own
     data["scene"]["description"] = f"Minimal scene of a fuzzing campaign: {d.kind.value} {d.what}"
     data = with_hard_case(data, f"the plants agree on this scene (the campaign found: {d.key})")
     scene = scene_from_dict(data)
