@@ -19,6 +19,7 @@ from validation.studies.fuzz.judge import Disagreement, Kind, judge_scene
 from validation.studies.fuzz.known import recognise
 from validation.studies.fuzz.shrink import MIN_HORIZON_S, round_sig
 from validation.studies.fuzz.space import draw_scene_dict, drivers
+from validation.studies.sweep.running import executor_for
 
 SHIFT_M = 1e-3
 """The planted plant's error: C displaced by 1 mm (the position_C threshold is far below)."""
@@ -175,3 +176,24 @@ def test_cli_bad_plant_is_one_line(tmp_path, capsys):
     rc = main(["fuzz", "--budget", "1", "--plants", "analytic,nope", "--out", str(tmp_path)])
     err = capsys.readouterr().err.strip().splitlines()
     assert rc != 0 and len(err) == 1 and "plants" in err[0]
+
+
+DASK_PLANTS = ("analytic", "pinocchio")
+
+
+def test_dask_local_cluster_gives_the_serial_verdicts(tmp_path):
+    """dask is in [test]: the distributed path runs on every submission."""
+    pytest.importorskip("distributed")
+    kw = dict(budget=3, seed=3, plants=DASK_PLANTS, horizon=0.1, report=False, shrink_evaluations=5)
+    serial = fuzz(tmp_path / "serial", executor=SerialExecutor(), **kw)
+    dask = fuzz(tmp_path / "dask", dask_workers=2, **kw)
+    assert [_strip(r.outcome.to_dict()) for r in serial.scenes] == [
+        _strip(r.outcome.to_dict()) for r in dask.scenes
+    ]
+
+
+def test_executor_for_refuses_both_and_bad_counts():
+    with pytest.raises(ValueError, match=r"^scheduler: "), executor_for(None, "tcp://x:1", 2):
+        pass
+    with pytest.raises(ValueError, match=r"^dask_workers: "), executor_for(None, None, 0):
+        pass
