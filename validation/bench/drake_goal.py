@@ -22,9 +22,12 @@ from collections.abc import Callable
 
 import numpy as np
 
+from mj_bridge.drake_plugin import DrakePlant, DrakeSettings
+from mj_bridge.plants import AnalyticSettings, plant
 from validation.bench.goals import Goal, _share
 from validation.bench.timing import CpuMeter
 from validation.bench.verdicts import spread_of
+from validation.scenes import resolve_scene
 
 DRAKE_GOAL = "Drake plant: 20 s controlled Example 1 at rtol 1e-12, Drake CPU / analytic CPU"
 DRAKE_LIMIT = 20.0
@@ -45,10 +48,6 @@ def goal_drake(
     ``simulate`` call), the CPU times and per-round ratios, the order of the rounds, the evaluations,
     the two plants' largest distance in C (m) and the analytic plant's wall on its default loop.
     """
-    from mj_bridge.drake_plugin import DrakePlant, DrakeSettings
-    from mj_bridge.plants import AnalyticSettings, plant
-    from validation.scenes import resolve_scene
-
     why = DrakePlant.unavailable()
     if why:
         return Goal(DRAKE_GOAL, math.nan, DRAKE_LIMIT, skipped=f"drake is not installed: {why}")

@@ -16,16 +16,22 @@ that may import both), not beside the kernel in ``analytic``.
 
 from __future__ import annotations
 
+import argparse
 import time
 
 import numpy as np
+
+from analytic import fast
+from analytic.kernel import jit
+from analytic.model import TumblingModel
+from validation.bench.timing import chain_scene, time_call
 
 NS = (2, 5, 10, 50, 1000)
 
 
 def _mujoco(scene):
     """A callable running mj_forward on the twin, or None when unavailable."""
-    try:
+    try:  # deferred: the twin is optional here (see below)
         import mujoco
 
         from model_xml import build_spec
@@ -39,18 +45,12 @@ def _mujoco(scene):
 
 
 def main(argv: list[str] | None = None) -> int:
-    import argparse
-
     argparse.ArgumentParser(
         prog="python -m validation.bench.fast_bench",
         description="One evaluation of the controlled dynamics for n = 2 ... 1000 masses: the numpy "
         "path, the compiled path and MuJoCo's mj_forward (median µs of thread CPU time; printed, "
         "never asserted).",
     ).parse_args(argv)
-    from analytic import fast
-    from analytic.kernel import jit
-    from analytic.model import TumblingModel
-    from validation.bench.timing import chain_scene, time_call
 
     print(f"numba available: {fast.available()}; cache: {jit.cache_dir_note()}")
     sc2 = chain_scene(2)

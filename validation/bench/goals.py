@@ -62,18 +62,41 @@ One BLAS thread throughout.
 
 from __future__ import annotations
 
+import json
 import math
 import os
 import statistics
+import subprocess
+import sys
+import tempfile
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
+import mujoco
 import numpy as np
 
-from validation.bench.timing import CpuMeter, interleaved, median_per_call, median_share
+import analytic
+import mj_bridge
+from analytic import compiled_stepping, fast
+from analytic.simulate import simulate
+from mj_bridge.callbacks import installed
+from mj_bridge.plants import AnalyticSettings, PinocchioPlant, PinocchioSettings, plant
+from mj_bridge.registry import BUILTIN, plugin_names
+from mj_bridge.twin import Twin
+from model_xml import build_spec
+from validation.bench.timing import (
+    CpuMeter,
+    chain_scene,
+    interleaved,
+    median_per_call,
+    median_share,
+)
 from validation.bench.verdicts import Spread, Verdict, decide, spread_of
+from validation.scenes import resolve_scene
+from validation.studies.sweep import errors_against, ref_samples, reference_run
 
 
 @dataclass(frozen=True)
@@ -133,11 +156,6 @@ def _share(cpus: dict[str, list[float]], walls: dict[str, list[float]]) -> float
 
 
 def _chain(n: int):
-    import mujoco
-
-    from analytic import fast
-    from model_xml import build_spec
-    from validation.bench.timing import chain_scene
 
     sc = chain_scene(n)
     fm = fast.FastModel(sc)
@@ -171,11 +189,6 @@ def goal_controller_in_rk4(scene_name: str, steps: int = 200, rounds: int = 21) 
     """Goal 2 (module docstring) on a controlled paper scene. ``data``: thread CPU time per step of
     each variant, µs (medians), the per-round added costs (``ratios``) and whether the native
     callback ran."""
-    import mujoco
-
-    from mj_bridge.callbacks import installed
-    from mj_bridge.twin import Twin
-    from validation.scenes import resolve_scene
 
     sc = resolve_scene(scene_name)
     tw = Twin(sc, integrator="RK4")
@@ -238,10 +251,6 @@ def goal_controller_in_rk4(scene_name: str, steps: int = 200, rounds: int = 21) 
 def goal_example1_60s(
     t_end: float = 60.0, cap_s: float = 120.0, progress: Callable[[str], None] = print
 ) -> Goal:
-    import analytic
-    import mj_bridge
-    from validation.scenes import resolve_scene
-    from validation.studies.sweep import errors_against, ref_samples, reference_run
 
     sc = resolve_scene("paper_example1_controlled")
     progress(f"  reference (DOP853 rtol 2.5e-14, {t_end:g} s) ...")
@@ -318,8 +327,6 @@ def goal_example1_60s(
 def goal_scaling(rounds: int = 21) -> Goal:
     """Goal 4 (module docstring). ``data``: thread CPU time per call at each n, µs (medians), and
     the per-round ratios."""
-    from analytic import fast
-    from validation.bench.timing import chain_scene
 
     fns = {}
     for n in (10, 1000):
@@ -364,8 +371,6 @@ def goal_pinocchio(
     ``simulate`` call), their medians, the order of the rounds and the two plants' agreement (max
     distance between their positions of C, m) as a check that both ran the same motion.
     """
-    from mj_bridge.plants import AnalyticSettings, PinocchioPlant, PinocchioSettings, plant
-    from validation.scenes import resolve_scene
 
     why = PinocchioPlant.unavailable()
     if why:
@@ -472,6 +477,7 @@ def _rhs_timer(ip):
     packed scene ``ip`` (:func:`analytic.fast_rhs.rhs_for`: the one the compiled loop embeds) from
     compiled code (no dispatch from Python per call), at the states ``(t[i], Y[i])`` in turn: what
     the compiled loop pays per evaluation."""
+    # deferred: numba is optional (analytic.fast.available(); without it this goal is skipped)
     import numba
 
     from analytic.fast_rhs import rhs_for
@@ -507,10 +513,6 @@ def goal_compiled_stepping(
     error measure (``loops_differ``, :func:`validation.studies.sweep.errors_against`), a check that both
     ran the same motion.
     """
-    from analytic import compiled_stepping, fast
-    from analytic.simulate import simulate
-    from validation.scenes import resolve_scene
-    from validation.studies.sweep import errors_against, ref_samples
 
     why = compiled_stepping.unavailable()
     if why:
@@ -622,7 +624,6 @@ estimate; ``tumble warmup`` pays it ahead, e.g. when a Docker image is built).""
 
 def _plant_names() -> tuple[str, ...]:
     """Every plant name of this installation (the stages of a run that are plants)."""
-    from mj_bridge.registry import BUILTIN, plugin_names
 
     return BUILTIN + plugin_names()
 
@@ -630,10 +631,6 @@ def _plant_names() -> tuple[str, ...]:
 def _validate_once(out: str, env: dict[str, str]) -> tuple[float, dict[str, float]]:
     """Wall of one ``python -m validation validate`` (default scene, every installed plant) in a
     new process, s, and its ``report.json`` stage walls."""
-    import json
-    import subprocess
-    import sys
-    from pathlib import Path
 
     t0 = time.perf_counter()
     proc = subprocess.run(
@@ -669,8 +666,6 @@ def goal_whole_command(progress: Callable[[str], None] = print) -> tuple[Goal, G
     warm runs, and the goal "cold wall / warm wall", the median of the pairs' ratios; each with the
     spread of its per-pair ratios. Timed by wall: the run is several processes (a pool of workers)
     whose waiting for each other is part of what the user waits for."""
-    import statistics
-    import tempfile
 
     progress(
         f"timing tumble validate in new processes: {FIRST_RUN_PAIRS} x (cold in an empty numba "
@@ -716,7 +711,6 @@ def goal_whole_command(progress: Callable[[str], None] = print) -> tuple[Goal, G
 
 
 def measure(skip_long: bool = False, progress: Callable[[str], None] = print) -> list[Goal]:
-    from analytic import fast
 
     if not fast.available():
         progress("numba is not installed: the analytic side runs on numpy")
