@@ -197,3 +197,65 @@ def test_executor_for_refuses_both_and_bad_counts():
         pass
     with pytest.raises(ValueError, match=r"^dask_workers: "), executor_for(None, None, 0):
         pass
+
+
+SLEEP_S = 60.0
+"""How long the sleeping plant's run would take: far past TIME_LIMIT_S."""
+TIME_LIMIT_S = 2.0
+STOP_MARGIN_S = 2.0
+"""Fork, SIGTERM, the 0.5 s grace before SIGKILL (workers.STOP_GRACE_S), reaping, on a loaded
+2-core machine."""
+
+
+class SleepyPlant(AnalyticPlant):
+    """A plant that hangs (test only): its run sleeps SLEEP_S s and never reports progress, under
+    Pinocchio's name; it writes its process id into ``pid_dir`` first."""
+
+    engine = Engine.PINOCCHIO
+    label = "sleepy"
+
+    def __init__(self, pid_dir):
+        super().__init__()
+        self.pid_dir = str(pid_dir)
+
+    def _simulate(self, scene, settings, t_end, progress):
+        import os
+        import time
+        from pathlib import Path
+
+        Path(self.pid_dir, f"{os.getpid()}.pid").write_text("")
+        time.sleep(SLEEP_S)
+        return super()._simulate(scene, settings, t_end, progress)
+
+
+def test_a_plant_that_hangs_is_stopped_at_its_limit_and_the_campaign_goes_on(tmp_path):
+    """The default executor (a process pool: single-threaded workers, so each run forks)."""
+    import os
+    import time
+
+    pids = tmp_path / "pids"
+    pids.mkdir()
+    t0 = time.perf_counter()
+    res = fuzz(tmp_path / "out", budget=2, seed=0, plants=["analytic", SleepyPlant(pids)],
+               horizon=0.1, time_limit_s=TIME_LIMIT_S)
+    wall = time.perf_counter() - t0
+    assert res.complete and [r.index for r in res.scenes] == [0, 1]  # on to the next scene
+    assert wall < 0.5 * SLEEP_S
+    for r in res.scenes:
+        assert r.outcome.timeouts == {"pinocchio": TIME_LIMIT_S}
+        assert r.outcome.ran == ("analytic",) and not r.outcome.disagreements
+        assert "pinocchio" not in r.outcome.refused
+        assert TIME_LIMIT_S <= r.outcome.walls["pinocchio"] < TIME_LIMIT_S + STOP_MARGIN_S
+    assert len(list(pids.iterdir())) == 2  # each run started in its own process ...
+    for p in pids.iterdir():  # ... which is gone (killed, not left sleeping)
+        with pytest.raises(ProcessLookupError):
+            os.kill(int(p.stem), 0)
+    doc = json.loads(res.files["json"].read_text())
+    assert doc["timeouts"] == {"pinocchio": [0, 1]}
+    md = res.files["md"].read_text()
+    assert "plant pinocchio: 2 × over its time limit (scenes 0, 1)" in md
+
+
+def test_time_limit_must_be_positive(tmp_path):
+    with pytest.raises(ValueError, match=r"^time_limit_s: "):
+        fuzz(tmp_path, executor=SerialExecutor(), time_limit_s=0.0)

@@ -9,7 +9,8 @@ Order of work:
    ``2 × workers`` at a time, until the budget (scenes) or the time (minutes) is spent;
 3. results are taken **in index order** (whatever order they finish in): each is written at once
    to ``OUT/scenes/<i>.json``; a scene's first disagreement not seen before (a plant failing, else a
-   referee outlier, else a failed check) is shrunk here (:mod:`validation.studies.fuzz.shrink`)
+   referee outlier, else a failed check) is shrunk here (:mod:`validation.studies.fuzz.shrink`;
+   each candidate judged on the same executor, so its plant runs have the same hard time limit)
    and written at once as ``OUT/counterexamples/<key>.toml`` (:mod:`validation.studies.fuzz.toml`);
 4. ``campaign.md``, ``campaign.json``, ``campaign.png`` (:mod:`validation.studies.fuzz.report`).
 
@@ -49,8 +50,8 @@ DEFAULT_HORIZON_S = 0.5
 SHRINK_BUDGET_FACTOR = 5.0
 SHRINK_BUDGET_MIN_S = 2.0
 """A shrink candidate's plant run gets this many times the slowest plant run of the scene it was
-found in (at least SHRINK_BUDGET_MIN_S s, at most judge.RUN_BUDGET_S) before it counts as over
-budget (not taken)."""
+found in (at least SHRINK_BUDGET_MIN_S s, at most judge.RUN_BUDGET_S) before it is stopped as over
+its time limit (then the candidate does not show the disagreement: not taken)."""
 CONFIG_FILE = "campaign_config.json"
 SCENES_DIR = "scenes"
 COUNTEREXAMPLES_DIR = "counterexamples"
@@ -58,10 +59,21 @@ PRIORITY = {Kind.RAISED: 0, Kind.STOPPED: 1, Kind.OUTLIER: 2, Kind.CHECK: 3}
 """Which of a scene's disagreements is shrunk: a plant failing first, then an outlier, a check."""
 
 
-def judge_index(seed: int, index: int, plants: Sequence[Plant | str], horizon: float) -> dict:
-    """Scene ``index`` of ``seed`` judged on ``plants`` (the executor's task): the outcome as a
-    dict (plain data: it travels back from any worker)."""
-    return judge_scene(draw_scene_dict(seed, index, horizon), plants, horizon).to_dict()
+def judge_index(
+    seed: int, index: int, plants: Sequence[Plant | str], horizon: float,
+    time_limit_s: float = RUN_BUDGET_S,
+) -> dict:
+    """Scene ``index`` of ``seed`` judged on ``plants``, each run within ``time_limit_s`` s (the
+    executor's task): the outcome as a dict (plain data: it travels back from any worker)."""
+    data = draw_scene_dict(seed, index, horizon)
+    return judge_scene(data, plants, horizon, budget_s=time_limit_s).to_dict()
+
+
+def judge_data(data: dict[str, Any], plants: Sequence[Plant | str], horizon: float,
+               budget_s: float) -> dict:
+    """A shrink candidate judged on ``plants``, each run within ``budget_s`` s (the executor's
+    task): the outcome as a dict."""
+    return judge_scene(data, plants, horizon, budget_s=budget_s).to_dict()
 
 
 class SerialExecutor(Executor):
@@ -127,6 +139,7 @@ def fuzz(
     shrink_evaluations: int = MAX_EVALUATIONS,
     progress: Callable[[str], None] | None = None,
     report: bool = True,
+    time_limit_s: float = RUN_BUDGET_S,
 ) -> CampaignResult:
     """Run a differential fuzzing campaign into ``out_dir`` (module docstring).
 
@@ -144,6 +157,8 @@ def fuzz(
         shrink_evaluations: most scene evaluations per shrink.
         progress: called with one line per finding.
         report: write campaign.md / campaign.json / campaign.png at the end.
+        time_limit_s: wall-time limit of one plant's run, s (:data:`judge.RUN_BUDGET_S`): a run
+            past it is stopped and counted as a timeout (:mod:`validation.studies.fuzz.judge`).
 
     Raises:
         ValueError: naming the argument for a bad budget, minutes, horizon, plants or ``out``.
@@ -158,6 +173,10 @@ def fuzz(
         raise ValueError(f"horizon: must be a positive number of seconds (got {horizon!r})")
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         raise ValueError(f"seed: must be a whole number ≥ 0 (got {seed!r})")
+    if isinstance(time_limit_s, bool) or not (
+        isinstance(time_limit_s, int | float) and 0 < time_limit_s < 1e6
+    ):
+        raise ValueError(f"time_limit_s: must be a positive number of seconds (got {time_limit_s!r})")
     if budget is None and minutes is None:
         budget = DEFAULT_BUDGET
     chosen: tuple[Plant | str, ...] = tuple(plants) if plants is not None else _default_plants()
@@ -183,10 +202,16 @@ def fuzz(
     examples: dict[str, Counterexample] = {}
     occurrences: dict[str, int] = {}
 
-    shrink_budget = [RUN_BUDGET_S]
+    shrink_budget = [float(time_limit_s)]
+    pool: list[Executor] = []
 
     def evaluate(data: dict[str, Any], h: float) -> Outcome:
-        return judge_scene(data, chosen, h, budget_s=shrink_budget[0])
+        # on the campaign's executor: a process pool's worker is single-threaded, so each plant
+        # run forks and is killed at its limit (judge module docstring); here, beside the pool's
+        # own threads, it could not be
+        return Outcome.from_dict(
+            pool[0].submit(judge_data, data, chosen, h, shrink_budget[0]).result()
+        )
 
     def take(rec: SceneRecord) -> None:
         records[rec.index] = rec
@@ -213,7 +238,9 @@ def fuzz(
             # a simpler scene costs less than the one found: a candidate taking far longer (a
             # stiffer variant) is over budget, hence not taken, instead of stalling the campaign
             slowest = max(rec.outcome.walls.values(), default=0.0)
-            shrink_budget[0] = min(RUN_BUDGET_S, max(SHRINK_BUDGET_MIN_S, SHRINK_BUDGET_FACTOR * slowest))
+            shrink_budget[0] = min(
+                time_limit_s, max(SHRINK_BUDGET_MIN_S, SHRINK_BUDGET_FACTOR * slowest)
+            )
             s = shrink(rec.data, cfg.horizon, target, evaluate, shrink_evaluations, rec.outcome)
             path = out / COUNTEREXAMPLES_DIR / f"{slug(target.key)}.toml"
             ex = Counterexample(
@@ -232,6 +259,7 @@ def fuzz(
 
     complete = False
     with executor_for(executor, scheduler, dask_workers) as (ex, workers):
+        pool.append(ex)
         pending: dict[int, Future] = {}
         index = 0
         window = 2 * max(1, workers)
@@ -244,7 +272,9 @@ def fuzz(
                         f.set_result(rec)
                         pending[index] = f
                     else:
-                        pending[index] = ex.submit(judge_index, seed, index, chosen, cfg.horizon)
+                        pending[index] = ex.submit(
+                            judge_index, seed, index, chosen, cfg.horizon, float(time_limit_s)
+                        )
                     index += 1
                 if not pending:
                     complete = True
@@ -292,5 +322,6 @@ __all__ = [
     "SceneRecord",
     "SerialExecutor",
     "fuzz",
+    "judge_data",
     "judge_index",
 ]

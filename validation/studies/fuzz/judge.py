@@ -11,6 +11,14 @@ A disagreement (:class:`Disagreement`) is one of: a failed check (its label, e.g
 ``analytic_vs_mujoco.rod_positions`` or ``mujoco.energy``), a referee outlier (quantity and the
 plant outside the agreeing two), or a plant that raised or stopped before the horizon. A scene
 the loader or a plant refuses is a refusal with its reason, never a disagreement.
+
+Every plant run has a hard wall-time limit (:data:`RUN_BUDGET_S`, or the caller's): where
+:func:`validation.runs.workers.can_fork` (Linux, a single-threaded process: the serial campaign,
+the process pool's workers) it runs in a forked worker that is killed when the limit passes,
+whether or not the plant ever reports progress; elsewhere (a thread or Dask executor) the limit is
+checked at the plant's progress reports only. A run over its limit is a timeout
+(``Outcome.timeouts``: plant -> the limit, s), its own kind of finding: neither a refusal nor a
+disagreement; the plants that finished are still compared with each other.
 """
 
 from __future__ import annotations
@@ -21,11 +29,13 @@ import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from enum import StrEnum
+from multiprocessing.connection import wait as mp_wait
 from typing import Any
 
 from analytic.plant import Plant
 from analytic.scene import Scene, scene_from_dict
-from analytic.trajectory import RunStatus
+from analytic.trajectory import RunStatus, Trajectory
+from validation.runs import workers
 
 
 class Kind(StrEnum):
@@ -71,6 +81,8 @@ class Outcome:
         disagreements: sorted, without repeats.
         messages: plant -> why it raised or stopped.
         walls: plant -> wall time of its run, s.
+        timeouts: plant -> the wall-time limit (s) its run was stopped at (depends on the
+            machine's speed and load, unlike everything else here).
     """
 
     refused: dict[str, str] = field(default_factory=dict)
@@ -80,6 +92,7 @@ class Outcome:
     disagreements: tuple[Disagreement, ...] = ()
     messages: dict[str, str] = field(default_factory=dict)
     walls: dict[str, float] = field(default_factory=dict)
+    timeouts: dict[str, float] = field(default_factory=dict)
 
     @property
     def judged(self) -> bool:
@@ -99,6 +112,7 @@ class Outcome:
             "disagreements": [d.to_dict() for d in self.disagreements],
             "messages": dict(self.messages),
             "walls": dict(self.walls),
+            "timeouts": dict(self.timeouts),
         }
 
     @classmethod
@@ -111,6 +125,7 @@ class Outcome:
             disagreements=tuple(Disagreement.from_dict(x) for x in d["disagreements"]),
             messages=dict(d["messages"]),
             walls={k: float(v) for k, v in d["walls"].items()},
+            timeouts={k: float(v) for k, v in d.get("timeouts", {}).items()},
         )
 
 
@@ -141,9 +156,91 @@ def _scene(data: dict[str, Any]) -> Scene:
 
 
 RUN_BUDGET_S = 30.0
-"""Wall-time budget of one plant's run, s: a safety net against a scene far costlier than the
-space means to draw; a run over it is counted as ``over budget`` (a refusal, with the plant and
-the time reached), never as a disagreement, since whether it trips depends on the machine's load."""
+"""Wall-time limit of one plant's run, s: a safety net against a scene far costlier than the
+space means to draw; a run over it is stopped (killed, where it runs in a forked worker) and
+counted as a timeout, never as a disagreement, since whether it trips depends on the machine."""
+
+
+class OverTime(Exception):
+    """A plant's run passed its wall-time limit (``limit_s``, s) and was stopped."""
+
+    def __init__(self, plant: str, limit_s: float):
+        super().__init__(f"plant {plant} over its time limit ({limit_s:g} s)")
+        self.plant = plant
+        self.limit_s = limit_s
+
+
+class _Raised(Exception):
+    """The plant raised in its worker: ``kind`` is the exception's type name."""
+
+    def __init__(self, kind: str, message: str):
+        super().__init__(f"{kind}: {message}".strip())
+        self.kind = kind
+
+
+def _simulate_task(pl: Plant, scene: Scene, horizon: float, progress=None, report=None) -> Trajectory:
+    """One plant's run (the forked worker's task; ``report`` is not used)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        return pl.simulate(scene, t_end=horizon, progress=progress)
+
+
+_LOADED: set[tuple[str, int | None]] = set()
+"""(plant, compiled solve) whose numba kernels this process has loaded (:func:`_load_kernels`)."""
+
+
+def _load_kernels(name: str, scene: Scene) -> None:
+    """Load (or compile) here the numba kernels plant ``name`` needs for ``scene``'s solve, once
+    per process, before its runs are forked: a forked run then inherits them, instead of each
+    loading them from numba's cache again (about 0.5 s per plant and run on the development
+    machine, 15× a warm scene's run). Only kernels are made (:mod:`validation.runs.warmup`'s
+    jobs), no scene is simulated, so nothing here waits on a slow scene; a failure is left for
+    the run to report."""
+    from validation.runs import warmup
+
+    key = (name, warmup.compiled_solver(scene))
+    if key in _LOADED or name not in warmup.KERNELS:
+        return
+    _LOADED.add(key)
+    kernels, _plants = warmup.tasks_for([(scene, name)])
+    for task in kernels:
+        warmup.run_task(task)
+
+
+def run_limited(name: str, pl: Plant, scene: Scene, horizon: float, limit_s: float) -> Trajectory:
+    """``pl``'s run of ``scene`` over ``horizon`` s within ``limit_s`` s of wall time (module
+    docstring: a forked worker killed at the limit where one can be forked, else the limit checked
+    at the plant's progress reports).
+
+    Raises:
+        OverTime: the limit passed (the worker, if any, is ended and reaped).
+        _Raised: the plant raised (its type name and first line).
+        KeyboardInterrupt: an interrupt here or in the worker (the worker is ended).
+    """
+    if not workers.can_fork():
+        progress, over_budget = _budget_progress(limit_s)
+        try:
+            return _simulate_task(pl, scene, horizon, progress)
+        except over_budget as exc:
+            raise OverTime(name, limit_s) from exc
+        except KeyboardInterrupt:
+            raise
+        except Exception as exc:
+            raise _Raised(type(exc).__name__, _one_line(exc).partition(": ")[2]) from exc
+    _load_kernels(name, scene)
+    job = workers.start(f"fuzz-{name}", _simulate_task, pl, scene, horizon)
+    try:
+        # the task sends nothing but its result: the pipe is ready only when the run is done
+        if not mp_wait([job.conn, job.process.sentinel], timeout=limit_s):
+            raise OverTime(name, limit_s)
+        return job.result()  # a finished worker exits on its own (validation.runs.workers)
+    except workers.WorkerError as exc:
+        raise _Raised(exc.kind, exc.message) from exc
+    except workers.WorkerLost as exc:
+        raise _Raised(type(exc).__name__, str(exc)) from exc
+    except BaseException:  # over time, or interrupted here: the worker is ended and reaped
+        workers.stop([job])
+        raise
 
 
 def _budget_progress(budget_s: float):
@@ -188,23 +285,20 @@ def judge_scene(
             continue
         chosen.append((name, pl))
     trajs, ran, messages, walls, found = [], [], {}, {}, []
+    timeouts: dict[str, float] = {}
     for name, pl in chosen:
         t0 = time.perf_counter()
-        progress, over_budget = _budget_progress(budget_s)
         try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", RuntimeWarning)
-                tr = pl.simulate(scene, t_end=horizon, progress=progress)
-        except KeyboardInterrupt:
-            raise
-        except over_budget as exc:
+            tr = run_limited(name, pl, scene, horizon, budget_s)
+        except OverTime as exc:
             walls[name] = time.perf_counter() - t0
-            refused[name] = f"over budget: {exc}"
+            timeouts[name] = exc.limit_s
+            messages[name] = str(exc)
             continue
-        except Exception as exc:  # a plant failing is a finding, whatever it raises
+        except _Raised as exc:  # a plant failing is a finding, whatever it raises
             walls[name] = time.perf_counter() - t0
-            messages[name] = _one_line(exc)
-            found.append(Disagreement(Kind.RAISED, type(exc).__name__, name))
+            messages[name] = str(exc)
+            found.append(Disagreement(Kind.RAISED, exc.kind, name))
             continue
         walls[name] = time.perf_counter() - t0
         if tr.status is RunStatus.INTERRUPTED:
@@ -243,7 +337,18 @@ def judge_scene(
         disagreements=tuple(sorted(set(found))),
         messages=messages,
         walls=walls,
+        timeouts=timeouts,
     )
 
 
-__all__ = ["RUN_BUDGET_S", "Disagreement", "Kind", "Outcome", "judge_scene", "plant_name", "resolve_plant"]
+__all__ = [
+    "RUN_BUDGET_S",
+    "Disagreement",
+    "Kind",
+    "Outcome",
+    "OverTime",
+    "judge_scene",
+    "plant_name",
+    "resolve_plant",
+    "run_limited",
+]

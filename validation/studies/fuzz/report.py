@@ -39,6 +39,15 @@ def refusals(res: CampaignResult) -> dict[str, dict[str, int]]:
     return {k: dict(v) for k, v in sorted(out.items())}
 
 
+def timeouts(res: CampaignResult) -> dict[str, list[int]]:
+    """Plant -> the indices of the scenes its run was stopped in at its time limit."""
+    out: dict[str, list[int]] = {}
+    for rec in res.scenes:
+        for who in rec.outcome.timeouts:
+            out.setdefault(who, []).append(rec.index)
+    return dict(sorted(out.items()))
+
+
 def pass_rates(res: CampaignResult) -> dict[str, dict[str, int]]:
     """Check label -> {"run": scenes judging it, "passed": scenes passing it}."""
     out: dict[str, dict[str, int]] = {}
@@ -64,6 +73,7 @@ def campaign_doc(res: CampaignResult) -> dict[str, Any]:
         "scenes_per_plant": {p: per_plant.get(p, 0) for p in res.config.plants},
         "with_disagreement": sum(bool(r.outcome.disagreements) for r in res.scenes),
         "refused": refusals(res),
+        "timeouts": timeouts(res),
         "pass_rates": pass_rates(res),
         "counterexamples": [
             {
@@ -130,6 +140,20 @@ def campaign_markdown(res: CampaignResult, doc: dict[str, Any]) -> str:
                 lines.append(f"- {who}: {k} × {why}")
     else:
         lines.append("none")
+    lines += ["", "## Over the time limit (by plant)", ""]
+    if doc["timeouts"]:
+        limits = sorted({x for r in res.scenes for x in r.outcome.timeouts.values()})
+        lines.append(
+            f"A run stopped at its wall-time limit ({', '.join(f'{x:g}' for x in limits)} s): whether "
+            "it trips depends on this machine's speed and load, so compare two campaigns on the "
+            "scenes neither lists here; everything else follows from the seed."
+        )
+        lines.append("")
+        for who, idx in doc["timeouts"].items():
+            lines.append(f"- plant {who}: {len(idx)} × over its time limit (scenes "
+                         f"{', '.join(str(i) for i in idx)})")
+    else:
+        lines.append("none")
     lines += ["", "## Pass rate per check", "", "| check | passed / run |", "|---|---|"]
     lines += [f"| `{k}` | {v['passed']} / {v['run']} |" for k, v in doc["pass_rates"].items()]
     for title, known in (("New findings", False), ("Known findings", True)):
@@ -176,7 +200,8 @@ def campaign_png(doc: dict[str, Any]) -> bytes:
         if key != "n":
             ax.set_xscale("symlog" if key == "stiffness" else "log")
     axes[0].set_ylabel("worst check value / threshold")
-    axes[0].legend(loc="best")
+    if axes[0].get_legend_handles_labels()[0]:
+        axes[0].legend(loc="best")
     fig.tight_layout()
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=80)
@@ -198,4 +223,4 @@ def write_campaign(res: CampaignResult) -> CampaignResult:
 
 
 __all__ = ["campaign_doc", "campaign_markdown", "campaign_png", "pass_rates", "refusals",
-           "worst_ratio", "write_campaign"]
+           "timeouts", "worst_ratio", "write_campaign"]
