@@ -107,6 +107,7 @@ class Subject(str):
     def pair(cls, a: str, b: str) -> Subject:
         """The subject of the difference of plants ``a`` and ``b`` (names, either order), the
         two in report order."""
+        # deferred: mj_bridge.registry reads installed metadata (importlib.metadata, ~20 ms by python -X importtime), paid only when plants are ordered
         from mj_bridge.registry import order_key
 
         first, second = sorted((str(cls.plant(a)), str(cls.plant(b))), key=order_key)

@@ -45,6 +45,7 @@ from validation.external.record import ExternalTrajectory, does_work
 from validation.external.reference_pack import REFERENCE_PLANT, read_pack
 from validation.preflight import check_validation_inputs
 from validation.report.figures import DEFAULT_FORMATS, FigureFormat
+from validation.runs.outputs import default_out_dir
 from validation.scenes import resolve_scene, with_threshold_overrides
 from validation.validate import (
     JoinedRuns,
@@ -363,7 +364,6 @@ def judge(
         thresholds=thresholds,
     )
     if out_dir is None:
-        from validation.runs.outputs import default_out_dir
 
         out_dir = default_out_dir("judge_", request.validation.scene.name)
     return run_judge(request, out_dir, progress=progress, concurrent=concurrent)

@@ -18,7 +18,7 @@ from validation.external.errors import TrajectoryFileError, Where
 
 def _pyarrow(where: str) -> tuple[Any, Any]:
     """``(pyarrow, pyarrow.parquet)``, or one line saying that Parquet needs pyarrow."""
-    try:
+    try:  # deferred: pyarrow is optional here (it comes with rerun-sdk) and only Parquet needs it
         import pyarrow as pa
         import pyarrow.parquet as pq
     except ImportError:

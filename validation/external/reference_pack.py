@@ -43,11 +43,13 @@ from mj_bridge.plants import plant
 from validation.compare.checks import compare
 from validation.compare.thresholds import thresholds_for
 from validation.external.columns import OPTIONAL_GROUPS
+from validation.external.pack_readme import render_readme
 from validation.external.read import read_trajectory, size_limit
 from validation.external.record import ExternalTrajectory
 from validation.external.write import write_trajectory
 from validation.runs.atomic import write_text
 from validation.runs.outputs import output_run
+from validation.scenes import resolve_scene
 
 SCENE_FILE = "scene.toml"
 TRAJECTORY_FILE = "reference.csv"
@@ -167,8 +169,6 @@ def write_pack(scene: Scene | str | Path | None, out_dir: str | Path) -> PackRes
         ValueError: a bad scene, naming its field; an output directory that is not the tool's.
         OutputError: a file could not be written (``out_dir`` keeps its previous contents).
     """
-    from validation.external.pack_readme import render_readme
-    from validation.scenes import resolve_scene
 
     sc = scene if isinstance(scene, Scene) else resolve_scene(scene)
     thresholds = thresholds_for(sc)

@@ -61,6 +61,7 @@ GHOST_ALPHA = 110
 
 
 def _extra(name: str) -> tuple[str, RGBA]:
+    # deferred: mj_bridge.registry reads installed metadata (importlib.metadata, ~20 ms by python -X importtime), paid only when plants are ordered
     from mj_bridge.registry import rank
 
     return EXTRA_PLANT_COLORS[(rank(name) - 3) % len(EXTRA_PLANT_COLORS)]

@@ -190,7 +190,7 @@ def executor_for(
         finally:
             ex.shutdown(wait=True, cancel_futures=True)
         return
-    try:
+    try:  # deferred: Dask is optional (the [test] extra has it)
         from distributed import Client, LocalCluster
     except ImportError:
         what = "scheduler" if scheduler is not None else "dask_workers"
