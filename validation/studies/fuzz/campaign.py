@@ -237,7 +237,11 @@ def fuzz(
             say(f"scene {rec.index}: {target.key}: shrinking")
             # a simpler scene costs less than the one found: a candidate taking far longer (a
             # stiffer variant) is over budget, hence not taken, instead of stalling the campaign
-            slowest = max(rec.outcome.walls.values(), default=0.0)
+            # a run stopped at its limit says nothing of what a finished run costs: left out
+            slowest = max(
+                (w for p, w in rec.outcome.walls.items() if p not in rec.outcome.timeouts),
+                default=0.0,
+            )
             shrink_budget[0] = min(
                 time_limit_s, max(SHRINK_BUDGET_MIN_S, SHRINK_BUDGET_FACTOR * slowest)
             )
