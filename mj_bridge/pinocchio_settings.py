@@ -6,56 +6,16 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-from analytic.effects import SolverMethod
-from analytic.plant import check_positive, coerce_enum
-from mj_bridge.mujoco_settings import ControllerSource
+from mj_bridge.scipy_loop_settings import ScipyLoopSettings
 
 if TYPE_CHECKING:
     from analytic.scene import Scene
 
 
 @dataclass(frozen=True)
-class PinocchioSettings:
-    """How the Pinocchio plant integrates.
-
-    Attributes:
-        method: scipy ``OdeSolver`` (default DOP853).
-        rtol, atol: tolerances on the motion (the quadratures are left out of the error control);
-            None takes the scene's ``[solver]`` values.
-        max_step: largest step, s; None takes the scene's.
-        controller: ``analytic_fast`` (the compiled kernel, numpy where it declines) or
-            ``analytic`` (the numpy model at every stage).
-    """
-
-    method: SolverMethod = SolverMethod.DOP853
-    rtol: float | None = None
-    atol: float | None = None
-    max_step: float | None = None
-    controller: ControllerSource = ControllerSource.ANALYTIC_FAST
-
-    def __post_init__(self):
-        coerce_enum(self, "method", SolverMethod)
-        try:
-            ctrl = ControllerSource(self.controller)
-        except ValueError:
-            ctrl = None
-        if ctrl not in (ControllerSource.ANALYTIC, ControllerSource.ANALYTIC_FAST):
-            raise ValueError(
-                f"controller: must be 'analytic' or 'analytic_fast' (got {self.controller!r})"
-            )
-        object.__setattr__(self, "controller", ctrl)
-        check_positive(self, "rtol", allow_none=True, what="positive number")
-        check_positive(self, "atol", allow_none=True, what="positive number")
-        check_positive(self, "max_step", allow_none=True, allow_inf=True)
-
-    def resolved(self, scene: Scene) -> tuple[float, float, float]:
-        """``(rtol, atol, max_step)`` with the scene's values where these are None."""
-        s = scene.solver
-        return (
-            s.rtol if self.rtol is None else float(self.rtol),
-            s.atol if self.atol is None else float(self.atol),
-            s.max_step if self.max_step is None else float(self.max_step),
-        )
+class PinocchioSettings(ScipyLoopSettings):
+    """How the Pinocchio plant integrates
+    (:class:`~mj_bridge.scipy_loop_settings.ScipyLoopSettings`)."""
 
 
 # Pinocchio's ``Data`` for this model (n prismatic joints under one free flyer) grows as the cube
