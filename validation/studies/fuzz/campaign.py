@@ -204,13 +204,14 @@ def fuzz(
 
     shrink_budget = [float(time_limit_s)]
     pool: list[Executor] = []
+    shrink_plants: list[tuple[Plant | str, ...]] = [chosen]
 
     def evaluate(data: dict[str, Any], h: float) -> Outcome:
         # on the campaign's executor: a process pool's worker is single-threaded, so each plant
         # run forks and is killed at its limit (judge module docstring); here, beside the pool's
         # own threads, it could not be
         return Outcome.from_dict(
-            pool[0].submit(judge_data, data, chosen, h, shrink_budget[0]).result()
+            pool[0].submit(judge_data, data, shrink_plants[0], h, shrink_budget[0]).result()
         )
 
     def take(rec: SceneRecord) -> None:
@@ -244,6 +245,11 @@ def fuzz(
             )
             shrink_budget[0] = min(
                 time_limit_s, max(SHRINK_BUDGET_MIN_S, SHRINK_BUDGET_FACTOR * slowest)
+            )
+            # a plant raising or stopping is its own: the candidates run on that plant alone
+            alone = target.kind in (Kind.RAISED, Kind.STOPPED)
+            shrink_plants[0] = tuple(
+                p for p in chosen if not alone or plant_name(p) == target.plant
             )
             s = shrink(rec.data, cfg.horizon, target, evaluate, shrink_evaluations, rec.outcome)
             path = out / COUNTEREXAMPLES_DIR / f"{slug(target.key)}.toml"
