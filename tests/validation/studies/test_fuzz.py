@@ -202,9 +202,11 @@ def test_executor_for_refuses_both_and_bad_counts():
 SLEEP_S = 60.0
 """How long the sleeping plant's run would take: far past TIME_LIMIT_S."""
 TIME_LIMIT_S = 2.0
-STOP_MARGIN_S = 2.0
-"""Fork, SIGTERM, the 0.5 s grace before SIGKILL (workers.STOP_GRACE_S), reaping, on a loaded
-2-core machine."""
+STOP_MARGIN_S = 0.25 * SLEEP_S - TIME_LIMIT_S
+"""Fork, SIGTERM, the 0.5 s grace before SIGKILL (workers.STOP_GRACE_S), reaping: a run stopped at
+its limit ends within a quarter of SLEEP_S, which a run that was not stopped (SLEEP_S) cannot; on
+a 2-core machine running the suite in two workers a stopped run took 2.1-5.2 s (this is not a
+timing goal, only the line between stopped and not stopped)."""
 
 
 class SleepyPlant(AnalyticPlant):
