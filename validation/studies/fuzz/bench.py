@@ -17,6 +17,10 @@ import sys
 import time
 from dataclasses import dataclass
 
+from analytic.scene.dump import scene_to_dict
+from validation.scenes import resolve_scene
+from validation.studies.fuzz.judge import judge_scene
+
 GOAL_PER_CORE_MINUTE = 200.0
 """Scene-validations per core-minute the campaign is meant to reach on Example 1 (2 s, three
 plants)."""
@@ -38,9 +42,6 @@ class Throughput:
 def measure(rounds: int = 5, plants: tuple[str, ...] = ("analytic", "mujoco", "pinocchio")) -> Throughput:
     """:class:`Throughput` over ``rounds`` validations (after one unmeasured, which loads the
     compiled kernels)."""
-    from analytic.scene.dump import scene_to_dict
-    from validation.scenes import resolve_scene
-    from validation.studies.fuzz.judge import judge_scene
 
     data = scene_to_dict(resolve_scene(SCENE))
     data["output"]["t_end"] = HORIZON_S

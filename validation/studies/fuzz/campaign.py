@@ -26,10 +26,12 @@ import json
 import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import Executor, Future
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 from analytic.plant import Plant
+from mj_bridge.plants import installed_plants, plant
 from validation.runs.atomic import write_text
 from validation.studies.fuzz.judge import RUN_BUDGET_S, Kind, Outcome, judge_scene, plant_name
 from validation.studies.fuzz.known import recognise
@@ -39,9 +41,11 @@ from validation.studies.fuzz.records import (
     FuzzConfig,
     SceneRecord,
 )
+from validation.studies.fuzz.report import write_campaign
 from validation.studies.fuzz.shrink import MAX_EVALUATIONS, shrink
 from validation.studies.fuzz.space import draw_scene_dict
 from validation.studies.fuzz.toml import counterexample_toml, slug
+from validation.studies.sweep.running import executor_for
 
 DEFAULT_BUDGET = 40
 """Scenes of a campaign given neither a budget nor minutes."""
@@ -91,8 +95,6 @@ class SerialExecutor(Executor):
 
 
 def _default_plants() -> tuple[str, ...]:
-    from mj_bridge.plants import installed_plants
-
     return tuple(plant_name(p) for p in installed_plants())
 
 
@@ -163,7 +165,6 @@ def fuzz(
     Raises:
         ValueError: naming the argument for a bad budget, minutes, horizon, plants or ``out``.
     """
-    from validation.studies.sweep.running import executor_for
 
     if budget is not None and (isinstance(budget, bool) or not isinstance(budget, int) or budget < 1):
         raise ValueError(f"budget: must be a whole number ≥ 1 (got {budget!r})")
@@ -187,8 +188,6 @@ def fuzz(
         raise ValueError(f"plants: each plant once (got {', '.join(names)})")
     for p in chosen:  # an unknown name is refused here, before any work
         if isinstance(p, str):
-            from mj_bridge.plants import plant
-
             plant(p)
     cfg = FuzzConfig(seed, names, float(horizon))
     out = Path(out_dir)
@@ -311,15 +310,11 @@ def fuzz(
         complete,
     )
     if report:
-        from validation.studies.fuzz.report import write_campaign
-
         result = write_campaign(result)
     return result
 
 
 def _with_occurrences(ex: Counterexample, k: int) -> Counterexample:
-    from dataclasses import replace
-
     return replace(ex, occurrences=k)
 
 

@@ -35,7 +35,11 @@ from typing import Any
 from analytic.plant import Plant
 from analytic.scene import Scene, scene_from_dict
 from analytic.trajectory import RunStatus, Trajectory
-from validation.runs import workers
+from mj_bridge.plants import plant
+from validation.compare.checks import compare_plants
+from validation.compare.referee import VerdictKind, referee
+from validation.runs import warmup, workers
+from validation.studies.sweep.running import BudgetExceeded
 
 
 class Kind(StrEnum):
@@ -141,7 +145,6 @@ def resolve_plant(pl: Plant | str) -> Plant:
     (:func:`mj_bridge.plants.plant`; ``ValueError`` naming ``plants`` for an unknown one)."""
     if isinstance(pl, Plant):
         return pl
-    from mj_bridge.plants import plant  # the engines load in the worker that runs them
 
     return plant(pl)
 
@@ -196,7 +199,6 @@ def _load_kernels(name: str, scene: Scene) -> None:
     machine, 15× a warm scene's run). Only kernels are made (:mod:`validation.runs.warmup`'s
     jobs), no scene is simulated, so nothing here waits on a slow scene; a failure is left for
     the run to report."""
-    from validation.runs import warmup
 
     key = (name, warmup.compiled_solver(scene))
     if key in _LOADED or name not in warmup.KERNELS:
@@ -244,8 +246,6 @@ def run_limited(name: str, pl: Plant, scene: Scene, horizon: float, limit_s: flo
 
 
 def _budget_progress(budget_s: float):
-    from validation.studies.sweep.running import BudgetExceeded
-
     start = time.perf_counter()
 
     def progress(t: float) -> None:
@@ -311,9 +311,6 @@ def judge_scene(
     checks: dict[str, tuple[float, float, str]] = {}
     verdicts: tuple[dict[str, Any], ...] = ()
     if len(trajs) >= 2:
-        from validation.compare.checks import compare_plants
-        from validation.compare.referee import VerdictKind, referee
-
         cmp = compare_plants(trajs, scene, t_end=horizon)
         for c in cmp.checks:
             if not c.applicable:

@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any
 
 from analytic.scene import scene_from_dict
 from analytic.scene.dump import scene_to_toml
+from validation.compare.thresholds import thresholds_for
 
 if TYPE_CHECKING:
     from validation.studies.fuzz.records import Counterexample, FuzzConfig
@@ -31,7 +32,6 @@ def slug(key: str) -> str:
 
 def with_hard_case(data: dict[str, Any], criterion: str) -> dict[str, Any]:
     """``data`` with a ``[hard_case]`` table (module docstring) and its bounds."""
-    from validation.compare.thresholds import thresholds_for
 
     out = copy.deepcopy(data)
     th = thresholds_for(None)
