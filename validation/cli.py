@@ -118,8 +118,6 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
 
 def cmd_validate(args: argparse.Namespace) -> int:
-    from validation.compare.referee import VerdictKind
-    from validation.compare.summary import check_sentence
     from validation.runs.outputs import default_out_dir
     from validation.runs.progress import StageProgress, Status
     from validation.runs.warmup import warming
@@ -144,19 +142,31 @@ def cmd_validate(args: argparse.Namespace) -> int:
             res = run_request(request, out, progress=progress)
         finally:
             progress.close(walls=res.wall_times if res is not None else None, stopped=res is None)
-    applicable = [c for c in res.checks if c.applicable]
-    n_fail = sum(1 for c in applicable if not c.passed)
-    n_na = len(res.checks) - len(applicable)
+    return _print_outcome(res, scene.name, "not applicable")
+
+
+def _print_outcome(res, subject: str, idle_words: str, not_judged: bool = False) -> int:
+    """The closing lines of ``tumble validate`` and ``tumble judge``: the verdict with its count
+    (``idle_words`` names the checks left out), a failed run, each failed check, the reasons a
+    file was not judged (``not_judged``), every referee ruling other than agree, and the report
+    and recording written; returns the exit status."""
+    from validation.compare.referee import VerdictKind
+    from validation.compare.summary import check_sentence
+
+    counted = [c for c in res.checks if c.applicable]
+    n_fail = sum(1 for c in counted if not c.passed)
+    idle = len(res.checks) - len(counted)
     verdict = "PASS" if res.passed else "FAIL"
-    na = f" ({n_na} not applicable)" if n_na else ""
-    print(
-        f"{verdict}: {len(applicable) - n_fail}/{len(applicable)} checks passed{na} for {scene.name}"
-    )
+    na = f" ({idle} {idle_words})" if idle else ""
+    print(f"{verdict}: {len(counted) - n_fail}/{len(counted)} checks passed{na} for {subject}")
     if res.failure:
         print(f"  run failed: {res.failure}")
     for c in res.checks:
         if not c.passed:
             print(f"  failed: {check_sentence(c, reason=False)}")
+    if not_judged:
+        for why in sorted({c.reason for c in res.checks if c.reason.startswith("not judged")}):
+            print(f"  {why}")
     for v in res.verdicts:
         if v.kind is not VerdictKind.AGREE:
             print(f"  referee: {v.text}")
@@ -170,8 +180,6 @@ _CLOSING_FILES = (("report", "report.md"), ("recording", "run.rrd"))
 
 
 def cmd_judge(args: argparse.Namespace) -> int:
-    from validation.compare.referee import VerdictKind
-    from validation.compare.summary import check_sentence
     from validation.external.judge import judge_request, run_judge
     from validation.runs.outputs import default_out_dir
     from validation.runs.progress import StageProgress, Status
@@ -194,28 +202,9 @@ def cmd_judge(args: argparse.Namespace) -> int:
             res = run_judge(request, out, progress=progress)
         finally:
             progress.close(walls=res.wall_times if res is not None else None, stopped=res is None)
-    judged = [c for c in res.checks if c.applicable]
-    n_fail = sum(1 for c in judged if not c.passed)
-    idle = len(res.checks) - len(judged)
-    verdict = "PASS" if res.passed else "FAIL"
-    na = f" ({idle} not judged or not applicable)" if idle else ""
-    print(
-        f"{verdict}: {len(judged) - n_fail}/{len(judged)} checks passed{na} for {request.label} "
-        f"on {scene.name}"
+    return _print_outcome(
+        res, f"{request.label} on {scene.name}", "not judged or not applicable", not_judged=True
     )
-    if res.failure:
-        print(f"  run failed: {res.failure}")
-    for c in res.checks:
-        if not c.passed:
-            print(f"  failed: {check_sentence(c, reason=False)}")
-    for why in sorted({c.reason for c in res.checks if c.reason.startswith("not judged")}):
-        print(f"  {why}")
-    for v in res.verdicts:
-        if v.kind is not VerdictKind.AGREE:
-            print(f"  referee: {v.text}")
-    named = [f"{what}: {res.files[name]}" for what, name in _CLOSING_FILES if name in res.files]
-    print("  ".join(named))
-    return 0 if res.passed else EXIT_FAILED
 
 
 def cmd_reference(args: argparse.Namespace) -> int:
