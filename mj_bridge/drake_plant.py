@@ -72,12 +72,13 @@ from analytic.fast import FastModel
 from analytic.kernel import compile_lock
 from analytic.kernel.jit import jit
 from analytic.model import ControlOutput, TumblingModel
-from analytic.scene import OutputSettings, Scene
-from analytic.stepping import NonFinite, step_and_sample
+from analytic.scene import Scene
+from analytic.stepping import NonFinite
 from analytic.trajectory import RunStatus, Trajectory
 from mj_bridge.drake_model import build_model, drake_to_paper_batch, import_drake, paper_to_drake
 from mj_bridge.drake_settings import DrakeSettings
 from mj_bridge.pinocchio_plant import MODE_GIVEN, stage_for, work_layout
+from mj_bridge.scipy_loop import check_t_end, integrate
 from mj_bridge.stages import ControllerSource
 
 ENGINE = "drake"
@@ -391,43 +392,13 @@ def simulate(
         (KeyboardInterrupt) with ``status = interrupted``.
     """
     settings = settings or DrakeSettings()
-    if t_end is not None and not (math.isfinite(t_end) and t_end > 0):
-        raise ValueError(f"t_end: must be a positive time in s (got {t_end!r})")
+    check_t_end(t_end)
     with compile_lock.compiling(COMPILE_LOCK):
         plant = DrakeDynamics(scene, settings.controller)
         plant.compile()
-    rtol, atol, max_step = settings.resolved(scene)
-    out = scene.output if t_end is None else OutputSettings(t_end=t_end, rate=scene.output.rate)
-    run = step_and_sample(
-        plant.rhs,
-        out.times(),
-        plant.initial_state(),
-        method=settings.method,
-        rtol=rtol,
-        atol=atol,
-        n_motion=plant.nq + plant.nv,
-        max_step=max_step,
-        progress=progress,
-    )
-    return _assemble(
-        plant,
-        run.t,
-        run.y,
-        run.status,
-        run.message,
-        {
-            "method": settings.method.value,
-            "rtol": rtol,
-            "atol": atol,
-            "controller": plant.controller.value,
-            "nfev": plant.nfev,
-            "nsteps": run.nsteps,
-            "controller_fallbacks": plant.fallbacks,
-            "wall_time_s": run.wall_time_s,
-            "max_quat_norm_error_at_steps": run.max_quat_norm_error_at_steps,
-            "drake_version": _drake_version(),
-        },
-    )
+    run, info = integrate(plant, settings, scene, t_end, progress)
+    info["drake_version"] = _drake_version()
+    return _assemble(plant, run.t, run.y, run.status, run.message, info)
 
 
 def _drake_version() -> str:

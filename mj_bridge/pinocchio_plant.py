@@ -78,11 +78,12 @@ from analytic.kernel.layout import (
 )
 from analytic.kernel.system import tail
 from analytic.model import ControlOutput, TumblingModel
-from analytic.scene import OutputSettings, Scene
-from analytic.stepping import NonFinite, step_and_sample
+from analytic.scene import Scene
+from analytic.stepping import NonFinite
 from analytic.trajectory import Engine, RunStatus, Trajectory
 from mj_bridge.pinocchio_model import build_model, import_pinocchio
 from mj_bridge.pinocchio_settings import PinocchioSettings, check_pinocchio_size
+from mj_bridge.scipy_loop import check_t_end, integrate
 from mj_bridge.stages import ControllerSource
 from model_xml.coordinates import (
     paper_to_pinocchio_plant,
@@ -522,43 +523,13 @@ def simulate(
         (KeyboardInterrupt) with ``status = interrupted``.
     """
     settings = settings or PinocchioSettings()
-    if t_end is not None and not (math.isfinite(t_end) and t_end > 0):
-        raise ValueError(f"t_end: must be a positive time in s (got {t_end!r})")
+    check_t_end(t_end)
     with compile_lock.compiling(compile_lock.PINOCCHIO):  # a first run's helper may be at it
         plant = PinocchioDynamics(scene, settings.controller)
         plant.compile()
-    rtol, atol, max_step = settings.resolved(scene)
-    out = scene.output if t_end is None else OutputSettings(t_end=t_end, rate=scene.output.rate)
-    run = step_and_sample(
-        plant.rhs,
-        out.times(),
-        plant.initial_state(),
-        method=settings.method,
-        rtol=rtol,
-        atol=atol,
-        n_motion=plant.nq + plant.nv,
-        max_step=max_step,
-        progress=progress,
-    )
-    return _assemble(
-        plant,
-        run.t,
-        run.y,
-        run.status,
-        run.message,
-        {
-            "method": settings.method.value,
-            "rtol": rtol,
-            "atol": atol,
-            "controller": plant.controller.value,
-            "nfev": plant.nfev,
-            "nsteps": run.nsteps,
-            "controller_fallbacks": plant.fallbacks,
-            "wall_time_s": run.wall_time_s,
-            "max_quat_norm_error_at_steps": run.max_quat_norm_error_at_steps,
-            "pinocchio_version": plant.pin.__version__,
-        },
-    )
+    run, info = integrate(plant, settings, scene, t_end, progress)
+    info["pinocchio_version"] = plant.pin.__version__
+    return _assemble(plant, run.t, run.y, run.status, run.message, info)
 
 
 def _assemble(

@@ -1,0 +1,76 @@
+"""The run both engine plants on scipy's loop share (Pinocchio, Drake): their dynamics stepped by
+:func:`analytic.stepping.step_and_sample` at the settings' tolerances, and the ``info`` every such
+trajectory carries. Each plant builds its own dynamics and assembles its own trajectory."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import Any, Protocol
+
+import numpy as np
+
+from analytic.scene import OutputSettings, Scene
+from analytic.stepping import Stepped, step_and_sample
+from mj_bridge.scipy_loop_settings import ScipyLoopSettings
+
+
+class LoopDynamics(Protocol):
+    """What the loop needs of a plant's dynamics (``PinocchioDynamics``, ``DrakeDynamics``)."""
+
+    nq: int
+    nv: int
+    nfev: int
+    fallbacks: int
+    controller: Any
+
+    def rhs(self, t: float, y: np.ndarray) -> np.ndarray: ...
+
+    def initial_state(self) -> np.ndarray: ...
+
+
+def check_t_end(t_end: float | None) -> None:
+    """``ValueError`` naming ``t_end`` unless it is None or a positive finite time (s)."""
+    if t_end is not None and not (math.isfinite(t_end) and t_end > 0):
+        raise ValueError(f"t_end: must be a positive time in s (got {t_end!r})")
+
+
+def integrate(
+    plant: LoopDynamics,
+    settings: ScipyLoopSettings,
+    scene: Scene,
+    t_end: float | None,
+    progress: Callable[[float], None] | None,
+) -> tuple[Stepped, dict[str, Any]]:
+    """Step ``plant`` over the scene's output grid (to ``t_end`` when given) at the settings'
+    tolerances (the scene's where None); returns the run and its ``info`` (method, tolerances,
+    controller, evaluations, steps, controller fallbacks, wall time, largest quaternion-norm
+    error at the steps), to which the plant adds its engine's version."""
+    rtol, atol, max_step = settings.resolved(scene)
+    out = scene.output if t_end is None else OutputSettings(t_end=t_end, rate=scene.output.rate)
+    run = step_and_sample(
+        plant.rhs,
+        out.times(),
+        plant.initial_state(),
+        method=settings.method,
+        rtol=rtol,
+        atol=atol,
+        n_motion=plant.nq + plant.nv,
+        max_step=max_step,
+        progress=progress,
+    )
+    info = {
+        "method": settings.method.value,
+        "rtol": rtol,
+        "atol": atol,
+        "controller": plant.controller.value,
+        "nfev": plant.nfev,
+        "nsteps": run.nsteps,
+        "controller_fallbacks": plant.fallbacks,
+        "wall_time_s": run.wall_time_s,
+        "max_quat_norm_error_at_steps": run.max_quat_norm_error_at_steps,
+    }
+    return run, info
+
+
+__all__ = ["LoopDynamics", "check_t_end", "integrate"]
