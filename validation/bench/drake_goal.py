@@ -17,15 +17,13 @@ from __future__ import annotations
 
 import math
 import statistics
-import time
 from collections.abc import Callable
 
 import numpy as np
 
 from mj_bridge.drake_plugin import DrakePlant, DrakeSettings
 from mj_bridge.plants import AnalyticSettings, plant
-from validation.bench.goals import Goal, _share
-from validation.bench.timing import CpuMeter
+from validation.bench.goals import Goal, _share, plant_rounds
 from validation.bench.verdicts import spread_of
 from validation.scenes import resolve_scene
 
@@ -57,37 +55,13 @@ def goal_drake(
         "drake": (DrakePlant(), DrakeSettings("DOP853", 1e-12, 1e-13)),
     }
 
-    def once(name: str):
-        pl, settings = runs[name]
-        meter = CpuMeter()
-        t0 = time.perf_counter()
-        with meter:
-            tr = pl.simulate(sc, settings, t_end=t_end, progress=meter).raise_if_interrupted()
-        call = time.perf_counter() - t0
-        if tr.status.value != "ok":
-            raise RuntimeError(f"{name} plant: {tr.message}")
-        wall = float(tr.info["wall_time_s"])
-        return tr, wall, call, meter.cpu_of(wall)
-
     try:
-        first = {name: once(name) for name in runs}  # warm: compilation and cache loads
-        default_loop = plant("analytic").simulate(
-            sc, AnalyticSettings("DOP853", 1e-12, 1e-13), t_end=t_end
-        )
-        walls: dict[str, list[float]] = {name: [] for name in runs}
-        calls: dict[str, list[float]] = {name: [] for name in runs}
-        cpus: dict[str, list[float]] = {name: [] for name in runs}
-        order = []
-        for k in range(rounds):
-            names = list(runs) if k % 2 == 0 else list(reversed(runs))  # alternate who goes first
-            order.append(names)
-            for name in names:
-                _, wall, call, cpu = once(name)
-                walls[name].append(wall)
-                calls[name].append(call)
-                cpus[name].append(cpu)
+        r = plant_rounds(sc, runs, t_end, rounds)
     except (RuntimeError, ValueError, ImportError) as exc:
         return Goal(DRAKE_GOAL, math.inf, DRAKE_LIMIT, f"a run failed: {exc}")
+    first, default_loop, walls, calls, cpus, order = (
+        r.first, r.default_loop, r.walls, r.calls, r.cpus, r.order
+    )
     tr_a, tr_d = first["analytic"][0], first["drake"][0]
     dR = float(np.max(np.linalg.norm(tr_a.R - tr_d.R, axis=1)))
     med_cpu = {name: statistics.median(v) for name, v in cpus.items()}

@@ -357,6 +357,64 @@ PINOCCHIO_GOAL = (
 PINOCCHIO_LIMIT = 3.0
 
 
+
+@dataclass(frozen=True)
+class PlantRounds:
+    """Two plants' 20 s runs timed in alternating rounds (:func:`plant_rounds`).
+
+    Attributes:
+        first: name -> ``(trajectory, wall, call, cpu)`` of the warm-up run (compilation and
+            cache loads), s.
+        default_loop: the analytic plant's run on its default loop at the same tolerances.
+        walls, calls, cpus: name -> per-round integration wall, whole ``simulate`` call and
+            integration CPU time, s.
+        order: who went first in each round.
+    """
+
+    first: dict[str, tuple[Any, float, float, float]]
+    default_loop: Any
+    walls: dict[str, list[float]]
+    calls: dict[str, list[float]]
+    cpus: dict[str, list[float]]
+    order: list[list[str]]
+
+
+def plant_rounds(sc, runs: dict[str, tuple[Any, Any]], t_end: float, rounds: int) -> PlantRounds:
+    """Each of ``runs`` (name -> ``(plant, settings)``) once to warm up, then ``rounds`` rounds
+    alternating who goes first, each run's integration CPU time measured by a :class:`CpuMeter`;
+    ``RuntimeError`` naming the plant whose run did not finish."""
+
+    def once(name: str):
+        pl, settings = runs[name]
+        meter = CpuMeter()
+        t0 = time.perf_counter()
+        with meter:
+            tr = pl.simulate(sc, settings, t_end=t_end, progress=meter).raise_if_interrupted()
+        call = time.perf_counter() - t0
+        if tr.status.value != "ok":
+            raise RuntimeError(f"{name} plant: {tr.message}")
+        wall = float(tr.info["wall_time_s"])
+        return tr, wall, call, meter.cpu_of(wall)
+
+    first = {name: once(name) for name in runs}
+    default_loop = plant("analytic").simulate(
+        sc, AnalyticSettings("DOP853", 1e-12, 1e-13), t_end=t_end
+    )
+    walls: dict[str, list[float]] = {name: [] for name in runs}
+    calls: dict[str, list[float]] = {name: [] for name in runs}
+    cpus: dict[str, list[float]] = {name: [] for name in runs}
+    order = []
+    for k in range(rounds):
+        names = list(runs) if k % 2 == 0 else list(reversed(runs))  # alternate who goes first
+        order.append(names)
+        for name in names:
+            _, wall, call, cpu = once(name)
+            walls[name].append(wall)
+            calls[name].append(call)
+            cpus[name].append(cpu)
+    return PlantRounds(first, default_loop, walls, calls, cpus, order)
+
+
 def goal_pinocchio(
     t_end: float = 20.0,
     rounds: int = 7,
@@ -383,37 +441,13 @@ def goal_pinocchio(
         "pinocchio": (plant("pinocchio"), PinocchioSettings("DOP853", 1e-12, 1e-13)),
     }
 
-    def once(name: str):
-        pl, settings = runs[name]
-        meter = CpuMeter()
-        t0 = time.perf_counter()
-        with meter:
-            tr = pl.simulate(sc, settings, t_end=t_end, progress=meter).raise_if_interrupted()
-        call = time.perf_counter() - t0
-        if tr.status.value != "ok":
-            raise RuntimeError(f"{name} plant: {tr.message}")
-        wall = float(tr.info["wall_time_s"])
-        return tr, wall, call, meter.cpu_of(wall)
-
     try:
-        first = {name: once(name) for name in runs}  # warm: compilation and cache loads
-        default_loop = plant("analytic").simulate(
-            sc, AnalyticSettings("DOP853", 1e-12, 1e-13), t_end=t_end
-        )
-        walls: dict[str, list[float]] = {name: [] for name in runs}
-        calls: dict[str, list[float]] = {name: [] for name in runs}
-        cpus: dict[str, list[float]] = {name: [] for name in runs}
-        order = []
-        for k in range(rounds):
-            names = list(runs) if k % 2 == 0 else list(reversed(runs))  # alternate who goes first
-            order.append(names)
-            for name in names:
-                _, wall, call, cpu = once(name)
-                walls[name].append(wall)
-                calls[name].append(call)
-                cpus[name].append(cpu)
+        r = plant_rounds(sc, runs, t_end, rounds)
     except (RuntimeError, ValueError) as exc:
         return Goal(PINOCCHIO_GOAL, math.inf, PINOCCHIO_LIMIT, f"a run failed: {exc}")
+    first, default_loop, walls, calls, cpus, order = (
+        r.first, r.default_loop, r.walls, r.calls, r.cpus, r.order
+    )
     tr_a, tr_p = first["analytic"][0], first["pinocchio"][0]
     dR = float(np.max(np.linalg.norm(tr_a.R - tr_p.R, axis=1)))
     med = {name: statistics.median(v) for name, v in walls.items()}
