@@ -3,7 +3,7 @@
 One validation is what a campaign does per scene: every plant's run at the scene's default
 settings, :func:`validation.compare.compare_plants` and the referee, no figure, recording or file
 (:func:`validation.studies.fuzz.judge.judge_scene`). Measured on the controlled Example 1 over a
-2 s horizon with the three plants (the issue's goal: at least
+2 s horizon with the three plants (the goal: at least
 :data:`GOAL_PER_CORE_MINUTE`), by this thread's CPU time, so the figure is per core whatever else
 the machine runs; the plants' own share (their wall times) is reported beside it.
 
