@@ -201,7 +201,8 @@ class AnalyticPlant(Plant):
         return AnalyticSettings(scene.solver.method, scene.solver.rtol, scene.solver.atol)
 
     def describe(self, settings: AnalyticSettings) -> str:
-        return f"analytic {settings.method.value} rtol {settings.rtol:g}"
+        # the label, not a fixed word: a plugin built on this plant is named as itself
+        return f"{self.label} {settings.method.value} rtol {settings.rtol:g}"
 
     def _simulate(self, scene, settings, t_end, progress):
         from analytic.simulate import simulate

@@ -24,6 +24,7 @@ from mj_bridge.plants import (
     plugin_errors,
     registered,
 )
+from tests.support.plugins import install_project
 from validation.compare.checks import Subject, subject_order_key
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "support" / "plugin_example"
@@ -81,33 +82,6 @@ def _broken_distribution(root: Path) -> Path:
     lines = ["[tumbling_testbed.plants]"] + [f"{k} = {v}" for k, (v, _) in BROKEN.items()]
     (info / "entry_points.txt").write_text("\n".join(lines) + "\n")
     return root
-
-
-def _install(project: Path, target: Path) -> Path:
-    """Install a pure-Python, single-module project into ``target`` as an installer does: its
-    modules (``[tool.setuptools] py-modules``) and a ``<name>-<version>.dist-info`` with
-    ``METADATA`` and the ``entry_points.txt`` of its ``[project.entry-points]``; ``target`` on
-    ``PYTHONPATH`` then shows it to ``importlib.metadata``. (``pip install --target`` needs a
-    build backend with ``bdist_wheel``, which the test environment does not promise offline.)"""
-    import shutil
-    import tomllib
-
-    meta = tomllib.loads((project / "pyproject.toml").read_text())
-    proj = meta["project"]
-    target.mkdir(parents=True)
-    for mod in meta["tool"]["setuptools"]["py-modules"]:
-        shutil.copy(project / f"{mod}.py", target / f"{mod}.py")
-    info = target / f"{proj['name'].replace('-', '_')}-{proj['version']}.dist-info"
-    info.mkdir()
-    (info / "METADATA").write_text(
-        f"Metadata-Version: 2.1\nName: {proj['name']}\nVersion: {proj['version']}\n"
-    )
-    groups = [
-        f"[{group}]\n" + "".join(f"{k} = {v}\n" for k, v in eps.items())
-        for group, eps in proj["entry-points"].items()
-    ]
-    (info / "entry_points.txt").write_text("\n".join(groups))
-    return target
 
 
 def _reload_registry() -> None:
@@ -216,10 +190,10 @@ def test_broken_plugins_are_named_in_one_line_and_the_others_run(broken_plugins,
 
 
 def test_a_plugin_package_installed_from_tests_runs_in_tumble_validate(tmp_path):
-    """The example package installed from its own pyproject.toml (:func:`_install`), then ``tumble validate --plants analytic,mujoco,echo`` in a subprocess that sees it and a
+    """The example package installed from its own pyproject.toml (:func:`tests.support.plugins.install_project`), then ``tumble validate --plants analytic,mujoco,echo`` in a subprocess that sees it and a
     distribution of broken plugins: the broken ones are named in one line each, the run passes,
     and the report holds the plugin as a plant, every pair compared."""
-    site = _install(EXAMPLE, tmp_path / "site")
+    site = install_project(EXAMPLE, tmp_path / "site")
     eps = list(site.glob("tumble_plugin_example-*.dist-info/entry_points.txt"))
     assert eps and "echo = tumble_plugin_example:EchoPlant" in eps[0].read_text()
     broken = _broken_distribution(tmp_path / "broken")

@@ -6,6 +6,7 @@ from __future__ import annotations
 import dataclasses
 import json
 from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -13,6 +14,7 @@ import pytest
 from analytic.plant import AnalyticPlant
 from analytic.scene import load_scene, scene_from_dict
 from analytic.trajectory import Engine
+from tests.support.plugins import install_project
 from validation.studies.fuzz import campaign as campaign_mod
 from validation.studies.fuzz.campaign import SerialExecutor, fuzz
 from validation.studies.fuzz.judge import Disagreement, Kind, judge_scene
@@ -261,3 +263,60 @@ def test_a_plant_that_hangs_is_stopped_at_its_limit_and_the_campaign_goes_on(tmp
 def test_time_limit_must_be_positive(tmp_path):
     with pytest.raises(ValueError, match=r"^time_limit_s: "):
         fuzz(tmp_path, executor=SerialExecutor(), time_limit_s=0.0)
+
+
+PLANTED = Path(__file__).parents[2] / "support" / "planted_plugin"
+PLANTED_SEED = 21
+"""A seed whose first scene shows the planted slip: 10 masses, spin 41 rad/s, both over the
+slip's bounds, so the shrinker has masses to remove and a spin it must keep."""
+
+
+def test_a_planted_wrong_plant_is_found_through_the_plugin_mechanism_and_shrunk_to_three_masses(
+    tmp_path,
+):
+    """The planted plant (``tests/support/planted_plugin``: the analytic plant with its body
+    inertia 1e-6 relative too large, only with at least three masses and |ω(0)| > 5 rad/s),
+    installed as a plugin and named on ``tumble fuzz``'s command line: the campaign finds it, and
+    the minimal scene has exactly three masses (two cannot show the slip), a spin over 5 rad/s, and
+    names the planted plant the outlier, reproduced by ``tumble validate`` on the file."""
+    import os
+    import subprocess
+    import sys
+
+    site = install_project(PLANTED, tmp_path / "site")
+    sys.path.insert(0, str(site))
+    try:
+        from tumble_planted_plant import MIN_MASSES, MIN_SPIN
+    finally:
+        sys.path.remove(str(site))
+    env = dict(os.environ, PYTHONPATH=str(site))
+    out = tmp_path / "campaign"
+    cmd = [sys.executable, "-m", "validation", "fuzz", "--plants", "analytic,pinocchio,planted",
+           "--seed", str(PLANTED_SEED), "--budget", "1", "--out", str(out)]
+    res = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=600)
+    assert res.returncode == 1, res.stdout + res.stderr  # 1: a new finding
+    doc = json.loads((out / "campaign.json").read_text())
+    assert doc["scenes_per_plant"]["planted"] == 1
+    found = [c for c in doc["counterexamples"] if c["plant"] == "planted"]
+    assert found and {c["kind"] for c in found} == {Kind.OUTLIER.value}
+    first = drivers(draw_scene_dict(PLANTED_SEED, 0, campaign_mod.DEFAULT_HORIZON_S))
+    assert first.n > MIN_MASSES  # the scene found had masses to remove
+    for c in found:
+        assert c["known"] == ""  # a new finding
+        data = _file_dict(out / c["file"])
+        assert drivers(data).n == MIN_MASSES  # exactly three masses
+        assert drivers(data).spin > MIN_SPIN
+        for v in c["verdicts"]:  # every outlier the minimal scene shows is the planted plant
+            assert v["verdict"] != "outlier" or v["outlier"] == "planted"
+        # the file, read by tumble validate as it is, reproduces the verdict
+        report = tmp_path / "validate"
+        rerun = subprocess.run(
+            [sys.executable, "-m", "validation", "validate", str(out / c["file"]), "--plants",
+             "analytic,pinocchio,planted", "--t-end", str(c["horizon"]), "--out", str(report)],
+            env=env, capture_output=True, text=True, timeout=600,
+        )
+        assert rerun.returncode == 1, rerun.stdout + rerun.stderr
+        verdicts = json.loads((report / "report.json").read_text())["referee"]
+        outliers = [v for v in verdicts if v["verdict"] == "outlier"]
+        assert outliers and {v["outlier"] for v in outliers} == {"planted"}
+        assert all("Planted DOP853 rtol 1e-12 is the outlier" in v["text"] for v in outliers)
