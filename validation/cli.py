@@ -340,6 +340,7 @@ def cmd_fuzz(args: argparse.Namespace) -> int:
         scheduler=args.scheduler,
         dask_workers=args.dask_workers,
         progress=progress,
+        **({"time_limit_s": args.time_limit} if args.time_limit else {}),
     )
     new = sum(not e.known for e in res.counterexamples)
     print(
@@ -617,6 +618,13 @@ def build_parser() -> argparse.ArgumentParser:
         "--horizon", type=_positive_float, default=0.5, help="each scene's horizon, s (default 0.5)"
     )
     p.add_argument("--out", help="output directory (default: out/fuzz_seed<seed>)")
+    p.add_argument(
+        "--time-limit",
+        type=_positive_float,
+        metavar="SECONDS",
+        help="wall-time limit of one plant's run; a run over it is stopped and counted as a "
+        "timeout (default 30)",
+    )
     _add_dask_args(p)
     p.set_defaults(func=cmd_fuzz)
 

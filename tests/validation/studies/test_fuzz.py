@@ -180,6 +180,25 @@ def test_cli_bad_plant_is_one_line(tmp_path, capsys):
     assert rc != 0 and len(err) == 1 and "plants" in err[0]
 
 
+
+def test_cli_time_limit_reaches_the_campaign_and_is_checked(tmp_path, monkeypatch, capsys):
+    from validation.cli import main
+
+    seen = {}
+
+    def fake_fuzz(out, **kwargs):
+        seen.update(kwargs)
+        raise SystemExit(0)
+
+    monkeypatch.setattr(campaign_mod, "fuzz", fake_fuzz)
+    with pytest.raises(SystemExit):
+        main(["fuzz", "--budget", "1", "--time-limit", "2.5", "--out", str(tmp_path)])
+    assert seen["time_limit_s"] == 2.5
+    with pytest.raises(SystemExit) as exc:
+        main(["fuzz", "--time-limit", "0", "--out", str(tmp_path)])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert exc.value.code == 2 and "--time-limit" in err[-1]
+
 DASK_PLANTS = ("analytic", "pinocchio")
 
 
