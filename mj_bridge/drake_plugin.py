@@ -15,6 +15,7 @@ from analytic.plant import Plant
 from analytic.scene import Scene
 from analytic.trajectory import Trajectory
 from mj_bridge.drake_settings import DrakeSettings, drake_unavailable
+from mj_bridge.scipy_loop_settings import tightened_scipy_loop
 
 SUPPORTED_EFFECTS = frozenset(Effect)
 """Every effect of :class:`analytic.effects.Effect`: gravity is Drake's gravity field, the mass
@@ -42,6 +43,9 @@ class DrakePlant(Plant):
     def describe(self, settings: DrakeSettings) -> str:
         rtol = "the scene's" if settings.rtol is None else f"{settings.rtol:g}"
         return f"Drake {settings.method.value} rtol {rtol}"
+
+    def tightened(self, scene: Scene, settings: DrakeSettings) -> DrakeSettings | None:
+        return tightened_scipy_loop(scene, settings)
 
     def _simulate(self, scene, settings, t_end, progress) -> Trajectory:
         from mj_bridge.drake_plant import simulate

@@ -17,6 +17,7 @@ the contract.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import importlib.util
 import inspect
@@ -24,7 +25,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from analytic.effects import Effect
-from analytic.plant import AnalyticPlant, AnalyticSettings, Plant
+from analytic.plant import TIGHTER_STEP, AnalyticPlant, AnalyticSettings, Plant
 from analytic.scene import Scene
 from analytic.trajectory import Engine, Trajectory
 from mj_bridge.mujoco_settings import MujocoRunSettings
@@ -34,6 +35,7 @@ from mj_bridge.pinocchio_settings import (
     check_pinocchio_size,
 )
 from mj_bridge.registry import NAME_PATTERN, RESERVED, entry_points, report_order
+from mj_bridge.scipy_loop_settings import tightened_scipy_loop
 
 
 class MujocoPlant(Plant):
@@ -48,6 +50,9 @@ class MujocoPlant(Plant):
 
     def describe(self, settings: MujocoRunSettings) -> str:
         return f"MuJoCo {settings.integrator.value} dt {settings.dt:g} s"
+
+    def tightened(self, scene: Scene, settings: MujocoRunSettings) -> MujocoRunSettings:
+        return dataclasses.replace(settings, dt=settings.dt / TIGHTER_STEP)
 
     def _simulate(self, scene, settings, t_end, progress) -> Trajectory:
         from mj_bridge.simulate import simulate
@@ -90,6 +95,9 @@ class PinocchioPlant(Plant):
     def describe(self, settings: PinocchioSettings) -> str:
         rtol = "the scene's" if settings.rtol is None else f"{settings.rtol:g}"
         return f"Pinocchio {settings.method.value} rtol {rtol}"
+
+    def tightened(self, scene: Scene, settings: PinocchioSettings) -> PinocchioSettings | None:
+        return tightened_scipy_loop(scene, settings)
 
     def _simulate(self, scene, settings, t_end, progress) -> Trajectory:
         from mj_bridge.pinocchio_plant import simulate

@@ -4,11 +4,12 @@ engines check their settings alike; each plant keeps its own subclass (``Plant.s
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from analytic.effects import SolverMethod
-from analytic.plant import check_positive, coerce_enum
+from analytic.plant import check_positive, coerce_enum, tighter_rtol
 from mj_bridge.mujoco_settings import ControllerSource
 
 if TYPE_CHECKING:
@@ -59,4 +60,14 @@ class ScipyLoopSettings:
         )
 
 
-__all__ = ["ScipyLoopSettings"]
+def tightened_scipy_loop(scene: Scene, settings: ScipyLoopSettings) -> ScipyLoopSettings | None:
+    """``settings`` with its tolerances (the scene's where None) tightened as
+    :meth:`analytic.plant.Plant.tightened` says; None when rtol is at scipy's floor already."""
+    rtol, atol, _ = settings.resolved(scene)
+    tight = tighter_rtol(rtol, atol)
+    if tight is None:
+        return None
+    return dataclasses.replace(settings, rtol=tight[0], atol=tight[1])
+
+
+__all__ = ["ScipyLoopSettings", "tightened_scipy_loop"]

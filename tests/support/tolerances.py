@@ -369,6 +369,21 @@ JUDGED_FILE_CHECK_FRACTION = Threshold(
     "MuJoCo on paper_example2 over 1 s). A wrong column or frame moves a value by O(1) of it.",
 )
 
+# --- a plant's own error estimate (tests/cross/test_tightened.py) -----------------------------------
+OWN_ERROR_ESTIMATE_REL = Threshold(
+    "OWN_ERROR_ESTIMATE_REL",
+    0.1,
+    "1",
+    "|estimate / true error - 1| of a plant's own error estimate (its run at the given settings "
+    "against its run at Plant.tightened's settings), the true error taken against the closed-form "
+    "torque-free precession of an axisymmetric body: the tightened run's own error is 1/256 of "
+    "the given one for RK4 (dt / 4) and about 1/100 for an adaptive method (tolerances / 100, "
+    "error about proportional to the tolerance), so the estimate is within ~1 %; 0.1 leaves a "
+    "decade for an adaptive step control that is not exactly proportional (measured 0.3-0.9 %). "
+    "An estimate that measured something else (a tightened run no better than the given one, or "
+    "a different method) is off by O(1).",
+)
+
 TOLERANCES: Mapping[str, Threshold] = {
     t.name: t for t in list(globals().values()) if isinstance(t, Threshold)
 }
