@@ -16,7 +16,12 @@ final value and time of the max, plotted on a log axis and logged to Rerun):
   energy (against the work of the control); the control torque ``|τ|`` and each rod force.
 
 Each check compares one summarised value with a named threshold from :mod:`validation.compare.thresholds`
-(the scene's ``[thresholds]`` override the defaults). Quaternions are w first.
+(the scene's ``[thresholds]`` override the defaults). For the states' differences and the tracking
+laws the bound is ``value + rtol · scale`` (:meth:`analytic.threshold.Threshold.bound`), ``scale``
+the quantity's own magnitude: the largest over time and over the compared plants of ``|R|``
+(position of C), ``|p_i|`` (rod positions), ``|Ṙ|``, ``|ṗ_i|``, ``|ω|`` (:data:`MAGNITUDES`); for
+a tracking law the plant's own ``|ω|`` or controlled ``|p_i|``. Non-finite samples are left out
+of a scale (a diverged run's difference is infinite and fails anyway). Quaternions are w first.
 """
 
 from __future__ import annotations
@@ -32,6 +37,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from analytic.invariants import Balance, balance_residual, balance_scale
+from analytic.threshold import Bound, BoundPart
 from analytic.trajectory import Engine, RunStatus, Trajectory
 from validation.compare.thresholds import Threshold, thresholds_for
 
@@ -247,8 +253,9 @@ class Check:
         name: the threshold's name (``position_C``) or ``completed``.
         subject: whose value it is.
         value: the checked value (max over time, divided by ``scale`` for relative checks).
-        threshold: the bound; passes when ``value <= threshold`` (``completed``: the run reached
-            its horizon, value = time reached, threshold = horizon).
+        threshold: the effective bound; passes when ``value <= threshold`` (``completed``: the
+            run reached its horizon, value = time reached, threshold = horizon). For a bound with
+            a relative part, ``absolute_part + relative_part``.
         unit: unit of value and threshold.
         passed: the verdict.
         reason: why the threshold has its value (or why the check failed).
@@ -261,6 +268,14 @@ class Check:
             control torque in a scene that controls no angular velocity): the check is neither
             passed nor failed but NOT_APPLICABLE (``passed`` is True so it fails nothing;
             ``value`` and ``t_max`` are NaN; ``reason`` says why).
+        absolute_part: the threshold's absolute part (its ``value``, atol), in ``unit``; NaN
+            given means ``threshold`` (a bound without a relative part).
+        relative_part: ``rtol × magnitude``, in ``unit`` (0 without a relative part).
+        magnitude: the quantity's own scale the relative part multiplies (the largest ``|R|``,
+            ``|p_i|``, ``|Ṙ|``, ``|ṗ_i|`` or ``|ω|`` over time and the compared plants), in
+            ``unit``; 0 without a relative part.
+        decided_by: :class:`~analytic.threshold.BoundPart`, the larger part (ABSOLUTE on a tie
+            or without a relative part).
     """
 
     name: str
@@ -275,10 +290,17 @@ class Check:
     t_max: float = math.nan
     bound: str = ""
     applicable: bool = True
+    absolute_part: float = math.nan
+    relative_part: float = 0.0
+    magnitude: float = 0.0
+    decided_by: BoundPart = BoundPart.ABSOLUTE
 
     def __post_init__(self) -> None:
         if not isinstance(self.subject, Subject):
             object.__setattr__(self, "subject", Subject(self.subject))
+        if math.isnan(self.absolute_part):
+            object.__setattr__(self, "absolute_part", float(self.threshold))
+        object.__setattr__(self, "decided_by", BoundPart(self.decided_by))
 
     @property
     def state(self) -> CheckState:
@@ -309,6 +331,10 @@ class Check:
             "series": self.series,
             "scale": self.scale,
             "t_max": self.t_max,
+            "absolute_part": self.absolute_part,
+            "relative_part": self.relative_part,
+            "magnitude": self.magnitude,
+            "decided_by": self.decided_by.value,
         }
         if self.bound:
             out["bound"] = self.bound
@@ -595,31 +621,40 @@ def plant_series(traj: Trajectory, scene: Any = None) -> tuple[Series, ...]:
 
 def _not_applicable(th: Threshold, subject: Subject, why: str) -> Check:
     """A check of ``th`` with nothing to check (:attr:`Check.applicable` False), saying why."""
-    return Check(
-        th.name, subject, math.nan, th.value, th.unit, True, why, applicable=False
-    )
+    return Check(th.name, subject, math.nan, th.value, th.unit, True, why, applicable=False)
 
 
-def _bound_check(th: Threshold, subject: Subject, series: Series, scale: float = 1.0) -> Check:
+def _bound_check(
+    th: Threshold, subject: Subject, series: Series, scale: float = 1.0, magnitude: float = 0.0
+) -> Check:
+    """The check of ``series``' max against ``th``: divided by ``max(scale, floor)`` for a
+    relative threshold; against ``th.value + th.rtol · magnitude`` (``magnitude``: the quantity's
+    own scale over the run, in its unit) for an absolute one."""
     s = series.summary
     if th.relative:
         scale = max(float(scale), th.floor)
         value = s.max / scale
+        bound = Bound(th.value)
     else:
         scale = 1.0
         value = s.max
-    passed = bool(np.isfinite(value) and value <= th.value)
+        bound = th.bound(magnitude)
+    passed = bool(np.isfinite(value) and value <= bound.value)
     return Check(
         th.name,
         subject,
         float(value),
-        th.value,
+        bound.value,
         th.unit,
         passed,
         th.reason,
         series.key,
         scale,
         s.t_max,
+        absolute_part=bound.absolute,
+        relative_part=bound.relative,
+        magnitude=bound.scale,
+        decided_by=bound.decided_by,
     )
 
 
@@ -660,6 +695,49 @@ def _completed_check(traj: Trajectory, t_end: float | None) -> Check:
         else f"the run did not finish: {traj.message or traj.status.value}"
     )
     return Check("completed", Subject.plant(traj.engine), reached, horizon, "s", bool(ok), reason)
+
+
+def _largest(x: np.ndarray, rows: bool) -> float:
+    """The largest finite magnitude of ``x`` (shape (N, k)): of each row's Euclidean norm when
+    ``rows`` (a vector per sample), else of every entry; 0 when there is none."""
+    a = np.asarray(x, float)
+    if a.size == 0:
+        return 0.0
+    m = np.linalg.norm(a, axis=1) if rows else np.abs(a)
+    m = m[np.isfinite(m)]
+    return float(m.max()) if m.size else 0.0
+
+
+MAGNITUDES: Mapping[str, Any] = {
+    "position_C": lambda tr, k: _largest(tr.q[:k, :3], True),  # |R|, m
+    "rod_positions": lambda tr, k: _largest(tr.q[:k, 7:], False),  # |p_i|, m
+    "velocity_C": lambda tr, k: _largest(tr.qdot[:k, :3], True),  # |Ṙ|, m/s
+    "rod_velocities": lambda tr, k: _largest(tr.qdot[:k, 7:], False),  # |ṗ_i|, m/s
+    "angular_velocity": lambda tr, k: _largest(tr.omega[:k], True),  # |ω|, rad/s (body axes)
+}
+"""Difference quantity -> ``(trajectory, k) -> its largest magnitude over the first k samples``,
+in the quantity's unit: the scale of its bound's relative part (the pair's is the larger of the
+two plants'). The attitude has none (:data:`validation.compare.thresholds.SCALED`)."""
+
+
+def pair_magnitude(name: str, a: Trajectory, b: Trajectory, k: int | None = None) -> float:
+    """The scale of difference ``name``'s relative part for plants ``a`` and ``b``: the largest
+    magnitude over their first ``k`` samples (default all) and over the two, in the quantity's
+    unit (:data:`MAGNITUDES`); 0 for a quantity without one."""
+    of = MAGNITUDES.get(name)
+    if of is None:
+        return 0.0
+    if k is None:
+        k = min(a.t.shape[0], b.t.shape[0])
+    return max(of(a, k), of(b, k))
+
+
+def _tracking_magnitudes(traj: Trajectory) -> tuple[float, float]:
+    """The scales of one plant's tracking laws: its largest ``|ω|`` (rad/s) and the largest
+    ``|p_i|`` of its controlled masses (m), over the run."""
+    idx = list(traj.tracking.mass_indices)
+    p = _largest(traj.q[:, [7 + i for i in idx]], False) if idx else 0.0
+    return _largest(traj.omega, True), p
 
 
 def _scale_max(x: np.ndarray) -> float:
@@ -718,7 +796,8 @@ def compare(
         by = {s.name: s for s in diffs}
         k = by["position_C"].t.shape[0]
         for name in list(Difference)[:6]:  # the absolute ones; the forces are relative, below
-            checks.append(_bound_check(th[name], pair, by[name]))
+            size = pair_magnitude(name, analytic, mujoco, k)
+            checks.append(_bound_check(th[name], pair, by[name], magnitude=size))
         if np.any(analytic.torque[:k]) or np.any(mujoco.torque[:k]):
             checks.append(
                 _bound_check(
@@ -757,10 +836,13 @@ def compare(
         series.extend(ps)
         by = {s.name: s for s in ps}
         subj = Subject.plant(p.engine)
+        w_size, p_size = _tracking_magnitudes(p)
         if "e_omega_law" in by:
-            checks.append(_bound_check(th["tracking_omega"], subj, by["e_omega_law"]))
+            checks.append(
+                _bound_check(th["tracking_omega"], subj, by["e_omega_law"], magnitude=w_size)
+            )
         if "e_p_law" in by:
-            checks.append(_bound_check(th["tracking_p"], subj, by["e_p_law"]))
+            checks.append(_bound_check(th["tracking_p"], subj, by["e_p_law"], magnitude=p_size))
         inv = p.invariants
         checks.append(_bound_check(th["quat_norm"], subj, by["quat_norm"]))
         for b in Balance:  # relative to the balanced quantity: analytic.invariants.relative_balance
@@ -816,6 +898,7 @@ def compare_plants(
 
 
 __all__ = [
+    "MAGNITUDES",
     "PAIR_SEPARATOR",
     "Check",
     "Comparison",
@@ -833,6 +916,7 @@ __all__ = [
     "judge",
     "mass_error_reference",
     "omega_error_reference",
+    "pair_magnitude",
     "pair_subject",
     "plant_series",
     "subject_order_key",

@@ -6,11 +6,16 @@ the scene loader keeps verbatim in ``scene.extra["thresholds"]``::
     [thresholds]
     position_C = 1e-7                                   # a number replaces the value
     attitude = { value = 1e-7, reason = "tighter dt" }  # or a table with a value and a reason
+    rod_velocities = { value = 1e-5, rtol = 1e-8 }      # and, for an absolute one, its rtol
 
 Two kinds of threshold:
 
 * **absolute** (``relative = False``): the checked value is a maximum over time in the threshold's
-  unit (m, rad, m/s, rad/s, or the dimensionless quaternion norm error);
+  unit (m, rad, m/s, rad/s, or the dimensionless quaternion norm error). The states' differences
+  and the tracking laws are bounded by ``value + rtol · scale``, as scipy's ``atol + rtol·|y|``:
+  ``scale`` is the quantity's own magnitude over the run, the largest over time and over the
+  compared plants (the names in :data:`SCALED`; the others, the attitude among them, have
+  ``rtol = 0``);
 * **relative** (``relative = True``): the checked value is a maximum over time divided by a scale,
   ``max(scale, floor)``, where the scale is the maximum magnitude of the reference signal (for
   forces: the analytic plant's; for balances: the quantity balanced) and ``floor`` (in the signal's
@@ -46,38 +51,94 @@ _RK4_DOP = (
     "20 s run, while a modelling difference shows at 1e-3 or larger"
 )
 
+STATE_RTOL = 1e-7
+"""The relative part of the state and tracking bounds (``rtol`` in ``value + rtol · scale``),
+dimensionless. Both integrators' errors are relative to the state's magnitude: DOP853 holds each
+step's local error to ``rtol · |y|`` (rtol 1e-12..1e-10 at the scene settings), and RK4's global
+error at dt = 2.5e-4 s is ``O((ω h)^4)`` of the state per unit time with ω h ≤ 15·2.5e-4 ≈ 4e-3,
+~1e-10 of it. So their global errors are ~1e-9 of the state's magnitude or smaller; the same two
+decades of margin as the absolute bounds (``_RK4_DOP``) for the growth over a tumbling 20 s run
+give 1e-7, while a modelling difference (a missing inertia term, a wrong spring force, a sign)
+shows at 1e-3 of the motion or larger, four decades above. A velocity's error and its scale are
+both its position's times the rate of the motion, so one rtol serves positions and velocities.
+The absolute parts keep deciding at the scales they were set for: at 10 m (or 10 m/s, 10 rad/s)
+the relative part is 1e-6, at most the absolute one; it decides only where the motion is larger
+(the paper scenes' free fall to ~1.6 km, masses running away at hundreds of m/s)."""
+
+SCALED = frozenset(
+    (
+        "position_C",
+        "rod_positions",
+        "velocity_C",
+        "rod_velocities",
+        "angular_velocity",
+        "tracking_omega",
+        "tracking_p",
+    )
+)
+"""The thresholds whose bound may have a relative part (``rtol`` > 0): those of a quantity with a
+magnitude of its own that grows with the motion (a position, a velocity; the tracking laws through
+the state they are errors of). The attitude is not among them: its magnitude is a unit
+quaternion's, the same in every run, so ``rtol`` × 1 would be a constant added to the value; nor
+the relative thresholds (their value is already a fraction of a scale) and the quaternion norm
+(dimensionless, of a unit quaternion). A scene's ``rtol`` for any other name is refused."""
+
+_SCALED_BY = (
+    "; plus rtol × the largest {of} over the run across the compared plants (both integrators' "
+    "errors are relative to the state: STATE_RTOL)"
+)
+
 DEFAULTS: Mapping[str, Threshold] = {
     t.name: t
     for t in (
         # ---- analytic vs MuJoCo: the state ----
         Threshold(
-            "position_C", 1e-6, "m", f"max |R_a - R_m| (position of C, inertial): {_RK4_DOP}"
+            "position_C",
+            1e-6,
+            "m",
+            f"max |R_a - R_m| (position of C, inertial): {_RK4_DOP}" + _SCALED_BY.format(of="|R|"),
+            rtol=STATE_RTOL,
         ),
         Threshold(
             "attitude",
             1e-6,
             "rad",
-            "max angle of the relative quaternion conj(u_a) ⊗ u_m (q and -q agree): " + _RK4_DOP,
+            "max angle of the relative quaternion conj(u_a) ⊗ u_m (q and -q agree): "
+            + _RK4_DOP
+            + "; no relative part: the attitude's scale is a unit quaternion's, so rtol × 1 "
+            "would only add a constant 1e-7 rad below this value",
         ),
-        Threshold("rod_positions", 1e-6, "m", f"max over masses of |p_a - p_m|: {_RK4_DOP}"),
+        Threshold(
+            "rod_positions",
+            1e-6,
+            "m",
+            f"max over masses of |p_a - p_m|: {_RK4_DOP}" + _SCALED_BY.format(of="|p_i|"),
+            rtol=STATE_RTOL,
+        ),
         Threshold(
             "velocity_C",
             1e-5,
             "m/s",
             "max |Ṙ_a - Ṙ_m|: a velocity error is the position error times the fastest rate of the "
-            "motion (~10 rad/s), hence one decade above the position bound",
+            "motion (~10 rad/s), hence one decade above the position bound"
+            + _SCALED_BY.format(of="|Ṙ|"),
+            rtol=STATE_RTOL,
         ),
         Threshold(
             "rod_velocities",
             1e-5,
             "m/s",
-            "max over masses of |ṗ_a - ṗ_m|: one decade above the position bound (rates up to 2π rad/s)",
+            "max over masses of |ṗ_a - ṗ_m|: one decade above the position bound (rates up to 2π rad/s)"
+            + _SCALED_BY.format(of="|ṗ_i|"),
+            rtol=STATE_RTOL,
         ),
         Threshold(
             "angular_velocity",
             1e-5,
             "rad/s",
-            "max |ω_a - ω_m| (body axes): one decade above the attitude bound (rates ~10 rad/s)",
+            "max |ω_a - ω_m| (body axes): one decade above the attitude bound (rates ~10 rad/s)"
+            + _SCALED_BY.format(of="|ω|"),
+            rtol=STATE_RTOL,
         ),
         # ---- analytic vs MuJoCo: the control (same controller, so same forces up to state error) ----
         Threshold(
@@ -103,14 +164,20 @@ DEFAULTS: Mapping[str, Threshold] = {
             1e-6,
             "rad/s",
             "max |e_ω(t) - exp(-P t) e_ω(0)|: Eq. (84) makes the error decay exactly as exp(-P t) "
-            "(γ = 0.6 1/s for the paper); an error of O(10) rad/s integrated to ~1e-9 relative",
+            "(γ = 0.6 1/s for the paper); an error of O(10) rad/s integrated to ~1e-9 relative; "
+            "plus rtol × the plant's largest |ω| over the run (e_ω inherits the integration error "
+            "of ω: STATE_RTOL)",
+            rtol=STATE_RTOL,
         ),
         Threshold(
             "tracking_p",
             1e-6,
             "m",
             "max over controlled masses |e_p(t) - e_ref(t)|, e_ref solving ë + α ė + β e = 0 "
-            "(Eq. 78) from e_p(0), ė_p(0): an error of O(1) m integrated to ~1e-9 relative",
+            "(Eq. 78) from e_p(0), ė_p(0): an error of O(1) m integrated to ~1e-9 relative; plus "
+            "rtol × the plant's largest |p_i| over the run among the controlled masses (e_p "
+            "inherits the integration error of p_i: STATE_RTOL)",
+            rtol=STATE_RTOL,
         ),
         # ---- each plant: invariants and their balances ----
         Threshold(
@@ -164,7 +231,13 @@ REFEREE_NOISE_FRACTION = 1e-3
 plants that all agree a thousand times better than the threshold asks have no outlier worth
 naming, and round-off-level differences (1e-12 m beside a 1e-6 m bound) do not decide verdicts.
 It is the threshold part of the referee's noise floor; the round-off part below takes over where a
-quantity's own scale makes its round-off larger (:class:`validation.compare.referee.NoiseFloor`)."""
+quantity's own scale makes its round-off larger (:class:`validation.compare.referee.NoiseFloor`).
+The fraction is of the threshold's absolute part (its ``value``), not of the effective bound
+``value + rtol · scale``: the relative part is a margin for the integrators' relative error
+(:data:`STATE_RTOL`, 1e-7 of the scale), and a thousandth of it (1e-10 of the scale) would call
+agreement what is an integrator's own error, the difference the referee is there to attribute
+(MuJoCo's RK4 1e-9 of |Ṙ| away from two DOP853 plants that agree to 2e-13 of it, in
+``paper_example2``). Where a state's size makes round-off matter, the round-off part scales it."""
 
 REFEREE_ROUNDOFF_FORCE = 1e5
 """The round-off part of the noise floor of the control torque and rod forces, in float64 epsilons
@@ -202,11 +275,14 @@ def thresholds_for(
 
     Args:
         scene: a :class:`analytic.scene.Scene` (or None for the defaults); its
-            ``extra["thresholds"]`` maps names to a number or to ``{value = ..., reason = ...}``.
+            ``extra["thresholds"]`` maps names to a number (the value; the rtol stays the
+            default's) or to ``{value = ..., rtol = ..., reason = ...}`` (rtol optional, only for
+            the names in :data:`SCALED`).
         overrides: further overrides in the same form (applied after the scene's).
 
     Raises:
-        ValueError: naming ``thresholds.<name>`` for an unknown name or a bad value.
+        ValueError: naming ``thresholds.<name>`` (or ``thresholds.<name>.rtol``) for an unknown
+            name, a bad value or rtol, or an rtol for a name outside :data:`SCALED`.
     """
     out = dict(DEFAULTS)
     tables = []
@@ -229,27 +305,43 @@ def thresholds_for(
     return out
 
 
+def _number(spec: Any, name: str) -> float:
+    """``spec`` as a finite non-negative float, else a ValueError naming ``name``."""
+    if isinstance(spec, bool) or not isinstance(spec, int | float):
+        raise ValueError(f"{name}: must be a number (got {spec!r})")
+    if not (math.isfinite(spec) and spec >= 0):
+        raise ValueError(f"{name}: must be a finite non-negative number (got {spec!r})")
+    return float(spec)
+
+
 def _override(base: Threshold, spec: Any) -> Threshold:
     name = f"thresholds.{base.name}"
     reason = "set by the scene"
+    rtol = base.rtol
     if isinstance(spec, Mapping):
-        unknown = sorted(set(spec) - {"value", "reason"})
+        unknown = sorted(set(spec) - {"value", "reason", "rtol"})
         if unknown:
-            raise ValueError(f"{name}.{unknown[0]}: unknown key (allowed: value, reason)")
+            raise ValueError(f"{name}.{unknown[0]}: unknown key (allowed: value, rtol, reason)")
         if "value" not in spec:
             raise ValueError(f"{name}.value: missing required key")
         reason = spec.get("reason", reason)
         if not isinstance(reason, str):
             raise ValueError(f"{name}.reason: must be a string (got {reason!r})")
+        if "rtol" in spec:
+            rtol = _number(spec["rtol"], f"{name}.rtol")
+            if rtol and base.name not in SCALED:
+                raise ValueError(
+                    f"{name}.rtol: {base.name} has no relative part (a scale of its own only "
+                    f"{', '.join(sorted(SCALED))} have; got {spec['rtol']!r})"
+                )
         spec = spec["value"]
-    if isinstance(spec, bool) or not isinstance(spec, int | float):
-        raise ValueError(f"{name}: must be a number (got {spec!r})")
-    if not (math.isfinite(spec) and spec >= 0):
-        raise ValueError(f"{name}: must be a finite non-negative number (got {spec!r})")
+    value = _number(spec, name)
+    default = f"{base.value:g}" + (f" + {base.rtol:g} × scale" if base.rtol else "")
     return replace(
         base,
-        value=float(spec),
-        reason=f"{reason} (default {base.value:g}: {base.reason})",
+        value=value,
+        rtol=rtol,
+        reason=f"{reason} (default {default}: {base.reason})",
         source=ThresholdSource.SCENE,
     )
 
@@ -260,6 +352,8 @@ __all__ = [
     "REFEREE_ROUNDOFF_FORCE",
     "REFEREE_ROUNDOFF_STATE",
     "REFEREE_SEPARATION",
+    "SCALED",
+    "STATE_RTOL",
     "Threshold",
     "ThresholdSource",
     "thresholds_for",

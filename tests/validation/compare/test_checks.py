@@ -203,7 +203,12 @@ def test_planted_offset_of_C_appears_with_its_exact_magnitude(scene, traj):
     assert s.summary.rms == pytest.approx(rms, rel=1e-9)
     ch = c.check("position_C")
     assert ch.value == pytest.approx(5e-5, rel=1e-9)
-    assert ch.threshold == DEFAULTS["position_C"].value
+    # the bound: the absolute value plus rtol × the largest |R| over both runs (8.5 m here, so the
+    # relative part, 8.5e-7 m, is below the absolute one and the absolute part decides)
+    th = DEFAULTS["position_C"]
+    size = max(np.linalg.norm(traj.q[:, :3], axis=1).max(), np.linalg.norm(q[:, :3], axis=1).max())
+    assert ch.threshold == pytest.approx(th.value + th.rtol * size, rel=1e-12)
+    assert ch.absolute_part == th.value and ch.decided_by == "absolute"
     assert not ch.passed and not c.passed
     assert c.failed_checks == (ch,)
 
@@ -295,10 +300,11 @@ def test_scene_thresholds_override_the_defaults(scene, traj):
     q = traj.q.copy()
     q[:, :3] += np.array([5e-5, 0.0, 0.0])
     looser = scene.replace(
-        extra={"thresholds": {"position_C": {"value": 1e-4, "reason": "planted"}}}
+        extra={"thresholds": {"position_C": {"value": 1e-4, "rtol": 0.0, "reason": "planted"}}}
     )
     th = thresholds_for(looser)
     assert th["position_C"].value == 1e-4 and th["position_C"].source == "scene"
+    assert th["position_C"].rtol == 0.0  # the table's rtol replaces the default's
     assert "planted" in th["position_C"].reason
     assert th["attitude"] == DEFAULTS["attitude"]
     c = compare(traj, as_mujoco(traj, q=q), looser, t_end=T_END)
