@@ -81,7 +81,7 @@ def test_planted_wrong_plant_shrinks_to_the_simplest_scene(tmp_path):
     # the minimal scene file reproduces it, read back as a file
     out = judge_scene(_file_dict(ex.path), PLANTS, ex.horizon)
     assert out.shows(TARGET)
-    assert recognise(ex.data, TARGET) == ""  # a new finding, not a known one
+    assert recognise(draw_scene_dict(0, ex.found_in, 0.5), ex.data, TARGET) == ""  # a new finding
 
 
 def _file_dict(path):
@@ -148,12 +148,22 @@ def test_report_matches_its_schema(tmp_path):
 
 
 def test_known_findings_are_recognised():
-    data = draw_scene_dict(0, 0, 0.5)
+    import copy
+
+    found = draw_scene_dict(0, 0, 0.5)
+    found["rod"]["offset"] = [1.5, 0.0, 0.0]
+    data = copy.deepcopy(found)
     data["rod"]["offset"] = [0.0, 0.0, 0.0]
-    assert recognise(data, Disagreement(Kind.OUTLIER, "rod_positions", "pinocchio")) == "rod_through_C"
-    assert recognise(data, Disagreement(Kind.OUTLIER, "rod_positions", "mujoco")) == ""
+    pin = Disagreement(Kind.OUTLIER, "rod_positions", "pinocchio")
+    assert recognise(data, data, pin) == "rod_through_C"
+    assert recognise(data, data, Disagreement(Kind.OUTLIER, "rod_positions", "mujoco")) == ""
+    # found with the rod off C, shrunk with the offset zeroed: not the known finding
+    assert recognise(found, data, pin) == ""
     data["initial"]["omega"] = [0.0, 200.0, 0.0]
-    assert recognise(data, Disagreement(Kind.OUTLIER, "attitude", "analytic")) == "fast_spin_analytic"
+    fast = Disagreement(Kind.OUTLIER, "attitude", "analytic")
+    assert recognise(data, data, fast) == "fast_spin_analytic"
+    found["initial"]["omega"] = [0.0, 20.0, 0.0]
+    assert recognise(found, data, fast) == ""
 
 
 @pytest.mark.parametrize(

@@ -254,7 +254,7 @@ def fuzz(
             path = out / COUNTEREXAMPLES_DIR / f"{slug(target.key)}.toml"
             ex = Counterexample(
                 target, rec.index, s.data, s.horizon, s.outcome, s.evaluations,
-                recognise(s.data, target), path,
+                recognise(rec.data, s.data, target), path,
             )
             write_text(path, counterexample_toml(ex, cfg))
             write_text(path.with_suffix(".json"), json.dumps(ex.to_dict(), indent=2) + "\n")

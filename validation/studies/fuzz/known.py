@@ -1,7 +1,10 @@
 """Known findings: disagreements already understood, listed apart from new ones.
 
-Each is recognised from the minimal scene and the disagreement it shows, never from a number of a
-past run:
+Each is recognised from the disagreement, the scene the campaign found it in **and** the minimal
+scene it was shrunk to, never from a number of a past run. Both scenes must fit: a shrink may slide
+into a known finding's corner (a Pinocchio outlier at 200 rad/s with the rod 1.5 m off C, shrunk
+with the offset zeroed, still shows a Pinocchio outlier, now the rod-through-C one), and the
+finding in the scene found would then hide behind the known one:
 
 * :data:`ROD_THROUGH_C`: the rod passes through C (zero offset) and Pinocchio is the one out of
   step: ``pin.aba`` returns round-off accelerations along a rod through C that seed its spring
@@ -66,10 +69,11 @@ FAST_SPIN_ANALYTIC = Known(
 KNOWN = (ROD_THROUGH_C, FAST_SPIN_ANALYTIC)
 
 
-def recognise(data: dict[str, Any], d: Disagreement) -> str:
-    """The name of the known finding the minimal scene ``data`` with ``d`` is ("" when new)."""
+def recognise(found: dict[str, Any], minimal: dict[str, Any], d: Disagreement) -> str:
+    """The name of the known finding ``d`` is, shown by the campaign scene ``found`` and by its
+    shrunk ``minimal`` scene (scene files' dicts), or "" when new (module docstring)."""
     for k in KNOWN:
-        if k.matches(data, d):
+        if k.matches(found, d) and k.matches(minimal, d):
             return k.name
     return ""
 
