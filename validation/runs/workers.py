@@ -107,6 +107,17 @@ def can_fork() -> bool:
     return available_cpus() > 1 and _os_threads() == 1
 
 
+def can_serve() -> bool:
+    """Whether :func:`start_served` starts a child here: Linux with the ``forkserver`` start method
+    (and workers not switched off, :data:`ENV_SWITCH`), whatever threads this process runs. The
+    fork server is a fresh, single-threaded interpreter started with ``fork`` + ``exec``, so
+    forking from it is safe even when this process is multi-threaded (a Dask worker, a thread
+    pool's caller)."""
+    if os.environ.get(ENV_SWITCH, "").strip() == "0":
+        return False
+    return sys.platform.startswith("linux") and "forkserver" in mp.get_all_start_methods()
+
+
 def _one_line(exc: BaseException) -> str:
     return str(exc).splitlines()[0] if str(exc) else ""
 
@@ -431,6 +442,66 @@ def start(
     return job
 
 
+@contextlib.contextmanager
+def _children_allowed():
+    """This process may start a child inside the block even if it is daemonic (a Dask worker is:
+    ``distributed.worker.daemon``). ``multiprocessing`` refuses children to a daemonic process
+    because it ends without joining them; a served child is the fork server's child, not this
+    process's, its parent-side ends close when this process ends, and its task is killed by the
+    caller at its time limit (:func:`stop`), so nothing is left behind that the rule guards
+    against. The flag is restored on leaving."""
+    me = mp.current_process()
+    daemonic = me.daemon
+    if not daemonic:
+        yield
+        return
+    me._config["daemon"] = False  # the setter refuses a started process; the flag is this dict's
+    try:
+        yield
+    finally:
+        me._config["daemon"] = True
+
+
+def start_served(
+    name: str,
+    task: Callable[..., Any],
+    *args: Any,
+    preload: Sequence[str] = (),
+    on_message: Report | None = None,
+) -> Job:
+    """Start ``task(*args, report=...)`` in a child forked by ``multiprocessing``'s fork server
+    when :func:`can_serve`, else return a job that runs it here on :meth:`Job.result`.
+
+    The fork server is started once per process, on the first call, and imports ``preload``
+    (module names) once: every child forked from it has them, as a child of :func:`start` has this
+    process's imports (the preload of the first call is the one kept). ``task`` and ``args``
+    travel to the child pickled (module-level functions and picklable inputs, as for a process
+    pool); the job is then a :class:`Job` like any other (:meth:`Job.result`, :func:`wait`,
+    :func:`stop`).
+    """
+    job = Job(name, task, args, on_message, None)
+    if not can_serve():
+        return job
+    ctx = mp.get_context("forkserver")
+    if preload:
+        ctx.set_forkserver_preload(list(preload))
+    conn, child_conn = ctx.Pipe(duplex=False)
+    flush_std_streams()
+    proc = ctx.Process(
+        target=_child,
+        args=(child_conn, None, None, task, args, False),
+        name=f"tumble-{name}",
+        daemon=True,
+    )
+    try:
+        with _children_allowed():
+            proc.start()
+    finally:
+        child_conn.close()
+    job.process, job.conn = proc, conn
+    return job
+
+
 def wait(jobs: Sequence[Job], first: bool = False, interrupted: bool = False) -> bool:
     """Collect the forked ``jobs`` until each has its outcome (``first``: until one more has),
     forwarding their messages. In-process jobs are left for :meth:`Job.result`.
@@ -514,12 +585,14 @@ __all__ = [
     "WorkerLost",
     "available_cpus",
     "can_fork",
+    "can_serve",
     "flush_std_streams",
     "idle_priority",
     "interrupt",
     "normal_priority",
     "signals_held",
     "start",
+    "start_served",
     "stop",
     "wait",
 ]

@@ -8,6 +8,7 @@ import json
 import os
 import subprocess
 import sys
+import time
 
 import numpy as np
 import pytest
@@ -175,3 +176,64 @@ def test_ctrl_c_reaches_the_plants_in_workers_and_keeps_the_partial_set(tmp_path
     man = json.loads((out / "manifest.json").read_text())
     assert man["state"] == "interrupted"
     assert set(man["files"]) | {"manifest.json"} == {p.name for p in out.iterdir()}
+
+
+def _served_square(x, *, report):
+    report("started")
+    return x * x, os.getpid()
+
+
+def _served_fail(*, report):
+    raise ZeroDivisionError("on purpose")
+
+
+def _served_hang(pid_file, *, report):
+    with open(pid_file, "w") as f:
+        f.write(str(os.getpid()))
+    while True:  # never reports, never returns: only a signal ends it
+        pass
+
+
+needs_server = pytest.mark.skipif(
+    not workers.can_serve(), reason="a fork server needs Linux and workers switched on"
+)
+
+
+@needs_server
+def test_a_served_job_works_from_a_thread_and_a_hung_one_is_stopped(tmp_path):
+    """From a second thread (this process is multi-threaded, so it must not fork), a fork-server
+    child returns its result and its messages, an exception comes back named, and a child that
+    spins without reporting is ended by stop() (SIGTERM, then SIGKILL) and reaped."""
+    import threading
+
+    out: dict = {}
+
+    def body():
+        heard: list = []
+        job = workers.start_served("square", _served_square, 6, on_message=heard.append)
+        value, pid = job.result()
+        out["square"] = (job.forked, value, pid, heard)
+        try:
+            workers.start_served("fail", _served_fail).result()
+        except workers.WorkerError as exc:
+            out["fail"] = exc.kind
+        pid_file = tmp_path / "hang.pid"
+        job = workers.start_served("hang", _served_hang, str(pid_file))
+        deadline = time.monotonic() + 30.0
+        while not pid_file.exists() or not pid_file.read_text():
+            assert time.monotonic() < deadline, "the hanging child never started"
+            time.sleep(0.01)
+        workers.stop([job])
+        out["hang"] = (int(pid_file.read_text()), job.process.is_alive())
+
+    t = threading.Thread(target=body)
+    t.start()
+    t.join(timeout=60)
+    assert not t.is_alive()
+    forked, value, pid, heard = out["square"]
+    assert forked and value == 36 and pid != os.getpid() and heard == ["started"]
+    assert out["fail"] == "ZeroDivisionError"
+    hung_pid, alive = out["hang"]
+    assert not alive
+    with pytest.raises(ProcessLookupError):
+        os.kill(hung_pid, 0)
