@@ -12,11 +12,11 @@ A disagreement (:class:`Disagreement`) is one of: a failed check (its label, e.g
 plant outside the agreeing two), or a plant that raised or stopped before the horizon. A scene
 the loader or a plant refuses is a refusal with its reason, never a disagreement.
 
-Every plant run has a hard wall-time limit (:data:`RUN_BUDGET_S`, or the caller's): where
-:func:`validation.runs.workers.can_fork` (Linux, a single-threaded process: the serial campaign,
-the process pool's workers) it runs in a forked worker that is killed when the limit passes,
-whether or not the plant ever reports progress; elsewhere (a thread or Dask executor) the limit is
-checked at the plant's progress reports only. A run over its limit is a timeout
+Every plant run has a hard wall-time limit (:data:`RUN_BUDGET_S`, or the caller's): on Linux it
+runs in a worker process that is killed when the limit passes, whether or not the plant ever
+reports progress, forked from here in a single-threaded process (the serial campaign, the process
+pool's workers) and by a fork server in a multi-threaded one (a thread or Dask executor,
+:func:`run_limited`); elsewhere the limit is checked at the plant's progress reports only. A run over its limit is a timeout
 (``Outcome.timeouts``: plant -> the limit, s), its own kind of finding: neither a refusal nor a
 disagreement; the plants that finished are still compared with each other.
 """
@@ -209,17 +209,38 @@ def _load_kernels(name: str, scene: Scene) -> None:
         warmup.run_task(task)
 
 
+SERVER_PRELOAD = ("validation.runs.kernel_preload", __name__)
+"""What the fork server imports once (:func:`validation.runs.workers.start_served`): every plant's
+kernels for every solve (:mod:`validation.runs.kernel_preload`), then this module and the plants'
+modules it imports, so a served run starts with them loaded."""
+
+
 def run_limited(name: str, pl: Plant, scene: Scene, horizon: float, limit_s: float) -> Trajectory:
-    """``pl``'s run of ``scene`` over ``horizon`` s within ``limit_s`` s of wall time (module
-    docstring: a forked worker killed at the limit where one can be forked, else the limit checked
-    at the plant's progress reports).
+    """``pl``'s run of ``scene`` over ``horizon`` s within ``limit_s`` s of wall time, stopped at the
+    limit whether or not the plant ever reports progress (module docstring).
+
+    Where :func:`validation.runs.workers.can_fork` (a single-threaded process on Linux: the serial
+    campaign, a process pool's worker) the run is forked from here, after its kernels are loaded
+    here once (:func:`_load_kernels`). In a multi-threaded process (a Dask worker, a thread pool)
+    forking is not safe; there, where :func:`validation.runs.workers.can_serve`, the run is forked
+    by ``multiprocessing``'s fork server (single-threaded, started once per process, with every
+    plant's kernels preloaded: :data:`SERVER_PRELOAD`). Either child is killed at the limit. Only
+    where neither exists (not Linux, or workers switched off) does the run go here, with the
+    limit checked at the plant's progress reports.
 
     Raises:
         OverTime: the limit passed (the worker, if any, is ended and reaped).
         _Raised: the plant raised (its type name and first line).
         KeyboardInterrupt: an interrupt here or in the worker (the worker is ended).
     """
-    if not workers.can_fork():
+    if workers.can_fork():
+        _load_kernels(name, scene)
+        job = workers.start(f"fuzz-{name}", _simulate_task, pl, scene, horizon)
+    elif workers.can_serve():
+        job = workers.start_served(
+            f"fuzz-{name}", _simulate_task, pl, scene, horizon, preload=SERVER_PRELOAD
+        )
+    else:
         progress, over_budget = _budget_progress(limit_s)
         try:
             return _simulate_task(pl, scene, horizon, progress)
@@ -229,8 +250,6 @@ def run_limited(name: str, pl: Plant, scene: Scene, horizon: float, limit_s: flo
             raise
         except Exception as exc:
             raise _Raised(type(exc).__name__, _one_line(exc).partition(": ")[2]) from exc
-    _load_kernels(name, scene)
-    job = workers.start(f"fuzz-{name}", _simulate_task, pl, scene, horizon)
     try:
         # the task sends nothing but its result: the pipe is ready only when the run is done
         if not mp_wait([job.conn, job.process.sentinel], timeout=limit_s):
