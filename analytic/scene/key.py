@@ -34,7 +34,7 @@ class Kind(StrEnum):
     INDICES = "list of distinct 1-based integers"
     CHOICE = "string, one of the choices"
     CHOICES = "list of strings, each one of the choices"
-    NUMBER_OR_VALUE_TABLE = "number, or table { value, reason }"
+    NUMBER_OR_VALUE_TABLE = "number, or table { value, rtol, reason }"
     NUMBER_OR_STRING = "number or string"
 
 

@@ -171,7 +171,8 @@ RUN_KEYS: tuple[Key, ...] = (
         "<name>",
         Kind.NUMBER_OR_VALUE_TABLE,
         "the threshold's",
-        'A new bound for the named threshold: a number, or `{{ value = …, reason = "…" }}`.',
+        "A new bound for the named threshold: a number (its value; its rtol stays the "
+        'default), or `{{ value = …, rtol = …, reason = "…" }}`.',
         bounds="finite, ≥ 0; a known name",
     ),
     Key(
@@ -185,6 +186,17 @@ RUN_KEYS: tuple[Key, ...] = (
     ),
     Key(
         "thresholds.<name>", "value", Kind.NUMBER, "the threshold's", "The bound.", _R, bounds="≥ 0"
+    ),
+    Key(
+        "thresholds.<name>",
+        "rtol",
+        Kind.NUMBER,
+        "1",
+        "The relative part of the bound, which becomes `value + rtol × scale`, scale the "
+        "quantity's largest magnitude over the run across the compared plants (as scipy's "
+        "`atol + rtol·|y|`); only for the names with an rtol column entry in the table above.",
+        bounds="finite, ≥ 0",
+        default_text="the default's",
     ),
     Key(
         "thresholds.<name>",

@@ -49,7 +49,7 @@ from analytic.scene.values import (
 
 def parse_thresholds(t: Table) -> dict[str, Any]:
     """The ``[thresholds]`` table's shape: each entry a finite non-negative number or
-    ``{value = number, reason = "..."}``; the hard-case suite's ``hard_*`` entries a number or,
+    ``{value = number, rtol = number, reason = "..."}`` (rtol optional, finite, ≥ 0); the hard-case suite's ``hard_*`` entries a number or,
     for its stated criterion, a sentence. Which names exist is for the layer that uses them."""
     out: dict[str, Any] = {}
     for key in list(t.data):
@@ -59,9 +59,11 @@ def parse_thresholds(t: Table) -> dict[str, Any]:
             out[key] = v if isinstance(v, str) else as_number(v, name, nonneg=True)
         elif isinstance(v, Mapping):
             sub = Table(v, name, generic_table(t.schema, key))
-            sub.used.update(("value", "reason"))
+            sub.used.update(("value", "rtol", "reason"))
             sub.finish()  # an unknown key first: a misspelt "value" is named as such
             entry = {"value": sub.number("value", nonneg=True)}
+            if sub.has("rtol"):
+                entry["rtol"] = sub.number("rtol", nonneg=True)
             if sub.has("reason"):
                 entry["reason"] = sub.string("reason")
             sub.finish()

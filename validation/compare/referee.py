@@ -32,7 +32,10 @@ distances 0 (the "outlier" would sit at distance 0 from a member); here no plant
 
 The noise floor (:class:`NoiseFloor`) is the larger of two parts, each in the quantity's unit:
 ``REFEREE_NOISE_FRACTION × threshold`` (distances a thousand times inside the threshold decide
-nothing) and the quantity's **round-off**, ``ε_round × ε × scale`` with ``ε`` the float64 machine
+nothing; the threshold's absolute part, its ``value``, not the effective bound ``value + rtol ·
+scale`` of a state's check: a thousandth of the relative part would be 1e-10 of the state, an
+integrator's own error, which is what the referee attributes; ``REFEREE_NOISE_FRACTION``) and
+the quantity's **round-off**, ``ε_round × ε × scale`` with ``ε`` the float64 machine
 epsilon: for a state (position of C, rod positions, velocities, angular velocity, attitude) its
 largest magnitude over the run across the plants with ``ε_round = REFEREE_ROUNDOFF_STATE``; for
 the control torque and rod forces the largest control force across the plants (torque in N·m and
@@ -204,7 +207,8 @@ def rule_text() -> str:
     return (
         "The rule, for each row's distances d (each pair's maximum over time; relative for the "
         "forces; a value that could not be computed counts as infinite). "
-        f"The noise floor is the larger of {REFEREE_NOISE_FRACTION:g} × the threshold and the "
+        f"The noise floor is the larger of {REFEREE_NOISE_FRACTION:g} × the threshold (its "
+        "absolute part) and the "
         f"quantity's round-off, {_sci(REFEREE_ROUNDOFF_STATE)} ε × its largest magnitude over the run "
         f"across the plants for a state, {_sci(REFEREE_ROUNDOFF_FORCE)} ε × the largest control force "
         "(relative to the check's scale) for the torque and rod forces, ε = 2.2e-16 (column "
@@ -432,9 +436,7 @@ def _sentence(
     fl = f"the noise floor {floor.phrase(unit)}"
     everyone = "both" if n == 2 else ("all three" if n == 3 else f"all {n}")
     if r.clause is Clause.BELOW_FLOOR:
-        return (
-            f"{everyone} agree: every pair is below {fl} (largest {_fmt(r.spread, unit)})"
-        )
+        return f"{everyone} agree: every pair is below {fl} (largest {_fmt(r.spread, unit)})"
     if r.kind is VerdictKind.OUTLIER:
         who = [nm(p) for p in r.group]
         inside = (
@@ -483,7 +485,8 @@ def rule(
         checks: one check per pair of two or more plants (every pair; keys are the checks'
             pair subjects, anything with ``plants``, or ``"a vs b"`` text).
         names: plant name -> how to name it in the text (e.g. ``MuJoCo RK4 dt 0.00025 s``).
-        floor: the noise floor (default: its threshold part alone, :meth:`NoiseFloor.of`).
+        floor: the noise floor (default: its threshold part alone, :meth:`NoiseFloor.of` of the
+            checks' absolute part).
 
     Raises:
         ValueError: naming ``checks`` when they do not cover every pair of two or more plants.
@@ -512,7 +515,7 @@ def rule(
             f"checks: the referee needs every pair of the plants ({expected} pairs of "
             f"{len(plants)} plants, got {len(distance)})"
         )
-    floor = floor or NoiseFloor.of(threshold)
+    floor = floor or NoiseFloor.of(first.absolute_part)
     r = decide(plants, distance, passed, floor.value)
     label = LABELS.get(quantity, quantity)
 
@@ -565,9 +568,7 @@ _STATE_SCALES: Mapping[str, tuple[str, str, Any]] = {
 }
 
 
-def roundoff_scales(
-    cmp: Comparison, trajectories: Sequence[Any] = ()
-) -> dict[str, RoundoffScale]:
+def roundoff_scales(cmp: Comparison, trajectories: Sequence[Any] = ()) -> dict[str, RoundoffScale]:
     """Quantity -> the magnitude whose round-off it carries, over the run and across the plants.
 
     The control torque and rod forces: the largest control force, ``max(|τ|, |F_i|)`` over every
@@ -606,9 +607,7 @@ def _complete(checks: Sequence[Check]) -> dict[Any, Check]:
         plants += [str(p) for p in s.plants if str(p) not in plants]
     have = {_key(*s.plants) for s in by}
     while len(plants) >= 2:
-        missing = {
-            p: sum(1 for o in plants if o != p and _key(p, o) not in have) for p in plants
-        }
+        missing = {p: sum(1 for o in plants if o != p and _key(p, o) not in have) for p in plants}
         worst = max(plants[::-1], key=lambda p: missing[p])
         if missing[worst] == 0:
             break
@@ -645,8 +644,9 @@ def referee(
         if len(ruled) < 3:
             continue
         divisor = min(c.scale for c in by.values()) if q in FORCE_QUANTITIES else 1.0
-        threshold = next(iter(by.values())).threshold
-        floor = NoiseFloor.of(threshold, scales.get(q), divisor)
+        # the absolute part: the pairs share it (one threshold), their relative parts differ
+        absolute = next(iter(by.values())).absolute_part
+        floor = NoiseFloor.of(absolute, scales.get(q), divisor)
         out.append(rule(q, by, names, floor))
     return tuple(out)
 

@@ -13,6 +13,7 @@ import math
 import numpy as np
 
 from analytic.invariants import Balance, relative_balance
+from analytic.threshold import BoundPart
 from analytic.trajectory import Trajectory
 from validation.compare.checks import Check
 from validation.compare.thresholds import DEFAULTS
@@ -39,7 +40,8 @@ def max_abs(values: np.ndarray) -> tuple[float, int]:
 
 def check_sentence(check: Check, reason: bool = True) -> str:
     """One check in words: ``analytic: stopped at 9.37 s of 20 s (why)`` for a run that did not
-    reach its horizon, ``position_C = 5.000e-05 m > threshold 1.000e-06 m (why)`` otherwise;
+    reach its horizon, ``position_C = 5.000e-05 m > threshold 1.000e-06 m (why)`` otherwise,
+    with :func:`bound_parts` after the threshold when its relative part decided;
     ``reason=False`` leaves out a threshold's reason (a long sentence) but never why a run
     stopped; a check that does not apply says so, with why (``control_torque: not applicable
     (neither plant applies a control torque)``)."""
@@ -55,7 +57,23 @@ def check_sentence(check: Check, reason: bool = True) -> str:
     op = "≤" if check.passed else ">"
     why = f" ({check.reason})" if reason else ""
     return (
-        f"{check.label} = {check.value:.3e}{unit} {op} threshold {check.threshold:.3e}{unit}{why}"
+        f"{check.label} = {check.value:.3e}{unit} {op} threshold {check.threshold:.3e}{unit}"
+        f"{bound_parts(check)}{why}"
+    )
+
+
+def bound_parts(check: Check) -> str:
+    """What decided a check's bound, when it is the relative part (the larger of
+    ``absolute_part`` and ``relative_part = rtol × magnitude``): `` (decided by the relative part
+    1e-07 × scale 1.856e+03 m; absolute part 1.000e-06 m)``; "" when the absolute part decided
+    (as every bound without a relative part)."""
+    if check.decided_by is not BoundPart.RELATIVE:
+        return ""
+    unit = "" if check.unit in ("", "1") else f" {check.unit}"
+    rtol = check.relative_part / check.magnitude if check.magnitude else math.nan
+    return (
+        f" (decided by the relative part {rtol:.3g} × scale {check.magnitude:.3e}{unit}; "
+        f"absolute part {check.absolute_part:.3e}{unit})"
     )
 
 

@@ -33,6 +33,7 @@ from typing import Any
 
 import numpy as np
 
+from analytic.threshold import BoundPart
 from analytic.trajectory import Trajectory
 from validation.compare.checks import Check, CheckState, Comparison, Series
 from validation.compare.referee import Verdict, rule_text, summary_lines
@@ -202,6 +203,17 @@ def _fmt(x: float) -> str:
     if isinstance(x, float) and math.isinf(x):
         return "∞"
     return f"{x:.3e}" if x != 0 else "0"
+
+
+def _bound_cell(c: Check) -> str:
+    """Which part of a check's threshold decided: ``absolute``, ``relative (1e-07 × 1.6e+03)``
+    (rtol × the quantity's scale, in the check's unit), or "" for a threshold without a relative
+    part."""
+    if not c.applicable or c.relative_part <= 0 or not c.magnitude:
+        return ""
+    if c.decided_by is BoundPart.RELATIVE:
+        return f"relative ({c.relative_part / c.magnitude:.3g} × {c.magnitude:.3g})"
+    return "absolute"
 
 
 def _state_cell(c: Check) -> str:
@@ -374,17 +386,20 @@ def render_markdown(
         lines += [
             "## Checks",
             "",
-            "| check | value | threshold | unit | verdict | at t (s) |",
-            "|---|---|---|---|---|---|",
+            "| check | value | threshold | threshold set by | unit | verdict | at t (s) |",
+            "|---|---|---|---|---|---|---|",
         ]
         for c in cmp.checks:
             lines.append(
-                f"| {_cell(c.label)} | {_fmt(c.value)} | {_fmt(c.threshold)} | {_cell(c.unit)} | "
-                f"{_state_cell(c)} | {_fmt(c.t_max)} |"
+                f"| {_cell(c.label)} | {_fmt(c.value)} | {_fmt(c.threshold)} | {_bound_cell(c)} | "
+                f"{_cell(c.unit)} | {_state_cell(c)} | {_fmt(c.t_max)} |"
             )
         lines += [
             "",
-            "Relative checks are divided by the scale of the signal (see report.json). A "
+            "Relative checks are divided by the scale of the signal (see report.json). The "
+            "states' and tracking laws' thresholds are the absolute part plus rtol × the "
+            "quantity's largest magnitude over the run across the compared plants; *threshold set "
+            "by* names the larger part (empty without a relative part). A "
             "`completed` check's value is the time the plant reached, its threshold the horizon.",
             "",
         ]
@@ -413,6 +428,8 @@ def render_markdown(
         lines += ["| name | value | unit | source | reason |", "|---|---|---|---|---|"]
         for th in cmp.thresholds.values():
             kind = " (relative)" if th.relative else ""
+            if th.rtol:
+                kind = f" + {th.rtol:g} × scale"
             lines.append(
                 f"| {_cell(th.name)} | {th.value:g}{kind} | {_cell(th.unit)} | {_cell(th.source)} | "
                 f"{_cell(th.reason)} |"
@@ -588,6 +605,7 @@ def _report_doc(
                 "unit": t.unit,
                 "relative": t.relative,
                 "floor": t.floor,
+                "rtol": t.rtol,
                 "source": t.source,
                 "reason": t.reason,
             }

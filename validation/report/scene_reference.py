@@ -19,7 +19,7 @@ from typing import Any
 from analytic import scene as S
 from analytic.scene.builtin import BUILTIN_DIR, builtin_scene_names
 from analytic.scene.schema import CHOICE_MEANINGS, KEYS, NO_DEFAULT, Key, Kind, Need
-from validation.compare.thresholds import DEFAULTS, HARD_CASE_PREFIX
+from validation.compare.thresholds import DEFAULTS, HARD_CASE_PREFIX, SCALED
 
 GENERATOR = "python -m validation scene-reference > docs/scene-format.md"
 
@@ -190,15 +190,19 @@ def _thresholds() -> list[str]:
         "The names the comparison knows, with their defaults (`validation/compare/thresholds.py`). An "
         "absolute threshold bounds the maximum over time of a difference, in its unit; a relative "
         "one bounds that maximum divided by the reference signal's largest magnitude (at least "
-        "its floor). Entries starting with "
+        "its floor). An absolute threshold with an rtol bounds it by `value + rtol × scale`, "
+        "scale the quantity's largest magnitude over the run across the compared plants (as "
+        "scipy's `atol + rtol·|y|`); a scene may set the rtol of those names only. Entries "
+        "starting with "
         f"`{HARD_CASE_PREFIX}` belong to the hard-case suite and are not checked here.",
         "",
-        "| name | default | unit | kind | why this number |",
-        "|---|---|---|---|---|",
+        "| name | default | rtol | unit | kind | why this number |",
+        "|---|---|---|---|---|---|",
     ]
     for name, t in DEFAULTS.items():
         kind = f"relative (floor {t.floor:g})" if t.relative else "absolute"
-        out.append(f"| `{name}` | `{t.value:g}` | {t.unit} | {kind} | {_cell(t.reason)} |")
+        rtol = f"`{t.rtol:g}`" if name in SCALED else "—"
+        out.append(f"| `{name}` | `{t.value:g}` | {rtol} | {t.unit} | {kind} | {_cell(t.reason)} |")
     out.append("")
     return out
 

@@ -47,15 +47,25 @@ def planted(scene, traj, tmp_path_factory):
     return out, files
 
 
-def test_planted_offset_fails_with_its_exact_value(planted):
+def test_planted_offset_fails_with_its_exact_value(planted, traj):
     out, _ = planted
+    other_q = traj.q.copy()
+    other_q[:, :3] += np.array([0.0, 3e-5, 4e-5])
+    other = dataclasses.replace(traj, q=other_q)
     doc = json.loads((out / "report.json").read_text())
     assert doc["verdict"] == "FAILED" and doc["passed"] is False
     by = {(c["subject"], c["name"]): c for c in doc["checks"]}
     c = by[("analytic vs mujoco", "position_C")]
     assert c["value"] == pytest.approx(5e-5, rel=1e-9)
     assert c["verdict"] == "FAIL" and c["passed"] is False and c["reason"]
-    assert c["threshold"] == 1e-6 and c["unit"] == "m"
+    # the bound: 1e-6 m plus rtol × the largest |R| of the two runs (a few m here: the absolute
+    # part decides, and the report says so)
+    size = max(np.linalg.norm(q[:, :3], axis=1).max() for q in (traj.q, other.q))
+    assert c["absolute_part"] == 1e-6 and c["unit"] == "m" and c["decided_by"] == "absolute"
+    assert c["magnitude"] == pytest.approx(size, rel=1e-12)
+    assert c["relative_part"] == pytest.approx(1e-7 * size, rel=1e-12)
+    assert c["threshold"] == pytest.approx(1e-6 + 1e-7 * size, rel=1e-12)
+    assert doc["thresholds"]["position_C"]["rtol"] == 1e-7
     # every other comparison check passes (the copy is otherwise identical)
     others = [v for k, v in by.items() if k != ("analytic vs mujoco", "position_C")]
     assert all(v["passed"] for v in others)
@@ -170,6 +180,66 @@ def test_an_interrupted_run_says_where_it_stopped(scene, tmp_path):
     assert f"stopped at {reached:.3g} s of {T_END:g} s" in (tmp_path / "report.md").read_text()
     planted = Check("completed", Subject.ANALYTIC, 9.37, 20.0, "s", False, "interrupted")
     assert check_sentence(planted) == "analytic: stopped at 9.37 s of 20 s (interrupted)"
+
+
+@pytest.fixture(scope="module")
+def far(scene, traj, tmp_path_factory):
+    """Both runs 10 km from the origin (|R| ≈ 1e4 m, so the position bound's relative part,
+    1e-7 × 1e4 = 1e-3 m, is a thousand times its absolute part), the second displaced by 5e-4 m
+    (passes by the relative part) and its rod positions by 5e-6 m (fails: |p_i| ≈ 12 m gives a
+    bound of 1e-6 + 1.2e-6 m)."""
+    shift = np.array([6e3, 8e3, 0.0])  # |shift| = 1e4 m
+    qa = traj.q.copy()
+    qa[:, :3] += shift
+    qb = qa.copy()
+    qb[:, :3] += np.array([3e-4, 4e-4, 0.0])  # 5e-4 m
+    qb[:, 7:] += 5e-6
+    a = dataclasses.replace(traj, q=qa)
+    b = dataclasses.replace(traj, engine=Engine.MUJOCO, q=qb)
+    cmp = compare(a, b, scene, t_end=T_END)
+    out = tmp_path_factory.mktemp("far")
+    write_report(out, cmp, [a, b], {"scene": {"name": scene.name}, "versions": versions()})
+    return out, cmp, qa, qb
+
+
+def test_report_json_names_the_relative_part_when_it_decides(far):
+    out, _, qa, qb = far
+    doc = json.loads((out / "report.json").read_text())
+    by = {(c["subject"], c["name"]): c for c in doc["checks"]}
+    c = by[("analytic vs mujoco", "position_C")]
+    size = max(np.linalg.norm(q[:, :3], axis=1).max() for q in (qa, qb))
+    assert size == pytest.approx(1e4, rel=1e-3)
+    assert c["passed"] and c["value"] == pytest.approx(5e-4, rel=1e-6)
+    assert c["value"] > c["absolute_part"] == 1e-6  # the absolute part alone would fail it
+    assert c["decided_by"] == "relative" and c["magnitude"] == pytest.approx(size, rel=1e-12)
+    assert c["threshold"] == pytest.approx(1e-6 + 1e-7 * size, rel=1e-12)
+    rod = by[("analytic vs mujoco", "rod_positions")]
+    p_size = max(np.abs(q[:, 7:]).max() for q in (qa, qb))
+    assert not rod["passed"] and rod["magnitude"] == pytest.approx(p_size, rel=1e-12)
+    assert rod["threshold"] == pytest.approx(1e-6 + 1e-7 * p_size, rel=1e-12)
+    assert rod["decided_by"] == ("relative" if 1e-7 * p_size > 1e-6 else "absolute")
+
+
+def test_markdown_and_text_state_the_deciding_part(far):
+    out, cmp, _, _ = far
+    md = (out / "report.md").read_text()
+    row = next(line for line in md.splitlines() if line.startswith("| position_C |"))
+    assert "| relative (1e-07 × 1e+04) |" in row
+    att = next(line for line in md.splitlines() if line.startswith("| attitude |"))
+    assert "relative" not in att and "absolute" not in att  # no relative part
+    text = check_sentence(cmp.check("position_C"), reason=False)
+    assert text.startswith("position_C = 5.000e-04 m ≤ threshold 1.001e-03 m")
+    assert (
+        "(decided by the relative part 1e-07 × scale 1.000e+04 m; absolute part 1.000e-06 m)"
+        in text
+    )
+    # a check the absolute part decides reads as before: the velocity of C, whose scale over
+    # 0.3 s (below 100 m/s) makes a relative part under the absolute 1e-5 m/s
+    v = cmp.check("velocity_C")
+    assert v.magnitude < 100 and v.decided_by == "absolute"
+    assert check_sentence(v, reason=False).endswith(f"threshold {v.threshold:.3e} m/s")
+    vrow = next(line for line in md.splitlines() if line.startswith("| velocity_C |"))
+    assert "| absolute |" in vrow
 
 
 def test_writes_are_atomic(tmp_path, monkeypatch):
