@@ -54,16 +54,21 @@ _RK4_DOP = (
 STATE_RTOL = 1e-7
 """The relative part of the state and tracking bounds (``rtol`` in ``value + rtol · scale``),
 dimensionless. Both integrators' errors are relative to the state's magnitude: DOP853 holds each
-step's local error to ``rtol · |y|`` (rtol 1e-12..1e-10 at the scene settings), and RK4's global
-error at dt = 2.5e-4 s is ``O((ω h)^4)`` of the state per unit time with ω h ≤ 15·2.5e-4 ≈ 4e-3,
-~1e-10 of it. So their global errors are ~1e-9 of the state's magnitude or smaller; the same two
-decades of margin as the absolute bounds (``_RK4_DOP``) for the growth over a tumbling 20 s run
-give 1e-7, while a modelling difference (a missing inertia term, a wrong spring force, a sign)
-shows at 1e-3 of the motion or larger, four decades above. A velocity's error and its scale are
-both its position's times the rate of the motion, so one rtol serves positions and velocities.
-The absolute parts keep deciding at the scales they were set for: at 10 m (or 10 m/s, 10 rad/s)
-the relative part is 1e-6, at most the absolute one; it decides only where the motion is larger
-(the paper scenes' free fall to ~1.6 km, masses running away at hundreds of m/s)."""
+step's local error to ``rtol · |y|`` (rtol 1e-12..1e-10 at the scene settings: ~1e-9 of the state
+over a run, as for ``_RK4_DOP``), and RK4 at dt = 2.5e-4 s loses ``O((ω h)^4)`` of the state per
+second, ~2e-10 at ω h = 15·2.5e-4 ≈ 4e-3, so ~4e-9 over 20 s at that rate and ~1e-10 at the
+paper's ≤ 2π rad/s. Over a 20 s run their global errors are thus a few 1e-9 of the state's
+magnitude or smaller; the margin of the absolute bounds (``_RK4_DOP``: two to three decades, for
+the growth over a tumbling run) put above the typical 1e-9 gives 1e-7, a factor 25 above the
+worst estimate (15 rad/s for 20 s), while a modelling difference (a missing inertia term, a wrong
+spring force, a sign) shows at 1e-3 of the motion or larger, four decades above. A velocity's error
+and its scale are both its position's times the rate of the motion, so one rtol serves positions
+and velocities. The absolute parts keep deciding at the scales they were set for: at 10 m (or
+10 m/s, 10 rad/s) the relative part is at most the absolute one; it decides where the motion is
+larger (the paper scenes' free fall to |R| ≈ 1.6 km, masses running away at hundreds of m/s).
+Stiff scenes are the exception the absolute part covers: RK4 on springs of high frequency errs by
+more than 1e-7 of the state (hard/stiff_springs: 9e-6 m/s at |ṗ| = 10 m/s, 9e-7 relative,
+within the absolute 1e-5 m/s)."""
 
 SCALED = frozenset(
     (

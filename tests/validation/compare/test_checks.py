@@ -12,8 +12,10 @@ from scipy.spatial.transform import Rotation
 
 from analytic.scene import load_scene
 from analytic.simulate import simulate
+from analytic.threshold import BoundPart
 from analytic.trajectory import Engine, RunStatus, Trajectory
 from validation.compare.checks import (
+    Check,
     Difference,
     Subject,
     attitude_angle,
@@ -327,3 +329,128 @@ def test_scene_thresholds_override_the_defaults(scene, traj):
 def test_bad_threshold_tables_name_the_field(scene, table, field):
     with pytest.raises(ValueError, match=field.replace(".", r"\.")):
         thresholds_for(scene.replace(extra={"thresholds": table}))
+
+
+# ----------------------------------------------------------------------------------------------
+# scale-aware bounds: atol + rtol · scale
+# ----------------------------------------------------------------------------------------------
+
+
+def _fast(traj: Trajectory, speed: float, rel: float) -> tuple[Trajectory, Trajectory]:
+    """Two runs whose C and masses all move at ``speed`` m/s (C along (0.6, 0.8, 0), each mass
+    along its rod), the second faster by the fraction ``rel``: a difference of ``rel`` relative
+    on a ``speed`` scale, in velocity_C and rod_velocities alone."""
+    qd = traj.qdot.copy()
+    qd[:, :3] = speed * np.array([0.6, 0.8, 0.0])
+    qd[:, 7:] = speed
+    other = qd.copy()
+    other[:, :3] *= 1 + rel
+    other[:, 7:] *= 1 + rel
+    return dataclasses.replace(traj, qdot=qd), as_mujoco(traj, qdot=other)
+
+
+def test_a_difference_of_1e7_relative_at_1000_m_per_s_passes_by_the_relative_part(scene, traj):
+    """1e-4 m/s at 1000 m/s: ten times the absolute 1e-5 m/s (the old verdict, FAIL, blind to
+    the scale), inside 1e-5 + 1e-7 × 1000(1 + 1e-7) m/s; the record names the relative part."""
+    a, b = _fast(traj, 1000.0, 1e-7)
+    c = compare(a, b, scene, t_end=T_END)
+    for name in ("velocity_C", "rod_velocities"):
+        ch = c.check(name)
+        assert ch.value == pytest.approx(1e-4, rel=1e-6), name
+        assert ch.value > DEFAULTS[name].value  # the absolute part alone fails it
+        scale = 1000.0 * (1 + 1e-7)  # the faster of the two plants
+        assert ch.magnitude == pytest.approx(scale, rel=1e-12)
+        assert ch.relative_part == pytest.approx(1e-7 * scale, rel=1e-12)
+        assert ch.absolute_part == 1e-5
+        assert ch.threshold == pytest.approx(1e-5 + 1e-7 * scale, rel=1e-12)
+        assert ch.passed and ch.decided_by is BoundPart.RELATIVE
+        d = ch.to_dict()
+        assert d["decided_by"] == "relative" and d["threshold"] == ch.threshold
+    # three times that relative difference fails: the relative part is a bound, not a waiver
+    a, b = _fast(traj, 1000.0, 3e-7)
+    assert not compare(a, b, scene, t_end=T_END).check("velocity_C").passed
+
+
+def test_a_small_scale_difference_is_decided_by_the_absolute_part_as_before(scene, traj):
+    """5e-5 m/s at 1 m/s: the relative part (1e-7 m/s) is a hundredth of the absolute 1e-5 m/s,
+    which decides; the verdict is the one the absolute bound alone gives."""
+    a, b = _fast(traj, 1.0, 5e-5)
+    ch = compare(a, b, scene, t_end=T_END).check("velocity_C")
+    assert ch.value == pytest.approx(5e-5, rel=1e-6)
+    assert ch.decided_by is BoundPart.ABSOLUTE and ch.absolute_part == 1e-5
+    assert ch.threshold == pytest.approx(1e-5 + 1e-7 * (1 + 5e-5), rel=1e-12)
+    assert not ch.passed and (ch.value <= DEFAULTS["velocity_C"].value) == ch.passed
+    a, b = _fast(traj, 1.0, 5e-6)  # 5e-6 m/s: passes, as under the absolute bound alone
+    ch = compare(a, b, scene, t_end=T_END).check("velocity_C")
+    assert ch.passed and ch.decided_by is BoundPart.ABSOLUTE
+
+
+def test_every_bound_is_recomputed_from_the_trajectories_own_arrays(scene, traj):
+    """The scale of each relative part, from the arrays by numpy alone: the largest over time
+    and over both plants of |R|, |p_i|, |Ṙ|, |ṗ_i|, |ω|; for the tracking laws the plant's own
+    |ω| and controlled |p_i|."""
+    q = traj.q.copy()
+    q[:, :3] *= 1.5
+    q[:, 7:] += 2.0
+    qd = traj.qdot * 3.0  # ω follows (the body rates from u and u̇)
+    b = as_mujoco(traj, q=q, qdot=qd)
+    c = compare(traj, b, scene, t_end=T_END)
+    w = b.omega
+
+    def vec(x):
+        return np.sqrt(np.sum(x * x, axis=1)).max()
+
+    expected = {
+        "position_C": max(vec(traj.q[:, :3]), vec(q[:, :3])),
+        "rod_positions": max(np.abs(traj.q[:, 7:]).max(), np.abs(q[:, 7:]).max()),
+        "velocity_C": max(vec(traj.qdot[:, :3]), vec(qd[:, :3])),
+        "rod_velocities": max(np.abs(traj.qdot[:, 7:]).max(), np.abs(qd[:, 7:]).max()),
+        "angular_velocity": max(vec(traj.omega), vec(w)),
+    }
+    for name, size in expected.items():
+        ch, th = c.check(name), DEFAULTS[name]
+        assert ch.magnitude == pytest.approx(size, rel=1e-12), name
+        assert ch.threshold == pytest.approx(th.value + th.rtol * size, rel=1e-12), name
+        want = BoundPart.RELATIVE if th.rtol * size > th.value else BoundPart.ABSOLUTE
+        assert ch.decided_by is want, name
+    att = c.check("attitude")
+    assert att.threshold == DEFAULTS["attitude"].value and att.relative_part == 0.0
+    # the tracking laws: one plant each, its own magnitudes
+    idx = [7 + i for i in traj.tracking.mass_indices]
+    for plant, tr in (("analytic", traj), ("mujoco", b)):
+        tw, tp = c.check(f"{plant}.tracking_omega"), c.check(f"{plant}.tracking_p")
+        assert tw.magnitude == pytest.approx(vec(tr.omega), rel=1e-12)
+        assert tp.magnitude == pytest.approx(np.abs(tr.q[:, idx]).max(), rel=1e-12)
+        assert tp.threshold == pytest.approx(1e-6 + 1e-7 * tp.magnitude, rel=1e-12)
+    # the relative checks keep their single part
+    for ch in c.checks:
+        if ch.name in ("control_torque", "rod_forces", "linear_momentum", "energy"):
+            assert ch.relative_part == 0.0 and ch.threshold == ch.absolute_part
+
+
+def test_a_diverged_sample_leaves_the_scale_finite_and_fails_the_check(scene, traj):
+    """A non-finite state is left out of the scale (it would make the bound infinite); the
+    difference is infinite there, so the check fails."""
+    qd = traj.qdot.copy()
+    qd[5, :3] = np.inf
+    c = compare(traj, as_mujoco(traj, qdot=qd), scene, t_end=T_END)
+    ch = c.check("velocity_C")
+    assert math.isfinite(ch.magnitude) and math.isfinite(ch.threshold)
+    assert not ch.passed
+
+
+def test_a_scene_rtol_changes_the_verdict_through_the_relative_part(scene, traj):
+    a, b = _fast(traj, 1000.0, 1e-7)
+    off = scene.replace(extra={"thresholds": {"velocity_C": {"value": 1e-5, "rtol": 0.0}}})
+    ch = compare(a, b, off, t_end=T_END).check("velocity_C")
+    assert not ch.passed and ch.threshold == 1e-5 and ch.decided_by is BoundPart.ABSOLUTE
+    wide = scene.replace(extra={"thresholds": {"velocity_C": {"value": 1e-5, "rtol": 1e-6}}})
+    ch = compare(a, b, wide, t_end=T_END).check("velocity_C")
+    assert ch.passed and ch.relative_part == pytest.approx(1e-6 * 1000 * (1 + 1e-7), rel=1e-12)
+
+
+def test_a_check_built_without_parts_reads_as_absolute():
+    """Checks other code builds (a hard case's, a count) have one part: the threshold."""
+    ch = Check("x", Subject.ANALYTIC, 1.0, 2.0, "m", True, "why")
+    assert ch.absolute_part == 2.0 and ch.relative_part == 0.0
+    assert ch.decided_by is BoundPart.ABSOLUTE and ch.to_dict()["decided_by"] == "absolute"

@@ -180,7 +180,9 @@ def test_two_plants_agree_or_disagree_but_name_no_outlier():
 def test_one_outlier_among_n(n):
     plants = "abcdef"[:n]
     # the last plant 3e-8 .. 5e-8 from the others, who agree to 2e-10 (below the floor)
-    planted = {plants[-1] + o: (3e-8, 4e-8, 5e-8, 3.5e-8, 4.5e-8)[i] for i, o in enumerate(plants[:-1])}
+    planted = {
+        plants[-1] + o: (3e-8, 4e-8, 5e-8, 3.5e-8, 4.5e-8)[i] for i, o in enumerate(plants[:-1])
+    }
     r = _decide(plants, planted)
     assert r.kind is VerdictKind.OUTLIER and r.clause is Clause.SEPARATED
     assert r.group == tuple(plants[:-1])
@@ -325,8 +327,15 @@ def _zero_torque_comparison(force: float) -> Comparison:
     )
     t = np.linspace(0.0, 1.0, 11)
     series = tuple(
-        Series(f"{p}.rod_force_1", "rod force on mass 1", "N", Group.CONTROL, Subject(p), t,
-               force * np.sin(3 * t))
+        Series(
+            f"{p}.rod_force_1",
+            "rod force on mass 1",
+            "N",
+            Group.CONTROL,
+            Subject(p),
+            t,
+            force * np.sin(3 * t),
+        )
         for p in ("analytic", "mujoco", "pinocchio")
     )
     return Comparison("zero torque", t, series, checks, (), thresholds_for())
@@ -358,7 +367,9 @@ def test_round_off_scale_is_the_largest_force_across_plants():
     scale = roundoff_scales(cmp)["control_torque"]
     assert scale.value == pytest.approx(peak, rel=1e-15)
     floor = NoiseFloor.of(1e-6, scale, divisor=1.0)
-    assert floor.roundoff_part == pytest.approx(REFEREE_ROUNDOFF_FORCE * 2.220446049250313e-16 * peak)
+    assert floor.roundoff_part == pytest.approx(
+        REFEREE_ROUNDOFF_FORCE * 2.220446049250313e-16 * peak
+    )
     assert floor.value == floor.roundoff_part and floor.threshold_part == pytest.approx(1e-9)
 
 
@@ -650,9 +661,60 @@ def test_round_off_of_a_real_zero_torque_is_not_an_outlier():
     trs = [plant(e).simulate(scene, t_end=0.5) for e in ("analytic", "mujoco", "pinocchio")]
     cmp = compare_plants(trs, scene, t_end=0.5)
     v = {v.quantity: v for v in referee(cmp, trajectories=trs)}["control_torque"]
-    force = max(max(np.abs(tr.rod_forces).max(), np.linalg.norm(tr.torque, axis=1).max())
-                for tr in trs)
+    force = max(
+        max(np.abs(tr.rod_forces).max(), np.linalg.norm(tr.torque, axis=1).max()) for tr in trs
+    )
     assert min(v.values.values()) > REFEREE_NOISE_FRACTION * v.threshold
     assert v.floor == pytest.approx(REFEREE_ROUNDOFF_FORCE * np.finfo(float).eps * force)
     assert v.kind is VerdictKind.AGREE and v.floor_set_by is FloorPart.ROUND_OFF, v.text
     assert "round-off, 1e5 ε × largest control force" in v.text
+
+
+# ---------------------------------------------------------------------------------------------
+# Scale-aware bounds: the floor is a fraction of the absolute part
+# ---------------------------------------------------------------------------------------------
+
+
+def _scaled_checks(values: dict[Subject, float], scale: float) -> dict[Subject, Check]:
+    """velocity_C checks at a ``scale`` m/s motion: bound 1e-5 + 1e-7 × scale m/s."""
+    th = DEFAULTS["velocity_C"]
+    b = th.bound(scale)
+    return {
+        s: Check(
+            "velocity_C",
+            s,
+            v,
+            b.value,
+            "m/s",
+            v <= b.value,
+            "test",
+            absolute_part=b.absolute,
+            relative_part=b.relative,
+            magnitude=b.scale,
+            decided_by=b.decided_by,
+        )
+        for s, v in values.items()
+    }
+
+
+def test_the_floor_is_a_fraction_of_the_absolute_part_not_of_the_effective_bound():
+    """paper_example2's velocity of C: MuJoCo's RK4 2.2e-7 m/s from two DOP853 plants that agree
+    to 3.5e-11 m/s, at |Ṙ| = 186 m/s. A thousandth of the effective bound (2.9e-5 m/s) would be
+    2.9e-8 m/s, and 2.2e-7 is not ten times that: the outlier would go unnamed. The floor is a
+    thousandth of the absolute part, 1e-8 m/s, and MuJoCo is named, as before the bound scaled."""
+    checks = _scaled_checks({P_AM: 2.154e-7, P_AP: 3.46e-11, P_MP: 2.154e-7}, 186.0)
+    first = next(iter(checks.values()))
+    assert first.threshold == pytest.approx(1e-5 + 1.86e-5)
+    v = rule("velocity_C", checks)
+    assert v.floor == pytest.approx(REFEREE_NOISE_FRACTION * 1e-5)
+    assert v.kind is VerdictKind.OUTLIER and v.outlier == "mujoco"
+    assert v.threshold == first.threshold  # the verdict shows the bound the checks used
+
+
+def test_the_referee_of_a_comparison_takes_the_absolute_part():
+    """Through :func:`referee`, on a comparison whose checks carry relative parts."""
+    checks = _scaled_checks({P_AM: 2.154e-7, P_AP: 3.46e-11, P_MP: 2.154e-7}, 186.0)
+    cmp = Comparison("s", np.zeros(1), (), tuple(checks.values()))
+    (v,) = referee(cmp)
+    assert v.quantity == "velocity_C" and v.noise.threshold_part == pytest.approx(1e-8)
+    assert v.kind is VerdictKind.OUTLIER and v.outlier == "mujoco"
