@@ -42,6 +42,7 @@ from validation.studies.fuzz.records import (
     SceneRecord,
 )
 from validation.studies.fuzz.report import write_campaign
+from validation.studies.fuzz.settle import Settlement, settle, settle_data
 from validation.studies.fuzz.shrink import MAX_EVALUATIONS, shrink
 from validation.studies.fuzz.space import draw_scene_dict
 from validation.studies.fuzz.toml import counterexample_toml, slug
@@ -232,6 +233,9 @@ def fuzz(
                 int(done["evaluations"]),
                 str(done["known"]),
                 out / COUNTEREXAMPLES_DIR / done["file"],
+                settlement=(
+                    Settlement.from_dict(done["settlement"]) if done.get("settlement") else None
+                ),
             )
         else:
             say(f"scene {rec.index}: {target.key}: shrinking")
@@ -252,13 +256,20 @@ def fuzz(
             )
             s = shrink(rec.data, cfg.horizon, target, evaluate, shrink_evaluations, rec.outcome)
             path = out / COUNTEREXAMPLES_DIR / f"{slug(target.key)}.toml"
+            # settled on the campaign's executor too: each plant at its default and tightened
+            # settings, each run within the campaign's own limit (a tightened run costs more)
+            task = pool[0].submit(
+                settle_data, s.data, shrink_plants[0], s.horizon, float(time_limit_s)
+            ).result()
+            settled = settle(target, s.outcome, task, [plant_name(p) for p in shrink_plants[0]])
             ex = Counterexample(
                 target, rec.index, s.data, s.horizon, s.outcome, s.evaluations,
-                recognise(rec.data, s.data, target), path,
+                recognise(rec.data, s.data, target), path, settlement=settled,
             )
             write_text(path, counterexample_toml(ex, cfg))
             write_text(path.with_suffix(".json"), json.dumps(ex.to_dict(), indent=2) + "\n")
-            say(f"  -> {path.name} ({s.evaluations} evaluations{', known: ' + ex.known if ex.known else ''})")
+            say(f"  -> {path.name} ({s.evaluations} evaluations"
+                f"{', known: ' + ex.known if ex.known else ''}; {settled.cause.value}: {settled.text})")
         examples[target.key] = ex
 
     def more(i: int) -> bool:

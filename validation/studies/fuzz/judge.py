@@ -181,11 +181,14 @@ class _Raised(Exception):
         self.kind = kind
 
 
-def _simulate_task(pl: Plant, scene: Scene, horizon: float, progress=None, report=None) -> Trajectory:
-    """One plant's run (the forked worker's task; ``report`` is not used)."""
+def _simulate_task(
+    pl: Plant, scene: Scene, horizon: float, settings: Any = None, progress=None, report=None
+) -> Trajectory:
+    """One plant's run at ``settings`` (None: its defaults; the forked worker's task; ``report`` is
+    not used)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        return pl.simulate(scene, t_end=horizon, progress=progress)
+        return pl.simulate(scene, settings, t_end=horizon, progress=progress)
 
 
 _LOADED: set[tuple[str, int | None]] = set()
@@ -215,8 +218,11 @@ kernels for every solve (:mod:`validation.runs.kernel_preload`), then this modul
 modules it imports, so a served run starts with them loaded."""
 
 
-def run_limited(name: str, pl: Plant, scene: Scene, horizon: float, limit_s: float) -> Trajectory:
-    """``pl``'s run of ``scene`` over ``horizon`` s within ``limit_s`` s of wall time, stopped at the
+def run_limited(
+    name: str, pl: Plant, scene: Scene, horizon: float, limit_s: float, settings: Any = None
+) -> Trajectory:
+    """``pl``'s run of ``scene`` over ``horizon`` s at ``settings`` (None: the plant's defaults)
+    within ``limit_s`` s of wall time, stopped at the
     limit whether or not the plant ever reports progress (module docstring).
 
     Where :func:`validation.runs.workers.can_fork` (a single-threaded process on Linux: the serial
@@ -235,15 +241,15 @@ def run_limited(name: str, pl: Plant, scene: Scene, horizon: float, limit_s: flo
     """
     if workers.can_fork():
         _load_kernels(name, scene)
-        job = workers.start(f"fuzz-{name}", _simulate_task, pl, scene, horizon)
+        job = workers.start(f"fuzz-{name}", _simulate_task, pl, scene, horizon, settings)
     elif workers.can_serve():
         job = workers.start_served(
-            f"fuzz-{name}", _simulate_task, pl, scene, horizon, preload=SERVER_PRELOAD
+            f"fuzz-{name}", _simulate_task, pl, scene, horizon, settings, preload=SERVER_PRELOAD
         )
     else:
         progress, over_budget = _budget_progress(limit_s)
         try:
-            return _simulate_task(pl, scene, horizon, progress)
+            return _simulate_task(pl, scene, horizon, settings, progress)
         except over_budget as exc:
             raise OverTime(name, limit_s) from exc
         except KeyboardInterrupt:
@@ -275,20 +281,16 @@ def _budget_progress(budget_s: float):
     return progress, BudgetExceeded
 
 
-def judge_scene(
-    data: dict[str, Any],
-    plants: Sequence[Plant | str],
-    horizon: float,
-    budget_s: float = RUN_BUDGET_S,
-) -> Outcome:
-    """Run the scene file's dict ``data`` on ``plants`` over ``horizon`` s (the scene's default
-    settings), each within ``budget_s`` s of wall time (:data:`RUN_BUDGET_S`), and judge it
-    (module docstring). Only an interrupt (``KeyboardInterrupt``) escapes."""
+def prepare(
+    data: dict[str, Any], plants: Sequence[Plant | str], horizon: float
+) -> tuple[Scene | None, dict[str, str], list[tuple[str, Plant]]]:
+    """The scene of the file's dict ``data`` (None when the loader refuses it), the refusals
+    (plant, or ``scene``, -> one-line reason) and the plants that can run it, ``(name, plant)``."""
     try:
         scene = _scene(data)
         scene.output.with_t_end(horizon, "horizon")
     except ValueError as exc:
-        return Outcome(refused={"scene": _one_line(exc)})
+        return None, {"scene": _one_line(exc)}, []
     refused: dict[str, str] = {}
     chosen: list[tuple[str, Plant]] = []
     for p in plants:
@@ -303,6 +305,60 @@ def judge_scene(
             refused[name] = _one_line(exc)
             continue
         chosen.append((name, pl))
+    return scene, refused, chosen
+
+
+def judge_runs(
+    scene: Scene,
+    horizon: float,
+    trajs: Sequence[Trajectory],
+    ran: Sequence[str],
+    found: Sequence[Disagreement] = (),
+    **fields: Any,
+) -> Outcome:
+    """The outcome of the runs ``trajs`` (of the plants ``ran``, in order) of ``scene``: the
+    comparison's checks and the referee's verdicts, added to the disagreements already ``found``
+    (a plant that raised or stopped); ``fields`` are the outcome's other fields."""
+    found = list(found)
+    checks: dict[str, tuple[float, float, str]] = {}
+    verdicts: tuple[dict[str, Any], ...] = ()
+    if len(trajs) >= 2:
+        cmp = compare_plants(list(trajs), scene, t_end=horizon)
+        for c in cmp.checks:
+            if not c.applicable:
+                continue
+            value = float(c.value) if math.isfinite(c.value) else math.inf
+            checks[c.label] = (value, float(c.threshold), c.state.value)
+            if not c.passed:
+                found.append(Disagreement(Kind.CHECK, c.label))
+        vs = referee(cmp)
+        verdicts = tuple(v.to_dict() for v in vs)
+        found += [
+            Disagreement(Kind.OUTLIER, v.quantity, v.outlier)
+            for v in vs
+            if v.kind is VerdictKind.OUTLIER
+        ]
+    return Outcome(
+        ran=tuple(ran),
+        checks=checks,
+        verdicts=verdicts,
+        disagreements=tuple(sorted(set(found))),
+        **fields,
+    )
+
+
+def judge_scene(
+    data: dict[str, Any],
+    plants: Sequence[Plant | str],
+    horizon: float,
+    budget_s: float = RUN_BUDGET_S,
+) -> Outcome:
+    """Run the scene file's dict ``data`` on ``plants`` over ``horizon`` s (the scene's default
+    settings), each within ``budget_s`` s of wall time (:data:`RUN_BUDGET_S`), and judge it
+    (module docstring). Only an interrupt (``KeyboardInterrupt``) escapes."""
+    scene, refused, chosen = prepare(data, plants, horizon)
+    if scene is None:
+        return Outcome(refused=refused)
     trajs, ran, messages, walls, found = [], [], {}, {}, []
     timeouts: dict[str, float] = {}
     for name, pl in chosen:
@@ -327,33 +383,9 @@ def judge_scene(
             found.append(Disagreement(Kind.STOPPED, str(tr.status.value), name))
         trajs.append(tr)
         ran.append(name)
-    checks: dict[str, tuple[float, float, str]] = {}
-    verdicts: tuple[dict[str, Any], ...] = ()
-    if len(trajs) >= 2:
-        cmp = compare_plants(trajs, scene, t_end=horizon)
-        for c in cmp.checks:
-            if not c.applicable:
-                continue
-            value = float(c.value) if math.isfinite(c.value) else math.inf
-            checks[c.label] = (value, float(c.threshold), c.state.value)
-            if not c.passed:
-                found.append(Disagreement(Kind.CHECK, c.label))
-        vs = referee(cmp)
-        verdicts = tuple(v.to_dict() for v in vs)
-        found += [
-            Disagreement(Kind.OUTLIER, v.quantity, v.outlier)
-            for v in vs
-            if v.kind is VerdictKind.OUTLIER
-        ]
-    return Outcome(
-        refused=refused,
-        ran=tuple(ran),
-        checks=checks,
-        verdicts=verdicts,
-        disagreements=tuple(sorted(set(found))),
-        messages=messages,
-        walls=walls,
-        timeouts=timeouts,
+    return judge_runs(
+        scene, horizon, trajs, ran, found,
+        refused=refused, messages=messages, walls=walls, timeouts=timeouts,
     )
 
 
@@ -363,8 +395,10 @@ __all__ = [
     "Kind",
     "Outcome",
     "OverTime",
+    "judge_runs",
     "judge_scene",
     "plant_name",
+    "prepare",
     "resolve_plant",
     "run_limited",
 ]

@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from validation.studies.fuzz.judge import Disagreement, Outcome
+from validation.studies.fuzz.settle import Cause, Settlement
 
 
 @dataclass(frozen=True)
@@ -50,6 +51,8 @@ class Counterexample:
         known: the known finding it is (:mod:`validation.studies.fuzz.known`), "" when new.
         path: its TOML file.
         occurrences: campaign scenes showing the same disagreement.
+        settlement: whether it is a model difference or a numerical limit of the settings
+            (:mod:`validation.studies.fuzz.settle`).
     """
 
     disagreement: Disagreement
@@ -61,6 +64,14 @@ class Counterexample:
     known: str
     path: Path
     occurrences: int = 1
+    settlement: Settlement | None = None
+
+    @property
+    def counts_against(self) -> bool:
+        """A new finding the settings do not explain: what fails a campaign."""
+        return not self.known and (
+            self.settlement is None or self.settlement.cause is not Cause.SETTINGS
+        )
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -73,6 +84,7 @@ class Counterexample:
             "occurrences": self.occurrences,
             "outcome": self.outcome.to_dict(),
             "scene": self.data,
+            "settlement": self.settlement.to_dict() if self.settlement else None,
         }
 
 

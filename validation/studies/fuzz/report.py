@@ -91,6 +91,7 @@ def campaign_doc(res: CampaignResult) -> dict[str, Any]:
                 "drivers": drivers(ex.data).to_dict(),
                 "verdicts": list(ex.outcome.verdicts),
                 "command": reproduce(ex, res),
+                "settlement": _settlement(ex),
             }
             for ex in res.counterexamples
         ],
@@ -103,6 +104,23 @@ def campaign_doc(res: CampaignResult) -> dict[str, Any]:
             }
             for r in res.scenes
         ],
+    }
+
+
+def _settlement(ex: Any) -> dict[str, Any] | None:
+    st = ex.settlement
+    if st is None:
+        return None
+    return {
+        "cause": st.cause.value,
+        "text": st.text,
+        "culprit": st.culprit,
+        "own_errors": {
+            p: {k: _finite(v) for k, v in q.items()} for p, q in st.own_errors.items()
+        },
+        "settings": {p: list(v) for p, v in st.settings.items()},
+        "tightened_verdicts": list(st.tightened.verdicts),
+        "tightened_disagreements": [d.key for d in st.tightened.disagreements],
     }
 
 
@@ -157,9 +175,22 @@ def campaign_markdown(res: CampaignResult, doc: dict[str, Any]) -> str:
         lines.append("none")
     lines += ["", "## Pass rate per check", "", "| check | passed / run |", "|---|---|"]
     lines += [f"| `{k}` | {v['passed']} / {v['run']} |" for k, v in doc["pass_rates"].items()]
-    for title, known in (("New findings", False), ("Known findings", True)):
+    def cause(e: dict[str, Any]) -> str:
+        return e["settlement"]["cause"] if e["settlement"] else "unsettled"
+
+    sections = (
+        ("New findings", "not known, and tightened settings do not explain them",
+         lambda e: not e["known"] and cause(e) != "settings"),
+        ("Numerical limits of the settings", "gone at tightened settings, or within the plants' "
+         "own error estimates at their default settings: the settings, not the model",
+         lambda e: not e["known"] and cause(e) == "settings"),
+        ("Known findings", "", lambda e: bool(e["known"])),
+    )
+    for title, what, keep in sections:
         lines += ["", f"## {title}", ""]
-        rows = [e for e in doc["counterexamples"] if bool(e["known"]) is known]
+        if what:
+            lines += [f"{what[0].upper()}{what[1:]}.", ""]
+        rows = [e for e in doc["counterexamples"] if keep(e)]
         if not rows:
             lines.append("none")
         for e in rows:
@@ -167,11 +198,13 @@ def campaign_markdown(res: CampaignResult, doc: dict[str, Any]) -> str:
                     for v in e["verdicts"] if v["verdict"] != "agree"]
             dr = e["drivers"]
             lines += [
-                f"- **{e['key']}**{' (' + e['known'] + ')' if known else ''}: in "
+                f"- **{e['key']}**{' (' + e['known'] + ')' if e['known'] else ''}: in "
                 f"{e['occurrences']} scene(s); minimal scene `{e['file']}` (n = {dr['n']}, spin "
                 f"{dr['spin']:.3g} rad/s, mass ratio {dr['mass_ratio']:.3g}, stiffness "
                 f"{dr['stiffness']:.3g} 1/s², horizon {e['horizon']:g} s)",
                 f"  - referee: {'; '.join(outl) if outl else 'no outlier'}",
+                f"  - cause: {cause(e)}"
+                + (f": {e['settlement']['text']}" if e["settlement"] else ""),
                 f"  - reproduce: `{e['command']}`",
             ]
     lines += ["", f"![where the disagreements lie]({FIGURE})", ""]

@@ -81,6 +81,8 @@ def counterexample_toml(ex: Counterexample, cfg: FuzzConfig) -> str:
     lines.append(f"Failed checks: {', '.join(failed) if failed else 'none'}.")
     for name, msg in ex.outcome.messages.items():
         lines.append(f"{name}: {msg}")
+    if ex.settlement is not None:
+        lines.append(f"Cause: {ex.settlement.cause.value}: {ex.settlement.text}.")
     lines.append(
         f"Reproduce: tumble validate FILE --plants {plants} --t-end {ex.horizon:g}"
     )

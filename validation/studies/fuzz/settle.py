@@ -1,0 +1,290 @@
+"""Settling a disagreement: a model difference, or a numerical limit of the settings?
+
+A campaign runs every plant at the scene's default settings. Where a plant disagrees because those
+settings are too coarse for the scene (MuJoCo's fixed step at a few hundred rad/s, the analytic
+plant's rtol 1e-12 on a fast unstable spin) the disagreement is real but says nothing against the
+plant's model; a verdict must not blame the model for the settings it was given. So every minimal
+counterexample is settled:
+
+1. **Each plant's own error estimate.** Each plant runs the minimal scene twice, at its default
+   settings and at :meth:`analytic.plant.Plant.tightened` ones (tolerances / 100, a fixed step / 4:
+   a far smaller error, ``docs/plugins.md``); the difference of the two runs, per compared quantity
+   (the comparison's :func:`~validation.compare.checks.difference_series`), estimates the plant's
+   own error at its default settings (within 1 % of the true error on a closed-form motion,
+   ``tests/cross/test_tightened.py``).
+2. **The judgement at tightened settings.** The tightened runs are compared and refereed as the
+   campaign's were (:func:`validation.studies.fuzz.judge.judge_runs`).
+
+The cause (:class:`Cause`):
+
+* ``settings``: the disagreement is gone at tightened settings, or (an outlier) its distance is
+  within :data:`SETTLE_MARGIN` times the own errors of the plants it separates; the plant whose own
+  error is the largest is named, with its settings;
+* ``model``: it stays at tightened settings and (an outlier) its distance exceeds
+  :data:`SETTLE_MARGIN` times those own errors: what is left is a difference of the models (or of
+  round-off, which no tightening removes: the rod through C);
+* ``unsettled``: a plant cannot tighten its settings (a plugin that does not say how), or a
+  tightened run failed or passed its time limit.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from enum import StrEnum
+from typing import Any
+
+import numpy as np
+
+from analytic.plant import Plant
+from analytic.trajectory import RunStatus, Trajectory
+from validation.compare.checks import difference_series
+from validation.studies.fuzz.judge import (
+    RUN_BUDGET_S,
+    Disagreement,
+    Kind,
+    Outcome,
+    OverTime,
+    _Raised,
+    judge_runs,
+    prepare,
+    run_limited,
+)
+
+SETTLE_MARGIN = 10.0
+"""An outlier is blamed on the model only when its distance from the agreeing plants exceeds this
+many times the sum of its own error estimate and the largest of theirs (on that quantity, at the
+default settings). Two trajectories that each carry an error E_a, E_b differ by at most E_a + E_b;
+the estimates are good to about 1 % where tightening divides the error by 100 or more, and to a
+factor of a few where it cannot (an error that no longer follows the tolerance near scipy's floor
+of 100 ε); a decade, as the referee's own separation (REFEREE_SEPARATION), keeps a distance that
+the settings could explain from being called a model difference."""
+
+
+class Cause(StrEnum):
+    """What a disagreement comes from (module docstring)."""
+
+    MODEL = "model"
+    SETTINGS = "settings"
+    UNSETTLED = "unsettled"
+
+
+@dataclass(frozen=True)
+class Settlement:
+    """How a minimal counterexample was settled.
+
+    Attributes:
+        cause: see :class:`Cause`.
+        text: one sentence saying why, with the numbers that decided.
+        culprit: for ``settings``, the plant whose own error is the largest on the quantity ("" else).
+        own_errors: plant -> quantity -> its own error estimate at its default settings (the
+            quantity's unit: m, rad, m/s, rad/s, N·m, N), the quantities of the comparison.
+        settings: plant -> [its default settings, its tightened settings] (``Plant.describe``;
+            the second "" when it cannot tighten).
+        tightened: the minimal scene judged with every plant at tightened settings.
+    """
+
+    cause: Cause
+    text: str
+    culprit: str = ""
+    own_errors: dict[str, dict[str, float]] = field(default_factory=dict)
+    settings: dict[str, list[str]] = field(default_factory=dict)
+    tightened: Outcome = field(default_factory=Outcome)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "cause": self.cause.value,
+            "text": self.text,
+            "culprit": self.culprit,
+            "own_errors": {p: dict(q) for p, q in self.own_errors.items()},
+            "settings": {p: list(s) for p, s in self.settings.items()},
+            "tightened": self.tightened.to_dict(),
+        }
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> Settlement:
+        return cls(
+            Cause(d["cause"]),
+            str(d["text"]),
+            str(d.get("culprit", "")),
+            {p: {k: float(v) for k, v in q.items()} for p, q in d["own_errors"].items()},
+            {p: [str(x) for x in s] for p, s in d["settings"].items()},
+            Outcome.from_dict(d["tightened"]),
+        )
+
+
+def _own_errors(given: Trajectory, tight: Trajectory) -> dict[str, float]:
+    """Max over time of each difference of the two runs (quantity -> value, its unit)."""
+    out = {}
+    for s in difference_series(given, tight):
+        name = s.key.split(".", 1)[1]
+        v = float(np.max(s.values)) if s.values.size else 0.0
+        out[name] = v if math.isfinite(v) else math.inf
+    return out
+
+
+def settle_data(
+    data: dict[str, Any],
+    plants: Sequence[Plant | str],
+    horizon: float,
+    budget_s: float = RUN_BUDGET_S,
+) -> dict[str, Any]:
+    """The executor's task: each plant's run of the scene file's dict ``data`` at its default and
+    at its tightened settings (each within ``budget_s`` s), the own error estimates, and the
+    tightened runs judged. Plain data back: ``own_errors``, ``settings``, ``untightened`` (plants
+    that cannot tighten, or whose tightened run did not finish: plant -> why) and ``tightened``
+    (``Outcome.to_dict()``)."""
+    scene, refused, chosen = prepare(data, plants, horizon)
+    if scene is None:
+        return {"own_errors": {}, "settings": {}, "untightened": refused,
+                "tightened": Outcome(refused=refused).to_dict()}
+    own: dict[str, dict[str, float]] = {}
+    described: dict[str, list[str]] = {}
+    untightened: dict[str, str] = dict(refused)
+    runs: list[tuple[str, Trajectory]] = []
+    found: list[Disagreement] = []
+    for name, pl in chosen:
+        given_settings = pl.default_settings(scene)
+        tight_settings = pl.tightened(scene, given_settings)
+        described[name] = [
+            pl.describe(given_settings),
+            pl.describe(tight_settings) if tight_settings is not None else "",
+        ]
+        if tight_settings is None:
+            untightened[name] = f"the {name} plant cannot tighten its settings"
+            continue
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)
+                given = run_limited(name, pl, scene, horizon, budget_s, given_settings)
+                tight = run_limited(name, pl, scene, horizon, budget_s, tight_settings)
+        except (OverTime, _Raised) as exc:
+            untightened[name] = str(exc)
+            continue
+        if tight.status is RunStatus.INTERRUPTED or given.status is RunStatus.INTERRUPTED:
+            raise KeyboardInterrupt(tight.message or given.message)
+        runs.append((name, tight))
+        if tight.status is not RunStatus.OK:
+            found.append(Disagreement(Kind.STOPPED, str(tight.status.value), name))
+            continue
+        if given.status is RunStatus.OK:
+            own[name] = _own_errors(given, tight)
+    tightened = judge_runs(
+        scene, horizon, [tr for _n, tr in runs], [n for n, _t in runs], found
+    )
+    return {
+        "own_errors": own,
+        "settings": described,
+        "untightened": untightened,
+        "tightened": tightened.to_dict(),
+    }
+
+
+def _fmt(x: float) -> str:
+    return f"{x:.2g}"
+
+
+def _involved(d: Disagreement, outcome: Outcome, plants: Sequence[str]) -> list[str]:
+    """The plants a disagreement is about: the outlier and the group it is separated from, a failed
+    pair's two plants, a plant's own check's plant, a plant that failed."""
+    if d.kind is Kind.OUTLIER:
+        for v in outcome.verdicts:
+            if v.get("quantity") == d.what:
+                return [d.plant, *[g for g in v.get("group", []) if g != d.plant]]
+        return [d.plant]
+    if d.kind is Kind.CHECK:
+        subject = d.what.split(".", 1)[0]
+        return [p for p in plants if p in subject.split("_vs_")] or list(plants)
+    return [d.plant]
+
+
+def _quantity(d: Disagreement) -> str:
+    return d.what if d.kind is Kind.OUTLIER else d.what.split(".", 1)[-1]
+
+
+def _distance(d: Disagreement, outcome: Outcome) -> float:
+    for v in outcome.verdicts:
+        if v.get("quantity") == d.what:
+            for o in v.get("outliers", []):
+                if o.get("plant") == d.plant:
+                    return float(o["distance"])
+    return math.nan
+
+
+def settle(
+    d: Disagreement, outcome: Outcome, task: Mapping[str, Any], plants: Sequence[str]
+) -> Settlement:
+    """The cause of ``d``, shown by the minimal scene's ``outcome`` at default settings, given the
+    settling task's result ``task`` (:func:`settle_data`) on ``plants`` (module docstring)."""
+    own = {p: dict(q) for p, q in task["own_errors"].items()}
+    described = {p: list(s) for p, s in task["settings"].items()}
+    tightened = Outcome.from_dict(task["tightened"])
+    untightened = dict(task["untightened"])
+    involved = _involved(d, outcome, plants)
+    q = _quantity(d)
+
+    def make(cause: Cause, text: str, culprit: str = "") -> Settlement:
+        return Settlement(cause, text, culprit, own, described, tightened)
+
+    if d.kind in (Kind.RAISED, Kind.STOPPED):
+        tight = described.get(d.plant, ["", ""])[1]
+        if d.plant in tightened.ran and not any(
+            x.plant == d.plant and x.kind in (Kind.RAISED, Kind.STOPPED)
+            for x in tightened.disagreements
+        ):
+            return make(
+                Cause.SETTINGS,
+                f"a numerical limit of the settings: {d.plant} finishes at {tight}",
+                d.plant,
+            )
+        why = untightened.get(d.plant, "")
+        if not tight or "over its time limit" in why:
+            return make(Cause.UNSETTLED, f"not settled: {d.plant}: {why}")
+        return make(Cause.MODEL, f"{d.plant} fails at its tightened settings too ({tight})")
+    missing = [p for p in involved if p in untightened]
+    if missing:
+        why = "; ".join(f"{p}: {untightened[p]}" for p in missing)
+        return make(Cause.UNSETTLED, f"not settled: {why}")
+    tight_names = ", ".join(described[p][1] for p in involved if p in described)
+    errors = {p: own.get(p, {}).get(q, math.nan) for p in involved}
+    known_errors = {p: e for p, e in errors.items() if math.isfinite(e)}
+    culprit = max(known_errors, key=known_errors.get) if known_errors else ""
+    if not culprit and len(involved) == 1:  # a plant's own check (a balance): that plant
+        culprit = involved[0]
+    own_text = ", ".join(
+        f"{p} {_fmt(e)} ({described[p][0]})" for p, e in known_errors.items()
+    )
+    if not tightened.shows(d):
+        return make(
+            Cause.SETTINGS,
+            f"a numerical limit of the settings: gone at tightened settings ({tight_names}); "
+            f"own errors on {q} at the default settings: {own_text}",
+            culprit,
+        )
+    if d.kind is Kind.OUTLIER:
+        dist = _distance(d, outcome)
+        bound = errors.get(d.plant, math.nan) + max(
+            (e for p, e in errors.items() if p != d.plant), default=0.0
+        )
+        if math.isfinite(dist) and math.isfinite(bound) and dist <= SETTLE_MARGIN * bound:
+            return make(
+                Cause.SETTINGS,
+                f"a numerical limit of the settings: {d.plant}'s distance {_fmt(dist)} is within "
+                f"{SETTLE_MARGIN:g} × the own errors on {q} ({own_text})",
+                culprit,
+            )
+        return make(
+            Cause.MODEL,
+            f"persists at tightened settings ({tight_names}) and {d.plant}'s distance "
+            f"{_fmt(dist)} exceeds {SETTLE_MARGIN:g} × the own errors on {q} ({own_text})",
+        )
+    return make(
+        Cause.MODEL,
+        f"persists at tightened settings ({tight_names}); own errors on {q} at the default "
+        f"settings: {own_text}",
+    )
+
+
+__all__ = ["SETTLE_MARGIN", "Cause", "Settlement", "settle", "settle_data"]
