@@ -11,8 +11,10 @@
    :data:`CAMPAIGN_SCENES` random scenes (seed :data:`CAMPAIGN_SEED`, the default horizon, every
    installed plant) on a local process pool of :data:`CAMPAIGN_WORKERS` workers. Ratio = the
    campaign's wall x the workers / the sum of every plant run's wall (``Outcome.walls``) over
-   every task the campaign ran: its scenes *and* its shrink candidates (shrinking is part of what
-   a campaign costs: a campaign that finds something spends most of its plant runs shrinking it).
+   every task the campaign ran: its scenes *and* its shrink candidates and the settling of each
+   minimal scene (part of what a campaign costs: a campaign that finds something spends most of
+   its plant runs shrinking it; a settling task reports no walls of its runs, so the whole task
+   counts as the plants').
    Holds when ≤ :data:`CAMPAIGN_WALL_LIMIT`. A plant run's wall is measured around the run in the
    worker (:func:`validation.studies.fuzz.judge.run_limited`), so it includes starting and reaping
    the run's child process; everything else (the pool's start, drawing and loading scenes, the
@@ -144,6 +146,11 @@ class TaskKind(enum.StrEnum):
 
     SCENE = "scene"  # a campaign scene (campaign.judge_index)
     SHRINK = "shrink"  # a shrink candidate (campaign.judge_data)
+    SETTLE = "settle"  # a minimal scene at default and tightened settings (settle.settle_data)
+
+
+_KINDS = {"judge_index": TaskKind.SCENE, "judge_data": TaskKind.SHRINK}
+"""A campaign task's function name -> its kind (any other task: :attr:`TaskKind.SETTLE`)."""
 
 
 BENCH_KEY = "_bench"
@@ -165,8 +172,9 @@ class TaskTime:
     """One task of a timed campaign.
 
     Attributes:
-        kind: scene or shrink candidate.
-        plants_s: the sum of its plant runs' walls (``Outcome.walls``), s.
+        kind: scene, shrink candidate or settling.
+        plants_s: the sum of its plant runs' walls (``Outcome.walls``), s; a settling task, which
+            reports no walls (two runs per plant and one comparison), counts whole.
         task_s: its wall in the worker (judging included), s.
         cpu_s: the worker's CPU time during it (its plant runs' children excluded), s.
         start, end: on the machine's monotonic clock, s.
@@ -192,7 +200,7 @@ class _Recording(Executor):
     def submit(self, fn, /, *args, **kwargs) -> Future:
         if kwargs:
             raise ValueError(f"kwargs: a campaign task takes positional arguments (got {kwargs!r})")
-        kind = TaskKind.SHRINK if fn.__name__ == "judge_data" else TaskKind.SCENE
+        kind = _KINDS.get(fn.__name__, TaskKind.SETTLE)
         f = self.inner.submit(timed_task, fn, *args)
 
         def note(done: Future) -> None:
@@ -200,10 +208,12 @@ class _Recording(Executor):
                 return
             res = done.result()
             b = res[BENCH_KEY]
+            # a settling task reports no walls of its runs: the whole task counts as compute
+            plants = sum(res["walls"].values()) if "walls" in res else b["end"] - b["start"]
             self.tasks.append(
                 TaskTime(
                     kind,
-                    sum(res["walls"].values()),
+                    plants,
                     b["end"] - b["start"],
                     b["cpu_s"],
                     b["start"],
@@ -271,15 +281,16 @@ class CampaignTiming:
         beside the runs: drawing and loading the scene, comparison, referee), ``startup`` (until
         the first task started, on every worker), ``idle`` (the rest: workers without a task,
         waiting for the parent to take results and to shrink, moving tasks and results), and
-        ``shrink_serial`` (of ``idle``: the worker-time left idle while shrink candidates ran one
-        at a time)."""
+        ``shrink_serial`` (of ``idle``: the worker-time left idle while shrink candidates and
+        settlings ran one at a time)."""
         total = self.wall_s * self.workers
         plants = self.plants_s
         judging = sum(t.task_s - t.plants_s for t in self.tasks)
         first = min((t.start for t in self.tasks), default=self.started)
         startup = max(0.0, first - self.started) * self.workers
         idle = total - plants - judging - startup
-        shrink_serial = sum(t.task_s for t in self.of(TaskKind.SHRINK)) * (self.workers - 1)
+        one_at_a_time = self.of(TaskKind.SHRINK) + self.of(TaskKind.SETTLE)
+        shrink_serial = sum(t.task_s for t in one_at_a_time) * (self.workers - 1)
         return {
             "total": total,
             "plants": plants,
@@ -292,6 +303,7 @@ class CampaignTiming:
     def text(self) -> str:
         s = self.split()
         n_sc, n_sh = len(self.of(TaskKind.SCENE)), len(self.of(TaskKind.SHRINK))
+        n_se = len(self.of(TaskKind.SETTLE))
         parts = ", ".join(
             f"{k} {s[k]:.1f} s ({s[k] / s['total']:.0%})"
             for k in ("plants", "judging", "startup", "idle")
@@ -302,8 +314,8 @@ class CampaignTiming:
         return (
             f"wall {self.wall_s:.1f} s x {self.workers} workers = {s['total']:.1f} s: {parts}; "
             f"of the idle time {s['shrink_serial']:.1f} s while shrink candidates ran one at a "
-            f"time; {n_sc} scenes and {n_sh} shrink candidates, {self.counterexamples} "
-            f"counterexamples{busy}"
+            f"time; {n_sc} scenes, {n_sh} shrink candidates, {n_se} settlings, "
+            f"{self.counterexamples} counterexamples{busy}"
         )
 
 
