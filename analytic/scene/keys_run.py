@@ -171,8 +171,8 @@ RUN_KEYS: tuple[Key, ...] = (
         "<name>",
         Kind.NUMBER_OR_VALUE_TABLE,
         "the threshold's",
-        "A new bound for the named threshold: a number (its value; its rtol stays the "
-        'default), or `{{ value = …, rtol = …, reason = "…" }}`.',
+        "A new bound for the named threshold: a number (the whole bound, no relative part), "
+        'or `{{ value = …, rtol = …, reason = "…" }}`.',
         bounds="finite, ≥ 0; a known name",
     ),
     Key(
@@ -196,7 +196,7 @@ RUN_KEYS: tuple[Key, ...] = (
         "quantity's largest magnitude over the run across the compared plants (as scipy's "
         "`atol + rtol·|y|`); only for the names with an rtol column entry in the table above.",
         bounds="finite, ≥ 0",
-        default_text="the default's",
+        default_text="0 (the value is the whole bound)",
     ),
     Key(
         "thresholds.<name>",

@@ -6,7 +6,10 @@ the scene loader keeps verbatim in ``scene.extra["thresholds"]``::
     [thresholds]
     position_C = 1e-7                                   # a number replaces the value
     attitude = { value = 1e-7, reason = "tighter dt" }  # or a table with a value and a reason
-    rod_velocities = { value = 1e-5, rtol = 1e-8 }      # and, for an absolute one, its rtol
+    rod_velocities = { value = 1e-5, rtol = 1e-8 }      # and, for a scaled one, its rtol
+
+An override without an ``rtol`` has none: its value is the whole bound, as it was before bounds had
+a relative part (give ``rtol`` to keep one).
 
 Two kinds of threshold:
 
@@ -280,9 +283,9 @@ def thresholds_for(
 
     Args:
         scene: a :class:`analytic.scene.Scene` (or None for the defaults); its
-            ``extra["thresholds"]`` maps names to a number (the value; the rtol stays the
-            default's) or to ``{value = ..., rtol = ..., reason = ...}`` (rtol optional, only for
-            the names in :data:`SCALED`).
+            ``extra["thresholds"]`` maps names to a number (the whole bound: rtol 0) or to
+            ``{value = ..., rtol = ..., reason = ...}`` (rtol optional, default 0, positive only
+            for the names in :data:`SCALED`).
         overrides: further overrides in the same form (applied after the scene's).
 
     Raises:
@@ -322,7 +325,9 @@ def _number(spec: Any, name: str) -> float:
 def _override(base: Threshold, spec: Any) -> Threshold:
     name = f"thresholds.{base.name}"
     reason = "set by the scene"
-    rtol = base.rtol
+    # An override states the whole bound unless it gives an rtol: a value alone means what it
+    # meant before bounds had a relative part (a scene's 1e-15 is 1e-15 at every scale).
+    rtol = 0.0
     if isinstance(spec, Mapping):
         unknown = sorted(set(spec) - {"value", "reason", "rtol"})
         if unknown:

@@ -83,8 +83,8 @@ def test_a_scene_table_sets_rtol_and_value():
     assert th["position_C"].value == 2e-6 and th["position_C"].rtol == 1e-8
     assert th["position_C"].source == "scene" and "tighter" in th["position_C"].reason
     assert "default 1e-06 + 1e-07 × scale" in th["position_C"].reason
-    # a number replaces the value and keeps the default rtol
-    assert th["rod_velocities"].value == 3e-5 and th["rod_velocities"].rtol == STATE_RTOL
+    # a number is the whole bound, as before bounds had a relative part: no rtol
+    assert th["rod_velocities"].value == 3e-5 and th["rod_velocities"].rtol == 0.0
     assert th["velocity_C"] == DEFAULTS["velocity_C"]
     b = th["position_C"].bound(1000.0)
     assert b.value == pytest.approx(2e-6 + 1e-5, rel=1e-15) and b.decided_by == "relative"
@@ -93,6 +93,16 @@ def test_a_scene_table_sets_rtol_and_value():
 def test_a_scene_may_switch_the_relative_part_off():
     th = thresholds_for(_scene({"velocity_C": {"value": 1e-5, "rtol": 0}}))
     assert th["velocity_C"].rtol == 0.0 and th["velocity_C"].bound(1e6).value == 1e-5
+
+
+def test_an_override_without_rtol_is_the_whole_bound_as_before():
+    """Scene files and code written before bounds had a relative part keep their meaning: a
+    value given alone (a number or a table without rtol) bounds the difference at every scale."""
+    th = thresholds_for(
+        _scene({"position_C": 1e-15, "velocity_C": {"value": 1e-9, "reason": "tight"}})
+    )
+    assert th["position_C"].rtol == 0.0 and th["position_C"].bound(1e4).value == 1e-15
+    assert th["velocity_C"].rtol == 0.0 and th["velocity_C"].bound(1e4).value == 1e-9
 
 
 def test_the_loader_keeps_rtol_in_the_scene():
