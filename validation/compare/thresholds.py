@@ -4,7 +4,7 @@ One module holds the defaults; a scene may override any of them in a ``[threshol
 the scene loader keeps verbatim in ``scene.extra["thresholds"]``::
 
     [thresholds]
-    position_C = 1e-7                                   # a number replaces the value
+    position_C = 1e-7                                   # a number is the whole bound
     attitude = { value = 1e-7, reason = "tighter dt" }  # or a table with a value and a reason
     rod_velocities = { value = 1e-5, rtol = 1e-8 }      # and, for a scaled one, its rtol
 
