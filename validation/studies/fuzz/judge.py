@@ -38,7 +38,7 @@ from analytic.trajectory import RunStatus, Trajectory
 from mj_bridge.plants import plant
 from validation.compare.checks import compare_plants
 from validation.compare.referee import VerdictKind, referee
-from validation.runs import warmup, workers
+from validation.runs import warm_plants, warmup, workers
 from validation.studies.sweep.running import BudgetExceeded
 
 
@@ -191,25 +191,14 @@ def _simulate_task(
         return pl.simulate(scene, settings, t_end=horizon, progress=progress)
 
 
-_LOADED: set[tuple[str, int | None]] = set()
-"""(plant, compiled solve) whose numba kernels this process has loaded (:func:`_load_kernels`)."""
-
-
 def _load_kernels(name: str, scene: Scene) -> None:
-    """Load (or compile) here the numba kernels plant ``name`` needs for ``scene``'s solve, once
-    per process, before its runs are forked: a forked run then inherits them, instead of each
-    loading them from numba's cache again (about 0.5 s per plant and run on the development
-    machine, 15× a warm scene's run). Only kernels are made (:mod:`validation.runs.warmup`'s
-    jobs), no scene is simulated, so nothing here waits on a slow scene; a failure is left for
-    the run to report."""
-
-    key = (name, warmup.compiled_solver(scene))
-    if key in _LOADED or name not in warmup.KERNELS:
-        return
-    _LOADED.add(key)
-    kernels, _plants = warmup.tasks_for([(scene, name)])
-    for task in kernels:
-        warmup.run_task(task)
+    """Make plant ``name`` ready here for ``scene``'s solve, once per process, before its runs are
+    forked: its kernels loaded and one short run of a built-in scene of that solve
+    (:func:`validation.runs.warm_plants.warm`), so a forked run inherits them instead of loading
+    the kernels from numba's cache again (about 0.5 s per plant and run) and paying the plant's
+    first use (a Pinocchio run 0.52 s instead of 0.05 s). ``scene`` itself is never simulated
+    here (no limit applies here); a failure is left for the run to report."""
+    warm_plants.warm(name, warmup.compiled_solver(scene))
 
 
 SERVER_PRELOAD = ("validation.runs.kernel_preload", __name__)
