@@ -429,3 +429,65 @@ def test_settle_rules():
     assert st.cause is Cause.SETTINGS and st.culprit == "c"
     st = settle(stop, Outcome(ran=("a", "b", "c"), disagreements=(stop,)), _task(own, [stop]), "abc")
     assert st.cause is Cause.MODEL
+
+
+class StallingPlant(AnalyticPlant):
+    """A plant that reaches t = STALL_T s and stalls there (test only): it reports that progress,
+    then sleeps SLEEP_S s, as an adaptive integrator grinding at a singularity does."""
+
+    engine = Engine.PINOCCHIO
+    label = "stalling"
+
+    def _simulate(self, scene, settings, t_end, progress):
+        import time
+
+        progress(STALL_T)
+        time.sleep(SLEEP_S)
+        return super()._simulate(scene, settings, t_end, progress)
+
+
+STALL_T = 0.0625
+"""Where the stalling plant stalls, s (a binary fraction: it comes back exactly)."""
+
+
+@pytest.mark.parametrize("where", ["here", "thread"])
+def test_a_run_stopped_at_its_limit_says_where_it_was(where):
+    """The simulated time a stalled run had reached comes back with its timeout, from a forked
+    worker or one of the fork server's (under a thread: a multi-threaded caller)."""
+    from validation.studies.fuzz.judge import OverTime, run_limited
+
+    scene = scene_from_dict(draw_scene_dict(0, 2, 0.5))
+
+    def run():
+        with pytest.raises(OverTime) as exc:
+            run_limited("pinocchio", StallingPlant(), scene, 0.5, TIME_LIMIT_S)
+        return exc.value
+
+    if where == "here":
+        err = run()
+    else:
+        with ThreadPoolExecutor(1) as pool:
+            err = pool.submit(run).result()
+    assert err.reached_s == STALL_T
+    assert f"at t = {STALL_T:g} s" in str(err)
+
+
+def test_settle_scene_rule():
+    """A plant stopping at its tightened settings too, while every other plant stops or stalls
+    within two output samples of the same time: the scene's own singular motion, which does not
+    fail a campaign; stalls far apart: the plant's model."""
+    stop = Disagreement(Kind.STOPPED, "failed", "c")
+    out = Outcome(ran=("a", "b", "c"), disagreements=(stop,))
+    task = _task({}, [stop])
+    task["interval"] = 0.01
+    task["default_runs"] = {
+        "a": {"status": "timeout", "reached": 0.3926},
+        "b": {"status": "timeout", "reached": 0.3900},
+        "c": {"status": "stopped", "reached": 0.39},
+    }
+    st = settle(stop, out, task, "abc")
+    assert st.cause is Cause.SCENE, st.text
+    task["default_runs"]["b"] = {"status": "ok", "reached": 0.5}
+    assert settle(stop, out, task, "abc").cause is Cause.MODEL
+    task["default_runs"]["b"] = {"status": "timeout", "reached": 0.2}
+    assert settle(stop, out, task, "abc").cause is Cause.MODEL

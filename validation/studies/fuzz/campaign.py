@@ -258,10 +258,14 @@ def fuzz(
             path = out / COUNTEREXAMPLES_DIR / f"{slug(target.key)}.toml"
             # settled on the campaign's executor too: each plant at its default and tightened
             # settings, each run within the campaign's own limit (a tightened run costs more)
+            # (a plant raising or stopping: only it tightened, every other plant at its default
+            # settings within the shrink's limit, to see whether they stop at the same time)
             task = pool[0].submit(
-                settle_data, s.data, shrink_plants[0], s.horizon, float(time_limit_s)
+                settle_data, s.data, chosen, s.horizon,
+                shrink_budget[0] if alone else float(time_limit_s),
+                [target.plant] if alone else None,
             ).result()
-            settled = settle(target, s.outcome, task, [plant_name(p) for p in shrink_plants[0]])
+            settled = settle(target, s.outcome, task, names)
             ex = Counterexample(
                 target, rec.index, s.data, s.horizon, s.outcome, s.evaluations,
                 recognise(rec.data, s.data, target), path, settlement=settled,

@@ -29,6 +29,7 @@ import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from enum import StrEnum
+from multiprocessing import RawValue
 from multiprocessing.connection import wait as mp_wait
 from typing import Any
 
@@ -87,6 +88,9 @@ class Outcome:
         walls: plant -> wall time of its run, s.
         timeouts: plant -> the wall-time limit (s) its run was stopped at (depends on the
             machine's speed and load, unlike everything else here).
+        reached: plant -> the simulated time (s) a run that stopped before the horizon reached
+            (its last output sample) or a run stopped at its time limit had reached (its last
+            progress report; with ``timeouts``, machine-dependent).
     """
 
     refused: dict[str, str] = field(default_factory=dict)
@@ -97,6 +101,7 @@ class Outcome:
     messages: dict[str, str] = field(default_factory=dict)
     walls: dict[str, float] = field(default_factory=dict)
     timeouts: dict[str, float] = field(default_factory=dict)
+    reached: dict[str, float] = field(default_factory=dict)
 
     @property
     def judged(self) -> bool:
@@ -117,6 +122,7 @@ class Outcome:
             "messages": dict(self.messages),
             "walls": dict(self.walls),
             "timeouts": dict(self.timeouts),
+            "reached": dict(self.reached),
         }
 
     @classmethod
@@ -130,6 +136,7 @@ class Outcome:
             messages=dict(d["messages"]),
             walls={k: float(v) for k, v in d["walls"].items()},
             timeouts={k: float(v) for k, v in d.get("timeouts", {}).items()},
+            reached={k: float(v) for k, v in d.get("reached", {}).items()},
         )
 
 
@@ -165,12 +172,15 @@ counted as a timeout, never as a disagreement, since whether it trips depends on
 
 
 class OverTime(Exception):
-    """A plant's run passed its wall-time limit (``limit_s``, s) and was stopped."""
+    """A plant's run passed its wall-time limit (``limit_s``, s) and was stopped, having reached
+    the simulated time ``reached_s`` (s; NaN when unknown)."""
 
-    def __init__(self, plant: str, limit_s: float):
-        super().__init__(f"plant {plant} over its time limit ({limit_s:g} s)")
+    def __init__(self, plant: str, limit_s: float, reached_s: float = math.nan):
+        at = f" at t = {reached_s:.6g} s" if math.isfinite(reached_s) else ""
+        super().__init__(f"plant {plant} over its time limit ({limit_s:g} s){at}")
         self.plant = plant
         self.limit_s = limit_s
+        self.reached_s = reached_s
 
 
 class _Raised(Exception):
@@ -182,13 +192,27 @@ class _Raised(Exception):
 
 
 def _simulate_task(
-    pl: Plant, scene: Scene, horizon: float, settings: Any = None, progress=None, report=None
+    pl: Plant,
+    scene: Scene,
+    horizon: float,
+    settings: Any = None,
+    reached: Any = None,
+    progress=None,
+    report=None,
 ) -> Trajectory:
     """One plant's run at ``settings`` (None: its defaults; the forked worker's task; ``report`` is
-    not used)."""
+    not used). ``reached``, a shared ``multiprocessing`` double, holds the simulated time the run
+    has reached (s), so the parent knows where a run it stops at its time limit was."""
+
+    def told(t: float) -> None:
+        if reached is not None:
+            reached.value = t
+        if progress is not None:
+            progress(t)
+
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        return pl.simulate(scene, settings, t_end=horizon, progress=progress)
+        return pl.simulate(scene, settings, t_end=horizon, progress=told)
 
 
 def _load_kernels(name: str, scene: Scene) -> None:
@@ -228,19 +252,21 @@ def run_limited(
         _Raised: the plant raised (its type name and first line).
         KeyboardInterrupt: an interrupt here or in the worker (the worker is ended).
     """
+    reached = RawValue("d", math.nan)
     if workers.can_fork():
         _load_kernels(name, scene)
-        job = workers.start(f"fuzz-{name}", _simulate_task, pl, scene, horizon, settings)
+        job = workers.start(f"fuzz-{name}", _simulate_task, pl, scene, horizon, settings, reached)
     elif workers.can_serve():
         job = workers.start_served(
-            f"fuzz-{name}", _simulate_task, pl, scene, horizon, settings, preload=SERVER_PRELOAD
+            f"fuzz-{name}", _simulate_task, pl, scene, horizon, settings, reached,
+            preload=SERVER_PRELOAD,
         )
     else:
         progress, over_budget = _budget_progress(limit_s)
         try:
-            return _simulate_task(pl, scene, horizon, settings, progress)
+            return _simulate_task(pl, scene, horizon, settings, reached, progress)
         except over_budget as exc:
-            raise OverTime(name, limit_s) from exc
+            raise OverTime(name, limit_s, reached.value) from exc
         except KeyboardInterrupt:
             raise
         except Exception as exc:
@@ -248,7 +274,7 @@ def run_limited(
     try:
         # the task sends nothing but its result: the pipe is ready only when the run is done
         if not mp_wait([job.conn, job.process.sentinel], timeout=limit_s):
-            raise OverTime(name, limit_s)
+            raise OverTime(name, limit_s, reached.value)
         return job.result()  # a finished worker exits on its own (validation.runs.workers)
     except workers.WorkerError as exc:
         raise _Raised(exc.kind, exc.message) from exc
@@ -350,6 +376,7 @@ def judge_scene(
         return Outcome(refused=refused)
     trajs, ran, messages, walls, found = [], [], {}, {}, []
     timeouts: dict[str, float] = {}
+    reached: dict[str, float] = {}
     for name, pl in chosen:
         t0 = time.perf_counter()
         try:
@@ -358,6 +385,8 @@ def judge_scene(
             walls[name] = time.perf_counter() - t0
             timeouts[name] = exc.limit_s
             messages[name] = str(exc)
+            if math.isfinite(exc.reached_s):
+                reached[name] = exc.reached_s
             continue
         except _Raised as exc:  # a plant failing is a finding, whatever it raises
             walls[name] = time.perf_counter() - t0
@@ -370,11 +399,12 @@ def judge_scene(
         if tr.status is not RunStatus.OK:
             messages[name] = tr.message.splitlines()[0] if tr.message else str(tr.status)
             found.append(Disagreement(Kind.STOPPED, str(tr.status.value), name))
+            reached[name] = float(tr.t[-1]) if len(tr.t) else 0.0
         trajs.append(tr)
         ran.append(name)
     return judge_runs(
         scene, horizon, trajs, ran, found,
-        refused=refused, messages=messages, walls=walls, timeouts=timeouts,
+        refused=refused, messages=messages, walls=walls, timeouts=timeouts, reached=reached,
     )
 
 

@@ -179,11 +179,14 @@ def campaign_markdown(res: CampaignResult, doc: dict[str, Any]) -> str:
         return e["settlement"]["cause"] if e["settlement"] else "unsettled"
 
     sections = (
-        ("New findings", "not known, and tightened settings do not explain them",
-         lambda e: not e["known"] and cause(e) != "settings"),
+        ("New findings", "not known, and neither tightened settings nor a singular motion "
+         "explain them", lambda e: not e["known"] and cause(e) not in ("settings", "scene")),
         ("Numerical limits of the settings", "gone at tightened settings, or within the plants' "
          "own error estimates at their default settings: the settings, not the model",
          lambda e: not e["known"] and cause(e) == "settings"),
+        ("Singular motions", "a plant stops, and every other plant stops or stalls at the same "
+         "time: the controlled motion itself ends there",
+         lambda e: not e["known"] and cause(e) == "scene"),
         ("Known findings", "", lambda e: bool(e["known"])),
     )
     for title, what, keep in sections:

@@ -23,8 +23,16 @@ The cause (:class:`Cause`):
 * ``model``: it stays at tightened settings and (an outlier) its distance exceeds
   :data:`SETTLE_MARGIN` times those own errors: what is left is a difference of the models (or of
   round-off, which no tightening removes: the rod through C);
+* ``scene``: a plant that raised or stopped did so at tightened settings too, and every other
+  plant stops or stalls at the same time (within :data:`SINGULAR_SPREAD_SAMPLES` output samples):
+  the motion itself ends there (a finite-time blow-up of the controlled motion, which every
+  engine meets), not a plant's failure;
 * ``unsettled``: a plant cannot tighten its settings (a plugin that does not say how), or a
   tightened run failed or passed its time limit.
+
+A plant raising or stopping is settled with only that plant tightened (the others run at their
+default settings, to see whether they stop at the same time); every other disagreement with every
+plant tightened.
 """
 
 from __future__ import annotations
@@ -63,11 +71,18 @@ of 100 ε); a decade, as the referee's own separation (REFEREE_SEPARATION), keep
 the settings could explain from being called a model difference."""
 
 
+SINGULAR_SPREAD_SAMPLES = 2.0
+"""Plants that stop or stall at simulated times within this many output intervals of each other
+stop at the same time: a stopped run is known to its last output sample (one interval), a stalled
+one to its last progress report; a second interval for the plant that stops just past a sample."""
+
+
 class Cause(StrEnum):
     """What a disagreement comes from (module docstring)."""
 
     MODEL = "model"
     SETTINGS = "settings"
+    SCENE = "scene"
     UNSETTLED = "unsettled"
 
 
@@ -125,27 +140,52 @@ def _own_errors(given: Trajectory, tight: Trajectory) -> dict[str, float]:
     return out
 
 
+def _default_run(
+    name: str, pl: Plant, scene: Any, horizon: float, budget_s: float
+) -> tuple[dict, Trajectory | None]:
+    """A plant's run at its default settings and how it ended: ``status`` (``ok``, ``stopped``,
+    ``timeout``, ``raised``) and ``reached`` (simulated time, s; NaN when unknown)."""
+    try:
+        tr = run_limited(name, pl, scene, horizon, budget_s)
+    except OverTime as exc:
+        return {"status": "timeout", "reached": exc.reached_s}, None
+    except _Raised:
+        return {"status": "raised", "reached": math.nan}, None
+    if tr.status is RunStatus.INTERRUPTED:
+        raise KeyboardInterrupt(tr.message)
+    ok = tr.status is RunStatus.OK
+    end = float(tr.t[-1]) if len(tr.t) else 0.0
+    return {"status": "ok" if ok else "stopped", "reached": end}, tr
+
+
 def settle_data(
     data: dict[str, Any],
     plants: Sequence[Plant | str],
     horizon: float,
     budget_s: float = RUN_BUDGET_S,
+    tighten: Sequence[str] | None = None,
 ) -> dict[str, Any]:
     """The executor's task: each plant's run of the scene file's dict ``data`` at its default and
     at its tightened settings (each within ``budget_s`` s), the own error estimates, and the
-    tightened runs judged. Plain data back: ``own_errors``, ``settings``, ``untightened`` (plants
-    that cannot tighten, or whose tightened run did not finish: plant -> why) and ``tightened``
-    (``Outcome.to_dict()``)."""
+    tightened runs judged; a plant not in ``tighten`` (None: every plant) runs at its default
+    settings only, and how that run ended is kept. Plain data back: ``own_errors``,
+    ``settings``, ``untightened`` (plants that cannot tighten, or whose tightened run did not
+    finish: plant -> why), ``tightened`` (``Outcome.to_dict()``), ``default_runs`` (plant ->
+    :func:`_default_run`) and ``interval`` (the output interval, s)."""
     scene, refused, chosen = prepare(data, plants, horizon)
     if scene is None:
-        return {"own_errors": {}, "settings": {}, "untightened": refused,
-                "tightened": Outcome(refused=refused).to_dict()}
+        return {"own_errors": {}, "settings": {}, "untightened": refused, "default_runs": {},
+                "interval": math.nan, "tightened": Outcome(refused=refused).to_dict()}
+    default_runs: dict[str, dict] = {}
     own: dict[str, dict[str, float]] = {}
     described: dict[str, list[str]] = {}
     untightened: dict[str, str] = dict(refused)
     runs: list[tuple[str, Trajectory]] = []
     found: list[Disagreement] = []
     for name, pl in chosen:
+        if tighten is not None and name not in tighten:
+            default_runs[name] = _default_run(name, pl, scene, horizon, budget_s)[0]
+            continue
         given_settings = pl.default_settings(scene)
         tight_settings = pl.tightened(scene, given_settings)
         described[name] = [
@@ -155,10 +195,10 @@ def settle_data(
         if tight_settings is None:
             untightened[name] = f"the {name} plant cannot tighten its settings"
             continue
+        default_runs[name], given = _default_run(name, pl, scene, horizon, budget_s)
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", RuntimeWarning)
-                given = run_limited(name, pl, scene, horizon, budget_s, given_settings)
                 tight = run_limited(name, pl, scene, horizon, budget_s, tight_settings)
         except (OverTime, _Raised) as exc:
             untightened[name] = str(exc)
@@ -169,7 +209,7 @@ def settle_data(
         if tight.status is not RunStatus.OK:
             found.append(Disagreement(Kind.STOPPED, str(tight.status.value), name))
             continue
-        if given.status is RunStatus.OK:
+        if given is not None and given.status is RunStatus.OK:
             own[name] = _own_errors(given, tight)
     tightened = judge_runs(
         scene, horizon, [tr for _n, tr in runs], [n for n, _t in runs], found
@@ -178,6 +218,8 @@ def settle_data(
         "own_errors": own,
         "settings": described,
         "untightened": untightened,
+        "default_runs": default_runs,
+        "interval": 1.0 / scene.output.rate,
         "tightened": tightened.to_dict(),
     }
 
@@ -242,6 +284,27 @@ def settle(
         why = untightened.get(d.plant, "")
         if not tight or "over its time limit" in why:
             return make(Cause.UNSETTLED, f"not settled: {d.plant}: {why}")
+        runs = dict(task.get("default_runs", {}))
+        others = {p: r for p, r in runs.items() if p != d.plant}
+        ends = {p: float(r["reached"]) for p, r in runs.items()
+                if r["status"] in ("stopped", "timeout") and math.isfinite(float(r["reached"]))}
+        interval = float(task.get("interval", math.nan))
+        if (
+            others
+            and d.plant in ends
+            and all(p in ends for p in others)
+            and max(ends.values()) - min(ends.values()) <= SINGULAR_SPREAD_SAMPLES * interval
+        ):
+            where = ", ".join(
+                f"{p} {'stopped' if runs[p]['status'] == 'stopped' else 'stalled'} at "
+                f"t = {t:.4g} s" for p, t in ends.items()
+            )
+            return make(
+                Cause.SCENE,
+                f"the motion itself ends near t = {min(ends.values()):.4g} s: every plant stops "
+                f"or stalls there ({where}; {d.plant} also at {tight}), a singularity of the "
+                "controlled motion rather than a plant's failure",
+            )
         return make(Cause.MODEL, f"{d.plant} fails at its tightened settings too ({tight})")
     missing = [p for p in involved if p in untightened]
     if missing:
@@ -287,4 +350,4 @@ def settle(
     )
 
 
-__all__ = ["SETTLE_MARGIN", "Cause", "Settlement", "settle", "settle_data"]
+__all__ = ["SETTLE_MARGIN", "SINGULAR_SPREAD_SAMPLES", "Cause", "Settlement", "settle", "settle_data"]
