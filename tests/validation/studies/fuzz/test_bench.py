@@ -20,25 +20,42 @@ def _task(kind, plants_s, start, end):
 
 def test_the_split_adds_up_to_wall_times_workers():
     """Two workers over a 10 s campaign started at t = 100 s: 20 worker-seconds. The first task
-    starts at 102 s (2 s of pool start on each worker: 4 s); three tasks of 3, 3 and 2 s hold
-    6.5 s of plant runs; one of them a shrink candidate of 2 s, run while the other worker had
-    nothing (2 s of the idle time)."""
+    starts at 102 s (2 s of pool start on each worker: 4 s). Scenes A (102-105 s, 2.5 s of plant
+    runs) and B (102-104 s, 1.5 s), then a shrink candidate (106-108 s, 1.5 s): 5.5 s of plant
+    runs, 0.5 s of judging in each task. The idle 9 s: 104-105 s one worker while only A ran (1 s),
+    106-108 s one worker beside the candidate (2 s), 105-106 s and 108-110 s both workers with
+    nothing running (6 s)."""
     tasks = (
         _task(TaskKind.SCENE, 2.5, 102.0, 105.0),
-        _task(TaskKind.SCENE, 2.5, 102.0, 105.0),
+        _task(TaskKind.SCENE, 1.5, 102.0, 104.0),
         _task(TaskKind.SHRINK, 1.5, 106.0, 108.0),
     )
     t = CampaignTiming(10.0, 2, tasks, 100.0, 2, 1, None)
     s = t.split()
     assert s["total"] == pytest.approx(20.0)
-    assert s["plants"] == pytest.approx(6.5)
-    assert s["judging"] == pytest.approx((3 - 2.5) * 2 + (2 - 1.5))
+    assert s["plants"] == pytest.approx(5.5)
+    assert s["judging"] == pytest.approx(1.5)
     assert s["startup"] == pytest.approx(4.0)
-    assert s["idle"] == pytest.approx(20.0 - 6.5 - 1.5 - 4.0)
-    assert s["shrink_serial"] == pytest.approx(2.0)
+    assert s["idle"] == pytest.approx(9.0)
+    assert s["idle_scenes"] == pytest.approx(1.0)
+    assert s["idle_shrinking"] == pytest.approx(2.0)
+    assert s["idle_none"] == pytest.approx(6.0)
     assert s["plants"] + s["judging"] + s["startup"] + s["idle"] == pytest.approx(s["total"])
-    assert t.ratio == pytest.approx(20.0 / 6.5)
+    assert t.ratio == pytest.approx(20.0 / 5.5)
     assert "wall 10.0 s x 2 workers = 20.0 s" in t.text()
+
+
+def test_other_processes_cpu_makes_a_campaign_goal_too_busy():
+    """The machine busy 30 CPU-seconds over a 10 s campaign whose parent used 1 s and whose
+    tasks ran 7 s in all: other processes used at least (30 - 1 - 7) / 10 = 2.2 CPUs."""
+    tasks = (_task(TaskKind.SCENE, 3.0, 0.0, 4.0), _task(TaskKind.SCENE, 2.0, 0.0, 3.0))
+    t = CampaignTiming(10.0, 2, tasks, 0.0, 2, 0, machine_busy_s=30.0, parent_cpu_s=1.0)
+    assert t.others_cpus == pytest.approx(2.2)
+    g = bench.Goal("c", 1.0, bench.CAMPAIGN_WALL_LIMIT)
+    assert bench.campaign_verdict(g, t.others_cpus) is Verdict.TOO_BUSY
+    assert bench.campaign_verdict(g, bench.OTHERS_BOUND_CPUS) is Verdict.HOLDS
+    assert bench.campaign_verdict(g, None) is Verdict.HOLDS
+    assert CampaignTiming(10.0, 2, tasks, 0.0, 2, 0).others_cpus is None
 
 
 def test_a_campaign_without_plant_runs_has_no_finite_ratio():
