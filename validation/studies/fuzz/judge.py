@@ -210,8 +210,11 @@ def _simulate_task(
         if progress is not None:
             progress(t)
 
+    # a campaign's scenes are meant to break plants: their warnings (numpy's overflow, MuJoCo's
+    # instability) would flood the terminal, and what they say is in the run's status and message
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
+        warnings.simplefilter("ignore", UserWarning)
         return pl.simulate(scene, settings, t_end=horizon, progress=told)
 
 

@@ -38,7 +38,6 @@ plant tightened.
 from __future__ import annotations
 
 import math
-import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from enum import StrEnum
@@ -197,9 +196,7 @@ def settle_data(
             continue
         default_runs[name], given = _default_run(name, pl, scene, horizon, budget_s)
         try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", RuntimeWarning)
-                tight = run_limited(name, pl, scene, horizon, budget_s, tight_settings)
+            tight = run_limited(name, pl, scene, horizon, budget_s, tight_settings)
         except (OverTime, _Raised) as exc:
             untightened[name] = str(exc)
             continue
