@@ -31,7 +31,7 @@ class Bound:
         absolute: the absolute part, the threshold's ``value`` (atol).
         relative: the relative part, ``rtol · scale`` (0 without a relative part).
         scale: the magnitude the relative part multiplies (max over time and the compared
-            plants of the quantity's own size, e.g. ``max |R|`` in m), in the threshold's unit;
+            plants of the quantity's own size, e.g. ``max |p_i|`` in m), in the threshold's unit;
             0 when the threshold has no relative part.
     """
 
@@ -136,7 +136,7 @@ class Threshold:
 
         Args:
             scale: the quantity's own magnitude over the run (finite, non-negative; e.g. the
-                largest ``|R|`` in m over time and the compared plants). Ignored (relative part
+                largest ``|p_i|`` in m over time and the compared plants). Ignored (relative part
                 0) when ``rtol`` is 0.
 
         Raises:

@@ -192,7 +192,8 @@ def _thresholds() -> list[str]:
         "one bounds that maximum divided by the reference signal's largest magnitude (at least "
         "its floor). An absolute threshold with an rtol bounds it by `value + rtol × scale`, "
         "scale the quantity's largest magnitude over the run across the compared plants (as "
-        "scipy's `atol + rtol·|y|`); a scene may set the rtol of those names only. Entries "
+        "scipy's `atol + rtol·|y|`; for C, its departure from the uniformly accelerated motion "
+        "R(0) + Ṙ(0) t + ½ g t²); a scene may set the rtol of those names only. Entries "
         "starting with "
         f"`{HARD_CASE_PREFIX}` belong to the hard-case suite and are not checked here.",
         "",
