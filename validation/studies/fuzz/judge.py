@@ -305,7 +305,9 @@ def prepare(
     """The scene of the file's dict ``data`` (None when the loader refuses it), the refusals
     (plant, or ``scene``, -> one-line reason) and the plants that can run it, ``(name, plant)``."""
     try:
-        scene = _scene(data)
+        with warnings.catch_warnings():  # the loader's notes (an axis normalised) on a drawn or
+            warnings.simplefilter("ignore", UserWarning)  # shrunk scene: no one to read them
+            scene = _scene(data)
         scene.output.with_t_end(horizon, "horizon")
     except ValueError as exc:
         return None, {"scene": _one_line(exc)}, []
