@@ -341,6 +341,12 @@ class CampaignTiming:
         busy = ""
         if self.others_cpus is not None:
             busy = f"; other processes used at least {self.others_cpus:.2f} CPUs meanwhile"
+        longest = max(self.tasks, key=lambda t: t.task_s, default=None)
+        if longest is not None:
+            parts += (
+                f"; the longest task ({longest.kind.value}) {longest.task_s:.1f} s, a lower bound "
+                "of the wall on any number of workers"
+            )
         return (
             f"wall {self.wall_s:.1f} s x {self.workers} workers = {s['total']:.1f} s: {parts}; "
             f"idle while shrinking or settling {s['idle_shrinking']:.1f} s, while only scenes "
