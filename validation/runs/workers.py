@@ -482,6 +482,11 @@ def _children_allowed():
         me._config["daemon"] = True
 
 
+_SERVED_START = threading.Lock()
+"""One served start at a time in this process: :func:`_children_allowed` lifts and restores a
+process-wide flag, which two threads starting children at once would otherwise restore early."""
+
+
 def start_served(
     name: str,
     task: Callable[..., Any],
@@ -514,7 +519,7 @@ def start_served(
         daemon=True,
     )
     try:
-        with _children_allowed():
+        with _SERVED_START, _children_allowed():
             proc.start()
     finally:
         child_conn.close()
