@@ -112,6 +112,11 @@ class Plant(abc.ABC):
         default: whether it is among the plants a run uses when none are named
             (``mj_bridge.plants.installed_plants``); False keeps an optional engine out of
             default runs, to be asked for by name (``--plants analytic,drake``).
+        value_bound: the largest magnitude of a coordinate, velocity or acceleration (SI units)
+            the engine carries on with; past it the engine stops its run by design (MuJoCo's
+            instability guard at ``mjMAXVAL`` = 1e10). Infinite (the default) for an engine with
+            no such bound. The fuzzer reads it to tell a motion that left an engine's range
+            from a failure (``docs/fuzzing.md``).
     """
 
     engine: ClassVar[str]
@@ -119,6 +124,7 @@ class Plant(abc.ABC):
     effects: ClassVar[frozenset[Effect]] = frozenset(Effect)
     settings_type: ClassVar[type]
     default: ClassVar[bool] = True
+    value_bound: ClassVar[float] = math.inf
 
     @classmethod
     def unavailable(cls) -> str:

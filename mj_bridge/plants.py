@@ -44,6 +44,10 @@ class MujocoPlant(Plant):
     engine = Engine.MUJOCO.value
     label = "MuJoCo"
     settings_type = MujocoRunSettings
+    value_bound = 1e10
+    """MuJoCo's ``mjMAXVAL``: ``mj_checkPos``/``mj_checkVel``/``mj_checkAcc`` reset the state and
+    warn (``mjWARN_BADQPOS``/``BADQVEL``/``BADQACC``) when a coordinate, velocity or acceleration
+    exceeds it, which the plant reports as a failed run."""
 
     def default_settings(self, scene: Scene) -> MujocoRunSettings:
         return MujocoRunSettings(scene.mujoco.integrator, scene.mujoco.timestep)

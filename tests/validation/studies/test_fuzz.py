@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
@@ -491,3 +492,36 @@ def test_settle_scene_rule():
     assert settle(stop, out, task, "abc").cause is Cause.MODEL
     task["default_runs"]["b"] = {"status": "timeout", "reached": 0.2}
     assert settle(stop, out, task, "abc").cause is Cause.MODEL
+
+
+def test_settle_range_rule():
+    """A plant stopping at its tightened settings too, while another plant finishes a run that
+    reaches an acceleration beyond the stopped plant's value_bound: the motion left that
+    engine's range (MuJoCo's mjMAXVAL), which does not fail a campaign; within the bound, or with
+    no finished plant to show it: the plant's model."""
+    stop = Disagreement(Kind.STOPPED, "failed", "c")
+    out = Outcome(ran=("a", "b", "c"), disagreements=(stop,))
+    task = _task({}, [stop])
+    task["interval"] = 0.01
+    task["bounds"] = {"a": math.inf, "b": math.inf, "c": 1e10}
+    big = {"coordinate": 2e7, "velocity": 5e8, "acceleration": 1.05e10}
+    task["default_runs"] = {
+        "a": {"status": "timeout", "reached": 0.457},
+        "b": {"status": "ok", "reached": 0.5, "largest": big},
+        "c": {"status": "stopped", "reached": 0.49},
+    }
+    st = settle(stop, out, task, "abc")
+    assert st.cause is Cause.RANGE and "acceleration 1.05e+10" in st.text, st.text
+    task["default_runs"]["b"]["largest"] = {**big, "acceleration": 9e9}
+    assert settle(stop, out, task, "abc").cause is Cause.MODEL
+    task["default_runs"]["b"] = {"status": "timeout", "reached": 0.45}
+    assert settle(stop, out, task, "abc").cause is Cause.MODEL
+
+
+def test_mujoco_states_its_range():
+    import mujoco
+
+    from mj_bridge.plants import MujocoPlant
+
+    assert MujocoPlant.value_bound == mujoco.mjMAXVAL
+    assert math.isinf(AnalyticPlant.value_bound)

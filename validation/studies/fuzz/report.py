@@ -179,14 +179,18 @@ def campaign_markdown(res: CampaignResult, doc: dict[str, Any]) -> str:
         return e["settlement"]["cause"] if e["settlement"] else "unsettled"
 
     sections = (
-        ("New findings", "not known, and neither tightened settings nor a singular motion "
-         "explain them", lambda e: not e["known"] and cause(e) not in ("settings", "scene")),
+        ("New findings", "not known, and neither tightened settings, a singular motion nor an "
+         "engine's range explain them",
+         lambda e: not e["known"] and cause(e) not in ("settings", "scene", "range")),
         ("Numerical limits of the settings", "gone at tightened settings, or within the plants' "
          "own error estimates at their default settings: the settings, not the model",
          lambda e: not e["known"] and cause(e) == "settings"),
         ("Singular motions", "a plant stops, and every other plant stops or stalls at the same "
          "time: the controlled motion itself ends there",
          lambda e: not e["known"] and cause(e) == "scene"),
+        ("Beyond an engine's range", "a plant stops where the motion passes the largest value it "
+         "carries on with (MuJoCo's mjMAXVAL), while every other plant finishes",
+         lambda e: not e["known"] and cause(e) == "range"),
         ("Known findings", "", lambda e: bool(e["known"])),
     )
     for title, what, keep in sections:

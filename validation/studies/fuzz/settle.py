@@ -27,6 +27,10 @@ The cause (:class:`Cause`):
   plant stops or stalls at the same time (within :data:`SINGULAR_SPREAD_SAMPLES` output samples):
   the motion itself ends there (a finite-time blow-up of the controlled motion, which every
   engine meets), not a plant's failure;
+* ``range``: a plant that raised or stopped did so at tightened settings too, no other plant
+  failed (one may pass its time limit), and a run that finished reaches a coordinate, velocity or acceleration beyond the stopped
+  plant's ``value_bound`` (MuJoCo's ``mjMAXVAL`` = 1e10: a mass flung off a spinning rod without
+  a spring runs away exponentially): the motion left that engine's range, by its design;
 * ``unsettled``: a plant cannot tighten its settings (a plugin that does not say how), or a
   tightened run failed or passed its time limit.
 
@@ -82,6 +86,7 @@ class Cause(StrEnum):
     MODEL = "model"
     SETTINGS = "settings"
     SCENE = "scene"
+    RANGE = "range"
     UNSETTLED = "unsettled"
 
 
@@ -139,11 +144,25 @@ def _own_errors(given: Trajectory, tight: Trajectory) -> dict[str, float]:
     return out
 
 
+def _largest(tr: Trajectory) -> dict[str, float]:
+    """The largest magnitudes a run reaches: ``coordinate`` (max |q|), ``velocity`` (max |q̇|)
+    and ``acceleration``, the largest mean over an output interval, max |Δq̇ / Δt|: a lower bound
+    of the largest acceleration (a mean never exceeds the largest value it averages)."""
+    q, qd, t = np.asarray(tr.q), np.asarray(tr.qdot), np.asarray(tr.t)
+    acc = np.abs(np.diff(qd, axis=0)) / np.diff(t)[:, None] if len(t) > 1 else np.zeros((1, 1))
+    return {
+        "coordinate": float(np.max(np.abs(q))) if q.size else 0.0,
+        "velocity": float(np.max(np.abs(qd))) if qd.size else 0.0,
+        "acceleration": float(np.max(acc)) if acc.size else 0.0,
+    }
+
+
 def _default_run(
     name: str, pl: Plant, scene: Any, horizon: float, budget_s: float
 ) -> tuple[dict, Trajectory | None]:
     """A plant's run at its default settings and how it ended: ``status`` (``ok``, ``stopped``,
-    ``timeout``, ``raised``) and ``reached`` (simulated time, s; NaN when unknown)."""
+    ``timeout``, ``raised``), ``reached`` (simulated time, s; NaN when unknown) and, for a run
+    that finished, ``largest`` (:func:`_largest`)."""
     try:
         tr = run_limited(name, pl, scene, horizon, budget_s)
     except OverTime as exc:
@@ -154,7 +173,10 @@ def _default_run(
         raise KeyboardInterrupt(tr.message)
     ok = tr.status is RunStatus.OK
     end = float(tr.t[-1]) if len(tr.t) else 0.0
-    return {"status": "ok" if ok else "stopped", "reached": end}, tr
+    record = {"status": "ok" if ok else "stopped", "reached": end}
+    if ok:
+        record["largest"] = _largest(tr)
+    return record, tr
 
 
 def settle_data(
@@ -174,8 +196,10 @@ def settle_data(
     scene, refused, chosen = prepare(data, plants, horizon)
     if scene is None:
         return {"own_errors": {}, "settings": {}, "untightened": refused, "default_runs": {},
-                "interval": math.nan, "tightened": Outcome(refused=refused).to_dict()}
+                "bounds": {}, "interval": math.nan,
+                "tightened": Outcome(refused=refused).to_dict()}
     default_runs: dict[str, dict] = {}
+    bounds = {name: float(pl.value_bound) for name, pl in chosen}
     own: dict[str, dict[str, float]] = {}
     described: dict[str, list[str]] = {}
     untightened: dict[str, str] = dict(refused)
@@ -216,6 +240,7 @@ def settle_data(
         "settings": described,
         "untightened": untightened,
         "default_runs": default_runs,
+        "bounds": bounds,
         "interval": 1.0 / scene.output.rate,
         "tightened": tightened.to_dict(),
     }
@@ -302,6 +327,25 @@ def settle(
                 f"or stalls there ({where}; {d.plant} also at {tight}), a singularity of the "
                 "controlled motion rather than a plant's failure",
             )
+        bound = float(task.get("bounds", {}).get(d.plant, math.inf))
+        finished = {p: r for p, r in others.items() if r["status"] == "ok"}
+        if (
+            finished
+            and all(r["status"] in ("ok", "timeout") for r in others.values())
+            and math.isfinite(bound)
+        ):
+            reach = max(
+                ((k, v, p) for p, r in finished.items() for k, v in r["largest"].items()),
+                key=lambda x: x[1],
+            )
+            if reach[1] > bound:
+                return make(
+                    Cause.RANGE,
+                    f"the motion leaves {d.plant}'s range: {reach[2]} reaches {reach[0]} "
+                    f"{reach[1]:.3g} (SI units) against {d.plant}'s bound {bound:g}, and "
+                    f"{d.plant} stops at its tightened settings too ({tight}); no other plant "
+                    "fails",
+                )
         return make(Cause.MODEL, f"{d.plant} fails at its tightened settings too ({tight})")
     missing = [p for p in involved if p in untightened]
     if missing:
