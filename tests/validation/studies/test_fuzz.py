@@ -525,3 +525,12 @@ def test_mujoco_states_its_range():
 
     assert MujocoPlant.value_bound == mujoco.mjMAXVAL
     assert math.isinf(AnalyticPlant.value_bound)
+
+
+def test_a_failed_pair_check_names_no_known_culprit():
+    data = draw_scene_dict(0, 0, 0.5)
+    data["rod"]["offset"] = [0.0, 0.0, 0.0]
+    pair = Disagreement(Kind.CHECK, "mujoco_vs_pinocchio.rod_velocities")
+    assert recognise(data, data, pair) == ""
+    own = Disagreement(Kind.CHECK, "pinocchio.energy")
+    assert recognise(data, data, own) == "rod_through_C"
