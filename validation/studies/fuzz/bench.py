@@ -146,12 +146,12 @@ def measure(
 class TaskKind(enum.StrEnum):
     """What a campaign task judged."""
 
-    SCENE = "scene"  # a campaign scene (campaign.judge_index)
-    SHRINK = "shrink"  # a shrink candidate (campaign.judge_data)
+    SCENE = "scene"  # a plant run of a campaign scene (campaign.scene_plant_task)
+    SHRINK = "shrink"  # a plant run of a shrink candidate (campaign.candidate_plant_task)
     SETTLE = "settle"  # a minimal scene at default and tightened settings (settle.settle_data)
 
 
-_KINDS = {"judge_index": TaskKind.SCENE, "judge_data": TaskKind.SHRINK}
+_KINDS = {"scene_plant_task": TaskKind.SCENE, "candidate_plant_task": TaskKind.SHRINK}
 """A campaign task's function name -> its kind (any other task: :attr:`TaskKind.SETTLE`)."""
 
 
@@ -177,7 +177,7 @@ class TaskTime:
         kind: scene, shrink candidate or settling.
         plants_s: the sum of its plant runs' walls (``Outcome.walls``), s; a settling task, which
             reports no walls (two runs per plant and one comparison), counts whole.
-        task_s: its wall in the worker (judging included), s.
+        task_s: its wall in the worker (loading the scene and forking the run included), s.
         cpu_s: the worker's CPU time during it (its plant runs' children excluded), s.
         start, end: on the machine's monotonic clock, s.
         pid: the worker's process id.
@@ -282,13 +282,14 @@ class CampaignTiming:
 
     def split(self) -> dict[str, float]:
         """Where wall x workers goes, s: ``plants`` (their runs), ``judging`` (in the workers
-        beside the runs: drawing and loading the scene, comparison, referee), ``startup`` (until
+        beside the runs: drawing and loading the scene, forking; the comparison and the referee
+        run in the campaign's own process), ``startup`` (until
         the first task started, on every worker), ``idle`` (the rest: a worker without a task,
         and moving tasks and results). ``idle`` is split by what ran meanwhile (from the tasks'
         start and end): ``idle_shrinking`` (a shrink candidate or a settling ran: the campaign
         runs those one at a time), ``idle_scenes`` (only scenes ran, fewer than the workers: the
-        campaign takes results in index order with at most 2 x workers scenes submitted, and
-        submits no new scene while it shrinks) and ``idle_none`` (no task ran after the first:
+        campaign takes results in index order with at most campaign.SCENE_WINDOW x workers
+        scenes submitted, and submits no new scene while it shrinks) and ``idle_none`` (no task ran after the first:
         the parent between results)."""
         total = self.wall_s * self.workers
         plants = self.plants_s

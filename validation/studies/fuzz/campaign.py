@@ -26,14 +26,23 @@ import json
 import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import Executor, Future
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
 from analytic.plant import Plant
 from mj_bridge.plants import installed_plants, plant
 from validation.runs.atomic import write_text
-from validation.studies.fuzz.judge import RUN_BUDGET_S, Kind, Outcome, judge_scene, plant_name
+from validation.studies.fuzz.judge import (
+    RUN_BUDGET_S,
+    Kind,
+    Outcome,
+    judge_scene,
+    outcome_of,
+    plant_name,
+    plant_task,
+    prepare,
+)
 from validation.studies.fuzz.known import recognise
 from validation.studies.fuzz.records import (
     CampaignResult,
@@ -60,25 +69,77 @@ its time limit (then the candidate does not show the disagreement: not taken).""
 CONFIG_FILE = "campaign_config.json"
 SCENES_DIR = "scenes"
 COUNTEREXAMPLES_DIR = "counterexamples"
+SCENE_WINDOW = 4
+"""Scenes submitted ahead per worker: each scene's plants are separate tasks, and the queue must
+stay full while this process waits for a scene in index order or shrinks a finding (its
+candidates queue behind the scenes already submitted), so no worker idles."""
 PRIORITY = {Kind.RAISED: 0, Kind.STOPPED: 1, Kind.OUTLIER: 2, Kind.CHECK: 3}
 """Which of a scene's disagreements is shrunk: a plant failing first, then an outlier, a check."""
+
+
+def scene_plant_task(
+    seed: int, index: int, p: Plant | str, horizon: float, time_limit_s: float = RUN_BUDGET_S,
+) -> dict:
+    """Plant ``p``'s run of scene ``index`` of ``seed`` within ``time_limit_s`` s (the executor's
+    task for a campaign scene: :func:`validation.studies.fuzz.judge.plant_task`)."""
+    return plant_task(draw_scene_dict(seed, index, horizon), p, horizon, time_limit_s)
+
+
+def candidate_plant_task(
+    data: dict[str, Any], p: Plant | str, horizon: float, budget_s: float
+) -> dict:
+    """Plant ``p``'s run of a shrink candidate within ``budget_s`` s (the executor's task)."""
+    return plant_task(data, p, horizon, budget_s)
 
 
 def judge_index(
     seed: int, index: int, plants: Sequence[Plant | str], horizon: float,
     time_limit_s: float = RUN_BUDGET_S,
 ) -> dict:
-    """Scene ``index`` of ``seed`` judged on ``plants``, each run within ``time_limit_s`` s (the
-    executor's task): the outcome as a dict (plain data: it travels back from any worker)."""
+    """Scene ``index`` of ``seed`` judged on ``plants`` here, one plant after the other, each run
+    within ``time_limit_s`` s: the outcome as a dict. (A campaign submits the plants of a scene
+    as separate tasks instead, :func:`submit_scene`; this is the same judgement in one call.)"""
     data = draw_scene_dict(seed, index, horizon)
     return judge_scene(data, plants, horizon, budget_s=time_limit_s).to_dict()
 
 
-def judge_data(data: dict[str, Any], plants: Sequence[Plant | str], horizon: float,
-               budget_s: float) -> dict:
-    """A shrink candidate judged on ``plants``, each run within ``budget_s`` s (the executor's
-    task): the outcome as a dict."""
-    return judge_scene(data, plants, horizon, budget_s=budget_s).to_dict()
+@dataclass
+class Pending:
+    """A scene (or shrink candidate) whose plants run as separate tasks: its prepared scene, the
+    refusals, and each plant's future, in the plants' order (:func:`submit_scene`)."""
+
+    scene: Any
+    horizon: float
+    refused: dict[str, str]
+    futures: list[Future]
+
+    def outcome(self) -> Outcome:
+        """Wait for every plant's run and judge them (:func:`~validation.studies.fuzz.judge.outcome_of`)."""
+        if self.scene is None:
+            return Outcome(refused=self.refused)
+        runs = [f.result()["run"] for f in self.futures]
+        return outcome_of(self.scene, self.horizon, self.refused, runs)
+
+
+def submit_scene(
+    ex: Executor,
+    data: dict[str, Any],
+    plants: Sequence[Plant | str],
+    horizon: float,
+    limit_s: float,
+    task: Callable[..., dict],
+    *identity: Any,
+) -> Pending:
+    """Prepare the scene file's dict ``data`` here (a refusal needs no run) and submit one task
+    per plant that can run it, ``task(*identity, plant, horizon, limit_s)``: ``identity`` names
+    the scene to the task (``seed, index`` for :func:`scene_plant_task`, ``data`` for
+    :func:`candidate_plant_task`), ``limit_s`` is each run's time limit, s."""
+    scene, refused, chosen = prepare(data, plants, horizon)
+    if scene is None:
+        return Pending(None, horizon, refused, [])
+    by_name = {plant_name(p): p for p in plants}
+    futures = [ex.submit(task, *identity, by_name[name], horizon, limit_s) for name, _ in chosen]
+    return Pending(scene, horizon, refused, futures)
 
 
 class SerialExecutor(Executor):
@@ -207,12 +268,12 @@ def fuzz(
     shrink_plants: list[tuple[Plant | str, ...]] = [chosen]
 
     def evaluate(data: dict[str, Any], h: float) -> Outcome:
-        # on the campaign's executor: a process pool's worker is single-threaded, so each plant
-        # run forks and is killed at its limit (judge module docstring); here, beside the pool's
-        # own threads, it could not be
-        return Outcome.from_dict(
-            pool[0].submit(judge_data, data, shrink_plants[0], h, shrink_budget[0]).result()
-        )
+        # on the campaign's executor, each plant its own task (they run side by side): a
+        # process pool's worker is single-threaded, so each plant run forks and is killed at
+        # its limit (judge module docstring)
+        return submit_scene(
+            pool[0], data, shrink_plants[0], h, shrink_budget[0], candidate_plant_task, data
+        ).outcome()
 
     def take(rec: SceneRecord) -> None:
         records[rec.index] = rec
@@ -284,36 +345,39 @@ def fuzz(
     complete = False
     with executor_for(executor, scheduler, dask_workers) as (ex, workers):
         pool.append(ex)
-        pending: dict[int, Future] = {}
+        pending: dict[int, Pending | SceneRecord] = {}
         index = 0
-        window = 2 * max(1, workers)
+        window = SCENE_WINDOW * max(1, workers)
         try:
             while True:
                 while len(pending) < window and more(index):
                     rec = _load_scene_record(out, cfg, index)
                     if rec is not None:  # resumed: judged before
-                        f: Future = Future()
-                        f.set_result(rec)
-                        pending[index] = f
+                        pending[index] = rec
                     else:
-                        pending[index] = ex.submit(
-                            judge_index, seed, index, chosen, cfg.horizon, float(time_limit_s)
+                        data = draw_scene_dict(seed, index, cfg.horizon)
+                        pending[index] = submit_scene(
+                            ex, data, chosen, cfg.horizon, float(time_limit_s),
+                            scene_plant_task, seed, index,
                         )
                     index += 1
                 if not pending:
                     complete = True
                     break
                 first = min(pending)
-                res = pending.pop(first).result()
-                if isinstance(res, SceneRecord):
-                    take(res)
+                got = pending.pop(first)
+                if isinstance(got, SceneRecord):
+                    take(got)
                     continue
-                outcome = Outcome.from_dict(res)
-                write_text(_scene_file(out, first), json.dumps(res, indent=2) + "\n")
+                outcome = got.outcome()
+                write_text(
+                    _scene_file(out, first), json.dumps(outcome.to_dict(), indent=2) + "\n"
+                )
                 take(SceneRecord(first, draw_scene_dict(seed, first, cfg.horizon), outcome))
         finally:
-            for f in pending.values():
-                f.cancel()
+            for got in pending.values():
+                for f in getattr(got, "futures", ()):
+                    f.cancel()
     for key, ex_ in list(examples.items()):
         examples[key] = _with_occurrences(ex_, occurrences.get(key, 1))
     result = CampaignResult(
@@ -341,7 +405,9 @@ __all__ = [
     "FuzzConfig",
     "SceneRecord",
     "SerialExecutor",
+    "candidate_plant_task",
     "fuzz",
-    "judge_data",
     "judge_index",
+    "scene_plant_task",
+    "submit_scene",
 ]

@@ -367,6 +367,95 @@ def judge_runs(
     )
 
 
+@dataclass(frozen=True)
+class PlantRun:
+    """How one plant's run of a scene went (plain data: it travels back from any worker).
+
+    Attributes:
+        name: the plant.
+        traj: its trajectory; None when it raised or passed its time limit.
+        wall: the run's wall time, s.
+        limit_s: the time limit the run was stopped at (s), None when it was not.
+        raised: the type name of what the plant raised ("" when it did not).
+        message: why it raised, stopped or was stopped ("" for a run that finished).
+        reached: the simulated time a run that stopped or was stopped reached, s (NaN: unknown,
+            or it finished).
+    """
+
+    name: str
+    traj: Trajectory | None
+    wall: float
+    limit_s: float | None = None
+    raised: str = ""
+    message: str = ""
+    reached: float = math.nan
+
+
+def run_one(name: str, pl: Plant, scene: Scene, horizon: float, budget_s: float) -> PlantRun:
+    """Plant ``pl``'s run of ``scene`` over ``horizon`` s within ``budget_s`` s (:func:`run_limited`);
+    only an interrupt escapes."""
+    t0 = time.perf_counter()
+    try:
+        tr = run_limited(name, pl, scene, horizon, budget_s)
+    except OverTime as exc:
+        return PlantRun(name, None, time.perf_counter() - t0, exc.limit_s, "", str(exc),
+                        exc.reached_s)
+    except _Raised as exc:  # a plant failing is a finding, whatever it raises
+        return PlantRun(name, None, time.perf_counter() - t0, None, exc.kind, str(exc))
+    wall = time.perf_counter() - t0
+    if tr.status is RunStatus.INTERRUPTED:
+        raise KeyboardInterrupt(tr.message)
+    if tr.status is not RunStatus.OK:
+        why = tr.message.splitlines()[0] if tr.message else str(tr.status)
+        return PlantRun(name, tr, wall, None, "", why, float(tr.t[-1]) if len(tr.t) else 0.0)
+    return PlantRun(name, tr, wall)
+
+
+def outcome_of(
+    scene: Scene, horizon: float, refused: dict[str, str], runs: Sequence[PlantRun]
+) -> Outcome:
+    """The outcome of ``runs`` (in the plants' order) of ``scene``: each plant that raised or
+    stopped, and the runs that returned compared and refereed (:func:`judge_runs`)."""
+    trajs, ran, messages, walls, found = [], [], {}, {}, []
+    timeouts: dict[str, float] = {}
+    reached: dict[str, float] = {}
+    for r in runs:
+        walls[r.name] = r.wall
+        if r.message:
+            messages[r.name] = r.message
+        if math.isfinite(r.reached):
+            reached[r.name] = r.reached
+        if r.limit_s is not None:
+            timeouts[r.name] = r.limit_s
+            continue
+        if r.raised:
+            found.append(Disagreement(Kind.RAISED, r.raised, r.name))
+            continue
+        if r.traj.status is not RunStatus.OK:
+            found.append(Disagreement(Kind.STOPPED, str(r.traj.status.value), r.name))
+        trajs.append(r.traj)
+        ran.append(r.name)
+    return judge_runs(
+        scene, horizon, trajs, ran, found,
+        refused=refused, messages=messages, walls=walls, timeouts=timeouts, reached=reached,
+    )
+
+
+def plant_task(
+    data: dict[str, Any], p: Plant | str, horizon: float, budget_s: float
+) -> dict[str, Any]:
+    """An executor's task: plant ``p``'s run of the scene file's dict ``data`` (a scene the
+    caller has already prepared, :func:`prepare`, and found the plant able to run). Back:
+    ``run`` (:class:`PlantRun`) and ``walls`` (plant -> wall, s)."""
+    scene, refused, chosen = prepare(data, [p], horizon)
+    if scene is None or not chosen:  # the caller checked; a worker's registry may differ
+        why = next(iter(refused.values()), "refused")
+        return {"run": PlantRun(plant_name(p), None, 0.0, None, "ValueError", why), "walls": {}}
+    name, pl = chosen[0]
+    r = run_one(name, pl, scene, horizon, budget_s)
+    return {"run": r, "walls": {name: r.wall}}
+
+
 def judge_scene(
     data: dict[str, Any],
     plants: Sequence[Plant | str],
@@ -374,43 +463,15 @@ def judge_scene(
     budget_s: float = RUN_BUDGET_S,
 ) -> Outcome:
     """Run the scene file's dict ``data`` on ``plants`` over ``horizon`` s (the scene's default
-    settings), each within ``budget_s`` s of wall time (:data:`RUN_BUDGET_S`), and judge it
-    (module docstring). Only an interrupt (``KeyboardInterrupt``) escapes."""
+    settings), one after the other here, each within ``budget_s`` s of wall time
+    (:data:`RUN_BUDGET_S`), and judge it (module docstring). Only an interrupt
+    (``KeyboardInterrupt``) escapes. A campaign runs the plants of a scene as separate tasks
+    instead (:func:`plant_task`, :func:`outcome_of`)."""
     scene, refused, chosen = prepare(data, plants, horizon)
     if scene is None:
         return Outcome(refused=refused)
-    trajs, ran, messages, walls, found = [], [], {}, {}, []
-    timeouts: dict[str, float] = {}
-    reached: dict[str, float] = {}
-    for name, pl in chosen:
-        t0 = time.perf_counter()
-        try:
-            tr = run_limited(name, pl, scene, horizon, budget_s)
-        except OverTime as exc:
-            walls[name] = time.perf_counter() - t0
-            timeouts[name] = exc.limit_s
-            messages[name] = str(exc)
-            if math.isfinite(exc.reached_s):
-                reached[name] = exc.reached_s
-            continue
-        except _Raised as exc:  # a plant failing is a finding, whatever it raises
-            walls[name] = time.perf_counter() - t0
-            messages[name] = str(exc)
-            found.append(Disagreement(Kind.RAISED, exc.kind, name))
-            continue
-        walls[name] = time.perf_counter() - t0
-        if tr.status is RunStatus.INTERRUPTED:
-            raise KeyboardInterrupt(tr.message)
-        if tr.status is not RunStatus.OK:
-            messages[name] = tr.message.splitlines()[0] if tr.message else str(tr.status)
-            found.append(Disagreement(Kind.STOPPED, str(tr.status.value), name))
-            reached[name] = float(tr.t[-1]) if len(tr.t) else 0.0
-        trajs.append(tr)
-        ran.append(name)
-    return judge_runs(
-        scene, horizon, trajs, ran, found,
-        refused=refused, messages=messages, walls=walls, timeouts=timeouts, reached=reached,
-    )
+    runs = [run_one(name, pl, scene, horizon, budget_s) for name, pl in chosen]
+    return outcome_of(scene, horizon, refused, runs)
 
 
 __all__ = [
@@ -419,10 +480,14 @@ __all__ = [
     "Kind",
     "Outcome",
     "OverTime",
+    "PlantRun",
     "judge_runs",
     "judge_scene",
+    "outcome_of",
     "plant_name",
+    "plant_task",
     "prepare",
     "resolve_plant",
     "run_limited",
+    "run_one",
 ]

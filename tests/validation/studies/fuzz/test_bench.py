@@ -79,14 +79,14 @@ def test_timed_task_keeps_the_outcome_and_adds_its_times():
 
 def test_a_recorded_campaign_counts_every_plant_run_once():
     """A real one-scene campaign, serial, two plants: every recorded task has a kind, the scene
-    tasks are the campaign's scenes, every task took at least its plants' time, and the tasks ran
-    one after another inside the campaign's wall."""
+    tasks are the campaign scene's plant runs (one task each), every task took at least its
+    plants' time, and the tasks ran one after another inside the campaign's wall."""
     t = bench.time_campaign(
         SerialExecutor(), 1, scenes=1, plants=("analytic", "mujoco"), shrink_evaluations=2
     )
-    assert t.scenes == 1 and len(t.of(TaskKind.SCENE)) == 1
+    assert t.scenes == 1 and len(t.of(TaskKind.SCENE)) == 2
     assert len(t.tasks) == sum(len(t.of(k)) for k in TaskKind)
-    assert len(t.of(TaskKind.SHRINK)) <= 2 * max(1, t.counterexamples)
+    assert len(t.of(TaskKind.SHRINK)) <= 2 * 2 * max(1, t.counterexamples)
     assert all(x.task_s >= x.plants_s > 0.0 for x in t.tasks)
     assert t.plants_s == pytest.approx(sum(x.plants_s for x in t.tasks))
     assert t.wall_s >= sum(x.task_s for x in t.tasks)  # serial: the tasks ran one after another
