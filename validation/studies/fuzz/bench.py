@@ -573,10 +573,27 @@ def served_overhead(
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = list(sys.argv[1:] if argv is None else argv)
-    campaign = "--campaign" in args
-    args = [a for a in args if a != "--campaign"]
-    t = measure(int(args[0]) if args else 5)
+    import argparse
+
+    parser = argparse.ArgumentParser(
+        prog="python -m validation.studies.fuzz.bench",
+        description="The fuzzer's throughput goals, as ratios measured in this process "
+        "(docs/fuzzing.md, Throughput).",
+    )
+    parser.add_argument(
+        "rounds", nargs="?", type=int, default=5, help="timed validations (default 5)"
+    )
+    parser.add_argument(
+        "--campaign",
+        action="store_true",
+        help="also the two campaign goals (wall against the plants' compute on a process pool of "
+        "two; two Dask workers against one): about 8 minutes",
+    )
+    args = parser.parse_args(argv)
+    if args.rounds < 1:
+        parser.error(f"rounds: must be a whole number ≥ 1 (got {args.rounds})")
+    campaign = args.campaign
+    t = measure(args.rounds)
     print(
         f"one validation of {SCENE} over {HORIZON_S:g} s, three plants: CPU {t.cpu_s:.3f} s "
         f"(plants {t.plants_s:.3f} s wall), {t.per_core_minute:.0f} per core-minute "
