@@ -51,7 +51,7 @@ from validation.studies.fuzz.records import (
     SceneRecord,
 )
 from validation.studies.fuzz.report import write_campaign
-from validation.studies.fuzz.settle import Settlement, settle, settle_data
+from validation.studies.fuzz.settle import Settlement, settle, settle_collect, settle_plant
 from validation.studies.fuzz.shrink import MAX_EVALUATIONS, shrink
 from validation.studies.fuzz.space import draw_scene_dict
 from validation.studies.fuzz.toml import counterexample_toml, slug
@@ -321,11 +321,18 @@ def fuzz(
             # settings, each run within the campaign's own limit (a tightened run costs more)
             # (a plant raising or stopping: only it tightened, every other plant at its default
             # settings within the shrink's limit, to see whether they stop at the same time)
-            task = pool[0].submit(
-                settle_data, s.data, chosen, s.horizon,
-                shrink_budget[0] if alone else float(time_limit_s),
-                [target.plant] if alone else None,
-            ).result()
+            # each plant's part its own task, side by side
+            scene_s, refused_s, chosen_s = prepare(s.data, chosen, s.horizon)
+            by_name = {plant_name(p): p for p in chosen}
+            limit = shrink_budget[0] if alone else float(time_limit_s)
+            parts = [
+                pool[0].submit(
+                    settle_plant, s.data, by_name[n], s.horizon, limit,
+                    not alone or n == target.plant,
+                )
+                for n, _ in chosen_s
+            ]
+            task = settle_collect(scene_s, s.horizon, refused_s, [f.result() for f in parts])
             settled = settle(target, s.outcome, task, names)
             ex = Counterexample(
                 target, rec.index, s.data, s.horizon, s.outcome, s.evaluations,

@@ -179,6 +179,89 @@ def _default_run(
     return record, tr
 
 
+def settle_plant(
+    data: dict[str, Any], p: Plant | str, horizon: float, budget_s: float, tighten: bool
+) -> dict[str, Any]:
+    """An executor's task: plant ``p``'s part of settling the scene file's dict ``data`` (a scene
+    the caller has prepared and found the plant able to run): its run at its default settings
+    (how it ended: :func:`_default_run`) and, when ``tighten``, its run at its tightened settings
+    and the own error estimate between the two. Each run within ``budget_s`` s. Back: ``name``,
+    ``default_run``, ``bound`` (its ``value_bound``), and with ``tighten``: ``settings``
+    ([default, tightened] descriptions), ``untightened`` (why not, "" when it was), ``tight``
+    (the tightened trajectory, None without one), ``own_errors`` (quantity -> estimate)."""
+    scene, refused, chosen = prepare(data, [p], horizon)
+    if scene is None or not chosen:
+        name = next(iter(refused), "scene")
+        why = next(iter(refused.values()), "refused")
+        return {"name": name, "default_run": {"status": "raised", "reached": math.nan},
+                "bound": math.inf, "settings": ["", ""], "untightened": why, "tight": None,
+                "own_errors": {}}
+    name, pl = chosen[0]
+    out: dict[str, Any] = {"name": name, "bound": float(pl.value_bound)}
+    if not tighten:
+        out["default_run"] = _default_run(name, pl, scene, horizon, budget_s)[0]
+        return out
+    given_settings = pl.default_settings(scene)
+    tight_settings = pl.tightened(scene, given_settings)
+    out["settings"] = [
+        pl.describe(given_settings),
+        pl.describe(tight_settings) if tight_settings is not None else "",
+    ]
+    out.update(untightened="", tight=None, own_errors={})
+    if tight_settings is None:
+        out["default_run"] = {"status": "not run", "reached": math.nan}
+        out["untightened"] = f"the {name} plant cannot tighten its settings"
+        return out
+    out["default_run"], given = _default_run(name, pl, scene, horizon, budget_s)
+    try:
+        tight = run_limited(name, pl, scene, horizon, budget_s, tight_settings)
+    except (OverTime, _Raised) as exc:
+        out["untightened"] = str(exc)
+        return out
+    if tight.status is RunStatus.INTERRUPTED:
+        raise KeyboardInterrupt(tight.message)
+    out["tight"] = tight
+    if tight.status is RunStatus.OK and given is not None and given.status is RunStatus.OK:
+        out["own_errors"] = _own_errors(given, tight)
+    return out
+
+
+def settle_collect(
+    scene: Any, horizon: float, refused: dict[str, str], parts: Sequence[Mapping[str, Any]]
+) -> dict[str, Any]:
+    """The settling task's result (what :func:`settle` reads) from each plant's part
+    (:func:`settle_plant`, in the plants' order): the tightened runs judged together."""
+    if scene is None:
+        return {"own_errors": {}, "settings": {}, "untightened": dict(refused),
+                "default_runs": {}, "bounds": {}, "interval": math.nan,
+                "tightened": Outcome(refused=dict(refused)).to_dict()}
+    untightened = dict(refused)
+    own, described, runs, found = {}, {}, [], []
+    for part in parts:
+        name = part["name"]
+        if "settings" in part:
+            described[name] = list(part["settings"])
+        if part.get("untightened"):
+            untightened[name] = part["untightened"]
+        if part.get("own_errors"):
+            own[name] = dict(part["own_errors"])
+        tight = part.get("tight")
+        if tight is not None:
+            runs.append((name, tight))
+            if tight.status is not RunStatus.OK:
+                found.append(Disagreement(Kind.STOPPED, str(tight.status.value), name))
+    tightened = judge_runs(scene, horizon, [t for _n, t in runs], [n for n, _t in runs], found)
+    return {
+        "own_errors": own,
+        "settings": described,
+        "untightened": untightened,
+        "default_runs": {p["name"]: p["default_run"] for p in parts},
+        "bounds": {p["name"]: p["bound"] for p in parts},
+        "interval": 1.0 / scene.output.rate,
+        "tightened": tightened.to_dict(),
+    }
+
+
 def settle_data(
     data: dict[str, Any],
     plants: Sequence[Plant | str],
@@ -186,64 +269,19 @@ def settle_data(
     budget_s: float = RUN_BUDGET_S,
     tighten: Sequence[str] | None = None,
 ) -> dict[str, Any]:
-    """The executor's task: each plant's run of the scene file's dict ``data`` at its default and
-    at its tightened settings (each within ``budget_s`` s), the own error estimates, and the
-    tightened runs judged; a plant not in ``tighten`` (None: every plant) runs at its default
-    settings only, and how that run ended is kept. Plain data back: ``own_errors``,
-    ``settings``, ``untightened`` (plants that cannot tighten, or whose tightened run did not
-    finish: plant -> why), ``tightened`` (``Outcome.to_dict()``), ``default_runs`` (plant ->
-    :func:`_default_run`) and ``interval`` (the output interval, s)."""
+    """Settling's runs of the scene file's dict ``data``, one plant after the other here: each
+    plant's :func:`settle_plant` (tightened unless ``tighten`` names others; None: every plant),
+    collected by :func:`settle_collect`. Plain data back: ``own_errors``, ``settings``,
+    ``untightened`` (plants that cannot tighten, or whose tightened run did not finish: plant ->
+    why), ``tightened`` (``Outcome.to_dict()``), ``default_runs`` (plant -> how its run at its
+    default settings ended), ``bounds`` (plant -> ``value_bound``) and ``interval`` (the output
+    interval, s). A campaign submits each plant's part as its own task instead."""
     scene, refused, chosen = prepare(data, plants, horizon)
-    if scene is None:
-        return {"own_errors": {}, "settings": {}, "untightened": refused, "default_runs": {},
-                "bounds": {}, "interval": math.nan,
-                "tightened": Outcome(refused=refused).to_dict()}
-    default_runs: dict[str, dict] = {}
-    bounds = {name: float(pl.value_bound) for name, pl in chosen}
-    own: dict[str, dict[str, float]] = {}
-    described: dict[str, list[str]] = {}
-    untightened: dict[str, str] = dict(refused)
-    runs: list[tuple[str, Trajectory]] = []
-    found: list[Disagreement] = []
-    for name, pl in chosen:
-        if tighten is not None and name not in tighten:
-            default_runs[name] = _default_run(name, pl, scene, horizon, budget_s)[0]
-            continue
-        given_settings = pl.default_settings(scene)
-        tight_settings = pl.tightened(scene, given_settings)
-        described[name] = [
-            pl.describe(given_settings),
-            pl.describe(tight_settings) if tight_settings is not None else "",
-        ]
-        if tight_settings is None:
-            untightened[name] = f"the {name} plant cannot tighten its settings"
-            continue
-        default_runs[name], given = _default_run(name, pl, scene, horizon, budget_s)
-        try:
-            tight = run_limited(name, pl, scene, horizon, budget_s, tight_settings)
-        except (OverTime, _Raised) as exc:
-            untightened[name] = str(exc)
-            continue
-        if tight.status is RunStatus.INTERRUPTED or given.status is RunStatus.INTERRUPTED:
-            raise KeyboardInterrupt(tight.message or given.message)
-        runs.append((name, tight))
-        if tight.status is not RunStatus.OK:
-            found.append(Disagreement(Kind.STOPPED, str(tight.status.value), name))
-            continue
-        if given is not None and given.status is RunStatus.OK:
-            own[name] = _own_errors(given, tight)
-    tightened = judge_runs(
-        scene, horizon, [tr for _n, tr in runs], [n for n, _t in runs], found
-    )
-    return {
-        "own_errors": own,
-        "settings": described,
-        "untightened": untightened,
-        "default_runs": default_runs,
-        "bounds": bounds,
-        "interval": 1.0 / scene.output.rate,
-        "tightened": tightened.to_dict(),
-    }
+    parts = [
+        settle_plant(data, pl, horizon, budget_s, tighten is None or name in tighten)
+        for name, pl in chosen
+    ]
+    return settle_collect(scene, horizon, refused, parts)
 
 
 def _fmt(x: float) -> str:
@@ -391,4 +429,13 @@ def settle(
     )
 
 
-__all__ = ["SETTLE_MARGIN", "SINGULAR_SPREAD_SAMPLES", "Cause", "Settlement", "settle", "settle_data"]
+__all__ = [
+    "SETTLE_MARGIN",
+    "SINGULAR_SPREAD_SAMPLES",
+    "Cause",
+    "Settlement",
+    "settle",
+    "settle_collect",
+    "settle_data",
+    "settle_plant",
+]
