@@ -534,3 +534,29 @@ def test_a_failed_pair_check_names_no_known_culprit():
     assert recognise(data, data, pair) == ""
     own = Disagreement(Kind.CHECK, "pinocchio.energy")
     assert recognise(data, data, own) == "rod_through_C"
+
+
+def test_settle_conditioning_rule():
+    """A failed check whose value the first plant's own run reproduces to a tenth or more from an
+    initial state moved at round-off level: the scene's conditioning, which no settings remove
+    and which does not fail a campaign; a perturbation that moves the run far less: not."""
+    d = Disagreement(Kind.CHECK, "analytic_vs_mujoco.velocity_C")
+    out = Outcome(ran=("a", "b", "c"), checks={d.what: (164.6, 0.07, "FAIL")}, disagreements=(d,))
+    task = _task({}, [d], {"a": "plant a over its time limit (30 s)"})
+    task["sensitivity"] = {"a": {"velocity_C": 40.0}}
+    st = settle(d, out, task, "abc")
+    assert st.cause is Cause.CONDITIONING, st.text
+    task["sensitivity"] = {"a": {"velocity_C": 1e-6}}
+    assert settle(d, out, task, "abc").cause is not Cause.CONDITIONING
+
+
+def test_perturbed_moves_the_initial_state_at_round_off_level():
+    from validation.studies.fuzz.settle import PERTURBATION, perturbed
+
+    data = draw_scene_dict(0, 0, 0.5)
+    moved = perturbed(data)
+    for key in ("omega", "p", "pdot"):
+        a, b = np.array(data["initial"][key]), np.array(moved["initial"][key])
+        assert np.all(b - a != 0.0)
+        assert np.all(np.abs(b - a) <= 2 * PERTURBATION * np.maximum(1.0, np.abs(a)))
+    assert data != moved and scene_from_dict(moved)

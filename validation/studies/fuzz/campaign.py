@@ -113,6 +113,11 @@ class Pending:
     refused: dict[str, str]
     futures: list[Future]
 
+    def cancel(self) -> None:
+        """Drop the runs not yet started (a shrink candidate no longer needed)."""
+        for f in self.futures:
+            f.cancel()
+
     def outcome(self) -> Outcome:
         """Wait for every plant's run and judge them (:func:`~validation.studies.fuzz.judge.outcome_of`)."""
         if self.scene is None:
@@ -267,13 +272,16 @@ def fuzz(
     pool: list[Executor] = []
     shrink_plants: list[tuple[Plant | str, ...]] = [chosen]
 
-    def evaluate(data: dict[str, Any], h: float) -> Outcome:
+    def submit(data: dict[str, Any], h: float) -> Pending:
         # on the campaign's executor, each plant its own task (they run side by side): a
         # process pool's worker is single-threaded, so each plant run forks and is killed at
         # its limit (judge module docstring)
         return submit_scene(
             pool[0], data, shrink_plants[0], h, shrink_budget[0], candidate_plant_task, data
-        ).outcome()
+        )
+
+    def evaluate(data: dict[str, Any], h: float) -> Outcome:
+        return submit(data, h).outcome()
 
     def take(rec: SceneRecord) -> None:
         records[rec.index] = rec
@@ -315,7 +323,10 @@ def fuzz(
             shrink_plants[0] = tuple(
                 p for p in chosen if not alone or plant_name(p) == target.plant
             )
-            s = shrink(rec.data, cfg.horizon, target, evaluate, shrink_evaluations, rec.outcome)
+            s = shrink(
+                rec.data, cfg.horizon, target, evaluate, shrink_evaluations, rec.outcome,
+                submit, lookahead[0],
+            )
             path = out / COUNTEREXAMPLES_DIR / f"{slug(target.key)}.toml"
             # settled on the campaign's executor too: each plant at its default and tightened
             # settings, each run within the campaign's own limit (a tightened run costs more)
@@ -328,9 +339,9 @@ def fuzz(
             parts = [
                 pool[0].submit(
                     settle_plant, s.data, by_name[n], s.horizon, limit,
-                    not alone or n == target.plant,
+                    not alone or n == target.plant, i == 0,  # the first plant: conditioning
                 )
-                for n, _ in chosen_s
+                for i, (n, _) in enumerate(chosen_s)
             ]
             task = settle_collect(scene_s, s.horizon, refused_s, [f.result() for f in parts])
             settled = settle(target, s.outcome, task, names)
@@ -350,8 +361,11 @@ def fuzz(
         return deadline is None or time.perf_counter() < deadline
 
     complete = False
+    lookahead = [1]
     with executor_for(executor, scheduler, dask_workers) as (ex, workers):
         pool.append(ex)
+        # candidates evaluated side by side while shrinking (one at a time where tasks run at once)
+        lookahead[0] = 1 if isinstance(ex, SerialExecutor) else max(1, workers)
         pending: dict[int, Pending | SceneRecord] = {}
         index = 0
         window = SCENE_WINDOW * max(1, workers)

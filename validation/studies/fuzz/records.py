@@ -68,10 +68,10 @@ class Counterexample:
 
     @property
     def counts_against(self) -> bool:
-        """A new finding that neither the settings, the scene's own singular motion nor an
-        engine's range explain: what fails a campaign."""
+        """A new finding that neither the settings, the scene's own singular motion or
+        conditioning, nor an engine's range explain: what fails a campaign."""
         return not self.known and (
-            self.settlement is None or self.settlement.cause not in (Cause.SETTINGS, Cause.SCENE, Cause.RANGE)
+            self.settlement is None or self.settlement.cause not in (Cause.SETTINGS, Cause.SCENE, Cause.RANGE, Cause.CONDITIONING)
         )
 
     def to_dict(self) -> dict[str, Any]:

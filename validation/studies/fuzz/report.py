@@ -179,9 +179,10 @@ def campaign_markdown(res: CampaignResult, doc: dict[str, Any]) -> str:
         return e["settlement"]["cause"] if e["settlement"] else "unsettled"
 
     sections = (
-        ("New findings", "not known, and neither tightened settings, a singular motion nor an "
-         "engine's range explain them",
-         lambda e: not e["known"] and cause(e) not in ("settings", "scene", "range")),
+        ("New findings", "not known, and neither tightened settings, a singular or "
+         "ill-conditioned motion nor an engine's range explain them",
+         lambda e: not e["known"]
+         and cause(e) not in ("settings", "scene", "range", "conditioning")),
         ("Numerical limits of the settings", "gone at tightened settings, or within the plants' "
          "own error estimates at their default settings: the settings, not the model",
          lambda e: not e["known"] and cause(e) == "settings"),
@@ -191,6 +192,9 @@ def campaign_markdown(res: CampaignResult, doc: dict[str, Any]) -> str:
         ("Beyond an engine's range", "a plant stops where the motion passes the largest value it "
          "carries on with (MuJoCo's mjMAXVAL), while every other plant finishes",
          lambda e: not e["known"] and cause(e) == "range"),
+        ("Ill-conditioned motions", "the motion amplifies a round-off-sized change of its "
+         "initial state into a tenth of the disagreement or more: no two engines can agree "
+         "closer", lambda e: not e["known"] and cause(e) == "conditioning"),
         ("Known findings", "", lambda e: bool(e["known"])),
     )
     for title, what, keep in sections:

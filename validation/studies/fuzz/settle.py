@@ -31,6 +31,10 @@ The cause (:class:`Cause`):
   failed (one may pass its time limit), and a run that finished reaches a coordinate, velocity or acceleration beyond the stopped
   plant's ``value_bound`` (MuJoCo's ``mjMAXVAL`` = 1e10: a mass flung off a spinning rod without
   a spring runs away exponentially): the motion left that engine's range, by its design;
+* ``conditioning``: the motion itself amplifies a perturbation of the initial state at round-off
+  level (:data:`PERTURBATION` relative) into at least :data:`CONDITIONING_FRACTION` of the
+  disagreement, in the first plant's own runs: two engines, whose errors are never smaller than
+  that, cannot agree on such a scene at any settings;
 * ``unsettled``: a plant cannot tighten its settings (a plugin that does not say how), or a
   tightened run failed or passed its time limit.
 
@@ -41,6 +45,7 @@ plant tightened.
 
 from __future__ import annotations
 
+import copy
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -74,6 +79,27 @@ of 100 ε); a decade, as the referee's own separation (REFEREE_SEPARATION), keep
 the settings could explain from being called a model difference."""
 
 
+PERTURBATION = 1e-12
+"""The conditioning test's perturbation of the initial state: each component of ω(0), p(0) and
+ṗ(0) moved by this times max(1, its magnitude) (rad/s, m, m/s): the size of the differences
+every two engines carry from their first steps (a double's round-off is 1.1e-16; one step of an
+integrator at the scene tolerances errs by up to ~1e-12)."""
+
+CONDITIONING_FRACTION = 0.1
+"""A disagreement is the scene's conditioning when the first plant's run from the perturbed
+initial state differs from its own run by at least this fraction of the disagreement's value
+(the failed check's value, or the outlier's distance) on the same quantity: a round-off-sized
+cause then makes a tenth of it, and the rest is the same amplification of the engines' own
+differences, which no settings remove."""
+
+ABSOLUTE_QUANTITIES = frozenset(
+    ("position_C", "attitude", "rod_positions", "velocity_C", "rod_velocities", "angular_velocity")
+)
+"""The quantities whose check values and referee distances are in their own unit, as the own
+error estimates and the conditioning test's differences are: the state. The forces' are
+relative to the largest force (validation.compare.thresholds), so the margin and conditioning
+rules, which compare the two, leave them to the tightened judgement."""
+
 SINGULAR_SPREAD_SAMPLES = 2.0
 """Plants that stop or stall at simulated times within this many output intervals of each other
 stop at the same time: a stopped run is known to its last output sample (one interval), a stalled
@@ -87,6 +113,7 @@ class Cause(StrEnum):
     SETTINGS = "settings"
     SCENE = "scene"
     RANGE = "range"
+    CONDITIONING = "conditioning"
     UNSETTLED = "unsettled"
 
 
@@ -179,27 +206,56 @@ def _default_run(
     return record, tr
 
 
+def perturbed(data: dict[str, Any]) -> dict[str, Any]:
+    """The scene file's dict ``data`` with its initial ω, p and ṗ moved by :data:`PERTURBATION`
+    (each component by that times max(1, its magnitude))."""
+    out = copy.deepcopy(data)
+    init = out.setdefault("initial", {})
+    for key in ("omega", "p", "pdot"):
+        if key in init:
+            init[key] = [float(x) + PERTURBATION * max(1.0, abs(float(x))) for x in init[key]]
+    if "omega" not in init:
+        init["omega"] = [PERTURBATION] * 3
+    return out
+
+
 def settle_plant(
-    data: dict[str, Any], p: Plant | str, horizon: float, budget_s: float, tighten: bool
+    data: dict[str, Any],
+    p: Plant | str,
+    horizon: float,
+    budget_s: float,
+    tighten: bool,
+    condition: bool = False,
 ) -> dict[str, Any]:
     """An executor's task: plant ``p``'s part of settling the scene file's dict ``data`` (a scene
     the caller has prepared and found the plant able to run): its run at its default settings
     (how it ended: :func:`_default_run`) and, when ``tighten``, its run at its tightened settings
-    and the own error estimate between the two. Each run within ``budget_s`` s. Back: ``name``,
-    ``default_run``, ``bound`` (its ``value_bound``), and with ``tighten``: ``settings``
-    ([default, tightened] descriptions), ``untightened`` (why not, "" when it was), ``tight``
-    (the tightened trajectory, None without one), ``own_errors`` (quantity -> estimate)."""
+    and the own error estimate between the two; when ``condition``, its run of the
+    :func:`perturbed` scene and how far that moves it. Each run within ``budget_s`` s. Back:
+    ``name``, ``default_run``, ``bound`` (its ``value_bound``), ``sensitivity`` (quantity -> the
+    perturbed run's difference; empty without ``condition`` or a finished default run), and with
+    ``tighten``: ``settings`` ([default, tightened] descriptions), ``untightened`` (why not, ""
+    when it was), ``tight`` (the tightened trajectory, None without one), ``own_errors``
+    (quantity -> estimate)."""
     scene, refused, chosen = prepare(data, [p], horizon)
     if scene is None or not chosen:
         name = next(iter(refused), "scene")
         why = next(iter(refused.values()), "refused")
         return {"name": name, "default_run": {"status": "raised", "reached": math.nan},
                 "bound": math.inf, "settings": ["", ""], "untightened": why, "tight": None,
-                "own_errors": {}}
+                "own_errors": {}, "sensitivity": {}}
     name, pl = chosen[0]
-    out: dict[str, Any] = {"name": name, "bound": float(pl.value_bound)}
+    out: dict[str, Any] = {"name": name, "bound": float(pl.value_bound), "sensitivity": {}}
+    out["default_run"], given = _default_run(name, pl, scene, horizon, budget_s)
+    if condition and given is not None and given.status is RunStatus.OK:
+        moved, _refused, _chosen = prepare(perturbed(data), [p], horizon)
+        try:
+            other = run_limited(name, pl, moved, horizon, budget_s) if moved else None
+        except (OverTime, _Raised):
+            other = None
+        if other is not None and other.status is RunStatus.OK:
+            out["sensitivity"] = _own_errors(given, other)
     if not tighten:
-        out["default_run"] = _default_run(name, pl, scene, horizon, budget_s)[0]
         return out
     given_settings = pl.default_settings(scene)
     tight_settings = pl.tightened(scene, given_settings)
@@ -209,10 +265,8 @@ def settle_plant(
     ]
     out.update(untightened="", tight=None, own_errors={})
     if tight_settings is None:
-        out["default_run"] = {"status": "not run", "reached": math.nan}
         out["untightened"] = f"the {name} plant cannot tighten its settings"
         return out
-    out["default_run"], given = _default_run(name, pl, scene, horizon, budget_s)
     try:
         tight = run_limited(name, pl, scene, horizon, budget_s, tight_settings)
     except (OverTime, _Raised) as exc:
@@ -233,7 +287,7 @@ def settle_collect(
     (:func:`settle_plant`, in the plants' order): the tightened runs judged together."""
     if scene is None:
         return {"own_errors": {}, "settings": {}, "untightened": dict(refused),
-                "default_runs": {}, "bounds": {}, "interval": math.nan,
+                "default_runs": {}, "bounds": {}, "sensitivity": {}, "interval": math.nan,
                 "tightened": Outcome(refused=dict(refused)).to_dict()}
     untightened = dict(refused)
     own, described, runs, found = {}, {}, [], []
@@ -257,6 +311,7 @@ def settle_collect(
         "untightened": untightened,
         "default_runs": {p["name"]: p["default_run"] for p in parts},
         "bounds": {p["name"]: p["bound"] for p in parts},
+        "sensitivity": {p["name"]: dict(p["sensitivity"]) for p in parts if p.get("sensitivity")},
         "interval": 1.0 / scene.output.rate,
         "tightened": tightened.to_dict(),
     }
@@ -278,8 +333,8 @@ def settle_data(
     interval, s). A campaign submits each plant's part as its own task instead."""
     scene, refused, chosen = prepare(data, plants, horizon)
     parts = [
-        settle_plant(data, pl, horizon, budget_s, tighten is None or name in tighten)
-        for name, pl in chosen
+        settle_plant(data, pl, horizon, budget_s, tighten is None or name in tighten, i == 0)
+        for i, (name, pl) in enumerate(chosen)
     ]
     return settle_collect(scene, horizon, refused, parts)
 
@@ -304,6 +359,11 @@ def _involved(d: Disagreement, outcome: Outcome, plants: Sequence[str]) -> list[
 
 def _quantity(d: Disagreement) -> str:
     return d.what if d.kind is Kind.OUTLIER else d.what.split(".", 1)[-1]
+
+
+def _check_value(d: Disagreement, outcome: Outcome) -> float:
+    v = outcome.checks.get(d.what)
+    return float(v[0]) if v else math.nan
 
 
 def _distance(d: Disagreement, outcome: Outcome) -> float:
@@ -385,6 +445,16 @@ def settle(
                     "fails",
                 )
         return make(Cause.MODEL, f"{d.plant} fails at its tightened settings too ({tight})")
+    value = _distance(d, outcome) if d.kind is Kind.OUTLIER else _check_value(d, outcome)
+    for p, sens in task.get("sensitivity", {}).items() if q in ABSOLUTE_QUANTITIES else ():
+        moved = float(sens.get(q, math.nan))
+        if math.isfinite(value) and value > 0 and moved >= CONDITIONING_FRACTION * value:
+            return make(
+                Cause.CONDITIONING,
+                f"the scene's conditioning: {p}'s run from an initial state moved by "
+                f"{PERTURBATION:g} relative differs from its own run by {_fmt(moved)} on {q}, "
+                f"against the disagreement's {_fmt(value)}: no two engines can agree closer",
+            )
     missing = [p for p in involved if p in untightened]
     if missing:
         why = "; ".join(f"{p}: {untightened[p]}" for p in missing)
@@ -410,7 +480,12 @@ def settle(
         bound = errors.get(d.plant, math.nan) + max(
             (e for p, e in errors.items() if p != d.plant), default=0.0
         )
-        if math.isfinite(dist) and math.isfinite(bound) and dist <= SETTLE_MARGIN * bound:
+        if (
+            q in ABSOLUTE_QUANTITIES
+            and math.isfinite(dist)
+            and math.isfinite(bound)
+            and dist <= SETTLE_MARGIN * bound
+        ):
             return make(
                 Cause.SETTINGS,
                 f"a numerical limit of the settings: {d.plant}'s distance {_fmt(dist)} is within "
@@ -430,10 +505,14 @@ def settle(
 
 
 __all__ = [
+    "ABSOLUTE_QUANTITIES",
+    "CONDITIONING_FRACTION",
+    "PERTURBATION",
     "SETTLE_MARGIN",
     "SINGULAR_SPREAD_SAMPLES",
     "Cause",
     "Settlement",
+    "perturbed",
     "settle",
     "settle_collect",
     "settle_data",
