@@ -207,7 +207,10 @@ def executor_for(
         client = Client(scheduler)
     try:
         width = sum(w.get("nthreads", 1) for w in client.scheduler_info()["workers"].values())
-        yield client.get_executor(), max(1, width)
+        # pure=False: Dask would otherwise give two submissions of one call (a shrink candidate
+        # met again) one key, and the second could inherit the first's release as a
+        # CancelledError; every submission here is its own task
+        yield client.get_executor(pure=False), max(1, width)
     finally:
         client.close()
         if cluster is not None:
