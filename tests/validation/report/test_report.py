@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from analytic.effects import Effect
 from analytic.scene import load_scene
 from analytic.simulate import simulate
 from analytic.trajectory import Engine, RunStatus
@@ -47,7 +48,7 @@ def planted(scene, traj, tmp_path_factory):
     return out, files
 
 
-def test_planted_offset_fails_with_its_exact_value(planted, traj):
+def test_planted_offset_fails_with_its_exact_value(planted, traj, scene):
     out, _ = planted
     other_q = traj.q.copy()
     other_q[:, :3] += np.array([0.0, 3e-5, 4e-5])
@@ -58,9 +59,17 @@ def test_planted_offset_fails_with_its_exact_value(planted, traj):
     c = by[("analytic vs mujoco", "position_C")]
     assert c["value"] == pytest.approx(5e-5, rel=1e-9)
     assert c["verdict"] == "FAIL" and c["passed"] is False and c["reason"]
-    # the bound: 1e-6 m plus rtol × the largest |R| of the two runs (a few m here: the absolute
-    # part decides, and the report says so)
-    size = max(np.linalg.norm(q[:, :3], axis=1).max() for q in (traj.q, other.q))
+    # the bound: 1e-6 m plus rtol × C's largest departure from its uniformly accelerated motion
+    # R(0) + Ṙ(0) t + ½ g t² over the two runs (a few m here: the absolute part decides, and the
+    # report says so)
+    g = np.asarray(scene.gravity, float) if scene.has(Effect.GRAVITY) else np.zeros(3)
+    t = (traj.t - traj.t[0])[:, None]
+
+    def departure(q):
+        ballistic = q[0, :3] + traj.qdot[0, :3] * t + 0.5 * g * t * t
+        return np.linalg.norm(q[:, :3] - ballistic, axis=1).max()
+
+    size = max(departure(traj.q), departure(other.q))
     assert c["absolute_part"] == 1e-6 and c["unit"] == "m" and c["decided_by"] == "absolute"
     assert c["magnitude"] == pytest.approx(size, rel=1e-12)
     assert c["relative_part"] == pytest.approx(1e-7 * size, rel=1e-12)
@@ -184,16 +193,16 @@ def test_an_interrupted_run_says_where_it_stopped(scene, tmp_path):
 
 @pytest.fixture(scope="module")
 def far(scene, traj, tmp_path_factory):
-    """Both runs 10 km from the origin (|R| ≈ 1e4 m, so the position bound's relative part,
-    1e-7 × 1e4 = 1e-3 m, is a thousand times its absolute part), the second displaced by 5e-4 m
-    (passes by the relative part) and its rod positions by 5e-6 m (fails: |p_i| ≈ 12 m gives a
-    bound of 1e-6 + 1.2e-6 m)."""
-    shift = np.array([6e3, 8e3, 0.0])  # |shift| = 1e4 m
+    """Both runs with every mass 10 km along the rod (|p_i| ≈ 1e4 m, so the rod positions'
+    bound has a relative part 1e-7 × 1e4 = 1e-3 m, a thousand times its absolute part), the
+    second's masses displaced by 5e-4 m (passes by the relative part) and its C by 5e-6 m
+    (fails: C's departure from its uniformly accelerated motion is a few m, so the absolute
+    part, 1e-6 m, decides)."""
     qa = traj.q.copy()
-    qa[:, :3] += shift
+    qa[:, 7:] += 1e4
     qb = qa.copy()
-    qb[:, :3] += np.array([3e-4, 4e-4, 0.0])  # 5e-4 m
-    qb[:, 7:] += 5e-6
+    qb[:, 7:] += 5e-4
+    qb[:, :3] += np.array([3e-6, 4e-6, 0.0])  # 5e-6 m
     a = dataclasses.replace(traj, q=qa)
     b = dataclasses.replace(traj, engine=Engine.MUJOCO, q=qb)
     cmp = compare(a, b, scene, t_end=T_END)
@@ -206,35 +215,34 @@ def test_report_json_names_the_relative_part_when_it_decides(far):
     out, _, qa, qb = far
     doc = json.loads((out / "report.json").read_text())
     by = {(c["subject"], c["name"]): c for c in doc["checks"]}
-    c = by[("analytic vs mujoco", "position_C")]
-    size = max(np.linalg.norm(q[:, :3], axis=1).max() for q in (qa, qb))
-    assert size == pytest.approx(1e4, rel=1e-3)
+    c = by[("analytic vs mujoco", "rod_positions")]
+    size = max(np.abs(q[:, 7:]).max() for q in (qa, qb))
+    assert size == pytest.approx(1e4, rel=1e-2)  # 1e4 m and the masses' own travel
     assert c["passed"] and c["value"] == pytest.approx(5e-4, rel=1e-6)
     assert c["value"] > c["absolute_part"] == 1e-6  # the absolute part alone would fail it
     assert c["decided_by"] == "relative" and c["magnitude"] == pytest.approx(size, rel=1e-12)
     assert c["threshold"] == pytest.approx(1e-6 + 1e-7 * size, rel=1e-12)
-    rod = by[("analytic vs mujoco", "rod_positions")]
-    p_size = max(np.abs(q[:, 7:]).max() for q in (qa, qb))
-    assert not rod["passed"] and rod["magnitude"] == pytest.approx(p_size, rel=1e-12)
-    assert rod["threshold"] == pytest.approx(1e-6 + 1e-7 * p_size, rel=1e-12)
-    assert rod["decided_by"] == ("relative" if 1e-7 * p_size > 1e-6 else "absolute")
+    pos = by[("analytic vs mujoco", "position_C")]
+    assert not pos["passed"] and pos["value"] == pytest.approx(5e-6, rel=1e-6)
+    assert pos["decided_by"] == "absolute" and pos["magnitude"] < 10.0
 
 
 def test_markdown_and_text_state_the_deciding_part(far):
     out, cmp, _, _ = far
     md = (out / "report.md").read_text()
-    row = next(line for line in md.splitlines() if line.startswith("| position_C |"))
+    row = next(line for line in md.splitlines() if line.startswith("| rod_positions |"))
     assert "| relative (1e-07 × 1e+04) |" in row
     att = next(line for line in md.splitlines() if line.startswith("| attitude |"))
     assert "relative" not in att and "absolute" not in att  # no relative part
-    text = check_sentence(cmp.check("position_C"), reason=False)
-    assert text.startswith("position_C = 5.000e-04 m ≤ threshold 1.001e-03 m")
+    ch = cmp.check("rod_positions")
+    text = check_sentence(ch, reason=False)
+    assert text.startswith(f"rod_positions = 5.000e-04 m ≤ threshold {ch.threshold:.3e} m")
     assert (
-        "(decided by the relative part 1e-07 × scale 1.000e+04 m; absolute part 1.000e-06 m)"
-        in text
+        f"(decided by the relative part 1e-07 × scale {ch.magnitude:.3e} m; absolute part "
+        "1.000e-06 m)" in text
     )
-    # a check the absolute part decides reads as before: the velocity of C, whose scale over
-    # 0.3 s (below 100 m/s) makes a relative part under the absolute 1e-5 m/s
+    # a check the absolute part decides reads as before: the velocity of C, whose departure
+    # from its uniformly accelerated motion over 0.3 s makes a relative part under 1e-5 m/s
     v = cmp.check("velocity_C")
     assert v.magnitude < 100 and v.decided_by == "absolute"
     assert check_sentence(v, reason=False).endswith(f"threshold {v.threshold:.3e} m/s")
