@@ -15,6 +15,7 @@ import pytest
 from analytic.plant import AnalyticPlant
 from analytic.scene import load_scene, scene_from_dict
 from analytic.trajectory import Engine
+from tests.support.hanging_plants import SLEEP_S, STALL_T, SleepyPlant, StallingPlant
 from tests.support.plugins import install_project
 from validation.studies.fuzz import campaign as campaign_mod
 from validation.studies.fuzz.campaign import SerialExecutor, fuzz
@@ -232,35 +233,12 @@ def test_executor_for_refuses_both_and_bad_counts():
         pass
 
 
-SLEEP_S = 60.0
-"""How long the sleeping plant's run would take: far past TIME_LIMIT_S."""
 TIME_LIMIT_S = 2.0
 STOP_MARGIN_S = 0.25 * SLEEP_S - TIME_LIMIT_S
 """Fork, SIGTERM, the 0.5 s grace before SIGKILL (workers.STOP_GRACE_S), reaping: a run stopped at
 its limit ends within a quarter of SLEEP_S, which a run that was not stopped (SLEEP_S) cannot; on
 a 2-core machine running the suite in two workers a stopped run took 2.1-5.2 s (this is not a
 timing goal, only the line between stopped and not stopped)."""
-
-
-class SleepyPlant(AnalyticPlant):
-    """A plant that hangs (test only): its run sleeps SLEEP_S s and never reports progress, under
-    Pinocchio's name; it writes its process id into ``pid_dir`` first."""
-
-    engine = Engine.PINOCCHIO
-    label = "sleepy"
-
-    def __init__(self, pid_dir):
-        super().__init__()
-        self.pid_dir = str(pid_dir)
-
-    def _simulate(self, scene, settings, t_end, progress):
-        import os
-        import time
-        from pathlib import Path
-
-        Path(self.pid_dir, f"{os.getpid()}.pid").write_text("")
-        time.sleep(SLEEP_S)
-        return super()._simulate(scene, settings, t_end, progress)
 
 
 def test_a_plant_that_hangs_is_stopped_at_its_limit_and_the_campaign_goes_on(tmp_path):
@@ -430,25 +408,6 @@ def test_settle_rules():
     assert st.cause is Cause.SETTINGS and st.culprit == "c"
     st = settle(stop, Outcome(ran=("a", "b", "c"), disagreements=(stop,)), _task(own, [stop]), "abc")
     assert st.cause is Cause.MODEL
-
-
-class StallingPlant(AnalyticPlant):
-    """A plant that reaches t = STALL_T s and stalls there (test only): it reports that progress,
-    then sleeps SLEEP_S s, as an adaptive integrator grinding at a singularity does."""
-
-    engine = Engine.PINOCCHIO
-    label = "stalling"
-
-    def _simulate(self, scene, settings, t_end, progress):
-        import time
-
-        progress(STALL_T)
-        time.sleep(SLEEP_S)
-        return super()._simulate(scene, settings, t_end, progress)
-
-
-STALL_T = 0.0625
-"""Where the stalling plant stalls, s (a binary fraction: it comes back exactly)."""
 
 
 @pytest.mark.parametrize("where", ["here", "thread"])

@@ -12,9 +12,8 @@ from pathlib import Path
 
 import pytest
 
-from analytic.plant import AnalyticPlant
 from analytic.scene.dump import scene_to_dict
-from analytic.trajectory import Engine
+from tests.support.hanging_plants import SLEEP_S, SleepyPlant
 from validation.runs import workers
 from validation.scenes import resolve_scene
 from validation.studies.fuzz.judge import judge_scene
@@ -23,8 +22,6 @@ needs_server = pytest.mark.skipif(
     not workers.can_serve(), reason="a fork server needs Linux and workers switched on"
 )
 
-SLEEP_S = 60.0
-"""How long the sleeping plant's run would take: far past TIME_LIMIT_S."""
 TIME_LIMIT_S = 2.0
 """The limit each run is given, s."""
 STOP_MARGIN_S = 0.25 * SLEEP_S - TIME_LIMIT_S
@@ -34,23 +31,6 @@ preload (about 1.5 s on the 2-core machine). A stopped run ends within a quarter
 that was not stopped cannot (this is the line between stopped and not stopped, not a timing
 goal)."""
 HORIZON_S = 0.1
-
-
-class SleepyPlant(AnalyticPlant):
-    """A plant that hangs (test only): its run writes its process id into ``pid_dir``, then sleeps
-    SLEEP_S s without ever reporting progress, under Pinocchio's name."""
-
-    engine = Engine.PINOCCHIO
-    label = "sleepy"
-
-    def __init__(self, pid_dir):
-        super().__init__()
-        self.pid_dir = str(pid_dir)
-
-    def _simulate(self, scene, settings, t_end, progress):
-        Path(self.pid_dir, f"{os.getpid()}.pid").write_text("")
-        time.sleep(SLEEP_S)
-        return super()._simulate(scene, settings, t_end, progress)
 
 
 def _scene_data() -> dict:
