@@ -3,7 +3,6 @@ scene files, resume, determinism across executors, the report and its schema, th
 
 from __future__ import annotations
 
-import dataclasses
 import json
 import math
 from concurrent.futures import ThreadPoolExecutor
@@ -14,8 +13,14 @@ import pytest
 
 from analytic.plant import AnalyticPlant
 from analytic.scene import load_scene, scene_from_dict
-from analytic.trajectory import Engine
-from tests.support.hanging_plants import SLEEP_S, STALL_T, SleepyPlant, StallingPlant
+from tests.support.fuzz_plants import (
+    SLEEP_S,
+    STALL_T,
+    CoarsePlant,
+    ShiftedPlant,
+    SleepyPlant,
+    StallingPlant,
+)
 from tests.support.plugins import install_project
 from validation.studies.fuzz import campaign as campaign_mod
 from validation.studies.fuzz.campaign import SerialExecutor, fuzz
@@ -25,25 +30,6 @@ from validation.studies.fuzz.settle import SETTLE_MARGIN, Cause, settle
 from validation.studies.fuzz.shrink import MIN_HORIZON_S, round_sig
 from validation.studies.fuzz.space import draw_scene_dict, drivers
 from validation.studies.sweep.running import executor_for
-
-SHIFT_M = 1e-3
-"""The planted plant's error: C displaced by 1 mm (the position_C threshold is far below)."""
-
-
-class ShiftedPlant(AnalyticPlant):
-    """A wrong plant (test only): the analytic plant's run with C displaced by SHIFT_M along x,
-    under MuJoCo's name. Every scene shows it on ``position_C``, so the minimal scene must be the
-    simplest one of the space."""
-
-    engine = Engine.MUJOCO
-    label = "shifted"
-
-    def _simulate(self, scene, settings, t_end, progress):
-        tr = super()._simulate(scene, settings, t_end, progress)
-        q = np.array(tr.q)
-        q[:, 0] += SHIFT_M
-        return dataclasses.replace(tr, q=q, engine=Engine.MUJOCO)
-
 
 PLANTS = ("analytic", ShiftedPlant())
 TARGET = Disagreement(Kind.CHECK, "position_C")
@@ -333,21 +319,6 @@ def test_a_planted_wrong_plant_is_found_through_the_plugin_mechanism_and_shrunk_
         outliers = [v for v in verdicts if v["verdict"] == "outlier"]
         assert outliers and {v["outlier"] for v in outliers} == {"planted"}
         assert all("Planted DOP853 rtol 1e-12 is the outlier" in v["text"] for v in outliers)
-
-
-class CoarsePlant(AnalyticPlant):
-    """A right model at coarse default settings (test only): the analytic plant at rtol 1e-5,
-    under MuJoCo's name. Its disagreements are its settings', not its model's."""
-
-    engine = Engine.MUJOCO
-    label = "coarse"
-
-    def default_settings(self, scene):
-        return dataclasses.replace(super().default_settings(scene), rtol=1e-5, atol=1e-7)
-
-    def _simulate(self, scene, settings, t_end, progress):
-        tr = super()._simulate(scene, settings, t_end, progress)
-        return dataclasses.replace(tr, engine=Engine.MUJOCO)
 
 
 def test_a_right_model_at_coarse_settings_is_settled_as_a_limit_of_its_settings(tmp_path):

@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 from analytic.scene.dump import scene_to_dict
-from tests.support.hanging_plants import SLEEP_S, SleepyPlant
+from tests.support.fuzz_plants import SLEEP_S, SleepyPlant
 from validation.runs import workers
 from validation.scenes import resolve_scene
 from validation.studies.fuzz.judge import judge_scene
