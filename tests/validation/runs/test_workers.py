@@ -206,11 +206,18 @@ def test_a_served_job_works_from_a_thread_and_a_hung_one_is_stopped(tmp_path):
     spins without reporting is ended by stop() (SIGTERM, then SIGKILL) and reaped."""
     import threading
 
+    from validation.studies.fuzz.judge import SERVER_PRELOAD
+
     out: dict = {}
 
     def body():
         heard: list = []
-        job = workers.start_served("square", _served_square, 6, on_message=heard.append)
+        # the fork server keeps the preload of its first start, for the whole process: start it
+        # with the fuzzer's, or every later served plant run of this test process (the fuzz
+        # tests') would load its kernels in its own child
+        job = workers.start_served(
+            "square", _served_square, 6, on_message=heard.append, preload=SERVER_PRELOAD
+        )
         value, pid = job.result()
         out["square"] = (job.forked, value, pid, heard)
         try:
