@@ -2,12 +2,16 @@
 
 The file holds the same columns as the CSV form (:mod:`validation.external.columns`), each a
 ``double`` (integer and float32 columns are read too, as float64); a null is refused like a NaN.
-The row and column counts are read from the file's metadata and refused before any data is
-decompressed, so a small file cannot expand to more rows than the scene's grid.
+The row and column counts, the columns' types and the uncompressed sizes the column chunks declare
+are read from the file's metadata and refused before any data is decompressed
+(:func:`check_metadata`), so a small file cannot expand to more rows than the scene's grid, nor
+to a large binary column.
 """
 
 from __future__ import annotations
 
+import os
+import struct
 from collections.abc import Sequence
 from typing import Any
 
@@ -29,6 +33,89 @@ def _pyarrow(where: str) -> tuple[Any, Any]:
     return pa, pq
 
 
+FOOTER_LIMIT = 16 << 20
+"""Largest Parquet footer (the file's metadata) read, bytes."""
+
+DECODED_BYTES_PER_VALUE = 32
+"""Bytes per value a column chunk may declare uncompressed (:func:`check_metadata`): 8 for a
+double, the rest room for a dictionary page and the definition levels."""
+
+DECODED_BYTES_PER_CHUNK = 4 << 10
+"""Bytes per column chunk a file may declare uncompressed beyond its values (page headers,
+statistics): a valid file of one-row row groups declares about 100."""
+
+_NUMERIC_PHYSICAL = frozenset({"DOUBLE", "FLOAT", "INT32", "INT64"})
+
+
+def footer_metadata(fd: int, size: int, where: Where) -> Any | None:
+    """The Parquet metadata of the open file ``fd`` of ``size`` bytes, read from its footer
+    alone (at most :data:`FOOTER_LIMIT` bytes); None when there is no readable footer."""
+    pa, pq = _pyarrow(where.file)
+    if size < 12:
+        return None
+    tail = os.pread(fd, 8, size - 8)
+    if len(tail) != 8 or tail[4:] != b"PAR1":
+        return None
+    length = struct.unpack("<I", tail[:4])[0]
+    if length + 12 > size or length > FOOTER_LIMIT:
+        return None
+    footer = os.pread(fd, length, size - 8 - length)
+    try:
+        return pq.read_metadata(pa.BufferReader(b"PAR1" + footer + tail))
+    except (pa.ArrowException, OSError, ValueError):
+        return None
+
+
+def rows_text(rows: int, max_rows: int) -> str:
+    """``"3000 rows, more than the scene's output grid has (3 samples)"``."""
+    return f"{rows} rows, more than the scene's output grid has ({max_rows} samples)"
+
+
+def check_metadata(
+    meta: Any, schema: Any, arrow_schema: Any, where: Where, max_rows: int, max_columns: int
+) -> None:
+    """Refuse, from the footer alone and before any data is decompressed: more columns than a
+    file of the scene can have, more rows than its grid, a column that is not a flat number
+    (binary, string, nested: physical type other than DOUBLE, FLOAT, INT32, INT64), and column
+    chunks that declare more uncompressed bytes than their values need
+    (:data:`DECODED_BYTES_PER_VALUE` a value, :data:`DECODED_BYTES_PER_CHUNK` a chunk)."""
+    if meta.num_columns > max_columns:
+        raise TrajectoryFileError(
+            f"{where.file}: {meta.num_columns} columns, more than the {max_columns} a file for "
+            "this scene can have"
+        )
+    if meta.num_rows > max_rows:
+        raise TrajectoryFileError(f"{where.file}: {rows_text(meta.num_rows, max_rows)}")
+    pa, _ = _pyarrow(where.file)
+    for field in arrow_schema:
+        if not (pa.types.is_floating(field.type) or pa.types.is_integer(field.type)):
+            raise TrajectoryFileError(
+                f"{where.file}, column {field.name!r}: of type {field.type}, not numbers (double "
+                "expected); refused before reading its data"
+            )
+    for c in range(meta.num_columns):
+        col = schema.column(c)
+        if col.physical_type not in _NUMERIC_PHYSICAL or col.max_repetition_level:
+            raise TrajectoryFileError(
+                f"{where.file}, column {col.path!r}: of Parquet type {col.physical_type}, not "
+                "numbers (double expected); refused before reading its data"
+            )
+    chunks = meta.num_row_groups * meta.num_columns
+    allowed = meta.num_rows * meta.num_columns * DECODED_BYTES_PER_VALUE
+    allowed += chunks * DECODED_BYTES_PER_CHUNK
+    declared = sum(
+        max(meta.row_group(g).column(c).total_uncompressed_size, 0)
+        for g in range(meta.num_row_groups)
+        for c in range(meta.num_columns)
+    )
+    if declared > allowed:
+        raise TrajectoryFileError(
+            f"{where.file}: its {meta.num_rows:,} rows × {meta.num_columns} columns declare "
+            f"{declared:,} bytes uncompressed, more than the {allowed:,} numbers need; refused "
+            "before decompressing"
+        )
+
+
 def parse_parquet(
     data: bytes, where: Where, max_rows: int, max_columns: int
 ) -> tuple[list[str], np.ndarray]:
@@ -37,34 +124,33 @@ def parse_parquet(
     Args:
         data: the whole file.
         where: how messages name the file.
-        max_rows, max_columns: refused beyond these, from the metadata, before reading data.
+        max_rows, max_columns: refused beyond these, from the metadata, before reading data
+            (:func:`check_metadata`, with the column types and the declared sizes).
 
     Raises:
         TrajectoryFileError: not a Parquet file, too many rows or columns, a column that is not
-            numeric, a null value (row and column named).
+            numeric, declared sizes beyond what the numbers need, a null value (row and column
+            named), data that does not match the metadata.
     """
     pa, pq = _pyarrow(where.file)
     try:
         pf = pq.ParquetFile(pa.BufferReader(data))
         meta = pf.metadata
+        schema = pf.schema
+        arrow_schema = pf.schema_arrow
     except (pa.ArrowException, OSError, ValueError) as exc:
         first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise TrajectoryFileError(f"{where.file}: not a readable Parquet file ({first})") from None
-    if meta.num_columns > max_columns:
-        raise TrajectoryFileError(
-            f"{where.file}: {meta.num_columns} columns, more than the {max_columns} a file for "
-            "this scene can have"
-        )
-    if meta.num_rows > max_rows:
-        raise TrajectoryFileError(
-            f"{where.file}: {meta.num_rows} rows, more than the scene's output grid has "
-            f"({max_rows})"
-        )
+    check_metadata(meta, schema, arrow_schema, where, max_rows, max_columns)
     try:
         table = pf.read()
     except (pa.ArrowException, OSError, ValueError) as exc:
         first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise TrajectoryFileError(f"{where.file}: not a readable Parquet file ({first})") from None
+    if table.num_rows != meta.num_rows:
+        raise TrajectoryFileError(
+            f"{where.file}: {table.num_rows:,} rows read, the metadata says {meta.num_rows:,}"
+        )
     names = [str(name) for name in table.column_names]
     values = np.empty((table.num_rows, len(names)))
     for c, name in enumerate(names):
@@ -91,4 +177,4 @@ def format_parquet(names: Sequence[str], values: np.ndarray, label: str) -> byte
     return sink.getvalue().to_pybytes()
 
 
-__all__ = ["format_parquet", "parse_parquet"]
+__all__ = ["check_metadata", "footer_metadata", "format_parquet", "parse_parquet", "rows_text"]

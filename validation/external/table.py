@@ -2,8 +2,9 @@
 
 A table is the file's header (names) and its samples as one float array, shape (N, C), one row
 per data row, columns in file order. :func:`check_table` refuses, in this order, the first
-non-finite value, a time that does not increase, a time column that is not the scene's output
-grid, and a quaternion that is not unit; every message names the data row and the column
+non-finite value, a time that does not increase, a time off the scene's output grid, a row count
+other than the grid's (a file that stops on the grid early is accepted when the caller asks,
+``up_to_file_end``), and a quaternion that is not unit; every message names the data row and the column
 (:class:`~validation.external.errors.Where`).
 """
 
@@ -59,9 +60,22 @@ def check_finite(values: np.ndarray, names: Sequence[str], where: Where) -> None
         raise TrajectoryFileError(f"{where.at(k, names[c])}: {what}; every value must be finite")
 
 
-def check_time(t: np.ndarray, scene: Scene, where: Where) -> None:
-    """Refuse a time that does not increase, then a time column other than the scene's grid
-    (count, then each value within :data:`GRID_TOL` intervals), naming the expected grid."""
+def check_time(
+    t: np.ndarray, scene: Scene, where: Where, *, up_to_file_end: bool = False, hint: bool = False
+) -> None:
+    """Refuse a time that does not increase, then a time off the scene's grid (each value within
+    :data:`GRID_TOL` intervals of its grid point), then a row count other than the grid's, naming
+    the expected grid.
+
+    Args:
+        t: the time column.
+        scene: the scene whose output grid the column must be.
+        where: how messages name the file and rows.
+        up_to_file_end: a file that stops on the grid before its end is accepted (at least two
+            rows): it is judged up to its last row (``tumble judge --up-to-file-end``).
+        hint: a file that stops on the grid early is refused with the options that judge it
+            over the horizon it covers (the reader of ``tumble judge``; not the writer).
+    """
     dt = np.diff(t)
     if (dt <= 0).any():
         k = int(np.argmax(dt <= 0)) + 1
@@ -70,18 +84,36 @@ def check_time(t: np.ndarray, scene: Scene, where: Where) -> None:
             f"{float(t[k - 1])!r} s (t must increase)"
         )
     grid = scene.output.times()
-    if len(t) != len(grid):
-        raise TrajectoryFileError(
-            f"{where.file}, column 't': {len(t)} data rows, not {grid_text(scene)}"
-        )
+    common = min(len(t), len(grid))
     step = 1.0 / scene.output.rate
-    off = np.abs(t - grid) > GRID_TOL * step
+    off = np.abs(t[:common] - grid[:common]) > GRID_TOL * step
     if off.any():
         k = int(np.argmax(off))
         raise TrajectoryFileError(
             f"{where.at(k, 't')}: {float(t[k])!r} s, expected {float(grid[k])!r} s "
             f"(± {GRID_TOL:g} sample intervals) on {grid_text(scene)}"
         )
+    if len(t) == len(grid):
+        return
+    count = f"{where.file}, column 't': {len(t)} data rows, not {grid_text(scene)}"
+    if len(t) > len(grid):
+        raise TrajectoryFileError(count)
+    last = float(grid[len(t) - 1])
+    if len(t) < 2:
+        raise TrajectoryFileError(
+            f"{count}: one data row (t = 0) covers no horizon to judge"
+            if up_to_file_end or hint
+            else count
+        )
+    if up_to_file_end:
+        return
+    if hint:
+        raise TrajectoryFileError(
+            f"{count}; it stops on the grid at t = {last!r} s: to judge it over the 0-{last:g} s "
+            f"it covers, give --t-end {last:g} or --up-to-file-end ([judge] t_end or "
+            "up_to_file_end = true)"
+        )
+    raise TrajectoryFileError(count)
 
 
 def check_quaternions(u: np.ndarray, where: Where) -> None:
@@ -98,7 +130,14 @@ def check_quaternions(u: np.ndarray, where: Where) -> None:
 
 
 def check_table(
-    names: Sequence[str], values: np.ndarray, layout: HeaderLayout, scene: Scene, where: Where
+    names: Sequence[str],
+    values: np.ndarray,
+    layout: HeaderLayout,
+    scene: Scene,
+    where: Where,
+    *,
+    up_to_file_end: bool = False,
+    hint: bool = False,
 ) -> None:
     """Every check of this module, in the order of the module docstring.
 
@@ -108,11 +147,14 @@ def check_table(
         layout: where each group is (:func:`validation.external.columns.parse_header`).
         scene: the scene whose grid and mass count the file must have.
         where: how messages name the file and rows.
+        up_to_file_end, hint: as :func:`check_time`.
     """
     if values.shape[0] == 0:
         raise TrajectoryFileError(f"{where.file}: no data rows, expected {grid_text(scene)}")
     check_finite(values, names, where)
-    check_time(values[:, layout.index["t"]], scene, where)
+    check_time(
+        values[:, layout.index["t"]], scene, where, up_to_file_end=up_to_file_end, hint=hint
+    )
     check_quaternions(values[:, layout.columns(ColumnGroup.ATTITUDE, scene.n)], where)
 
 
