@@ -191,9 +191,13 @@ def cmd_judge(args: argparse.Namespace) -> int:
         label=args.label,
         plants=args.plants,
         reference=args.reference,
+        t_end=args.t_end,
+        up_to_file_end=args.up_to_file_end,
         figure_formats=args.figure_format,
     )
     scene = request.validation.scene
+    horizon = request.horizon
+    over = f", {horizon.sentence}" if horizon is not None and not horizon.whole else ""
     out = Path(args.out) if args.out else default_out_dir("judge_", scene.name)
     res = None
     with warming(scene, request.validation.plants, Status()):
@@ -203,7 +207,7 @@ def cmd_judge(args: argparse.Namespace) -> int:
         finally:
             progress.close(walls=res.wall_times if res is not None else None, stopped=res is None)
     return _print_outcome(
-        res, f"{request.label} on {scene.name}", "not judged or not applicable", not_judged=True
+        res, f"{request.label} on {scene.name}{over}", "not judged or not applicable", not_judged=True
     )
 
 
@@ -213,6 +217,10 @@ def cmd_reference(args: argparse.Namespace) -> int:
     from validation.scenes import resolve_scene
 
     scene = resolve_scene(args.scene)
+    if args.t_end is not None:
+        from validation.external.horizon import horizon_on_grid, shortened
+
+        scene = shortened(scene, horizon_on_grid(scene, args.t_end, "--t-end"))
     out = Path(args.out) if args.out else default_out_dir("reference_", scene.name)
     pack = write_pack(scene, out)
     worst = max(
@@ -518,6 +526,19 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="DIR",
         help="a reference pack (tumble reference): judge against its trajectory, running no plant",
     )
+    p.add_argument(
+        "--t-end",
+        type=_positive_float,
+        metavar="T",
+        help="judge the scene as if its t_end were T, s: in (0, the scene's t_end], on its output "
+        "grid; the file then holds the grid up to T",
+    )
+    p.add_argument(
+        "--up-to-file-end",
+        action="store_true",
+        help="a file that stops on the grid before the end is judged up to its last row (the "
+        "report states the horizon judged); without it such a file is refused",
+    )
     p.add_argument("--out", help="output directory (default: out/judge_<scene slug>)")
     p.add_argument(
         "--figure-format",
@@ -539,6 +560,13 @@ def build_parser() -> argparse.ArgumentParser:
         "tumble judge SCENE --trajectory FILE --reference OUT.",
     )
     _add_scene_arg(p, DEFAULT_SCENE, builtin_names())
+    p.add_argument(
+        "--t-end",
+        type=_positive_float,
+        metavar="T",
+        help="the pack's horizon, s: in (0, the scene's t_end], on its output grid (a pack "
+        "judges any horizon up to its own)",
+    )
     p.add_argument("--out", help="output directory (default: out/reference_<scene slug>)")
     p.set_defaults(func=cmd_reference)
 

@@ -40,6 +40,7 @@ from mj_bridge.registry import NAME_PATTERN
 from validation.compare.checks import Check, Comparison
 from validation.compare.thresholds import thresholds_for
 from validation.external.columns import ColumnGroup
+from validation.external.horizon import HorizonSource, JudgedHorizon, horizon_on_grid, shortened
 from validation.external.read import read_trajectory
 from validation.external.record import ExternalTrajectory, does_work
 from validation.external.reference_pack import REFERENCE_PLANT, read_pack
@@ -176,11 +177,13 @@ class JudgeRequest:
             thresholds, horizon and figure formats, as ``run_request`` takes them.
         external: the file's run, read and checked, its plant name the label.
         reference: the reference pack's trajectory (plant ``reference``), or None.
+        horizon: the horizon judged, beside the scene's own (the report states it).
     """
 
     validation: ValidationRequest
     external: ExternalTrajectory
     reference: ExternalTrajectory | None = None
+    horizon: JudgedHorizon | None = None
 
     @property
     def label(self) -> str:
@@ -215,15 +218,19 @@ def judge_request(
     plants: Sequence[str] | str | None = None,
     reference: str | Path | None = None,
     t_end: float | None = None,
+    up_to_file_end: bool = False,
     figure_formats: Sequence[FigureFormat | str] | str = DEFAULT_FORMATS,
     thresholds: Mapping[str, Any] | None = None,
 ) -> JudgeRequest:
     """Check a judge's whole input, once; build nothing and run nothing.
 
     The scene (a :class:`Scene`, a scene file or a built-in name) with ``thresholds`` laid over its
-    ``[thresholds]`` and its horizon shortened to ``t_end`` (the file then holds that grid); the
-    plants (:func:`_plants`; none may be named with ``reference``); the label
-    (:func:`plant_label`); the reference pack (its scene must be this scene); the file.
+    ``[thresholds]`` and its horizon shortened to ``t_end`` (in (0, the scene's t_end], on its
+    output grid: :func:`validation.external.horizon.horizon_on_grid`; the file then holds the
+    grid up to it); the plants (:func:`_plants`; none may be named with ``reference``); the label
+    (:func:`plant_label`); the file (with ``up_to_file_end``, a file that stops on the grid early
+    is judged up to its last row: the horizon is shortened to it); the reference pack (its scene
+    must be this scene, its horizon at least the one judged, its record accurate enough).
 
     Raises:
         ValueError: one line naming the field and the value, or the file's row and column
@@ -231,10 +238,13 @@ def judge_request(
     """
     if not isinstance(scene, Scene):
         scene = resolve_scene(scene, check_thresholds=False)  # checked below, once
+    scene_t_end = scene.output.t_end
+    source = HorizonSource.SCENE
     if t_end is not None:
-        if not (t_end > 0):
-            raise ValueError(f"t_end: must be a positive time in s (got {t_end!r})")
-        scene = scene.replace(output=scene.output.with_t_end(t_end, "t_end"))
+        scene = shortened(scene, horizon_on_grid(scene, t_end, "t_end"))
+        source = HorizonSource.T_END
+    if not isinstance(up_to_file_end, bool):
+        raise ValueError(f"up_to_file_end: must be true or false (got {up_to_file_end!r:.60})")
     sc = with_threshold_overrides(scene, thresholds)
     checked = thresholds_for(sc)
     if reference is not None and plants:
@@ -247,8 +257,18 @@ def judge_request(
     check_validation_inputs(sc, mujoco=Engine.MUJOCO in chosen)
     formats = _figure_formats(figure_formats)
     name = plant_label(label, trajectory_file, chosen)
+    external = read_trajectory(trajectory_file, sc, engine=name, up_to_file_end=up_to_file_end)
+    covered = float(external.trajectory.t[-1])
+    if covered != sc.output.t_end:  # the file stops on the grid early, and the user said so
+        sc = shortened(sc, covered)
+        source = HorizonSource.FILE_END
     ref = read_pack(reference, sc) if reference is not None else None
-    external = read_trajectory(trajectory_file, sc, engine=name)
+    horizon = JudgedHorizon(
+        t_end=sc.output.t_end,
+        scene_t_end=scene_t_end,
+        samples=int(external.trajectory.t.shape[0]),
+        source=source,
+    )
     request = ValidationRequest(
         scene=sc,
         thresholds=checked,
@@ -259,7 +279,7 @@ def judge_request(
         horizon=sc.output.t_end,
         figure_formats=formats,
     )
-    return JudgeRequest(validation=request, external=external, reference=ref)
+    return JudgeRequest(validation=request, external=external, reference=ref, horizon=horizon)
 
 
 def run_judge(
@@ -301,10 +321,20 @@ def run_judge(
         ),
     }
     files = request.files
+    horizon = request.horizon
+    if horizon is not None:
+        meta["judged_horizon"] = horizon.to_dict()
+
+    def amend(cmp: Comparison) -> Comparison:
+        out = not_judged(cmp, files, sc)
+        if horizon is None:
+            return out
+        return dataclasses.replace(out, notes=(horizon.sentence, *out.notes))
+
     joined = JoinedRuns(
         trajectories=tuple(f.trajectory for f in files),
         names=names,
-        amend=lambda cmp: not_judged(cmp, files, sc),
+        amend=amend,
         meta=meta,
     )
     return run_request(
@@ -326,6 +356,7 @@ def judge(
     plants: Sequence[str] | str | None = None,
     reference: str | Path | None = None,
     t_end: float | None = None,
+    up_to_file_end: bool = False,
     figure_formats: Sequence[FigureFormat | str] | str = DEFAULT_FORMATS,
     thresholds: Mapping[str, Any] | None = None,
     progress: Progress | None = None,
@@ -336,7 +367,12 @@ def judge(
     Args:
         scene: a :class:`Scene`, a scene file, or a built-in scene name.
         trajectory_file: the run, CSV or Parquet (``docs/trajectory-format.md``), on the scene's
-            output grid (``t_end``: the horizon the file covers, default the scene's).
+            output grid up to ``t_end``.
+        t_end: the horizon judged, s: in (0, the scene's t_end], on the scene's output grid
+            (default the scene's t_end).
+        up_to_file_end: a file that stops on the grid before ``t_end`` is judged up to its last
+            row (otherwise it is refused, the message naming this option); the report states
+            the horizon judged (its first note, and ``run.judged_horizon`` in report.json).
         out_dir: output directory (default ``out/judge_<scene slug>``); as ``run_validation``'s.
         label: the file's plant name (default from the file name, :func:`plant_label`).
         plants: the built-in plants run beside it (default every installed one that can run the
@@ -360,6 +396,7 @@ def judge(
         plants=plants,
         reference=reference,
         t_end=t_end,
+        up_to_file_end=up_to_file_end,
         figure_formats=figure_formats,
         thresholds=thresholds,
     )

@@ -17,6 +17,8 @@ import hashlib
 import os
 from pathlib import Path
 
+import numpy as np
+
 from analytic.safe_files import open_regular
 from analytic.scene import Scene
 from analytic.trajectory import Engine
@@ -26,7 +28,7 @@ from validation.external.errors import TrajectoryFileError, Where
 from validation.external.horizon import shortened
 from validation.external.parquet_table import footer_metadata, parse_parquet
 from validation.external.record import ExternalTrajectory, external_trajectory
-from validation.external.table import check_table, grid_text
+from validation.external.table import GRID_TOL, check_table, grid_text
 
 BYTES_PER_VALUE = 64
 """Bytes per value a CSV file may spend on average (:func:`size_limit`): ``repr`` of a double is
@@ -199,8 +201,12 @@ def read_trajectory(
     else:
         on = scene
     rows = len(on.output.times())
-    if rows > values.shape[0]:
-        raise ValueError(f"judged: {rows} samples, more than the file's {values.shape[0]} rows")
+    if rows > values.shape[0] or not np.allclose(
+        on.output.times(), grid[:rows], rtol=0.0, atol=GRID_TOL / scene.output.rate
+    ):
+        raise TrajectoryFileError(
+            f"{where.file}: its grid does not hold {grid_text(on)} (the horizon judged)"
+        )
     groups = {
         g: values[:rows, layout.columns(g, scene.n)]
         for g in ColumnGroup

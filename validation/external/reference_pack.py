@@ -18,7 +18,9 @@
 
 :func:`read_pack` reads a pack back for ``tumble judge --reference DIR``: the three files at their
 fixed names in ``DIR`` (regular files, not links; nothing in the pack names a path), the pack's
-scene compared with the scene judged, the CSV's SHA-256 with the one ``reference.json`` records.
+scene compared with the scene judged (its horizon aside: a pack judges any horizon up to its own),
+the CSV's SHA-256 with the one ``reference.json`` records. A pack whose ``reference.json`` does not
+say ``accurate_enough = true`` is refused: a judge against it would not be a judge.
 """
 
 from __future__ import annotations
@@ -241,20 +243,47 @@ def _first_difference(a: Any, b: Any, at: str = "") -> str:
 
 def _comparable(sc: Scene) -> dict[str, Any]:
     """The scene as a dict, without the tables that judge rather than define the problem (its
-    ``[thresholds]``, a hard case's criterion)."""
+    ``[thresholds]``, a hard case's criterion) and without its horizon (a pack's run judges any
+    horizon up to its own, :func:`read_pack`)."""
     data = json.loads(json.dumps(scene_to_dict(sc), default=str))
     for table in ("thresholds", "hard_case"):
         data.pop(table, None)
+    if isinstance(data.get("output"), dict):
+        data["output"].pop("t_end", None)
     return data
+
+
+def _check_accurate(record: Mapping[str, Any], where: str) -> None:
+    """Refuse a pack whose record does not say its reference is accurate enough
+    (``accurate_enough`` true): an engine judged against it would be judged against the
+    reference's own error."""
+    if record.get("accurate_enough") is True:
+        return
+    bad = [
+        str(a.get("quantity"))
+        for a in record.get("accuracy", ())
+        if isinstance(a, Mapping) and a.get("ok") is False
+    ]
+    which = f" ({', '.join(bad)})" if bad else ""
+    raise ValueError(
+        f"{where}: {RECORD_FILE} says the reference is not accurate enough{which} "
+        f"(accurate_enough = {json.dumps(record.get('accurate_enough'))}): it cannot judge an "
+        "engine"
+    )
 
 
 def read_pack(pack: str | Path, scene: Scene) -> ExternalTrajectory:
     """The reference trajectory of the pack in ``pack`` for ``scene`` (plant ``reference``).
 
+    ``scene``'s horizon may be shorter than the pack's (a pack of 20 s judges 2 s): the
+    reference is read whole on the pack's grid and judged up to ``scene``'s t_end.
+
     Raises:
         ValueError: one line naming the pack and what is wrong: not a directory, a file missing,
-            a link or not regular, ``reference.json`` unreadable or of another pack format, the
-            pack's scene not ``scene`` (naming the first field that differs), ``reference.csv``
+            a link or not regular, ``reference.json`` unreadable or of another pack format, a
+            pack that does not say it is accurate enough (``accurate_enough`` not true), the
+            pack's scene not ``scene`` (naming the first field that differs; the horizon aside),
+            a pack shorter than ``scene``'s horizon, ``reference.csv``
             not the file ``reference.json`` records (its SHA-256), or a bad ``reference.csv``
             (its row and column).
     """
@@ -269,6 +298,7 @@ def read_pack(pack: str | Path, scene: Scene) -> ExternalTrajectory:
         raise ValueError(f"{where}: {RECORD_FILE} is not JSON ({exc})") from None
     if not isinstance(record, dict) or record.get("pack_format") != PACK_FORMAT:
         raise ValueError(f"{where}: {RECORD_FILE} is not of pack format {PACK_FORMAT}")
+    _check_accurate(record, where)
     try:
         theirs = load_scene(_pack_file(pack, SCENE_FILE, where))
     except ValueError as exc:
@@ -276,13 +306,20 @@ def read_pack(pack: str | Path, scene: Scene) -> ExternalTrajectory:
     diff = _first_difference(_comparable(theirs), _comparable(scene))
     if diff:
         raise ValueError(f"{where}: its scene is not the scene {scene.name!r} ({diff})")
+    covers, wanted = theirs.output.t_end, scene.output.t_end
+    if covers < wanted:
+        raise ValueError(
+            f"{where}: its reference covers 0-{covers:g} s, shorter than the 0-{wanted:g} s "
+            f"judged (write a pack of the scene's {wanted:g} s with tumble reference)"
+        )
+    grid = scene.replace(output=theirs.output)  # the pack's grid; judged up to the scene's t_end
     csv = _pack_file(pack, TRAJECTORY_FILE, where)
-    digest = _sha256(read_regular(csv, size_limit(scene), follow_links=False))
+    digest = _sha256(read_regular(csv, size_limit(grid), follow_links=False))
     if digest != record.get("reference_sha256"):
         raise ValueError(
             f"{where}: {TRAJECTORY_FILE} is not the file {RECORD_FILE} records (SHA-256 {digest[:12]}…)"
         )
-    ref = read_trajectory(csv, scene, engine=REFERENCE_PLANT)
+    ref = read_trajectory(csv, grid, engine=REFERENCE_PLANT, judged=scene)
     missing = sorted(g.value for g in OPTIONAL_GROUPS - ref.present)
     if missing:
         raise ValueError(f"{where}: {TRAJECTORY_FILE} lacks the {', '.join(missing)} columns")

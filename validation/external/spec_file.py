@@ -9,6 +9,8 @@
     label = "my_engine"                  # optional: the file's plant name (default: its stem)
     plants = "analytic,mujoco"           # optional: the plants run beside it (default: installed)
     reference = "pack"                   # optional: a reference pack directory instead of plants
+    t_end = 2.0                          # optional: the horizon judged, s (default the scene's)
+    up_to_file_end = true                # optional: a file that stops early judged to its end
 
 Every path is relative to the directory of the TOML file and stays inside it: no absolute path,
 no ``..``, and nothing (a symbolic link included) that resolves outside that directory. Nothing in
@@ -19,12 +21,13 @@ the pytest plugin (:mod:`validation.testing.pytest_plugin`) runs :func:`validati
 
 from __future__ import annotations
 
+import math
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path, PurePosixPath, PureWindowsPath
 
 TABLE = "judge"
-KEYS = ("scene", "trajectory", "label", "plants", "reference")
+KEYS = ("scene", "trajectory", "label", "plants", "reference", "t_end", "up_to_file_end")
 REQUIRED = ("scene", "trajectory")
 
 
@@ -38,6 +41,9 @@ class JudgeSpec:
         label: the file's plant name (None: from its stem).
         plants: the plants run beside it (None: the session's ``--tumble-plants``).
         reference: a reference pack directory inside the TOML's directory, or None.
+        t_end: the horizon judged, s (None: the scene's; checked against the scene by the judge:
+            in (0, its t_end], on its output grid).
+        up_to_file_end: a file that stops on the grid early is judged up to its last row.
     """
 
     scene: str | Path
@@ -45,6 +51,8 @@ class JudgeSpec:
     label: str | None = None
     plants: str | None = None
     reference: Path | None = None
+    t_end: float | None = None
+    up_to_file_end: bool = False
 
 
 def inside(base: Path, value: object, key: str) -> Path:
@@ -85,7 +93,8 @@ def parse_spec(text: bytes, base: Path, builtin: list[str]) -> JudgeSpec:
 
     Raises:
         ValueError: one line naming the key: not TOML, a table besides ``[judge]``, an unknown
-            or missing key, a value that is not a string, a path outside ``base``.
+            or missing key, a value that is not a string (``t_end``: a positive number,
+            ``up_to_file_end``: a boolean), a path outside ``base``.
     """
     try:
         data = tomllib.loads(text.decode("utf-8"))
@@ -106,6 +115,16 @@ def parse_spec(text: bytes, base: Path, builtin: list[str]) -> JudgeSpec:
     for key in ("label", "plants"):
         if key in table and not isinstance(table[key], str):
             raise ValueError(f"{TABLE}.{key}: must be a string (got {table[key]!r:.60})")
+    t_end = table.get("t_end")
+    if t_end is not None and (
+        isinstance(t_end, bool) or not isinstance(t_end, (int, float)) or not 0 < t_end < math.inf
+    ):
+        raise ValueError(f"{TABLE}.t_end: must be a positive number of seconds (got {t_end!r:.60})")
+    up_to_file_end = table.get("up_to_file_end", False)
+    if not isinstance(up_to_file_end, bool):
+        raise ValueError(
+            f"{TABLE}.up_to_file_end: must be true or false (got {up_to_file_end!r:.60})"
+        )
     scene = table["scene"]
     if not isinstance(scene, str):
         raise ValueError(f"{TABLE}.scene: must be a string (got {scene!r:.60})")
@@ -115,6 +134,8 @@ def parse_spec(text: bytes, base: Path, builtin: list[str]) -> JudgeSpec:
         label=table.get("label"),
         plants=table.get("plants"),
         reference=inside(base, table["reference"], "reference") if "reference" in table else None,
+        t_end=None if t_end is None else float(t_end),
+        up_to_file_end=up_to_file_end,
     )
 
 

@@ -244,6 +244,10 @@ class JudgeFile(SceneFile):
 
             spec = parse_spec(_read_head(self.path, 1 << 20), self.path.parent, builtin_names())
             scene = resolve_scene(str(spec.scene))
+            if spec.t_end is not None:  # the horizon judged: in the scene's, on its grid
+                from validation.external.horizon import horizon_on_grid
+
+                horizon_on_grid(scene, spec.t_end, "judge.t_end")
             if spec.reference is not None:
                 plants: tuple[str, ...] = (REFERENCE_PLANT,)
             elif spec.plants is not None:
@@ -452,6 +456,8 @@ class _Session:
                 label=spec.label,
                 plants=None if spec.reference is not None else (spec.plants or self.plants()),
                 reference=spec.reference,
+                t_end=spec.t_end,
+                up_to_file_end=spec.up_to_file_end,
             )
         except (ValueError, OSError) as exc:
             res = f"{type(exc).__name__}: {exc}".splitlines()[0]

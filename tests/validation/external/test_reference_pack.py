@@ -104,8 +104,8 @@ def test_judging_against_the_pack_runs_no_plant_and_exits_on_the_verdict(
 
 def test_a_pack_of_another_scene_is_refused(pack, tmp_path):
     sc, d = pack
-    with pytest.raises(ValueError, match=r"its scene is not the scene .*\(output\.t_end"):
-        judge(_scene(t_end=0.5), tmp_path / "x.csv", reference=d)
+    with pytest.raises(ValueError, match=r"its reference covers 0-1 s, shorter than the 0-2 s"):
+        read_pack(d, _scene(t_end=2.0))
     inertia = np.array(sc.body.inertia, float) * 1.001
     other = sc.replace(body=dataclasses.replace(sc.body, inertia=inertia))
     with pytest.raises(ValueError, match=r"its scene is not the scene .*\(body\.inertia"):
