@@ -12,8 +12,12 @@ A check that needs a column group the file does not hold is **not judged** (:dat
 state is not applicable, its reason ``not judged: no omega columns``; it never passes or fails.
 The report's notes name the file, its SHA-256 and every group it lacks.
 
-Inputs are checked once, before any plant runs (:func:`judge_request`): the scene, the file (one
-line naming the row and column), the label, the plants, the pack; the result is the
+A file that covers less than the scene's horizon is judged over the horizon it covers when the
+caller says so (``t_end``, ``up_to_file_end``: :mod:`validation.external.horizon`); the report
+states the horizon judged (its first note, ``run.judged_horizon`` in ``report.json``).
+
+Inputs are checked once, before any plant runs (:func:`judge_request`): the scene, the horizon, the
+file (one line naming the row and column), the label, the plants, the pack; the result is the
 :class:`validation.validate.ValidationResult` of ``run_validation``.
 """
 
