@@ -130,3 +130,31 @@ def test_a_tampered_or_linked_pack_file_is_refused(pack, tmp_path):
     os.symlink(d / "reference.csv", copy / "reference.csv")
     with pytest.raises(ValueError, match=r"reference\.csv is not a regular file"):
         read_pack(copy, sc)
+
+
+def test_reference_t_end_writes_a_pack_of_that_horizon_and_refuses_one_off_the_grid(
+    pack, tmp_path, capsys
+):
+    """``tumble reference --t-end 0.2`` of the 1 s scene: a pack whose scene, record and CSV hold
+    0-0.2 s (21 samples), the CSV's rows the first 21 of the 1 s pack's to the pack's stated
+    error; a --t-end beyond the scene or off its grid is one line and exit 2, nothing written."""
+    sc, whole = pack
+    scene = tmp_path / "scene.toml"
+    scene.write_text(scene_to_toml(sc))
+    out = tmp_path / "short"
+    assert main(["reference", str(scene), "--t-end", "0.2", "--out", str(out)]) == 0
+    record = json.loads((out / "reference.json").read_text())
+    assert record["t_end"] == 0.2 and record["samples"] == 21
+    assert load_scene(out / "scene.toml").output.t_end == 0.2
+    short = read_pack(out, _scene(0.2)).trajectory
+    longer = read_pack(whole, _scene(0.2)).trajectory
+    np.testing.assert_array_equal(short.t, longer.t)
+    bound = ACCURACY_MARGIN * thresholds_for(sc)["position_C"].value
+    assert np.max(np.abs(short.q[:, :3] - longer.q[:, :3])) <= bound
+    capsys.readouterr()
+    for t_end, said in (("2", "not in (0, 1] s"), ("0.205", "not on the output grid")):
+        bad = tmp_path / f"bad_{t_end}"
+        assert main(["reference", str(scene), "--t-end", t_end, "--out", str(bad)]) == 2
+        err = capsys.readouterr().err.splitlines()
+        assert len(err) == 1 and said in err[0] and "--t-end" in err[0], err
+        assert not bad.exists()
