@@ -37,6 +37,12 @@ def test_a_table_with_relative_paths_inside_its_directory(tmp_path):
     assert spec.label == "mine" and spec.plants is None and spec.reference is None
     spec = _spec('[judge]\nscene = "s.toml"\ntrajectory = "a.csv"\nreference = "pack"\n', tmp_path)
     assert spec.scene == tmp_path / "s.toml" and spec.reference == tmp_path / "pack"
+    assert spec.t_end is None and spec.up_to_file_end is False
+    spec = _spec(
+        '[judge]\nscene = "s.toml"\ntrajectory = "a.csv"\nt_end = 2\nup_to_file_end = true\n',
+        tmp_path,
+    )
+    assert spec.t_end == 2.0 and spec.up_to_file_end is True
 
 
 @pytest.mark.parametrize(
@@ -50,6 +56,10 @@ def test_a_table_with_relative_paths_inside_its_directory(tmp_path):
         ('trajectory = "a.csv"\nlabel = 1', "judge.label: must be a string"),
         ('trajectory = "a.csv"\ncommand = "rm -rf"', "judge.command: unknown key"),
         ('label = "x"', "judge.trajectory: missing"),
+        ('trajectory = "a.csv"\nt_end = "2"', "judge.t_end: must be a positive number of seconds"),
+        ('trajectory = "a.csv"\nt_end = -1.0', "judge.t_end: must be a positive number of seconds"),
+        ('trajectory = "a.csv"\nt_end = true', "judge.t_end: must be a positive number of seconds"),
+        ('trajectory = "a.csv"\nup_to_file_end = 1', "judge.up_to_file_end: must be true or false"),
     ],
 )
 def test_bad_tables_are_refused_naming_the_key(tmp_path, body, said):
