@@ -1,10 +1,10 @@
 """``read_trajectory``: another engine's run of a scene, from a CSV or Parquet trajectory file.
 
-The file is read through :func:`analytic.safe_files.read_regular` (a regular file only, as a
+The file is opened through :func:`analytic.safe_files.open_regular` (a regular file only, as a
 scene file the user names: a symbolic link is followed to the file it names, a FIFO, device or
-directory is refused without blocking; at most :func:`size_limit` bytes, a larger file refused
-naming its row count and the limit), parsed as numbers
-and nothing else, and checked whole before anything is built from it: the header
+directory is refused without blocking) and read whole, at most :func:`size_limit` bytes (a larger
+file is refused naming its row count, its lines counted or its Parquet footer read, and the
+limit), parsed as numbers and nothing else, and checked whole before anything is built from it: the header
 (:func:`validation.external.columns.parse_header`), then the values
 (:func:`validation.external.table.check_table`). Nothing in the file is evaluated or names a path.
 Every refusal is one :class:`~validation.external.errors.TrajectoryFileError` line naming the file,
@@ -113,7 +113,7 @@ def _too_large(
             return f"{larger}, and no readable Parquet footer"
         rows, counted = meta.num_rows, f"{meta.num_rows} rows"
     if rows > grid:
-        return f"{counted}, more than the {grid} samples of {grid_text(scene)}; {larger}"
+        return f"{counted}, more than {grid_text(scene)}; {larger}"
     return f"{larger}, with {counted} in its {size:,} bytes"
 
 
