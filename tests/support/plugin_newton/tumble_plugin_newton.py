@@ -99,7 +99,9 @@ class NewtonEulerPlant(Plant):
 
     def tightened(self, scene, settings: NewtonSettings) -> NewtonSettings | None:
         tight = tighter_rtol(settings.rtol, settings.atol)  # tolerances / TIGHTER_RTOL, floored
-        return None if tight is None else dataclasses.replace(settings, rtol=tight[0], atol=tight[1])
+        return (
+            None if tight is None else dataclasses.replace(settings, rtol=tight[0], atol=tight[1])
+        )
 
     def check_scene(self, scene) -> None:
         super().check_scene(scene)  # the effects
@@ -143,7 +145,9 @@ class NewtonEulerPlant(Plant):
             """``(q, q̇)`` of this plant's state ``y``, in the paper's coordinates (Eq. 44)."""
             u, omega = y[3:7], y[10:13]
             q = np.concatenate([y[0:3], u, y[13 : 13 + n]])
-            qdot = np.concatenate([y[7:10], 0.5 * quat_times_vector(u, omega), y[13 + n : 13 + 2 * n]])
+            qdot = np.concatenate(
+                [y[7:10], 0.5 * quat_times_vector(u, omega), y[13 + n : 13 + 2 * n]]
+            )
             return q, qdot
 
         def control(t, y):
@@ -165,7 +169,9 @@ class NewtonEulerPlant(Plant):
             tau, rod, f_c = control(t, y)
             gb = S.T @ g
             rho = np.outer(p, a) + d  # (n, 3), body axes
-            c = np.cross(omega, np.cross(omega, rho)) + self.coriolis * np.outer(pd, np.cross(omega, a))
+            c = np.cross(omega, np.cross(omega, rho)) + self.coriolis * np.outer(
+                pd, np.cross(omega, a)
+            )
             X = cross_matrix(rho)  # [ρ_i]×
             A = np.zeros((6 + n, 6 + n))
             b = np.zeros(6 + n)
@@ -176,7 +182,9 @@ class NewtonEulerPlant(Plant):
             A[3:6, 0:3] = np.einsum("i,ijk->jk", m, X)  # turning about C
             A[3:6, 3:6] = J - np.einsum("i,ijk,ikl->jl", m, X, X)
             A[3:6, 6:] = (X @ a).T * m
-            b[3:6] = tau - np.cross(omega, J @ omega) - np.einsum("i,ij->j", m, np.cross(rho, c - gb))
+            b[3:6] = (
+                tau - np.cross(omega, J @ omega) - np.einsum("i,ij->j", m, np.cross(rho, c - gb))
+            )
             A[6:, 0:3] = np.outer(m, a)  # each mass along its rod
             A[6:, 3:6] = -np.outer(m, axd)  # a · (ω̇ × ρ_i) = ω̇ · (d × a)
             A[6:, 6:] = np.diag(m * (a @ a))
@@ -197,7 +205,9 @@ class NewtonEulerPlant(Plant):
                     f_c,  # İ_P
                 ]
             )
-            out = np.concatenate([V, 0.5 * quat_times_vector(u, omega), acc, omega_dot, pd, pdd, rates])
+            out = np.concatenate(
+                [V, 0.5 * quat_times_vector(u, omega), acc, omega_dot, pd, pdd, rates]
+            )
             if not np.all(np.isfinite(out)):
                 raise NonFinite(f"non-finite Newton-Euler rates at t = {t:.6g} s")
             return out
