@@ -67,8 +67,12 @@ class PlantChoice:
     left_out: tuple[LeftOut, ...] = ()
 
 
-def _accepting(scene: Scene, candidates: tuple[str, ...]) -> PlantChoice:
-    """Those of ``candidates`` that accept ``scene``; each other one warned about once."""
+def accepting_plants(scene: Scene, candidates: Sequence[str]) -> PlantChoice:
+    """Those of ``candidates`` whose ``check_scene`` accepts ``scene``, in the same order; each
+    other one is left out with one warning (``<plant> plant left out: <reason>``) and listed in
+    :attr:`PlantChoice.left_out`. How a default plant set or ``--plants all`` meets a scene some
+    of its plants cannot run."""
+    candidates = tuple(str(e) for e in candidates)
     chosen = plants_for_scene(scene, candidates)
     left: list[LeftOut] = []
     for e in candidates:
@@ -77,7 +81,7 @@ def _accepting(scene: Scene, candidates: tuple[str, ...]) -> PlantChoice:
                 plant(e).check_scene(scene)
             except ValueError as exc:
                 left.append(LeftOut(str(e), " ".join(str(exc).split())))
-                warnings.warn(str(left[-1]), stacklevel=3)
+                warnings.warn(str(left[-1]), stacklevel=2)
     return PlantChoice(chosen, tuple(left))
 
 
@@ -101,7 +105,7 @@ def plant_choice(
         installed = installed_plants()
         if scene is None:
             return PlantChoice(installed)
-        choice = _accepting(scene, installed)
+        choice = accepting_plants(scene, installed)
         if len(choice.plants) < 2:
             raise ValueError(
                 f"plants: fewer than two of the installed plants can run {scene.name!r} "
@@ -115,7 +119,7 @@ def plant_choice(
         raise ValueError(f"plants: {', '.join(twice)} named twice (got {text!r})")
     chosen = parse_plants(text)
     if scene is not None and [n.strip() for n in text.split(",") if n.strip()] == [ALL]:
-        choice = _accepting(scene, chosen)
+        choice = accepting_plants(scene, chosen)
         if len(choice.plants) < 2:
             raise ValueError(
                 f"plants: fewer than two of the runnable plants can run {scene.name!r} "
@@ -140,6 +144,7 @@ def validation_plants(
 __all__ = [
     "LeftOut",
     "PlantChoice",
+    "accepting_plants",
     "check_validation_inputs",
     "plant_choice",
     "validation_plants",

@@ -213,3 +213,16 @@ def test_the_referee_note_names_the_plants_left_out(with_picky):
     assert [x.engine for x in req.left_out] == ["picky"]
     lines = _referee_lines([], {"referee_note": "; ".join(str(x) for x in req.left_out)})
     assert any("picky plant left out: scene.name: the picky plant runs no scene" in ln for ln in lines)
+
+
+def test_judge_plants_all_leaves_out_a_plugin_that_refuses_the_scene(with_picky):
+    """``tumble judge --plants all`` resolves its referee plants as ``validate`` does: the plugin
+    that refuses the scene is left out with one warning, the others stay (no ValueError)."""
+    from validation.external import judge
+
+    sc = load_scene(SCENE)
+    with pytest.warns(UserWarning, match=r"^picky plant left out: scene\.name: "):
+        chosen = judge._plants("all", sc)
+    assert "picky" not in chosen and {"analytic", "mujoco"} <= set(chosen)
+    with pytest.raises(ValueError, match=r"^plants: picky cannot run"):
+        judge._plants("analytic,picky", sc)
