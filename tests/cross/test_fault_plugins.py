@@ -10,6 +10,10 @@ import sys
 import textwrap
 from pathlib import Path
 
+import pytest
+
+import mj_bridge.plants as plants_mod
+from analytic.plant import AnalyticPlant
 from tests.support.plugins import install_project
 
 TUMBLE = Path(sys.executable).parent / "tumble"
@@ -52,6 +56,38 @@ def _picky_site(root: Path) -> Path:
     return install_project(project, root / "site")
 
 
+class _Picky(AnalyticPlant):
+    engine = "picky"
+    label = "Picky"
+
+    def check_scene(self, scene):
+        super().check_scene(scene)
+        raise ValueError(f"scene.name: the picky plant runs no scene (got {scene.name!r})")
+
+
+def test_run_validation_all_with_a_plugin_refusing_the_scene_notes_it(monkeypatch, tmp_path):
+    """`run_validation(plants="all")` with a registered plugin refusing the scene -> the other
+    plants run and pass, one warning, and report.json's and report.md's referee note name the
+    plant left out and its reason."""
+    from validation.validate import run_validation
+
+    known = {**plants_mod.PLANTS, "picky": _Picky}
+    monkeypatch.setattr(plants_mod, "_load", lambda: (known, ()))
+    monkeypatch.setattr(plants_mod.PinocchioPlant, "unavailable", classmethod(lambda cls: "no"))
+    with pytest.warns(UserWarning, match=r"^picky plant left out: scene\.name: "):
+        res = run_validation(
+            "paper_example1_controlled", tmp_path / "out", t_end=0.05, plants="all",
+            figure_formats="svg",
+        )
+    assert res.passed
+    doc = json.loads((tmp_path / "out" / "report.json").read_text())
+    assert [p["engine"] for p in doc["plants"]] == ["analytic", "mujoco"]
+    note = doc["run"]["referee_note"]
+    assert note.startswith("picky plant left out: scene.name: the picky plant runs no scene"), note
+    assert "picky plant left out" in (tmp_path / "out" / "report.md").read_text()
+
+
+@pytest.mark.slow
 def test_plants_all_with_a_plugin_refusing_the_scene_runs_the_others(tmp_path):
     """`--plants all` with an installed plugin whose check_scene refuses the scene -> that plant
     left out with one warning line naming it and why, the others run (not exit 2), and the
