@@ -3,8 +3,10 @@
 :func:`check_validation_inputs` refuses, with a ``ValueError`` naming the field, what would
 otherwise be found only after the analytic plant has run (or after both have): a bad or unknown
 ``[thresholds]`` entry, a horizon or MuJoCo time step that does not fit the output grid, an
-integrator MuJoCo does not have, a run too long to hold. :func:`validation_plants` refuses a
-choice of plants that leaves nothing to compare (one plant, or one plant named twice). Both are
+integrator MuJoCo does not have, a run too long to hold. :func:`plant_choice` refuses a
+choice of plants that leaves nothing to compare (one plant, or one plant named twice), and leaves
+out of a default set or of ``--plants all`` the plants that refuse the scene, each with one
+warning (:func:`accepting_plants`; the report's referee note names them). Both are
 steps of :func:`validation.validate.validation_request`, the one function that checks a
 validation's whole input, once per boundary.
 """
