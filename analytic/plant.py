@@ -267,6 +267,9 @@ class AnalyticPlant(Plant):
 
 
 __all__ = [
+    "RTOL_FLOOR",
+    "TIGHTER_RTOL",
+    "TIGHTER_STEP",
     "AnalyticPlant",
     "AnalyticSettings",
     "Plant",
@@ -274,4 +277,5 @@ __all__ = [
     "check_horizon",
     "check_positive",
     "coerce_enum",
+    "tighter_rtol",
 ]

@@ -39,7 +39,7 @@ from mj_bridge.plants import MujocoRunSettings, PinocchioPlant, plant
 from validation.compare.checks import Check, Comparison, compare_plants
 from validation.compare.referee import Verdict, referee
 from validation.compare.thresholds import thresholds_for
-from validation.preflight import check_validation_inputs, validation_plants
+from validation.preflight import LeftOut, check_validation_inputs, plant_choice
 from validation.report.figures import (
     DEFAULT_FORMATS,
     FIGURES,
@@ -157,6 +157,8 @@ class ValidationRequest:
         t_end: horizon override, s (None: the scene's).
         horizon: the horizon in force, s.
         figure_formats: the figures' file formats, each once.
+        left_out: the plants of the default set or of ``--plants all`` that refused the scene,
+            each with its reason (the report's referee note names them).
     """
 
     scene: Scene
@@ -167,6 +169,7 @@ class ValidationRequest:
     t_end: float | None
     horizon: float
     figure_formats: tuple[FigureFormat, ...]
+    left_out: tuple[LeftOut, ...] = ()
 
 
 def _figure_formats(formats: Sequence[FigureFormat | str] | str) -> tuple[FigureFormat, ...]:
@@ -205,7 +208,8 @@ def validation_request(
         scene = resolve_scene(scene, check_thresholds=False)  # checked below, once
     sc = with_threshold_overrides(scene, thresholds)
     checked_thresholds = thresholds_for(sc)
-    chosen = validation_plants(plants, sc)
+    choice = plant_choice(plants, sc)
+    chosen = choice.plants
     check_validation_inputs(
         sc, integrator=integrator, dt=dt, t_end=t_end, mujoco=Engine.MUJOCO in chosen
     )
@@ -223,6 +227,7 @@ def validation_request(
         t_end=t_end,
         horizon=float(t_end) if t_end is not None else sc.output.t_end,
         figure_formats=formats,
+        left_out=choice.left_out,
     )
 
 
@@ -327,6 +332,7 @@ def run_request(
             concurrent,
             thresholds=request.thresholds,
             joined=joined,
+            left_out=request.left_out,
         )
     files = {name: run.final(name) for name in res.files}
     files["manifest.json"] = run.final("manifest.json")
@@ -603,11 +609,15 @@ def _meta(
     horizon: float,
     verdicts: Sequence[Verdict],
     joined: JoinedRuns = NO_JOINED,
+    left_out: Sequence[LeftOut] = (),
 ) -> dict[str, Any]:
     """The run's metadata for the report (the wall times are added when they are known); the
     ``joined`` runs are plants too, named as ``joined.names`` says, with ``joined.meta``."""
     mj = next((st for pl, st in runs if pl.engine == Engine.MUJOCO), None)
     referee_note = "" if len(runs) + len(joined.trajectories) >= 3 else _referee_note(sc)
+    # the plants of the default set or of `--plants all` that refused the scene, each once
+    told = [str(x) for x in left_out if not (referee_note and x.engine == Engine.PINOCCHIO)]
+    referee_note = "; ".join([*told, *([referee_note] if referee_note else [])])
     meta = {
         "run_id": run.run_id,
         "scene": {
@@ -654,6 +664,7 @@ def _validate_into(
     concurrent: bool = True,
     thresholds: Mapping[str, Threshold] | None = None,
     joined: JoinedRuns = NO_JOINED,
+    left_out: Sequence[LeftOut] = (),
 ) -> ValidationResult:
     """:func:`run_validation`'s work, writing into the staging directory ``run.path``; the
     ``joined`` runs follow the plants' (:class:`JoinedRuns`).
@@ -724,7 +735,7 @@ def _validate_into(
     except BaseException:
         workers.stop(jobs)
         raise
-    meta = _meta(run, sc, runs, names, horizon, verdicts, joined)
+    meta = _meta(run, sc, runs, names, horizon, verdicts, joined, left_out)
     # the scene as it ran, in the scene file's conventions: `tumble validate OUT/scene.toml` reruns it
     files: dict[str, Path] = {"scene.toml": write_text(out / "scene.toml", scene_to_toml(sc))}
     drawn: Sequence[list] = ([], [], [])

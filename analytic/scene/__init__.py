@@ -29,6 +29,7 @@ quaternions w-first; mass and axis indices 1-based in files, 0-based in the reco
 """
 
 from analytic.scene.builtin import BUILTIN_DIR, builtin_scene_names, builtin_scene_path
+from analytic.scene.dump import modified_scene
 from analytic.scene.limits import (
     AXIS_NORMALISE_TOL,
     AXIS_REFUSE_TOL,
@@ -117,6 +118,7 @@ __all__ = [
     "builtin_scene_names",
     "builtin_scene_path",
     "load_scene",
+    "modified_scene",
     "output_times",
     "scene_from_dict",
     "twin_point_inertia",

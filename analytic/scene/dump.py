@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 
 from analytic.scene.limits import QUAT_NORMALISE_TOL
-from analytic.scene.loading import Scene
+from analytic.scene.loading import Scene, scene_from_dict
 from analytic.scene.schema import DEFAULT_GRAVITY
 
 
@@ -185,6 +185,33 @@ def scene_to_dict(scene: Scene) -> dict[str, Any]:
     return out
 
 
+def modified_scene(scene: Scene, changes: Mapping[str, Any]) -> Scene:
+    """``scene`` with some keys of its tables changed, validated again as a loaded scene is.
+
+    ``changes`` is laid over :func:`scene_to_dict` of ``scene``, in the scene file's own keys
+    (``docs/scene-format.md``): a table given as a dict is merged key by key, any other value
+    replaces the key (``{"body": {"inertia": [1.0, 2.0, 3.0]}, "output": {"t_end": 5.0}}``;
+    ``{"scene": {"effects": ["gravity"]}}`` sets the effects). Every cross-field rule is applied
+    again (:func:`~analytic.scene.scene_from_dict`); ``dataclasses.replace`` and
+    :meth:`~analytic.scene.SceneRecord.replace` check nothing.
+
+    Raises:
+        ValueError: naming the changed field that the loader refuses, and its value.
+    """
+    def merge(base: dict[str, Any], over: Mapping[str, Any]) -> dict[str, Any]:
+        out = dict(base)
+        for key, value in over.items():
+            if isinstance(value, Mapping) and isinstance(out.get(key), Mapping):
+                out[key] = merge(dict(out[key]), value)
+            else:
+                out[key] = value
+        return out
+
+    if not isinstance(changes, Mapping):
+        raise ValueError(f"changes: must be a table of tables (got {type(changes).__name__})")
+    return scene_from_dict(merge(scene_to_dict(scene), changes), source=scene.source)
+
+
 def _verbatim(x: Any) -> Any:
     """A table the scene gave, as plain dicts and lists (the values themselves untouched)."""
     if isinstance(x, Mapping):
@@ -292,4 +319,4 @@ def scene_to_toml(scene: Scene, header: str = "") -> str:
     return "\n".join(lines).rstrip("\n") + "\n"
 
 
-__all__ = ["scene_to_dict", "scene_to_toml"]
+__all__ = ["modified_scene", "scene_to_dict", "scene_to_toml"]

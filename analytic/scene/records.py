@@ -338,7 +338,8 @@ class SceneRecord:
         return bool(self.effects & CONTROL_EFFECTS)
 
     def replace(self, **changes: Any) -> SceneRecord:
-        """A copy with top-level fields replaced (e.g. ``output=OutputSettings(t_end=60)``)."""
+        """A copy with top-level fields replaced (e.g. ``output=OutputSettings(t_end=60)``),
+        checked by nothing: a modified *valid* scene is :func:`analytic.scene.modified_scene`."""
         return dataclasses.replace(self, **changes)
 
 

@@ -32,7 +32,7 @@ from validation.validate import ValidationRequest, run_validation, validation_re
 COUNTED = {
     "resolve_scene": scenes_mod,
     "thresholds_for": thresholds_mod,
-    "validation_plants": preflight_mod,
+    "plant_choice": preflight_mod,
     "check_validation_inputs": preflight_mod,
     "parse_plants": plants_mod,
 }

@@ -48,7 +48,7 @@ from validation.external.horizon import HorizonSource, JudgedHorizon, horizon_on
 from validation.external.read import read_trajectory
 from validation.external.record import ExternalTrajectory, does_work
 from validation.external.reference_pack import REFERENCE_PLANT, read_pack
-from validation.preflight import check_validation_inputs
+from validation.preflight import accepting_plants, check_validation_inputs
 from validation.report.figures import DEFAULT_FORMATS, FigureFormat
 from validation.runs.outputs import default_out_dir
 from validation.scenes import resolve_scene, with_threshold_overrides
@@ -206,6 +206,8 @@ def _plants(plants: Sequence[str] | str | None, scene: Scene) -> tuple[str, ...]
         return plants_for_scene(scene, installed_plants())
     text = plants if isinstance(plants, str) else ",".join(str(getattr(p, "value", p)) for p in plants)
     chosen = parse_plants(text)
+    if [n.strip() for n in text.split(",") if n.strip()] == [ALL]:  # as a default set: warn, go on
+        return accepting_plants(scene, chosen).plants
     for e in chosen:
         try:
             plant(e).check_scene(scene)

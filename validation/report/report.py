@@ -226,11 +226,13 @@ def _referee_lines(verdicts: Sequence[Verdict], meta: Mapping[str, Any]) -> list
     """The referee's section: one sentence per quantity, then the pairwise table."""
     if not verdicts:
         note = meta.get("referee_note", "")
-        return ["## Referee", "", f"No referee verdict: {note}.", ""] if note else []
+        return ["## Referee", "", f"No referee verdict: {_md(note)}.", ""] if note else []
     lines = ["## Referee", ""]
     plants = meta.get("plants", [])
     if plants:
         lines += ["Plants: " + "; ".join(_md(p["settings"]) for p in plants) + ".", ""]
+    if meta.get("referee_note"):  # a plant of the run's set left out (it refused the scene)
+        lines += [f"Note: {_md(meta['referee_note'])}.", ""]
     lines += [f"- {_md(t)}" for t in summary_lines(verdicts)]
     pairs = list(dict.fromkeys(p for v in verdicts for p in v.values))
     lines += [

@@ -66,6 +66,20 @@ class Progress:
             self.stream.flush()
 
 
+def plant_title(stage: str) -> str:
+    """How a progress line names the stage ``stage`` when it is a plant, "" when it is not: every
+    registered plant, built-in or plugin (:func:`mj_bridge.plants.registered`), is
+    ``<name> plant``, followed by its ``label`` in parentheses where the label says more than the
+    name (``newton plant (Newton-Euler)``; ``mujoco plant`` for MuJoCo)."""
+    from mj_bridge.plants import registered  # loaded already by the run that reports
+
+    cls = registered().get(str(stage))
+    if cls is None:
+        return ""
+    label = str(cls.label)
+    return f"{stage} plant" if label.lower() == str(stage).lower() else f"{stage} plant ({label})"
+
+
 class StageProgress:
     """Callable ``progress(stage, t)`` for a run made of stages (each plant of ``tumble validate``).
 
@@ -75,12 +89,11 @@ class StageProgress:
         stream: default stderr.
         delay: on a terminal, nothing is drawn before this many seconds (short runs stay quiet).
 
-    Not a terminal: one line when a stage starts (``tumble: <label>: analytic plant, 0 -> 20 s``)
+    Not a terminal: one line when a stage starts (``tumble: <label>: analytic plant, 0 -> 20 s``;
+    a plant plugin as :func:`plant_title` names it)
     and, at :meth:`close`, one line with each stage's wall time (from its first to its last
     report). On a terminal: one updating line.
     """
-
-    PLANTS = frozenset({"analytic", "mujoco", "pinocchio"})
 
     def __init__(self, label: str, t_end: float, stream=None, delay: float = 2.0):
         self.label = label
@@ -100,7 +113,8 @@ class StageProgress:
         if stage not in self._started:
             self._started[stage] = now
             if not self.tty:
-                what = f"{stage} plant, 0 -> {self.t_end:g} s" if stage in self.PLANTS else stage
+                title = plant_title(stage)
+                what = f"{title}, 0 -> {self.t_end:g} s" if title else stage
                 self.stream.write(f"{PREFIX}{self.label}: {what}\n")
                 self.stream.flush()
         self.walls[stage] = now - self._started[stage]
