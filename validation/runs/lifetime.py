@@ -16,11 +16,12 @@ process's only thread (:func:`validation.runs.workers.can_fork`) or from the for
 thread, never from a pool thread that may end before its process does.
 
 Where children come from: :func:`validation.runs.workers.start` (validate's plants, figures and
-recording), the fork server's children (:func:`validation.runs.workers.start_served`, armed by
-:func:`forks_die_with_parent` in the server, :mod:`validation.runs.server_setup`) and the local
-process pools (:func:`pool_initializer`). The fork server itself ends when its parent does
-(``multiprocessing`` closes a pipe it watches); a Dask worker process ends when its nanny's
-process does (Dask's own parent pipe).
+recording), the fork server's children (:func:`validation.runs.workers.start_served`: each ends
+with the process that asked for it, :func:`die_with`, and with the server,
+:func:`forks_die_with_parent` in :mod:`validation.runs.server_setup`) and the local process pools
+(:func:`pool_initializer`). The fork server itself ends once its client and the children it
+forked are gone (``multiprocessing`` watches a pipe they hold); a Dask worker process ends when
+its nanny's process does (Dask's own parent pipe).
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ from __future__ import annotations
 import contextlib
 import ctypes
 import os
+import select
 import signal
 import sys
 import threading
@@ -72,6 +74,39 @@ def die_with_parent(parent: int) -> None:
         os._exit(ORPHANED_EXIT)
 
 
+def die_with(pid: int) -> None:
+    """This process ends when process ``pid`` does, ``pid`` not its parent: a fork server's child
+    (whose parent is the server) ends with the process that asked the server for it. A daemon
+    thread waits for ``pid``'s end (a Linux pidfd; elsewhere ``os.kill(pid, 0)`` every
+    :data:`WATCH_S` s); a ``pid`` already gone ends this process at once.
+
+    The fork server cannot end first: every child it forks holds the pipe end whose closing
+    tells the server that its clients are gone (``multiprocessing``'s design), so the server
+    lives as long as its children do, and a child tied to the server alone outlived a killed
+    client with it."""
+    try:
+        fd = os.pidfd_open(pid)
+    except ProcessLookupError:
+        os._exit(ORPHANED_EXIT)
+    except (AttributeError, OSError):  # not Linux 5.3+: polled
+        fd = None
+
+    def watch() -> None:
+        if fd is not None:
+            select.select([fd], [], [])
+            os._exit(ORPHANED_EXIT)
+        while True:
+            try:
+                os.kill(pid, 0)
+            except ProcessLookupError:
+                os._exit(ORPHANED_EXIT)
+            except OSError:  # another user's process by now: not ours
+                os._exit(ORPHANED_EXIT)
+            time.sleep(WATCH_S)
+
+    threading.Thread(target=watch, name="tumble-client-watch", daemon=True).start()
+
+
 def forks_die_with_parent() -> None:
     """Every process forked from this one from now on (in this process and in its children)
     calls :func:`die_with_parent` with the pid of the process that forked it, right after the
@@ -104,4 +139,4 @@ def pool_initializer(parent: int) -> None:
     limit_blas_threads()
 
 
-__all__ = ["die_with_parent", "forks_die_with_parent", "pool_initializer"]
+__all__ = ["die_with", "die_with_parent", "forks_die_with_parent", "pool_initializer"]

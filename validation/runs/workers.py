@@ -49,7 +49,7 @@ from typing import Any
 from validation.runs import interrupts
 from validation.runs.atomic import OutputError
 from validation.runs.interrupts import keep_swallowed
-from validation.runs.lifetime import die_with_parent
+from validation.runs.lifetime import die_with, die_with_parent
 
 ENV_SWITCH = "TUMBLE_WORKERS"
 """Set to ``0`` to run every stage in this process."""
@@ -256,13 +256,16 @@ def _send_error(conn, exc: BaseException) -> None:  # pragma: no cover - in a ch
 
 
 def _child(
-    conn, inbox, prepare, task, args, idle: bool, parent: int | None
+    conn, inbox, prepare, task, args, idle: bool, parent: int | None, client: int | None = None
 ) -> None:  # pragma: no cover - in a child
     """The worker process: prepare, wait for the inputs if they come later, run, send back. It
-    ends with ``parent`` (its parent's pid; None: armed at the fork already, a fork server's
-    child), :func:`validation.runs.lifetime.die_with_parent`."""
+    ends with ``parent`` (its parent's pid, :func:`validation.runs.lifetime.die_with_parent`;
+    None: armed at the fork already, a fork server's child) and with ``client`` (the process
+    that asked the fork server for it, :func:`validation.runs.lifetime.die_with`)."""
     if parent is not None:
         die_with_parent(parent)
+    if client is not None:
+        die_with(client)
     _close_parent_ends()
     _child_signals()
     try:
@@ -505,7 +508,7 @@ def start_served(
     flush_std_streams()
     proc = ctx.Process(
         target=_child,
-        args=(child_conn, None, None, task, args, False, None),
+        args=(child_conn, None, None, task, args, False, None, os.getpid()),
         name=f"tumble-{name}",
         daemon=True,
     )
