@@ -155,10 +155,11 @@ def test_fuzz_on_dask_killed_with_sigkill_leaves_no_served_worker(tmp_path):
 
 
 POOL_SCRIPT = """
-import time
+import pathlib, time
 from validation.studies.sweep.running import default_executor
 
 ex = default_executor()
+ex.submit(pathlib.Path("worker-ran").touch).result()  # the pool works (its initializer too)
 ex.submit(time.sleep, 600).result()
 """
 
@@ -176,6 +177,7 @@ def test_process_pool_parent_killed_with_sigkill_leaves_no_pool_worker(tmp_path)
     with SIGKILL while a worker runs a task -> the worker ends with it: none is left running."""
 
     def started(root: int, kids: set[int]) -> bool:
-        return any("spawn_main" in _cmdline(p) for p in kids)
+        ran = (tmp_path / "worker-ran").exists()
+        return ran and any("spawn_main" in _cmdline(p) for p in kids)
 
     _kill_and_require_all_gone([sys.executable, "-c", POOL_SCRIPT], tmp_path, started)

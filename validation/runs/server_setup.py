@@ -35,5 +35,5 @@ RUNPY_RERUN = r".* found in sys\.modules after import of package .*"
 
 warnings.filterwarnings("ignore", message=RUNPY_RERUN, category=RuntimeWarning)
 forks_die_with_parent()
-limit_blas_threads()
 gc.freeze()
+limit_blas_threads()  # last: after the preload's imports (numpy, scipy)
