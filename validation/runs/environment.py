@@ -6,7 +6,8 @@ no thread pool. What changes, and where:
 
 * the ``tumble`` program (:func:`validation.cli.run`, ``python -m validation``) calls
   :func:`set_process_env` first thing, before numpy is imported: its whole process, and every
-  child it starts, is the tool's;
+  child it starts, is the tool's; so do the ``python -m`` measurement programs
+  (:func:`as_program`);
 * a scene run of the pytest plugin (:mod:`validation.testing.pytest_plugin`) runs inside
   :func:`one_blas_thread`: the process's BLAS pools are limited for the run (``threadpoolctl``)
   and given back as they were; the worker processes forked meanwhile keep the limit;
@@ -49,6 +50,20 @@ def set_process_env() -> None:
         os.environ.setdefault(var, "1")
     if _wants_no_color():
         os.environ[NO_COLOR] = "1"
+
+
+def as_program() -> None:
+    """For a ``python -m validation....`` measurement program, first thing in its ``__main__``
+    block: its process is the tool's, so :func:`set_process_env`; when numpy was imported already
+    (by the module's own imports) without the variables, the program is started again in the
+    same process (``os.execv``, the same command line) with them set, so its BLAS starts with one
+    thread (and no BLAS thread keeps :func:`validation.runs.workers.can_fork` from forking)."""
+    missing = [var for var in BLAS_VARS if var not in os.environ]
+    set_process_env()
+    if missing and "numpy" in sys.modules:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os.execv(sys.executable, [sys.executable, *sys.orig_argv[1:]])
 
 
 def _load_blas() -> None:
@@ -94,6 +109,7 @@ def import_rerun() -> None:
 
 __all__ = [
     "BLAS_VARS",
+    "as_program",
     "import_rerun",
     "limit_blas_threads",
     "one_blas_thread",

@@ -102,3 +102,25 @@ def test_import_validation_leaves_the_environment_unchanged(monkeypatch) -> None
     before, after = json.loads(out.stdout)
     assert after == before
     assert not set(VARS) & set(after)
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="counts threads in /proc")
+def test_a_measurement_program_starts_again_with_one_blas_thread(monkeypatch, tmp_path) -> None:
+    """A ``python -m`` measurement program whose module imported numpy before its main block:
+    :func:`validation.runs.environment.as_program` starts it again with the variables set, so
+    its BLAS has one thread (one OS thread in the process) and its arguments are kept."""
+    _clean_env(monkeypatch)
+    prog = tmp_path / "prog.py"
+    prog.write_text(
+        "import json, os, sys\n"
+        "import numpy\n"
+        "from validation.runs.environment import as_program\n"
+        "as_program()\n"
+        "print(json.dumps([os.environ.get('OPENBLAS_NUM_THREADS'),"
+        " len(os.listdir('/proc/self/task')), sys.argv[1:]]))\n"
+    )
+    out = subprocess.run(
+        [sys.executable, str(prog), "--x", "1"], capture_output=True, text=True, timeout=120
+    )
+    assert out.returncode == 0, out.stderr
+    assert json.loads(out.stdout) == ["1", 1, ["--x", "1"]]
