@@ -85,7 +85,10 @@ def one_blas_thread() -> Iterator[None]:
 
 def limit_blas_threads() -> None:
     """This process's BLAS and OpenMP pools on one thread from now on: for the tool's own worker
-    processes only (the fork server, a pool's worker)."""
+    processes only (the fork server, a pool's worker). Nothing to do in a process started with
+    each of :data:`BLAS_VARS` at ``1`` (by ``tumble``): its BLAS started with one thread."""
+    if all(os.environ.get(var) == "1" for var in BLAS_VARS):
+        return
     _load_blas()
     from threadpoolctl import threadpool_limits
 

@@ -124,3 +124,34 @@ def test_a_measurement_program_starts_again_with_one_blas_thread(monkeypatch, tm
     )
     assert out.returncode == 0, out.stderr
     assert json.loads(out.stdout) == ["1", 1, ["--x", "1"]]
+
+
+POOL_BLAS = """
+import json, threadpoolctl
+from validation.studies.sweep.running import default_executor
+
+def blas(info):
+    return sorted(i["num_threads"] for i in info if i["user_api"] == "blas")
+
+with default_executor() as ex:
+    worker = blas(ex.submit(threadpoolctl.threadpool_info).result())
+import numpy, scipy.linalg
+print(json.dumps([worker, blas(threadpoolctl.threadpool_info())]))
+"""
+
+
+def test_the_tools_pool_workers_have_one_blas_thread_and_the_caller_keeps_its_own(
+    monkeypatch,
+) -> None:
+    """A library user's process without the variables runs a study's process pool: each pool
+    worker (the tool's own process) has its BLAS on one thread; the user's process keeps its
+    original thread counts."""
+    _clean_env(monkeypatch)
+    expected = sorted(n for _, n in _reference()["blas"])
+    out = subprocess.run(
+        [sys.executable, "-c", POOL_BLAS], capture_output=True, text=True, timeout=300
+    )
+    assert out.returncode == 0, out.stderr
+    worker, caller = json.loads(out.stdout)
+    assert worker and all(n == 1 for n in worker)
+    assert caller == expected
