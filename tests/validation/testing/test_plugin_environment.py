@@ -61,7 +61,11 @@ def _unrelated_suite(pytester: pytest.Pytester, out: Path) -> None:
     )
 
 
-@pytest.mark.parametrize("with_scene", [False, True], ids=["no_scene", "after_a_scene"])
+@pytest.mark.parametrize(
+    "with_scene",
+    [False, pytest.param(True, marks=pytest.mark.slow)],  # a scene run in a fresh session: ~40 s
+    ids=["no_scene", "after_a_scene"],
+)
 def test_an_unrelated_suite_keeps_its_environment_and_blas_threads(
     pytester: pytest.Pytester, monkeypatch: pytest.MonkeyPatch, tmp_path: Path, with_scene: bool
 ) -> None:
