@@ -1,10 +1,8 @@
 """The side-by-side validation of the analytic plant and the MuJoCo twin, and the ``tumble`` CLI.
 
-Importing this package pins BLAS to one thread (``OPENBLAS_NUM_THREADS``, ``OMP_NUM_THREADS``,
-``MKL_NUM_THREADS``, unless set) and sets ``NO_COLOR=1`` when stderr is not a terminal (unless ``NO_COLOR`` is
-set already): Rerun's logger otherwise writes ANSI colour codes into files and pipes. It reads the
-variable once, when ``rerun`` is first imported, which in this project happens inside this package
-(:mod:`validation.recording.recording`).
+Importing this package changes nothing in the process: no environment variable, no thread pool
+(the ``tumble`` program sets its own numerical environment at start,
+:mod:`validation.runs.environment`, with the measured reason).
 
 Public names (imported on first use, so ``import validation`` stays cheap: the pytest plugin
 :mod:`validation.testing.pytest_plugin` imports this package in every pytest run):
@@ -15,20 +13,6 @@ Public names (imported on first use, so ``import validation`` stays cheap: the p
 * :func:`thresholds_for`, :class:`Threshold`: the named agreement thresholds;
 * :class:`Check`: one verdict of a run.
 """
-
-import os as _os
-
-# The process-wide numerical environment, set here once: every entry point (``tumble``,
-# ``python -m validation.*``, the pytest plugin, ``import validation``) imports this package before
-# numpy. The model works on small dense matrices (n + 7 up to a few hundred): multithreaded BLAS
-# only adds synchronisation there, and on a loaded 2-core machine its spinning threads slowed one
-# evaluation by up to 100x (measured: n = 50, 1.3 ms with one thread against 120 ms with two while
-# another process ran). ``setdefault``: a user's explicit setting wins.
-for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-    _os.environ.setdefault(_var, "1")
-
-if "NO_COLOR" not in _os.environ and not _os.isatty(2):
-    _os.environ["NO_COLOR"] = "1"
 
 _LAZY = {
     "assert_agree": "validation.testing.agree",

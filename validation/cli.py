@@ -791,7 +791,14 @@ def run(argv: list[str] | None = None) -> None:
     Every file is written and closed by then and the output streams are flushed here; what is
     skipped is the interpreter's teardown of the loaded compiled kernels, about 0.3 s of nothing
     (measured on the default ``validate``). Code that calls ``tumble`` in-process uses
-    :func:`main`, which returns the status instead."""
+    :func:`main`, which returns the status instead.
+
+    The program's process is the tool's own: its numerical environment (BLAS on one thread,
+    ``NO_COLOR``) is set here, before numpy is imported
+    (:func:`validation.runs.environment.set_process_env`), not on ``import validation``."""
+    from validation.runs.environment import set_process_env
+
+    set_process_env()
     status = main(argv)
     numba_cache = sys.modules.get("analytic.kernel.cache_check")
     if numba_cache is not None:  # what Python's teardown would do: the cache's manifest kept

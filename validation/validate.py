@@ -437,6 +437,9 @@ def _as_output_error(exc: BaseException, path: Path) -> OutputError:
 
 
 def _import_rerun() -> None:
+    from validation.runs.environment import import_rerun
+
+    import_rerun()  # first: NO_COLOR for rerun's first import only
     import rerun.blueprint  # noqa: F401
 
     import validation.recording.recording  # noqa: F401  (scipy.spatial)

@@ -195,10 +195,15 @@ def test_user_warnings_one_line_each_resource_warnings_hidden(capsys):
 
 
 def test_no_colour_codes_when_stderr_is_not_a_terminal():
-    """Rerun's logger colours its lines unless NO_COLOR is set, which importing validation does
-    when stderr is not a terminal."""
+    """Rerun's logger colours its lines unless NO_COLOR is set when rerun is first imported: the
+    tool's import of rerun sets it for that import only, when stderr is not a terminal, and
+    leaves the environment as it was."""
     code = (
-        "import validation, rerun as rr\n"
+        "import os\n"
+        "from validation.runs.environment import import_rerun\n"
+        "import_rerun()\n"
+        "assert 'NO_COLOR' not in os.environ\n"
+        "import rerun as rr\n"
         "rec = rr.RecordingStream('x')\n"
         "stream = rec.binary_stream()\n"
         "rr.log('a', rr.Points3D([[0.0, 0.0, 0.0]]), recording=rec)\n"

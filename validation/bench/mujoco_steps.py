@@ -106,4 +106,7 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
+    from validation.runs.environment import as_program
+
+    as_program()  # one BLAS thread, as `tumble` has
     raise SystemExit(main())

@@ -118,6 +118,9 @@ def write_recording(
 
     ``recording_id``: Rerun's recording id (the run id of the output directory, when there is one).
     """
+    from validation.runs.environment import import_rerun
+
+    import_rerun()  # first: NO_COLOR for rerun's first import only
     import rerun.blueprint as rrb
 
     path = Path(path)

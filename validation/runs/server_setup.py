@@ -11,6 +11,14 @@ it forks should inherit, set once in the server after its other imports.
   also imported in the server: from a child's start to its task's first line, 250 ms without,
   90 ms with; without matplotlib the difference is within the noise of a loaded machine.
 
+* BLAS is on one thread in the server, so in every child
+  (:func:`validation.runs.environment.limit_blas_threads`: the server is started with the
+  environment of the process that asked for it, a user's maybe).
+* Every child the server forks ends when the server does
+  (:func:`validation.runs.lifetime.forks_die_with_parent`), and the server ends when the process
+  that started it does (``multiprocessing`` closes the pipe it watches): a served plant run does
+  not outlive a ``tumble`` killed with SIGKILL.
+
 Import it only on purpose: it does its work at import.
 """
 
@@ -19,8 +27,13 @@ from __future__ import annotations
 import gc
 import warnings
 
+from validation.runs.environment import limit_blas_threads
+from validation.runs.lifetime import forks_die_with_parent
+
 RUNPY_RERUN = r".* found in sys\.modules after import of package .*"
 """The message (a regular expression) of runpy's warning silenced here."""
 
 warnings.filterwarnings("ignore", message=RUNPY_RERUN, category=RuntimeWarning)
+forks_die_with_parent()
 gc.freeze()
+limit_blas_threads()  # last: after the preload's imports (numpy, scipy)

@@ -50,6 +50,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from validation.runs.atomic import write_text
+from validation.runs.lifetime import pool_initializer
 from validation.runs.workers import flush_std_streams
 
 if TYPE_CHECKING:
@@ -432,14 +433,20 @@ def _order(tasks: Sequence[Task]) -> list[Task]:
 
 def _pool(workers: int, fork: bool | None = None) -> ProcessPoolExecutor:
     """Worker processes, forked when that is safe (Linux, no other thread in this process: they
-    inherit what is imported here), else spawned (``fork`` forces either)."""
+    inherit what is imported here), else spawned (``fork`` forces either); each ends when this
+    process does (:func:`validation.runs.lifetime.pool_initializer`)."""
     if fork is None:
         methods = multiprocessing.get_all_start_methods()
         fork = sys.platform == "linux" and "fork" in methods and threading.active_count() == 1
     if fork:
         flush_std_streams()  # nothing buffered here is written twice
     context = multiprocessing.get_context("fork" if fork else "spawn")
-    return ProcessPoolExecutor(max_workers=workers, mp_context=context)
+    return ProcessPoolExecutor(
+        max_workers=workers,
+        mp_context=context,
+        initializer=pool_initializer,
+        initargs=(os.getpid(),),
+    )
 
 
 HALVES = (Job.SYSTEM, Job.SOLVE)

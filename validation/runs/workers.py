@@ -13,6 +13,8 @@ elsewhere, and whenever forking is not safe, each runs here, in order, with the 
   :class:`WorkerLost`; the caller then does that stage here and says so in its report
   (:mod:`validation.validate`: a plant, the figures, the recording), so nothing is lost to a
   worker.
+* Every child ends with its parent, even one killed with SIGKILL (:mod:`validation.runs.lifetime`:
+  ``PR_SET_PDEATHSIG`` on Linux); so does every child of the fork server (:func:`start_served`).
 * A file the child could not write (a full disk) comes back as the same
   :class:`validation.runs.atomic.OutputError`, never as a stage's ordinary error.
 
@@ -47,6 +49,7 @@ from typing import Any
 from validation.runs import interrupts
 from validation.runs.atomic import OutputError
 from validation.runs.interrupts import keep_swallowed
+from validation.runs.lifetime import die_with, die_with_parent
 
 ENV_SWITCH = "TUMBLE_WORKERS"
 """Set to ``0`` to run every stage in this process."""
@@ -109,11 +112,18 @@ def can_fork() -> bool:
 
 def can_serve() -> bool:
     """Whether :func:`start_served` starts a child here: Linux with the ``forkserver`` start method
-    (and workers not switched off, :data:`ENV_SWITCH`), whatever threads this process runs. The
-    fork server is a fresh, single-threaded interpreter started with ``fork`` + ``exec``, so
-    forking from it is safe even when this process is multi-threaded (a Dask worker, a thread
-    pool's caller)."""
-    if os.environ.get(ENV_SWITCH, "").strip() == "0":
+    (and workers not switched off, :data:`ENV_SWITCH`), whatever threads this process runs, in a
+    process that is not daemonic. The fork server is a fresh, single-threaded interpreter started
+    with ``fork`` + ``exec``, so forking from it is safe even when this process is multi-threaded
+    (a Dask worker, a thread pool's caller).
+
+    ``multiprocessing`` refuses children to a daemonic process (it would end without joining
+    them). Dask's worker processes are daemonic unless its config says
+    ``distributed.worker.daemon: False``: the ``--dask-workers`` cluster the tool starts says so
+    (:func:`validation.studies.sweep.running.executor_for`); a user who starts Dask workers by
+    hand sets it too (``DASK_DISTRIBUTED__WORKER__DAEMON=False``), else a run there falls back to
+    the time limit checked at the plant's progress reports."""
+    if os.environ.get(ENV_SWITCH, "").strip() == "0" or mp.current_process().daemon:
         return False
     return sys.platform.startswith("linux") and "forkserver" in mp.get_all_start_methods()
 
@@ -245,8 +255,17 @@ def _send_error(conn, exc: BaseException) -> None:  # pragma: no cover - in a ch
         pass
 
 
-def _child(conn, inbox, prepare, task, args, idle: bool) -> None:  # pragma: no cover - in a child
-    """The worker process: prepare, wait for the inputs if they come later, run, send back."""
+def _child(
+    conn, inbox, prepare, task, args, idle: bool, parent: int | None, client: int | None = None
+) -> None:  # pragma: no cover - in a child
+    """The worker process: prepare, wait for the inputs if they come later, run, send back. It
+    ends with ``parent`` (its parent's pid, :func:`validation.runs.lifetime.die_with_parent`;
+    None: armed at the fork already, a fork server's child) and with ``client`` (the process
+    that asked the fork server for it, :func:`validation.runs.lifetime.die_with`)."""
+    if parent is not None:
+        die_with_parent(parent)
+    if client is not None:
+        die_with(client)
     _close_parent_ends()
     _child_signals()
     try:
@@ -429,7 +448,7 @@ def start(
     _PARENT_ENDS.extend((conn, inbox_w))
     proc = ctx.Process(
         target=_child,
-        args=(child_conn, inbox_r, prepare, task, job.args, idle_until_given),
+        args=(child_conn, inbox_r, prepare, task, job.args, idle_until_given, os.getpid()),
         name=f"tumble-{name}",
         daemon=True,
     )
@@ -462,31 +481,6 @@ def _main_module() -> list[str]:
     return [name]
 
 
-@contextlib.contextmanager
-def _children_allowed():
-    """This process may start a child inside the block even if it is daemonic (a Dask worker is:
-    ``distributed.worker.daemon``). ``multiprocessing`` refuses children to a daemonic process
-    because it ends without joining them; a served child is the fork server's child, not this
-    process's, its parent-side ends close when this process ends, and its task is killed by the
-    caller at its time limit (:func:`stop`), so nothing is left behind that the rule guards
-    against. The flag is restored on leaving."""
-    me = mp.current_process()
-    daemonic = me.daemon
-    if not daemonic:
-        yield
-        return
-    me._config["daemon"] = False  # the setter refuses a started process; the flag is this dict's
-    try:
-        yield
-    finally:
-        me._config["daemon"] = True
-
-
-_SERVED_START = threading.Lock()
-"""One served start at a time in this process: :func:`_children_allowed` lifts and restores a
-process-wide flag, which two threads starting children at once would otherwise restore early."""
-
-
 def start_served(
     name: str,
     task: Callable[..., Any],
@@ -514,13 +508,12 @@ def start_served(
     flush_std_streams()
     proc = ctx.Process(
         target=_child,
-        args=(child_conn, None, None, task, args, False),
+        args=(child_conn, None, None, task, args, False, None, os.getpid()),
         name=f"tumble-{name}",
         daemon=True,
     )
     try:
-        with _SERVED_START, _children_allowed():
-            proc.start()
+        proc.start()
     finally:
         child_conn.close()
     job.process, job.conn = proc, conn

@@ -21,7 +21,9 @@ nothing until a scene is collected:
   support skipped as ``not judged: no ... columns``.
 
 This module imports pytest and the standard library only; the plants, numpy and MuJoCo are imported
-when the first scene file is collected. ``python -m validation.testing.pytest_plugin --bench`` measures
+when the first scene file is collected. Loading the plugin changes nothing in the session's
+process (no environment variable, no thread pool); a scene's run has BLAS on one thread for the
+run only (:func:`validation.runs.environment.one_blas_thread`), the pools given back as they were. ``python -m validation.testing.pytest_plugin --bench`` measures
 the plugin's cost on a pytest run that collects no scene.
 """
 
@@ -445,20 +447,22 @@ class _Session:
         if key in self._memo:
             return self._memo[key]
         from validation.external.judge import judge
+        from validation.runs.environment import one_blas_thread
 
         RUNS.append(key)
         out = self._out_dir(path, key, "judge")
         try:
-            res = judge(
-                str(spec.scene),
-                spec.trajectory,
-                out,
-                label=spec.label,
-                plants=None if spec.reference is not None else (spec.plants or self.plants()),
-                reference=spec.reference,
-                t_end=spec.t_end,
-                up_to_file_end=spec.up_to_file_end,
-            )
+            with one_blas_thread():  # the session's pools as they were after (module docstring)
+                res = judge(
+                    str(spec.scene),
+                    spec.trajectory,
+                    out,
+                    label=spec.label,
+                    plants=None if spec.reference is not None else (spec.plants or self.plants()),
+                    reference=spec.reference,
+                    t_end=spec.t_end,
+                    up_to_file_end=spec.up_to_file_end,
+                )
         except (ValueError, OSError) as exc:
             res = f"{type(exc).__name__}: {exc}".splitlines()[0]
         self._memo[key] = res
@@ -514,14 +518,16 @@ class _Session:
         scene: Any,
         label: str,
     ) -> Any:
+        from validation.runs.environment import one_blas_thread
         from validation.validate import run_validation
 
         RUNS.append(key)
         out = self._out_dir(path, key, label)
         try:
-            return run_validation(
-                scene if scene is not None else path, out, t_end=t_end, plants=",".join(plants)
-            )
+            with one_blas_thread():  # the session's pools as they were after (module docstring)
+                return run_validation(
+                    scene if scene is not None else path, out, t_end=t_end, plants=",".join(plants)
+                )
         except (ValueError, OSError) as exc:
             return f"{type(exc).__name__}: {exc}".splitlines()[0]
 

@@ -244,3 +244,48 @@ def test_a_served_job_works_from_a_thread_and_a_hung_one_is_stopped(tmp_path):
     assert not alive
     with pytest.raises(ProcessLookupError):
         os.kill(hung_pid, 0)
+
+
+def _can_serve_in(conn):
+    conn.send(workers.can_serve())
+
+
+@needs_server
+def test_a_daemonic_process_is_not_served_and_a_daemon_free_one_is():
+    """multiprocessing refuses children to a daemonic process (a Dask worker by default): there
+    can_serve() says no (the run falls back to the limit at progress reports) instead of lifting
+    the process's private flag; a non-daemonic child may serve."""
+    import multiprocessing as mp
+
+    ctx = mp.get_context("spawn")
+    seen = {}
+    for daemon in (True, False):
+        here, there = ctx.Pipe(duplex=False)
+        proc = ctx.Process(target=_can_serve_in, args=(there,), daemon=daemon)
+        proc.start()
+        there.close()
+        assert here.poll(120)
+        seen[daemon] = here.recv()
+        proc.join(30)
+    assert seen == {True: False, False: True}
+
+
+def _daemonic():
+    import multiprocessing as mp
+
+    return mp.current_process().daemon, workers.can_serve()
+
+
+@needs_server
+def test_the_dask_workers_the_tool_starts_may_serve_and_the_setting_is_scoped():
+    """``--dask-workers``: the LocalCluster's worker processes are not daemonic (Dask's documented
+    ``distributed.worker.daemon``), so a run there may go to the fork server; the user's Dask
+    config is as it was after the cluster."""
+    dask = pytest.importorskip("dask")
+    pytest.importorskip("distributed")
+    from validation.studies.sweep.running import executor_for
+
+    before = dask.config.get("distributed.worker.daemon")
+    with executor_for(dask_workers=1) as (ex, _width):
+        assert ex.submit(_daemonic).result(timeout=120) == (False, True)
+    assert dask.config.get("distributed.worker.daemon") == before

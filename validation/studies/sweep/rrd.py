@@ -64,6 +64,9 @@ def write_rrd(
     """Write ``sweep.rrd`` atomically (:func:`validation.recording.recording.atomic_stream`), with its
     blueprint."""
     # deferred: rerun ~0.25 s (python -X importtime), only when the recording is written
+    from validation.runs.environment import import_rerun
+
+    import_rerun()  # first: NO_COLOR for rerun's first import only
     import rerun as rr
     import rerun.blueprint as rrb
 

@@ -17,7 +17,7 @@ import time
 import warnings
 from collections.abc import Callable, Iterator
 from concurrent.futures import Executor, ProcessPoolExecutor
-from contextlib import contextmanager
+from contextlib import ExitStack, contextmanager
 from typing import Any
 
 import analytic
@@ -150,11 +150,16 @@ def default_executor() -> Executor:
     """A local process pool of :func:`default_workers` workers.
 
     spawn, not fork: the parent may hold threads (BLAS, numba, a Dask client) that fork would copy
-    mid-state; workers import the engines afresh.
+    mid-state; workers import the engines afresh. Each worker ends when this process does, even
+    one killed with SIGKILL (:func:`validation.runs.lifetime.pool_initializer`).
     """
+    from validation.runs.lifetime import pool_initializer
+
     return ProcessPoolExecutor(
         max_workers=default_workers(),
         mp_context=multiprocessing.get_context("spawn"),
+        initializer=pool_initializer,
+        initargs=(os.getpid(),),
     )
 
 
@@ -198,11 +203,23 @@ def executor_for(
             f'{what}: Dask is not installed (pip install "dask[distributed]")'
         ) from None
     cluster = None
+    scoped = ExitStack()
     if scheduler is None:
-        cluster = LocalCluster(
-            n_workers=dask_workers, threads_per_worker=1, processes=True, dashboard_address=None
-        )
-        client = Client(cluster)
+        # Dask's worker processes are daemonic by default, and a daemonic process may start no
+        # child: a run there could not go to the fork server (validation.runs.workers.can_serve).
+        # Not daemonic for this cluster's life (its nanny reads the setting at every worker
+        # (re)start); each worker still ends with this process (the nanny's parent pipe).
+        import dask
+
+        scoped.enter_context(dask.config.set({"distributed.worker.daemon": False}))
+        try:
+            cluster = LocalCluster(
+                n_workers=dask_workers, threads_per_worker=1, processes=True, dashboard_address=None
+            )
+            client = Client(cluster)
+        except BaseException:
+            scoped.close()
+            raise
     else:
         client = Client(scheduler)
     try:
@@ -215,6 +232,7 @@ def executor_for(
         client.close()
         if cluster is not None:
             cluster.close()
+        scoped.close()
 
 
 __all__ = [

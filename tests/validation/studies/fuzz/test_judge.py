@@ -1,6 +1,6 @@
 """The fuzzer's hard time limit on one plant run (:func:`validation.studies.fuzz.judge.run_limited`)
 where forking from the running process is not safe: under a thread pool and on a Dask
-``LocalCluster`` of worker processes (multi-threaded, daemonic), a plant that never reports
+``LocalCluster`` of worker processes (multi-threaded, made non-daemonic), a plant that never reports
 progress is still stopped at its limit, by a child of the fork server, and its process is gone."""
 
 from __future__ import annotations
@@ -70,9 +70,13 @@ def test_a_silent_plant_is_stopped_at_its_limit_under_a_thread_pool(tmp_path):
 
 @needs_server
 def test_a_silent_plant_is_stopped_at_its_limit_on_a_dask_local_cluster(tmp_path):
-    """Dask's worker processes are multi-threaded and daemonic (``distributed.worker.daemon``)."""
+    """Dask's worker processes are multi-threaded; started by hand they are made non-daemonic
+    (``distributed.worker.daemon``), as documented, so that a run may go to the fork server."""
     distributed = pytest.importorskip("distributed")
+    import dask
+
     with (
+        dask.config.set({"distributed.worker.daemon": False}),
         distributed.LocalCluster(
             n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None
         ) as cluster,
