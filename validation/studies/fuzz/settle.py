@@ -56,14 +56,16 @@ import numpy as np
 
 from analytic.plant import Plant
 from analytic.trajectory import RunStatus, Trajectory
-from validation.compare.checks import difference_series
+from validation.compare.checks import CheckState, Subject, difference_series
 from validation.studies.fuzz.judge import (
+    RELATIVE_DIFFERENCES,
     RUN_BUDGET_S,
     Disagreement,
     Kind,
     Outcome,
     OverTime,
     _Raised,
+    cut_short,
     judge_runs,
     prepare,
     run_limited,
@@ -198,7 +200,7 @@ def _default_run(
         return {"status": "raised", "reached": math.nan}, None
     if tr.status is RunStatus.INTERRUPTED:
         raise KeyboardInterrupt(tr.message)
-    ok = tr.status is RunStatus.OK
+    ok = not cut_short(tr)
     end = float(tr.t[-1]) if len(tr.t) else 0.0
     record = {"status": "ok" if ok else "stopped", "reached": end}
     if ok:
@@ -247,13 +249,13 @@ def settle_plant(
     name, pl = chosen[0]
     out: dict[str, Any] = {"name": name, "bound": float(pl.value_bound), "sensitivity": {}}
     out["default_run"], given = _default_run(name, pl, scene, horizon, budget_s)
-    if condition and given is not None and given.status is RunStatus.OK:
+    if condition and given is not None and not cut_short(given):
         moved, _refused, _chosen = prepare(perturbed(data), [p], horizon)
         try:
             other = run_limited(name, pl, moved, horizon, budget_s) if moved else None
         except (OverTime, _Raised):
             other = None
-        if other is not None and other.status is RunStatus.OK:
+        if other is not None and not cut_short(other):
             out["sensitivity"] = _own_errors(given, other)
     if not tighten:
         return out
@@ -275,7 +277,7 @@ def settle_plant(
     if tight.status is RunStatus.INTERRUPTED:
         raise KeyboardInterrupt(tight.message)
     out["tight"] = tight
-    if tight.status is RunStatus.OK and given is not None and given.status is RunStatus.OK:
+    if not cut_short(tight) and given is not None and not cut_short(given):
         out["own_errors"] = _own_errors(given, tight)
     return out
 
@@ -291,6 +293,8 @@ def settle_collect(
                 "tightened": Outcome(refused=dict(refused)).to_dict()}
     untightened = dict(refused)
     own, described, runs, found = {}, {}, [], []
+    messages: dict[str, str] = {}
+    reached: dict[str, float] = {}
     for part in parts:
         name = part["name"]
         if "settings" in part:
@@ -302,9 +306,15 @@ def settle_collect(
         tight = part.get("tight")
         if tight is not None:
             runs.append((name, tight))
-            if tight.status is not RunStatus.OK:
-                found.append(Disagreement(Kind.STOPPED, str(tight.status.value), name))
-    tightened = judge_runs(scene, horizon, [t for _n, t in runs], [n for n, _t in runs], found)
+            if cut_short(tight):
+                found.append(Disagreement(Kind.STOPPED, cut_short(tight), name))
+                messages[name] = (tight.message.splitlines() or [cut_short(tight)])[0]
+                if len(tight.t):
+                    reached[name] = float(tight.t[-1])
+    tightened = judge_runs(
+        scene, horizon, [t for _n, t in runs], [n for n, _t in runs], found,
+        messages=messages, reached=reached,
+    )
     return {
         "own_errors": own,
         "settings": described,
@@ -340,25 +350,42 @@ def settle_data(
 
 
 def _fmt(x: float) -> str:
-    return f"{x:.2g}"
+    return f"{x:.3g}"
+
+
+def _pair_of(label: str) -> tuple[tuple[str, ...], str]:
+    """The plants and the quantity of a check label: ``analytic_vs_pinocchio.rod_positions`` ->
+    ``(("analytic", "pinocchio"), "rod_positions")``, a plant's own ``mujoco.energy`` ->
+    ``(("mujoco",), "energy")``, the reference pair's bare ``rod_positions`` -> its two plants
+    (``validation.compare.checks.Check.label``)."""
+    subject, dot, name = label.rpartition(".")
+    if not dot:
+        return tuple(Subject.BOTH.plants), label
+    return tuple(subject.split("_vs_")), name
 
 
 def _involved(d: Disagreement, outcome: Outcome, plants: Sequence[str]) -> list[str]:
     """The plants a disagreement is about: the outlier and the group it is separated from, a failed
     pair's two plants, a plant's own check's plant, a plant that failed."""
     if d.kind is Kind.OUTLIER:
-        for v in outcome.verdicts:
-            if v.get("quantity") == d.what:
-                return [d.plant, *[g for g in v.get("group", []) if g != d.plant]]
-        return [d.plant]
+        return [d.plant, *[g for g in _group(d, outcome) if g != d.plant]]
     if d.kind is Kind.CHECK:
-        subject = d.what.split(".", 1)[0]
-        return [p for p in plants if p in subject.split("_vs_")] or list(plants)
+        pair = _pair_of(d.what)[0]
+        return [p for p in plants if p in pair] or list(plants)
     return [d.plant]
 
 
+def _verdict(d: Disagreement, outcome: Outcome) -> Mapping[str, Any]:
+    return next((v for v in outcome.verdicts if v.get("quantity") == d.what), {})
+
+
+def _group(d: Disagreement, outcome: Outcome) -> list[str]:
+    """The majority group the referee separated the outlier ``d`` from."""
+    return [str(g) for g in _verdict(d, outcome).get("group", []) if g != d.plant]
+
+
 def _quantity(d: Disagreement) -> str:
-    return d.what if d.kind is Kind.OUTLIER else d.what.split(".", 1)[-1]
+    return d.what if d.kind is Kind.OUTLIER else _pair_of(d.what)[1]
 
 
 def _check_value(d: Disagreement, outcome: Outcome) -> float:
@@ -367,19 +394,67 @@ def _check_value(d: Disagreement, outcome: Outcome) -> float:
 
 
 def _distance(d: Disagreement, outcome: Outcome) -> float:
-    for v in outcome.verdicts:
-        if v.get("quantity") == d.what:
-            for o in v.get("outliers", []):
-                if o.get("plant") == d.plant:
-                    return float(o["distance"])
+    for o in _verdict(d, outcome).get("outliers", []):
+        if o.get("plant") == d.plant:
+            return float(o["distance"])
     return math.nan
+
+
+def _cut_short(p: str, outcome: Outcome) -> Disagreement | None:
+    """Plant ``p``'s run in ``outcome`` cut short (its :data:`Kind.STOPPED`), None when it was not."""
+    return next((x for x in outcome.disagreements if x.kind is Kind.STOPPED and x.plant == p), None)
+
+
+def _end_text(p: str, outcome: Outcome) -> str:
+    """``at t = 0.41 s: unstable: bad qacc (MuJoCo reset the state)``: where and why a run ended."""
+    at = outcome.reached.get(p, math.nan)
+    where = f" at t = {at:.4g} s" if math.isfinite(at) else ""
+    why = outcome.messages.get(p, "")
+    return f"{where}{': ' + why if why else ''}"
+
+
+def _failed_pairs(group: Sequence[str], outcome: Outcome) -> list[str]:
+    """The pair checks between two members of ``group`` that fail in ``outcome``, each as
+    ``label value > threshold``."""
+    out = []
+    for label, (value, threshold, state) in outcome.checks.items():
+        pair = _pair_of(label)[0]
+        if len(pair) == 2 and set(pair) <= set(group) and state == CheckState.FAIL.value:
+            out.append(f"{label} {_fmt(value)} > threshold {_fmt(threshold)}")
+    return out
+
+
+def _scale(d: Disagreement, outcome: Outcome, involved: Sequence[str]) -> float:
+    """The divisor of a relative quantity's value (NaN when not recorded): a failed pair check's
+    own, or for an outlier the smallest of its pair checks with the group's members (the largest
+    own error bound relative to it: the margin test's benefit of the doubt goes to the settings)."""
+    if d.kind is Kind.CHECK:
+        return float(outcome.scales.get(d.what, math.nan))
+    q, members = d.what, set(involved) - {d.plant}
+    found = [
+        s for label, s in outcome.scales.items()
+        if _pair_of(label)[1] == q and d.plant in _pair_of(label)[0]
+        and set(_pair_of(label)[0]) - {d.plant} <= members
+    ]
+    return min(found) if found else math.nan
+
+
+def _unknown_why(p: str, task: Mapping[str, Any], untightened: Mapping[str, str]) -> str:
+    run = task.get("default_runs", {}).get(p, {})
+    status = run.get("status", "")
+    if status and status != "ok":
+        return f"its run at its default settings {'was ' if status == 'timeout' else ''}{status}"
+    if p in untightened:
+        return untightened[p]
+    return "its tightened run did not finish"
 
 
 def settle(
     d: Disagreement, outcome: Outcome, task: Mapping[str, Any], plants: Sequence[str]
 ) -> Settlement:
     """The cause of ``d``, shown by the minimal scene's ``outcome`` at default settings, given the
-    settling task's result ``task`` (:func:`settle_data`) on ``plants`` (module docstring)."""
+    settling task's result ``task`` (:func:`settle_data`) on ``plants`` (module docstring). Every
+    comparison the sentence quotes was made, with the numbers it quotes."""
     own = {p: dict(q) for p, q in task["own_errors"].items()}
     described = {p: list(s) for p, s in task["settings"].items()}
     tightened = Outcome.from_dict(task["tightened"])
@@ -391,61 +466,33 @@ def settle(
         return Settlement(cause, text, culprit, own, described, tightened)
 
     if d.kind in (Kind.RAISED, Kind.STOPPED):
-        tight = described.get(d.plant, ["", ""])[1]
-        if d.plant in tightened.ran and not any(
-            x.plant == d.plant and x.kind in (Kind.RAISED, Kind.STOPPED)
-            for x in tightened.disagreements
-        ):
+        return _settle_failure(d, task, make, described, tightened, untightened)
+    # 1. a comparison with a run its engine's guard cut short blames nothing on that engine's model
+    for p in involved:
+        stop = _cut_short(p, outcome)
+        if stop is None:
+            continue
+        st = settle(stop, outcome, task, plants)
+        head = (f"{d.kind.value} on {q} compares {p}'s run cut short by its engine"
+                f"{_end_text(p, outcome)}")
+        if st.cause in (Cause.SCENE, Cause.RANGE):
+            return make(st.cause, f"{head}; its stop is settled as {st.cause.value}: {st.text}")
+        if st.cause is not Cause.SETTINGS:
             return make(
-                Cause.SETTINGS,
-                f"a numerical limit of the settings: {d.plant} finishes at {tight}",
-                d.plant,
+                Cause.UNSETTLED,
+                f"not settled: {head}, which is no evidence against its model (its stop, a "
+                f"finding of its own: {st.cause.value}: {st.text})",
             )
-        why = untightened.get(d.plant, "")
-        if not tight or "over its time limit" in why:
-            return make(Cause.UNSETTLED, f"not settled: {d.plant}: {why}")
-        runs = dict(task.get("default_runs", {}))
-        others = {p: r for p, r in runs.items() if p != d.plant}
-        ends = {p: float(r["reached"]) for p, r in runs.items()
-                if r["status"] in ("stopped", "timeout") and math.isfinite(float(r["reached"]))}
-        interval = float(task.get("interval", math.nan))
-        if (
-            others
-            and d.plant in ends
-            and all(p in ends for p in others)
-            and max(ends.values()) - min(ends.values()) <= SINGULAR_SPREAD_SAMPLES * interval
-        ):
-            where = ", ".join(
-                f"{p} {'stopped' if runs[p]['status'] == 'stopped' else 'stalled'} at "
-                f"t = {t:.4g} s" for p, t in ends.items()
-            )
+        break  # p finishes at its tightened settings: judged there (its own error is unknown)
+    for p in involved:
+        if _cut_short(p, tightened) is not None:
             return make(
-                Cause.SCENE,
-                f"the motion itself ends near t = {min(ends.values()):.4g} s: every plant stops "
-                f"or stalls there ({where}; {d.plant} also at {tight}), a singularity of the "
-                "controlled motion rather than a plant's failure",
+                Cause.UNSETTLED,
+                f"not settled: {p}'s run at its tightened settings "
+                f"({described.get(p, ['', ''])[1]}) was cut short{_end_text(p, tightened)}",
             )
-        bound = float(task.get("bounds", {}).get(d.plant, math.inf))
-        finished = {p: r for p, r in others.items() if r["status"] == "ok"}
-        if (
-            finished
-            and all(r["status"] in ("ok", "timeout") for r in others.values())
-            and math.isfinite(bound)
-        ):
-            reach = max(
-                ((k, v, p) for p, r in finished.items() for k, v in r["largest"].items()),
-                key=lambda x: x[1],
-            )
-            if reach[1] > bound:
-                return make(
-                    Cause.RANGE,
-                    f"the motion leaves {d.plant}'s range: {reach[2]} reaches {reach[0]} "
-                    f"{reach[1]:.3g} (SI units) against {d.plant}'s bound {bound:g}, and "
-                    f"{d.plant} stops at its tightened settings too ({tight}); no other plant "
-                    "fails",
-                )
-        return make(Cause.MODEL, f"{d.plant} fails at its tightened settings too ({tight})")
     value = _distance(d, outcome) if d.kind is Kind.OUTLIER else _check_value(d, outcome)
+    # 2. the scene's conditioning
     for p, sens in task.get("sensitivity", {}).items() if q in ABSOLUTE_QUANTITIES else ():
         moved = float(sens.get(q, math.nan))
         if math.isfinite(value) and value > 0 and moved >= CONDITIONING_FRACTION * value:
@@ -453,8 +500,10 @@ def settle(
                 Cause.CONDITIONING,
                 f"the scene's conditioning: {p}'s run from an initial state moved by "
                 f"{PERTURBATION:g} relative differs from its own run by {_fmt(moved)} on {q}, "
-                f"against the disagreement's {_fmt(value)}: no two engines can agree closer",
+                f"≥ {CONDITIONING_FRACTION:g} × the disagreement's {_fmt(value)}: no two engines "
+                "can agree closer",
             )
+    # 3. a plant that could not be tightened
     missing = [p for p in involved if p in untightened]
     if missing:
         why = "; ".join(f"{p}: {untightened[p]}" for p in missing)
@@ -465,43 +514,136 @@ def settle(
     culprit = max(known_errors, key=known_errors.get) if known_errors else ""
     if not culprit and len(involved) == 1:  # a plant's own check (a balance): that plant
         culprit = involved[0]
-    own_text = ", ".join(
-        f"{p} {_fmt(e)} ({described[p][0]})" for p, e in known_errors.items()
-    )
+    own_text = ", ".join(f"{p} {_fmt(e)} ({described[p][0]})" for p, e in known_errors.items())
+    own_part = f"; own errors on {q} at the default settings: {own_text}" if own_text else ""
+    # 4. gone at tightened settings
     if not tightened.shows(d):
         return make(
             Cause.SETTINGS,
-            f"a numerical limit of the settings: gone at tightened settings ({tight_names}); "
-            f"own errors on {q} at the default settings: {own_text}",
+            f"a numerical limit of the settings: gone at tightened settings ({tight_names})"
+            f"{own_part}",
             culprit,
         )
+    # 5. an outlier needs a majority that agrees with itself, at both settings
     if d.kind is Kind.OUTLIER:
-        dist = _distance(d, outcome)
-        bound = errors.get(d.plant, math.nan) + max(
-            (e for p, e in errors.items() if p != d.plant), default=0.0
-        )
-        if (
-            q in ABSOLUTE_QUANTITIES
-            and math.isfinite(dist)
-            and math.isfinite(bound)
-            and dist <= SETTLE_MARGIN * bound
-        ):
-            return make(
-                Cause.SETTINGS,
-                f"a numerical limit of the settings: {d.plant}'s distance {_fmt(dist)} is within "
-                f"{SETTLE_MARGIN:g} × the own errors on {q} ({own_text})",
-                culprit,
-            )
+        group = _group(d, outcome)
+        for where, o in (("default", outcome), ("tightened", tightened)):
+            failed = _failed_pairs(group, o)
+            if failed:
+                return make(
+                    Cause.UNSETTLED,
+                    f"not settled: {' and '.join(group)}, the group that makes {d.plant} the "
+                    f"outlier on {q}, disagree with each other at the {where} settings "
+                    f"({'; '.join(failed)}): no majority to trust",
+                )
+    pair_check = d.kind is Kind.CHECK and len(_pair_of(d.what)[0]) == 2
+    if not (d.kind is Kind.OUTLIER or pair_check) or q not in ABSOLUTE_QUANTITIES | (
+        RELATIVE_DIFFERENCES
+    ):
+        return make(Cause.MODEL, f"persists at tightened settings ({tight_names}){own_part}")
+    # 6. the margin: the distance against the own errors that could explain it
+    unknown = [p for p in involved if p not in known_errors]
+    if unknown:
+        why = "; ".join(f"{p}: {_unknown_why(p, task, untightened)}" for p in unknown)
+        return make(Cause.UNSETTLED, f"not settled: no own error on {q} for {why}")
+    if d.kind is Kind.OUTLIER:
+        who = f"{d.plant}'s distance on {q}"
+        member = max((p for p in involved if p != d.plant), key=lambda p: errors[p])
+        terms = [(f"{d.plant}'s own error", errors[d.plant]),
+                 (f"the group's largest, {member}'s", errors[member])]
+    else:
+        a, b = involved
+        who = f"the {d.what} check's value"
+        terms = [(f"{a}'s own error", errors[a]), (f"{b}'s", errors[b])]
+    bound = sum(e for _n, e in terms)
+    over = ""
+    if q in RELATIVE_DIFFERENCES:
+        scale = _scale(d, outcome, involved)
+        if not (math.isfinite(scale) and scale > 0):
+            return make(Cause.UNSETTLED, f"not settled: the scale of the relative {q} is not known")
+        bound /= scale
+        over = f" / the check's scale {_fmt(scale)}"
+    if not math.isfinite(value):
+        return make(Cause.UNSETTLED, f"not settled: {who} could not be computed")
+    quoted = (f"{_fmt(value)} {{}} {SETTLE_MARGIN:g} × ("
+              + " + ".join(f"{n} {_fmt(e)}" for n, e in terms) + f"){over} = "
+              f"{_fmt(SETTLE_MARGIN * bound)}")
+    if value <= SETTLE_MARGIN * bound:
         return make(
-            Cause.MODEL,
-            f"persists at tightened settings ({tight_names}) and {d.plant}'s distance "
-            f"{_fmt(dist)} exceeds {SETTLE_MARGIN:g} × the own errors on {q} ({own_text})",
+            Cause.SETTINGS,
+            f"a numerical limit of the settings: {who} " + quoted.format("≤") + own_part,
+            culprit,
         )
     return make(
         Cause.MODEL,
-        f"persists at tightened settings ({tight_names}); own errors on {q} at the default "
-        f"settings: {own_text}",
+        f"persists at tightened settings ({tight_names}) and {who} "
+        + quoted.format(">") + own_part,
     )
+
+
+def _settle_failure(
+    d: Disagreement,
+    task: Mapping[str, Any],
+    make: Any,
+    described: Mapping[str, list[str]],
+    tightened: Outcome,
+    untightened: Mapping[str, str],
+) -> Settlement:
+    """A plant that raised or stopped (module docstring: settings, scene, range, model)."""
+    tight = described.get(d.plant, ["", ""])[1]
+    if d.plant in tightened.ran and not any(
+        x.plant == d.plant and x.kind in (Kind.RAISED, Kind.STOPPED)
+        for x in tightened.disagreements
+    ):
+        return make(
+            Cause.SETTINGS,
+            f"a numerical limit of the settings: {d.plant} finishes at {tight}",
+            d.plant,
+        )
+    why = untightened.get(d.plant, "")
+    if not tight or "over its time limit" in why:
+        return make(Cause.UNSETTLED, f"not settled: {d.plant}: {why}")
+    runs = dict(task.get("default_runs", {}))
+    others = {p: r for p, r in runs.items() if p != d.plant}
+    ends = {p: float(r["reached"]) for p, r in runs.items()
+            if r["status"] in ("stopped", "timeout") and math.isfinite(float(r["reached"]))}
+    interval = float(task.get("interval", math.nan))
+    if (
+        others
+        and d.plant in ends
+        and all(p in ends for p in others)
+        and max(ends.values()) - min(ends.values()) <= SINGULAR_SPREAD_SAMPLES * interval
+    ):
+        where = ", ".join(
+            f"{p} {'stopped' if runs[p]['status'] == 'stopped' else 'stalled'} at "
+            f"t = {t:.4g} s" for p, t in ends.items()
+        )
+        return make(
+            Cause.SCENE,
+            f"the motion itself ends near t = {min(ends.values()):.4g} s: every plant stops "
+            f"or stalls there ({where}; {d.plant} also at {tight}), a singularity of the "
+            "controlled motion rather than a plant's failure",
+        )
+    bound = float(task.get("bounds", {}).get(d.plant, math.inf))
+    finished = {p: r for p, r in others.items() if r["status"] == "ok"}
+    if (
+        finished
+        and all(r["status"] in ("ok", "timeout") for r in others.values())
+        and math.isfinite(bound)
+    ):
+        reach = max(
+            ((k, v, p) for p, r in finished.items() for k, v in r["largest"].items()),
+            key=lambda x: x[1],
+        )
+        if reach[1] > bound:
+            return make(
+                Cause.RANGE,
+                f"the motion leaves {d.plant}'s range: {reach[2]} reaches {reach[0]} "
+                f"{reach[1]:.3g} (SI units) against {d.plant}'s bound {bound:g}, and "
+                f"{d.plant} stops at its tightened settings too ({tight}); no other plant "
+                "fails",
+            )
+    return make(Cause.MODEL, f"{d.plant} fails at its tightened settings too ({tight})")
 
 
 __all__ = [
