@@ -129,10 +129,12 @@ def _finite(x: float) -> float | None:
 
 
 def reproduce(ex: Any, res: CampaignResult) -> str:
-    """The command that reproduces a counterexample."""
+    """The command that reproduces a counterexample, each plant run within the campaign's
+    time limit."""
     return (
         f"tumble validate {res.out_dir / 'counterexamples' / ex.path.name} "
-        f"--plants {','.join(res.config.plants)} --t-end {ex.horizon:g}"
+        f"--plants {','.join(res.config.plants)} --t-end {ex.horizon:g} "
+        f"--time-limit {res.config.time_limit_s:g}"
     )
 
 
