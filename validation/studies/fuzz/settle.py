@@ -15,28 +15,55 @@ counterexample is settled:
 2. **The judgement at tightened settings.** The tightened runs are compared and refereed as the
    campaign's were (:func:`validation.studies.fuzz.judge.judge_runs`).
 
-The cause (:class:`Cause`):
+The cause (:class:`Cause`) of a plant that raised or stopped:
 
-* ``settings``: the disagreement is gone at tightened settings, or (an outlier) its distance is
-  within :data:`SETTLE_MARGIN` times the own errors of the plants it separates; the plant whose own
-  error is the largest is named, with its settings;
-* ``model``: it stays at tightened settings and (an outlier) its distance exceeds
-  :data:`SETTLE_MARGIN` times those own errors: what is left is a difference of the models (or of
-  round-off, which no tightening removes: the rod through C);
-* ``scene``: a plant that raised or stopped did so at tightened settings too, and every other
-  plant stops or stalls at the same time (within :data:`SINGULAR_SPREAD_SAMPLES` output samples):
-  the motion itself ends there (a finite-time blow-up of the controlled motion, which every
-  engine meets), not a plant's failure;
-* ``range``: a plant that raised or stopped did so at tightened settings too, no other plant
-  failed (one may pass its time limit), and a run that finished reaches a coordinate, velocity or acceleration beyond the stopped
-  plant's ``value_bound`` (MuJoCo's ``mjMAXVAL`` = 1e10: a mass flung off a spinning rod without
-  a spring runs away exponentially): the motion left that engine's range, by its design;
-* ``conditioning``: the motion itself amplifies a perturbation of the initial state at round-off
-  level (:data:`PERTURBATION` relative) into at least :data:`CONDITIONING_FRACTION` of the
-  disagreement, in the first plant's own runs: two engines, whose errors are never smaller than
-  that, cannot agree on such a scene at any settings;
-* ``unsettled``: a plant cannot tighten its settings (a plugin that does not say how), or a
-  tightened run failed or passed its time limit.
+* ``settings``: it finishes at its tightened settings;
+* ``scene``: it stops at tightened settings too, and every other plant stops or stalls at the
+  same time (within :data:`SINGULAR_SPREAD_SAMPLES` output samples): the motion itself ends there
+  (a finite-time blow-up of the controlled motion, which every engine meets);
+* ``range``: it stops at tightened settings too, no other plant failed (one may pass its time
+  limit), and a run that finished reaches a coordinate, velocity or acceleration beyond the
+  stopped plant's ``value_bound`` (MuJoCo's ``mjMAXVAL`` = 1e10: a mass flung off a spinning rod
+  without a spring runs away exponentially): the motion left that engine's range, by its design;
+* ``unsettled``: it cannot tighten, or its tightened run passed its time limit;
+* ``model``: none of these.
+
+Of an outlier or a failed check, the first rule that applies, in this order:
+
+1. **A run cut short.** A plant it is about (the outlier and its group, a pair's two plants) whose
+   run its engine's guard ended (a reset, a stop, a non-finite state:
+   :func:`validation.studies.fuzz.judge.cut_short`) was compared only up to its stop, so the
+   comparison is no evidence against that plant's model: the disagreement takes its stop's cause
+   when that is ``scene`` or ``range``, is judged at tightened settings (below) when the plant
+   finishes there (``settings``; its own error at default settings is then unknown), and is
+   ``unsettled`` otherwise (the stop, a finding of its own, carries its cause). A run cut short
+   at tightened settings: ``unsettled``.
+2. ``conditioning``: on a state quantity, the motion amplifies a perturbation of the initial
+   state at round-off level (:data:`PERTURBATION` relative) into at least
+   :data:`CONDITIONING_FRACTION` of the disagreement, in the first plant's own runs: two
+   engines, whose errors are never smaller than that, cannot agree on such a scene at any
+   settings.
+3. ``unsettled``: a plant it is about cannot tighten its settings (a plugin that does not say
+   how), or its tightened run failed or passed its time limit.
+4. ``settings``: the disagreement is gone at tightened settings; the plant whose own error is
+   the largest is named, with its settings.
+5. ``unsettled``, an outlier only: the plants of the group that makes it the outlier fail a pair
+   check between each other (any quantity), at default or tightened settings: a majority that
+   disagrees with itself beyond a threshold confirms nothing.
+6. **The margin** (an outlier, a failed pair check, on a difference quantity): its value (an
+   outlier's distance to the group, a check's value) against :data:`SETTLE_MARGIN` × the sum of
+   the own errors that could explain it (the outlier's and the group's largest; the pair's two).
+   ``unsettled`` when one of them is unknown (its run did not finish at both settings);
+   on the relative forces (:data:`~validation.studies.fuzz.judge.RELATIVE_DIFFERENCES`) the own
+   errors, in N·m or N, are divided by the check's scale (``Outcome.scales``; an outlier's
+   smallest with a group member), ``unsettled`` when it is not known. Within: ``settings``;
+   beyond: ``model``, what is left is a difference of the models (or of round-off, which no
+   tightening removes: the rod through C).
+7. ``model``: a plant's own check (a balance, tracking) that persists at tightened settings.
+
+Every sentence states only comparisons that were made, each with the numbers it compared
+(``0.00032 ≤ 10 × (mujoco's own error 130 + the group's largest, pinocchio's 5.6e-07) / the
+check's scale 4e+05 = 0.00325``).
 
 A plant raising or stopping is settled with only that plant tightened (the others run at their
 default settings, to see whether they stop at the same time); every other disagreement with every
@@ -45,30 +72,20 @@ plant tightened.
 
 from __future__ import annotations
 
-import copy
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from enum import StrEnum
 from typing import Any
 
-import numpy as np
-
-from analytic.plant import Plant
-from analytic.trajectory import RunStatus, Trajectory
-from validation.compare.checks import CheckState, Subject, difference_series
-from validation.studies.fuzz.judge import (
-    RELATIVE_DIFFERENCES,
-    RUN_BUDGET_S,
-    Disagreement,
-    Kind,
-    Outcome,
-    OverTime,
-    _Raised,
-    cut_short,
-    judge_runs,
-    prepare,
-    run_limited,
+from validation.compare.checks import CheckState, Subject
+from validation.studies.fuzz.judge import RELATIVE_DIFFERENCES, Disagreement, Kind, Outcome
+from validation.studies.fuzz.settle_runs import (
+    PERTURBATION,
+    perturbed,
+    settle_collect,
+    settle_data,
+    settle_plant,
 )
 
 SETTLE_MARGIN = 10.0
@@ -80,12 +97,6 @@ factor of a few where it cannot (an error that no longer follows the tolerance n
 of 100 ε); a decade, as the referee's own separation (REFEREE_SEPARATION), keeps a distance that
 the settings could explain from being called a model difference."""
 
-
-PERTURBATION = 1e-12
-"""The conditioning test's perturbation of the initial state: each component of ω(0), p(0) and
-ṗ(0) moved by this times max(1, its magnitude) (rad/s, m, m/s): the size of the differences
-every two engines carry from their first steps (a double's round-off is 1.1e-16; one step of an
-integrator at the scene tolerances errs by up to ~1e-12)."""
 
 CONDITIONING_FRACTION = 0.1
 """A disagreement is the scene's conditioning when the first plant's run from the perturbed
@@ -161,192 +172,6 @@ class Settlement:
             {p: [str(x) for x in s] for p, s in d["settings"].items()},
             Outcome.from_dict(d["tightened"]),
         )
-
-
-def _own_errors(given: Trajectory, tight: Trajectory) -> dict[str, float]:
-    """Max over time of each difference of the two runs (quantity -> value, its unit)."""
-    out = {}
-    for s in difference_series(given, tight):
-        name = s.key.split(".", 1)[1]
-        v = float(np.max(s.values)) if s.values.size else 0.0
-        out[name] = v if math.isfinite(v) else math.inf
-    return out
-
-
-def _largest(tr: Trajectory) -> dict[str, float]:
-    """The largest magnitudes a run reaches: ``coordinate`` (max |q|), ``velocity`` (max |q̇|)
-    and ``acceleration``, the largest mean over an output interval, max |Δq̇ / Δt|: a lower bound
-    of the largest acceleration (a mean never exceeds the largest value it averages)."""
-    q, qd, t = np.asarray(tr.q), np.asarray(tr.qdot), np.asarray(tr.t)
-    acc = np.abs(np.diff(qd, axis=0)) / np.diff(t)[:, None] if len(t) > 1 else np.zeros((1, 1))
-    return {
-        "coordinate": float(np.max(np.abs(q))) if q.size else 0.0,
-        "velocity": float(np.max(np.abs(qd))) if qd.size else 0.0,
-        "acceleration": float(np.max(acc)) if acc.size else 0.0,
-    }
-
-
-def _default_run(
-    name: str, pl: Plant, scene: Any, horizon: float, budget_s: float
-) -> tuple[dict, Trajectory | None]:
-    """A plant's run at its default settings and how it ended: ``status`` (``ok``, ``stopped``,
-    ``timeout``, ``raised``), ``reached`` (simulated time, s; NaN when unknown) and, for a run
-    that finished, ``largest`` (:func:`_largest`)."""
-    try:
-        tr = run_limited(name, pl, scene, horizon, budget_s)
-    except OverTime as exc:
-        return {"status": "timeout", "reached": exc.reached_s}, None
-    except _Raised:
-        return {"status": "raised", "reached": math.nan}, None
-    if tr.status is RunStatus.INTERRUPTED:
-        raise KeyboardInterrupt(tr.message)
-    ok = not cut_short(tr)
-    end = float(tr.t[-1]) if len(tr.t) else 0.0
-    record = {"status": "ok" if ok else "stopped", "reached": end}
-    if ok:
-        record["largest"] = _largest(tr)
-    return record, tr
-
-
-def perturbed(data: dict[str, Any]) -> dict[str, Any]:
-    """The scene file's dict ``data`` with its initial ω, p and ṗ moved by :data:`PERTURBATION`
-    (each component by that times max(1, its magnitude))."""
-    out = copy.deepcopy(data)
-    init = out.setdefault("initial", {})
-    for key in ("omega", "p", "pdot"):
-        if key in init:
-            init[key] = [float(x) + PERTURBATION * max(1.0, abs(float(x))) for x in init[key]]
-    if "omega" not in init:
-        init["omega"] = [PERTURBATION] * 3
-    return out
-
-
-def settle_plant(
-    data: dict[str, Any],
-    p: Plant | str,
-    horizon: float,
-    budget_s: float,
-    tighten: bool,
-    condition: bool = False,
-) -> dict[str, Any]:
-    """An executor's task: plant ``p``'s part of settling the scene file's dict ``data`` (a scene
-    the caller has prepared and found the plant able to run): its run at its default settings
-    (how it ended: :func:`_default_run`) and, when ``tighten``, its run at its tightened settings
-    and the own error estimate between the two; when ``condition``, its run of the
-    :func:`perturbed` scene and how far that moves it. Each run within ``budget_s`` s. Back:
-    ``name``, ``default_run``, ``bound`` (its ``value_bound``), ``sensitivity`` (quantity -> the
-    perturbed run's difference; empty without ``condition`` or a finished default run), and with
-    ``tighten``: ``settings`` ([default, tightened] descriptions), ``untightened`` (why not, ""
-    when it was), ``tight`` (the tightened trajectory, None without one), ``own_errors``
-    (quantity -> estimate)."""
-    scene, refused, chosen = prepare(data, [p], horizon)
-    if scene is None or not chosen:
-        name = next(iter(refused), "scene")
-        why = next(iter(refused.values()), "refused")
-        return {"name": name, "default_run": {"status": "raised", "reached": math.nan},
-                "bound": math.inf, "settings": ["", ""], "untightened": why, "tight": None,
-                "own_errors": {}, "sensitivity": {}}
-    name, pl = chosen[0]
-    out: dict[str, Any] = {"name": name, "bound": float(pl.value_bound), "sensitivity": {}}
-    out["default_run"], given = _default_run(name, pl, scene, horizon, budget_s)
-    if condition and given is not None and not cut_short(given):
-        moved, _refused, _chosen = prepare(perturbed(data), [p], horizon)
-        try:
-            other = run_limited(name, pl, moved, horizon, budget_s) if moved else None
-        except (OverTime, _Raised):
-            other = None
-        if other is not None and not cut_short(other):
-            out["sensitivity"] = _own_errors(given, other)
-    if not tighten:
-        return out
-    given_settings = pl.default_settings(scene)
-    tight_settings = pl.tightened(scene, given_settings)
-    out["settings"] = [
-        pl.describe(given_settings),
-        pl.describe(tight_settings) if tight_settings is not None else "",
-    ]
-    out.update(untightened="", tight=None, own_errors={})
-    if tight_settings is None:
-        out["untightened"] = f"the {name} plant cannot tighten its settings"
-        return out
-    try:
-        tight = run_limited(name, pl, scene, horizon, budget_s, tight_settings)
-    except (OverTime, _Raised) as exc:
-        out["untightened"] = str(exc)
-        return out
-    if tight.status is RunStatus.INTERRUPTED:
-        raise KeyboardInterrupt(tight.message)
-    out["tight"] = tight
-    if not cut_short(tight) and given is not None and not cut_short(given):
-        out["own_errors"] = _own_errors(given, tight)
-    return out
-
-
-def settle_collect(
-    scene: Any, horizon: float, refused: dict[str, str], parts: Sequence[Mapping[str, Any]]
-) -> dict[str, Any]:
-    """The settling task's result (what :func:`settle` reads) from each plant's part
-    (:func:`settle_plant`, in the plants' order): the tightened runs judged together."""
-    if scene is None:
-        return {"own_errors": {}, "settings": {}, "untightened": dict(refused),
-                "default_runs": {}, "bounds": {}, "sensitivity": {}, "interval": math.nan,
-                "tightened": Outcome(refused=dict(refused)).to_dict()}
-    untightened = dict(refused)
-    own, described, runs, found = {}, {}, [], []
-    messages: dict[str, str] = {}
-    reached: dict[str, float] = {}
-    for part in parts:
-        name = part["name"]
-        if "settings" in part:
-            described[name] = list(part["settings"])
-        if part.get("untightened"):
-            untightened[name] = part["untightened"]
-        if part.get("own_errors"):
-            own[name] = dict(part["own_errors"])
-        tight = part.get("tight")
-        if tight is not None:
-            runs.append((name, tight))
-            if cut_short(tight):
-                found.append(Disagreement(Kind.STOPPED, cut_short(tight), name))
-                messages[name] = (tight.message.splitlines() or [cut_short(tight)])[0]
-                if len(tight.t):
-                    reached[name] = float(tight.t[-1])
-    tightened = judge_runs(
-        scene, horizon, [t for _n, t in runs], [n for n, _t in runs], found,
-        messages=messages, reached=reached,
-    )
-    return {
-        "own_errors": own,
-        "settings": described,
-        "untightened": untightened,
-        "default_runs": {p["name"]: p["default_run"] for p in parts},
-        "bounds": {p["name"]: p["bound"] for p in parts},
-        "sensitivity": {p["name"]: dict(p["sensitivity"]) for p in parts if p.get("sensitivity")},
-        "interval": 1.0 / scene.output.rate,
-        "tightened": tightened.to_dict(),
-    }
-
-
-def settle_data(
-    data: dict[str, Any],
-    plants: Sequence[Plant | str],
-    horizon: float,
-    budget_s: float = RUN_BUDGET_S,
-    tighten: Sequence[str] | None = None,
-) -> dict[str, Any]:
-    """Settling's runs of the scene file's dict ``data``, one plant after the other here: each
-    plant's :func:`settle_plant` (tightened unless ``tighten`` names others; None: every plant),
-    collected by :func:`settle_collect`. Plain data back: ``own_errors``, ``settings``,
-    ``untightened`` (plants that cannot tighten, or whose tightened run did not finish: plant ->
-    why), ``tightened`` (``Outcome.to_dict()``), ``default_runs`` (plant -> how its run at its
-    default settings ended), ``bounds`` (plant -> ``value_bound``) and ``interval`` (the output
-    interval, s). A campaign submits each plant's part as its own task instead."""
-    scene, refused, chosen = prepare(data, plants, horizon)
-    parts = [
-        settle_plant(data, pl, horizon, budget_s, tighten is None or name in tighten, i == 0)
-        for i, (name, pl) in enumerate(chosen)
-    ]
-    return settle_collect(scene, horizon, refused, parts)
 
 
 def _fmt(x: float) -> str:
@@ -483,7 +308,7 @@ def settle(
                 f"not settled: {head}, which is no evidence against its model (its stop, a "
                 f"finding of its own: {st.cause.value}: {st.text})",
             )
-        break  # p finishes at its tightened settings: judged there (its own error is unknown)
+        # p finishes at its tightened settings: judged there, below (its own error is unknown)
     for p in involved:
         if _cut_short(p, tightened) is not None:
             return make(
