@@ -418,6 +418,9 @@ NON_FINITE = "non-finite"
 non-finite coordinate or velocity."""
 
 
+NON_FINITE_MESSAGE = "a non-finite state in a run it reports finished"
+
+
 def cut_short(tr: Trajectory) -> str:
     """Why a returned run does not stand for the motion up to its horizon, "" when it does: its
     status when it did not finish (``failed``: its engine's own guard ended it, a reset, a
@@ -447,8 +450,6 @@ def run_one(name: str, pl: Plant, scene: Scene, horizon: float, budget_s: float)
     if tr.status is not RunStatus.OK:
         why = tr.message.splitlines()[0] if tr.message else str(tr.status)
         return PlantRun(name, tr, wall, None, "", why, float(tr.t[-1]) if len(tr.t) else 0.0)
-    if cut_short(tr):
-        return PlantRun(name, tr, wall, None, "", "a non-finite state in a run it reports finished")
     return PlantRun(name, tr, wall)
 
 
@@ -474,6 +475,8 @@ def outcome_of(
             continue
         if cut_short(r.traj):
             found.append(Disagreement(Kind.STOPPED, cut_short(r.traj), r.name))
+            if cut_short(r.traj) == NON_FINITE:
+                messages.setdefault(r.name, NON_FINITE_MESSAGE)
         trajs.append(r.traj)
         ran.append(r.name)
     return judge_runs(
