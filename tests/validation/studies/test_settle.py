@@ -255,31 +255,3 @@ def test_the_conditioning_sentence_quotes_a_comparison_that_holds():
     assert _close(_num(m.group(1)), 40.0) and _close(_num(m.group(3)), 164.6)
     assert 40.0 >= CONDITIONING_FRACTION * 164.6
 
-
-def test_a_run_reported_finished_with_a_non_finite_state_is_cut_short():
-    """A plant that says its run finished but returns a NaN coordinate: the judge records it as
-    stopped (non-finite), and the outlier the referee may name on it is no model finding."""
-    import dataclasses
-
-    import numpy as np
-
-    from validation.studies.fuzz.judge import NON_FINITE, PlantRun, outcome_of, prepare
-    from validation.studies.fuzz.space import draw_scene_dict
-
-    data = draw_scene_dict(0, 0, 0.1)
-    scene, _refused, chosen = prepare(data, ["analytic"], 0.1)
-    tr = chosen[0][1].simulate(scene, None, t_end=0.1)
-    q = np.array(tr.q)
-    q[-1, 0] = np.nan
-    runs = [PlantRun("analytic", tr, 0.0),
-            PlantRun("mujoco", dataclasses.replace(tr, q=q, engine="mujoco"), 0.0),
-            PlantRun("pinocchio", dataclasses.replace(tr, engine="pinocchio"), 0.0)]
-    out = outcome_of(scene, 0.1, {}, runs)
-    stop = Disagreement(Kind.STOPPED, NON_FINITE, "mujoco")
-    assert stop in out.disagreements and out.messages["mujoco"]
-    outliers = [d for d in out.disagreements if d.kind is Kind.OUTLIER and d.plant == "mujoco"]
-    assert outliers  # the referee names it on the position of C, at an infinite distance
-    task = _task({p: {q: 0.0 for q in ("position_C", "rod_positions")} for p in PLANTS}, out)
-    task["default_runs"]["mujoco"] = {"status": "stopped", "reached": 0.1}
-    for d in outliers:
-        assert settle(d, out, task, PLANTS).cause is Cause.UNSETTLED
