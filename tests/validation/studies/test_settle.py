@@ -255,3 +255,22 @@ def test_the_conditioning_sentence_quotes_a_comparison_that_holds():
     assert _close(_num(m.group(1)), 40.0) and _close(_num(m.group(3)), 164.6)
     assert 40.0 >= CONDITIONING_FRACTION * 164.6
 
+
+
+def test_a_stop_against_plants_that_disagree_with_each_other_is_unsettled():
+    """MuJoCo stops at tightened settings too, with no range or scene cause, while analytic and
+    Pinocchio, the plants that finish, fail their pair check on the rod positions: no majority
+    shows that the motion goes on, so the stop is unsettled; with the pair passing, the model."""
+    failing = {"analytic_vs_pinocchio.rod_positions": (0.5, 1e-6, "FAIL")}
+    out = Outcome(ran=PLANTS, checks=failing, disagreements=(STOP,))
+    task = _task({}, out)
+    task["default_runs"]["mujoco"] = {"status": "stopped", "reached": 0.41}
+    st = settle(STOP, out, task, PLANTS)
+    assert st.cause is Cause.UNSETTLED, st.text
+    m = re.search(r"analytic_vs_pinocchio\.rod_positions " + NUMBER + " > threshold " + NUMBER,
+                  st.text)
+    assert m and _num(m.group(1)) > _num(m.group(2))
+    passing = {"analytic_vs_pinocchio.rod_positions": (1e-9, 1e-6, "pass")}
+    out = Outcome(ran=PLANTS, checks=passing, disagreements=(STOP,))
+    task["tightened"] = out.to_dict()
+    assert settle(STOP, out, task, PLANTS).cause is Cause.MODEL

@@ -25,7 +25,9 @@ The cause (:class:`Cause`) of a plant that raised or stopped:
   limit), and a run that finished reaches a coordinate, velocity or acceleration beyond the
   stopped plant's ``value_bound`` (MuJoCo's ``mjMAXVAL`` = 1e10: a mass flung off a spinning rod
   without a spring runs away exponentially): the motion left that engine's range, by its design;
-* ``unsettled``: it cannot tighten, or its tightened run passed its time limit;
+* ``unsettled``: it cannot tighten, or its tightened run passed its time limit; or the other
+  plants that ran fail a pair check between each other (a majority that disagrees with itself
+  beyond a threshold confirms nothing, not even that the motion goes on);
 * ``model``: none of these.
 
 Of an outlier or a failed check, the first rule that applies, in this order:
@@ -291,7 +293,7 @@ def settle(
         return Settlement(cause, text, culprit, own, described, tightened)
 
     if d.kind in (Kind.RAISED, Kind.STOPPED):
-        return _settle_failure(d, task, make, described, tightened, untightened)
+        return _settle_failure(d, outcome, task, make, described, tightened, untightened)
     # 1. a comparison with a run its engine's guard cut short blames nothing on that engine's model
     for p in involved:
         stop = _cut_short(p, outcome)
@@ -408,6 +410,7 @@ def settle(
 
 def _settle_failure(
     d: Disagreement,
+    outcome: Outcome,
     task: Mapping[str, Any],
     make: Any,
     described: Mapping[str, list[str]],
@@ -468,6 +471,15 @@ def _settle_failure(
                 f"{d.plant} stops at its tightened settings too ({tight}); no other plant "
                 "fails",
             )
+    others_ran = [p for p in outcome.ran if p != d.plant]
+    failed = _failed_pairs(others_ran, outcome) if len(others_ran) >= 2 else []
+    if failed:
+        return make(
+            Cause.UNSETTLED,
+            f"not settled: {d.plant} fails at its tightened settings too ({tight}), but "
+            f"{' and '.join(others_ran)}, the plants that ran, disagree with each other "
+            f"({'; '.join(failed)}): no majority to trust that the motion goes on",
+        )
     return make(Cause.MODEL, f"{d.plant} fails at its tightened settings too ({tight})")
 
 
