@@ -369,17 +369,22 @@ def settle(
     ):
         return make(Cause.MODEL, f"persists at tightened settings ({tight_names}){own_part}")
     # 6. the margin: the distance against the own errors that could explain it
-    unknown = [p for p in involved if p not in known_errors]
+    explain = list(_pair_of(d.what)[0]) if pair_check else involved
+    if d.kind is Kind.OUTLIER and len(explain) < 2:
+        return make(Cause.UNSETTLED, f"not settled: the group {d.plant} is an outlier from is "
+                    "not recorded")
+    errors = {p: own.get(p, {}).get(q, math.nan) for p in explain}
+    unknown = [p for p in explain if not math.isfinite(errors[p])]
     if unknown:
         why = "; ".join(f"{p}: {_unknown_why(p, task, untightened)}" for p in unknown)
         return make(Cause.UNSETTLED, f"not settled: no own error on {q} for {why}")
     if d.kind is Kind.OUTLIER:
         who = f"{d.plant}'s distance on {q}"
-        member = max((p for p in involved if p != d.plant), key=lambda p: errors[p])
+        member = max(explain[1:], key=lambda p: errors[p])
         terms = [(f"{d.plant}'s own error", errors[d.plant]),
                  (f"the group's largest, {member}'s", errors[member])]
     else:
-        a, b = involved
+        a, b = explain
         who = f"the {d.what} check's value"
         terms = [(f"{a}'s own error", errors[a]), (f"{b}'s", errors[b])]
     bound = sum(e for _n, e in terms)
@@ -392,19 +397,16 @@ def settle(
         over = f" / the check's scale {_fmt(scale)}"
     if not math.isfinite(value):
         return make(Cause.UNSETTLED, f"not settled: {who} could not be computed")
-    quoted = (f"{_fmt(value)} {{}} {SETTLE_MARGIN:g} × ("
+    within = value <= SETTLE_MARGIN * bound
+    quoted = (f"{who} {_fmt(value)} {'≤' if within else '>'} {SETTLE_MARGIN:g} × ("
               + " + ".join(f"{n} {_fmt(e)}" for n, e in terms) + f"){over} = "
               f"{_fmt(SETTLE_MARGIN * bound)}")
-    if value <= SETTLE_MARGIN * bound:
+    if within:
         return make(
-            Cause.SETTINGS,
-            f"a numerical limit of the settings: {who} " + quoted.format("≤") + own_part,
-            culprit,
+            Cause.SETTINGS, f"a numerical limit of the settings: {quoted}{own_part}", culprit
         )
     return make(
-        Cause.MODEL,
-        f"persists at tightened settings ({tight_names}) and {who} "
-        + quoted.format(">") + own_part,
+        Cause.MODEL, f"persists at tightened settings ({tight_names}) and {quoted}{own_part}"
     )
 
 
