@@ -189,10 +189,12 @@ def campaign_markdown(res: CampaignResult, doc: dict[str, Any]) -> str:
          "own error estimates at their default settings: the settings, not the model",
          lambda e: not e["known"] and cause(e) == "settings"),
         ("Singular motions", "a plant stops, and every other plant stops or stalls at the same "
-         "time: the controlled motion itself ends there",
+         "time: the controlled motion itself ends there (or a disagreement with that plant's "
+         "run up to its stop)",
          lambda e: not e["known"] and cause(e) == "scene"),
         ("Beyond an engine's range", "a plant stops where the motion passes the largest value it "
-         "carries on with (MuJoCo's mjMAXVAL), while every other plant finishes",
+         "carries on with (MuJoCo's mjMAXVAL), while every other plant finishes (or a "
+         "disagreement with that plant's run up to its stop)",
          lambda e: not e["known"] and cause(e) == "range"),
         ("Ill-conditioned motions", "the motion amplifies a round-off-sized change of its "
          "initial state into a tenth of the disagreement or more: no two engines can agree "
