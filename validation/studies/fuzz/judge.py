@@ -419,6 +419,7 @@ non-finite coordinate or velocity."""
 
 
 NON_FINITE_MESSAGE = "a non-finite state in a run it reports finished"
+"""The outcome's message for such a run (its plant gave none)."""
 
 
 def cut_short(tr: Trajectory) -> str:
