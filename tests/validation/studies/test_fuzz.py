@@ -79,12 +79,27 @@ def _file_dict(path):
     return tomllib.loads(path.read_text())
 
 
+def _reproduce_limit(command: str) -> float:
+    """The ``--time-limit`` a ``tumble validate`` command gives (its only one)."""
+    import shlex
+
+    words = shlex.split(command)
+    assert words[:2] == ["tumble", "validate"] and words.count("--time-limit") == 1, command
+    return float(words[words.index("--time-limit") + 1])
+
+
 def test_minimal_scene_is_accepted_by_validate_plugin_and_hard_case_runner(tmp_path):
-    res = fuzz(tmp_path, budget=1, seed=0, plants=PLANTS, executor=SerialExecutor())
+    """... and its reproduce command, in the file and in campaign.json, runs each plant within
+    the campaign's own per-run time limit (not the default's)."""
+    res = fuzz(tmp_path, budget=1, seed=0, plants=PLANTS, executor=SerialExecutor(),
+               time_limit_s=45.5)
     path = res.counterexamples[0].path
     text = path.read_text()
     assert text.startswith("# Minimal counterexample")
-    assert "Reproduce: tumble validate" in text
+    (line,) = [x for x in text.splitlines() if x.startswith("# Reproduce: ")]
+    assert _reproduce_limit(line.removeprefix("# Reproduce: ")) == 45.5
+    doc = json.loads(res.files["json"].read_text())
+    assert [_reproduce_limit(c["command"]) for c in doc["counterexamples"]] == [45.5]
     load_scene(path)  # tumble validate and the plugin read it through the loader
     from validation.studies.hard_cases.runner import load_case
 

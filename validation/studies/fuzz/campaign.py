@@ -256,7 +256,7 @@ def fuzz(
     for p in chosen:  # an unknown name is refused here, before any work
         if isinstance(p, str):
             plant(p)
-    cfg = FuzzConfig(seed, names, float(horizon))
+    cfg = FuzzConfig(seed, names, float(horizon), float(time_limit_s))
     out = Path(out_dir)
     (out / SCENES_DIR).mkdir(parents=True, exist_ok=True)
     (out / COUNTEREXAMPLES_DIR).mkdir(exist_ok=True)

@@ -9,8 +9,13 @@ file is made. What it returns, :class:`Outcome`, is plain data (JSON-able throug
 
 A disagreement (:class:`Disagreement`) is one of: a failed check (its label, e.g.
 ``analytic_vs_mujoco.rod_positions`` or ``mujoco.energy``), a referee outlier (quantity and the
-plant outside the agreeing two), or a plant that raised or stopped before the horizon. A scene
-the loader or a plant refuses is a refusal with its reason, never a disagreement.
+plant outside the agreeing two), or a plant that raised or stopped before the horizon (its
+engine's own guard: a reset, a non-finite state, a failed step; or a run that reports it finished
+with a non-finite state, :func:`cut_short`). A run cut short is still compared up to its last
+sample, so the referee may name it an outlier there: the outcome records what the referee said,
+and settling (:mod:`validation.studies.fuzz.settle`) never calls such an outlier a model
+difference. A scene the loader or a plant refuses is a refusal with its reason, never a
+disagreement.
 
 Every plant run has a hard wall-time limit (:data:`RUN_BUDGET_S`, or the caller's): on Linux it
 runs in a worker process that is killed when the limit passes, whether or not the plant ever
@@ -33,6 +38,8 @@ from multiprocessing import RawValue
 from multiprocessing.connection import wait as mp_wait
 from typing import Any
 
+import numpy as np
+
 from analytic.plant import Plant
 from analytic.scene import Scene, scene_from_dict
 from analytic.trajectory import RunStatus, Trajectory
@@ -42,6 +49,11 @@ from validation.compare.referee import VerdictKind, referee
 from validation.runs import warm_plants, warmup, workers
 from validation.studies.sweep.running import BudgetExceeded
 
+RELATIVE_DIFFERENCES = frozenset(("control_torque", "rod_forces"))
+"""The difference quantities whose pair checks are relative: their value is the largest
+difference divided by the check's scale (``Outcome.scales``), the largest force of the pair's
+reference (``validation.compare.thresholds``)."""
+
 
 class Kind(StrEnum):
     """What kind of disagreement."""
@@ -49,7 +61,7 @@ class Kind(StrEnum):
     CHECK = "failed check"  # a check of compare_plants failed: ``what`` is its label
     OUTLIER = "outlier"  # the referee named ``plant`` the outlier on quantity ``what``
     RAISED = "plant raised"  # ``plant`` raised an exception: ``what`` is its type
-    STOPPED = "plant stopped"  # ``plant`` returned before the horizon (failed or diverged)
+    STOPPED = "plant stopped"  # ``plant`` returned before the horizon or non-finite (cut_short)
 
 
 @dataclass(frozen=True, order=True)
@@ -91,6 +103,9 @@ class Outcome:
         reached: plant -> the simulated time (s) a run that stopped before the horizon reached
             (its last output sample) or a run stopped at its time limit had reached (its last
             progress report; with ``timeouts``, machine-dependent).
+        scales: check label -> the divisor of a relative check (its ``Check.scale``, in the
+            signal's unit: the largest control torque, N·m, or rod force, N, of the pair's
+            reference over their common samples); only relative checks are listed.
     """
 
     refused: dict[str, str] = field(default_factory=dict)
@@ -102,6 +117,7 @@ class Outcome:
     walls: dict[str, float] = field(default_factory=dict)
     timeouts: dict[str, float] = field(default_factory=dict)
     reached: dict[str, float] = field(default_factory=dict)
+    scales: dict[str, float] = field(default_factory=dict)
 
     @property
     def judged(self) -> bool:
@@ -123,6 +139,7 @@ class Outcome:
             "walls": dict(self.walls),
             "timeouts": dict(self.timeouts),
             "reached": dict(self.reached),
+            "scales": dict(self.scales),
         }
 
     @classmethod
@@ -137,6 +154,7 @@ class Outcome:
             walls={k: float(v) for k, v in d["walls"].items()},
             timeouts={k: float(v) for k, v in d.get("timeouts", {}).items()},
             reached={k: float(v) for k, v in d.get("reached", {}).items()},
+            scales={k: float(v) for k, v in d.get("scales", {}).items()},
         )
 
 
@@ -341,6 +359,7 @@ def judge_runs(
     (a plant that raised or stopped); ``fields`` are the outcome's other fields."""
     found = list(found)
     checks: dict[str, tuple[float, float, str]] = {}
+    scales: dict[str, float] = {}
     verdicts: tuple[dict[str, Any], ...] = ()
     if len(trajs) >= 2:
         cmp = compare_plants(list(trajs), scene, t_end=horizon)
@@ -349,6 +368,8 @@ def judge_runs(
                 continue
             value = float(c.value) if math.isfinite(c.value) else math.inf
             checks[c.label] = (value, float(c.threshold), c.state.value)
+            if c.subject.is_pair and c.name in RELATIVE_DIFFERENCES:
+                scales[c.label] = float(c.scale)
             if not c.passed:
                 found.append(Disagreement(Kind.CHECK, c.label))
         vs = referee(cmp)
@@ -363,6 +384,7 @@ def judge_runs(
         checks=checks,
         verdicts=verdicts,
         disagreements=tuple(sorted(set(found))),
+        scales=scales,
         **fields,
     )
 
@@ -389,6 +411,27 @@ class PlantRun:
     raised: str = ""
     message: str = ""
     reached: float = math.nan
+
+
+NON_FINITE = "non-finite"
+"""What a :data:`Kind.STOPPED` disagreement says of a run that reports it finished but holds a
+non-finite coordinate or velocity."""
+
+
+NON_FINITE_MESSAGE = "a non-finite state in a run it reports finished"
+"""The outcome's message for such a run (its plant gave none)."""
+
+
+def cut_short(tr: Trajectory) -> str:
+    """Why a returned run does not stand for the motion up to its horizon, "" when it does: its
+    status when it did not finish (``failed``: its engine's own guard ended it, a reset, a
+    non-finite state, a failed step), :data:`NON_FINITE` when it reports it finished but holds a
+    non-finite coordinate or velocity. Such a run is a :data:`Kind.STOPPED` disagreement."""
+    if tr.status is not RunStatus.OK:
+        return str(tr.status.value)
+    if not (np.all(np.isfinite(np.asarray(tr.q))) and np.all(np.isfinite(np.asarray(tr.qdot)))):
+        return NON_FINITE
+    return ""
 
 
 def run_one(name: str, pl: Plant, scene: Scene, horizon: float, budget_s: float) -> PlantRun:
@@ -431,8 +474,10 @@ def outcome_of(
         if r.raised:
             found.append(Disagreement(Kind.RAISED, r.raised, r.name))
             continue
-        if r.traj.status is not RunStatus.OK:
-            found.append(Disagreement(Kind.STOPPED, str(r.traj.status.value), r.name))
+        if cut_short(r.traj):
+            found.append(Disagreement(Kind.STOPPED, cut_short(r.traj), r.name))
+            if cut_short(r.traj) == NON_FINITE:
+                messages.setdefault(r.name, NON_FINITE_MESSAGE)
         trajs.append(r.traj)
         ran.append(r.name)
     return judge_runs(
@@ -475,12 +520,15 @@ def judge_scene(
 
 
 __all__ = [
+    "NON_FINITE",
+    "RELATIVE_DIFFERENCES",
     "RUN_BUDGET_S",
     "Disagreement",
     "Kind",
     "Outcome",
     "OverTime",
     "PlantRun",
+    "cut_short",
     "judge_runs",
     "judge_scene",
     "outcome_of",

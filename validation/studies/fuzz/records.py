@@ -7,23 +7,28 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from validation.studies.fuzz.judge import Disagreement, Outcome
+from validation.studies.fuzz.judge import RUN_BUDGET_S, Disagreement, Outcome
 from validation.studies.fuzz.settle import Cause, Settlement
 
 
 @dataclass(frozen=True)
 class FuzzConfig:
-    """What a campaign is: its seed, plants and horizon (a resumed campaign must match them).
+    """What a campaign is: its seed, plants and horizon (a resumed campaign must match them), and
+    the wall-time limit of its plant runs (not part of what it is: ``to_dict`` leaves it out, a
+    resumed campaign may be given another).
 
     Attributes:
         seed: the campaign's seed (scene ``i`` is drawn from ``[seed, i]``).
         plants: the plants' names, in the order given (the first is the comparison's reference).
         horizon: s.
+        time_limit_s: wall-time limit of one plant run, s (the counterexamples' reproduce
+            commands carry it).
     """
 
     seed: int
     plants: tuple[str, ...]
     horizon: float
+    time_limit_s: float = RUN_BUDGET_S
 
     def to_dict(self) -> dict[str, Any]:
         return {"seed": self.seed, "plants": list(self.plants), "horizon": self.horizon}

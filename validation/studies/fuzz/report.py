@@ -129,10 +129,12 @@ def _finite(x: float) -> float | None:
 
 
 def reproduce(ex: Any, res: CampaignResult) -> str:
-    """The command that reproduces a counterexample."""
+    """The command that reproduces a counterexample, each plant run within the campaign's
+    time limit."""
     return (
         f"tumble validate {res.out_dir / 'counterexamples' / ex.path.name} "
-        f"--plants {','.join(res.config.plants)} --t-end {ex.horizon:g}"
+        f"--plants {','.join(res.config.plants)} --t-end {ex.horizon:g} "
+        f"--time-limit {res.config.time_limit_s:g}"
     )
 
 
@@ -187,10 +189,12 @@ def campaign_markdown(res: CampaignResult, doc: dict[str, Any]) -> str:
          "own error estimates at their default settings: the settings, not the model",
          lambda e: not e["known"] and cause(e) == "settings"),
         ("Singular motions", "a plant stops, and every other plant stops or stalls at the same "
-         "time: the controlled motion itself ends there",
+         "time: the controlled motion itself ends there (or a disagreement with that plant's "
+         "run up to its stop)",
          lambda e: not e["known"] and cause(e) == "scene"),
         ("Beyond an engine's range", "a plant stops where the motion passes the largest value it "
-         "carries on with (MuJoCo's mjMAXVAL), while every other plant finishes",
+         "carries on with (MuJoCo's mjMAXVAL), while every other plant finishes (or a "
+         "disagreement with that plant's run up to its stop)",
          lambda e: not e["known"] and cause(e) == "range"),
         ("Ill-conditioned motions", "the motion amplifies a round-off-sized change of its "
          "initial state into a tenth of the disagreement or more: no two engines can agree "

@@ -15,28 +15,57 @@ counterexample is settled:
 2. **The judgement at tightened settings.** The tightened runs are compared and refereed as the
    campaign's were (:func:`validation.studies.fuzz.judge.judge_runs`).
 
-The cause (:class:`Cause`):
+The cause (:class:`Cause`) of a plant that raised or stopped:
 
-* ``settings``: the disagreement is gone at tightened settings, or (an outlier) its distance is
-  within :data:`SETTLE_MARGIN` times the own errors of the plants it separates; the plant whose own
-  error is the largest is named, with its settings;
-* ``model``: it stays at tightened settings and (an outlier) its distance exceeds
-  :data:`SETTLE_MARGIN` times those own errors: what is left is a difference of the models (or of
-  round-off, which no tightening removes: the rod through C);
-* ``scene``: a plant that raised or stopped did so at tightened settings too, and every other
-  plant stops or stalls at the same time (within :data:`SINGULAR_SPREAD_SAMPLES` output samples):
-  the motion itself ends there (a finite-time blow-up of the controlled motion, which every
-  engine meets), not a plant's failure;
-* ``range``: a plant that raised or stopped did so at tightened settings too, no other plant
-  failed (one may pass its time limit), and a run that finished reaches a coordinate, velocity or acceleration beyond the stopped
-  plant's ``value_bound`` (MuJoCo's ``mjMAXVAL`` = 1e10: a mass flung off a spinning rod without
-  a spring runs away exponentially): the motion left that engine's range, by its design;
-* ``conditioning``: the motion itself amplifies a perturbation of the initial state at round-off
-  level (:data:`PERTURBATION` relative) into at least :data:`CONDITIONING_FRACTION` of the
-  disagreement, in the first plant's own runs: two engines, whose errors are never smaller than
-  that, cannot agree on such a scene at any settings;
-* ``unsettled``: a plant cannot tighten its settings (a plugin that does not say how), or a
-  tightened run failed or passed its time limit.
+* ``settings``: it finishes at its tightened settings;
+* ``scene``: it stops at tightened settings too, and every other plant stops or stalls at the
+  same time (within :data:`SINGULAR_SPREAD_SAMPLES` output samples): the motion itself ends there
+  (a finite-time blow-up of the controlled motion, which every engine meets);
+* ``range``: it stops at tightened settings too, no other plant failed (one may pass its time
+  limit), and a run that finished reaches a coordinate, velocity or acceleration beyond the
+  stopped plant's ``value_bound`` (MuJoCo's ``mjMAXVAL`` = 1e10: a mass flung off a spinning rod
+  without a spring runs away exponentially): the motion left that engine's range, by its design;
+* ``unsettled``: it cannot tighten, or its tightened run passed its time limit; or the other
+  plants that ran fail a pair check between each other (a majority that disagrees with itself
+  beyond a threshold confirms nothing, not even that the motion goes on);
+* ``model``: none of these.
+
+Of an outlier or a failed check, the first rule that applies, in this order:
+
+1. **A run cut short.** A plant it is about (the outlier and its group, a pair's two plants) whose
+   run its engine's guard ended (a reset, a stop, a non-finite state:
+   :func:`validation.studies.fuzz.judge.cut_short`) was compared only up to its stop, so the
+   comparison is no evidence against that plant's model: the disagreement takes its stop's cause
+   when that is ``scene`` or ``range``, is judged at tightened settings (below) when the plant
+   finishes there (``settings``; its own error at default settings is then unknown), and is
+   ``unsettled`` otherwise (the stop, a finding of its own, carries its cause). A run cut short
+   at tightened settings: ``unsettled``.
+2. ``conditioning``: on a state quantity, the motion amplifies a perturbation of the initial
+   state at round-off level (:data:`PERTURBATION` relative) into at least
+   :data:`CONDITIONING_FRACTION` of the disagreement, in the first plant's own runs: two
+   engines, whose errors are never smaller than that, cannot agree on such a scene at any
+   settings.
+3. ``unsettled``: a plant it is about cannot tighten its settings (a plugin that does not say
+   how), or its tightened run failed or passed its time limit.
+4. ``settings``: the disagreement is gone at tightened settings; the plant whose own error is
+   the largest is named, with its settings.
+5. ``unsettled``, an outlier only: the plants of the group that makes it the outlier fail a pair
+   check between each other (any quantity), at default or tightened settings: a majority that
+   disagrees with itself beyond a threshold confirms nothing.
+6. **The margin** (an outlier, a failed pair check, on a difference quantity): its value (an
+   outlier's distance to the group, a check's value) against :data:`SETTLE_MARGIN` × the sum of
+   the own errors that could explain it (the outlier's and the group's largest; the pair's two).
+   ``unsettled`` when one of them is unknown (its run did not finish at both settings);
+   on the relative forces (:data:`~validation.studies.fuzz.judge.RELATIVE_DIFFERENCES`) the own
+   errors, in N·m or N, are divided by the check's scale (``Outcome.scales``; an outlier's
+   smallest with a group member), ``unsettled`` when it is not known. Within: ``settings``;
+   beyond: ``model``, what is left is a difference of the models (or of round-off, which no
+   tightening removes: the rod through C).
+7. ``model``: a plant's own check (a balance, tracking) that persists at tightened settings.
+
+Every sentence states only comparisons that were made, each with the numbers it compared
+(``0.00032 ≤ 10 × (mujoco's own error 130 + the group's largest, pinocchio's 5.6e-07) / the
+check's scale 4e+05 = 0.00325``).
 
 A plant raising or stopping is settled with only that plant tightened (the others run at their
 default settings, to see whether they stop at the same time); every other disagreement with every
@@ -45,28 +74,20 @@ plant tightened.
 
 from __future__ import annotations
 
-import copy
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from enum import StrEnum
 from typing import Any
 
-import numpy as np
-
-from analytic.plant import Plant
-from analytic.trajectory import RunStatus, Trajectory
-from validation.compare.checks import difference_series
-from validation.studies.fuzz.judge import (
-    RUN_BUDGET_S,
-    Disagreement,
-    Kind,
-    Outcome,
-    OverTime,
-    _Raised,
-    judge_runs,
-    prepare,
-    run_limited,
+from validation.compare.checks import CheckState, Subject
+from validation.studies.fuzz.judge import RELATIVE_DIFFERENCES, Disagreement, Kind, Outcome
+from validation.studies.fuzz.settle_runs import (
+    PERTURBATION,
+    perturbed,
+    settle_collect,
+    settle_data,
+    settle_plant,
 )
 
 SETTLE_MARGIN = 10.0
@@ -78,12 +99,6 @@ factor of a few where it cannot (an error that no longer follows the tolerance n
 of 100 ε); a decade, as the referee's own separation (REFEREE_SEPARATION), keeps a distance that
 the settings could explain from being called a model difference."""
 
-
-PERTURBATION = 1e-12
-"""The conditioning test's perturbation of the initial state: each component of ω(0), p(0) and
-ṗ(0) moved by this times max(1, its magnitude) (rad/s, m, m/s): the size of the differences
-every two engines carry from their first steps (a double's round-off is 1.1e-16; one step of an
-integrator at the scene tolerances errs by up to ~1e-12)."""
 
 CONDITIONING_FRACTION = 0.1
 """A disagreement is the scene's conditioning when the first plant's run from the perturbed
@@ -161,204 +176,43 @@ class Settlement:
         )
 
 
-def _own_errors(given: Trajectory, tight: Trajectory) -> dict[str, float]:
-    """Max over time of each difference of the two runs (quantity -> value, its unit)."""
-    out = {}
-    for s in difference_series(given, tight):
-        name = s.key.split(".", 1)[1]
-        v = float(np.max(s.values)) if s.values.size else 0.0
-        out[name] = v if math.isfinite(v) else math.inf
-    return out
-
-
-def _largest(tr: Trajectory) -> dict[str, float]:
-    """The largest magnitudes a run reaches: ``coordinate`` (max |q|), ``velocity`` (max |q̇|)
-    and ``acceleration``, the largest mean over an output interval, max |Δq̇ / Δt|: a lower bound
-    of the largest acceleration (a mean never exceeds the largest value it averages)."""
-    q, qd, t = np.asarray(tr.q), np.asarray(tr.qdot), np.asarray(tr.t)
-    acc = np.abs(np.diff(qd, axis=0)) / np.diff(t)[:, None] if len(t) > 1 else np.zeros((1, 1))
-    return {
-        "coordinate": float(np.max(np.abs(q))) if q.size else 0.0,
-        "velocity": float(np.max(np.abs(qd))) if qd.size else 0.0,
-        "acceleration": float(np.max(acc)) if acc.size else 0.0,
-    }
-
-
-def _default_run(
-    name: str, pl: Plant, scene: Any, horizon: float, budget_s: float
-) -> tuple[dict, Trajectory | None]:
-    """A plant's run at its default settings and how it ended: ``status`` (``ok``, ``stopped``,
-    ``timeout``, ``raised``), ``reached`` (simulated time, s; NaN when unknown) and, for a run
-    that finished, ``largest`` (:func:`_largest`)."""
-    try:
-        tr = run_limited(name, pl, scene, horizon, budget_s)
-    except OverTime as exc:
-        return {"status": "timeout", "reached": exc.reached_s}, None
-    except _Raised:
-        return {"status": "raised", "reached": math.nan}, None
-    if tr.status is RunStatus.INTERRUPTED:
-        raise KeyboardInterrupt(tr.message)
-    ok = tr.status is RunStatus.OK
-    end = float(tr.t[-1]) if len(tr.t) else 0.0
-    record = {"status": "ok" if ok else "stopped", "reached": end}
-    if ok:
-        record["largest"] = _largest(tr)
-    return record, tr
-
-
-def perturbed(data: dict[str, Any]) -> dict[str, Any]:
-    """The scene file's dict ``data`` with its initial ω, p and ṗ moved by :data:`PERTURBATION`
-    (each component by that times max(1, its magnitude))."""
-    out = copy.deepcopy(data)
-    init = out.setdefault("initial", {})
-    for key in ("omega", "p", "pdot"):
-        if key in init:
-            init[key] = [float(x) + PERTURBATION * max(1.0, abs(float(x))) for x in init[key]]
-    if "omega" not in init:
-        init["omega"] = [PERTURBATION] * 3
-    return out
-
-
-def settle_plant(
-    data: dict[str, Any],
-    p: Plant | str,
-    horizon: float,
-    budget_s: float,
-    tighten: bool,
-    condition: bool = False,
-) -> dict[str, Any]:
-    """An executor's task: plant ``p``'s part of settling the scene file's dict ``data`` (a scene
-    the caller has prepared and found the plant able to run): its run at its default settings
-    (how it ended: :func:`_default_run`) and, when ``tighten``, its run at its tightened settings
-    and the own error estimate between the two; when ``condition``, its run of the
-    :func:`perturbed` scene and how far that moves it. Each run within ``budget_s`` s. Back:
-    ``name``, ``default_run``, ``bound`` (its ``value_bound``), ``sensitivity`` (quantity -> the
-    perturbed run's difference; empty without ``condition`` or a finished default run), and with
-    ``tighten``: ``settings`` ([default, tightened] descriptions), ``untightened`` (why not, ""
-    when it was), ``tight`` (the tightened trajectory, None without one), ``own_errors``
-    (quantity -> estimate)."""
-    scene, refused, chosen = prepare(data, [p], horizon)
-    if scene is None or not chosen:
-        name = next(iter(refused), "scene")
-        why = next(iter(refused.values()), "refused")
-        return {"name": name, "default_run": {"status": "raised", "reached": math.nan},
-                "bound": math.inf, "settings": ["", ""], "untightened": why, "tight": None,
-                "own_errors": {}, "sensitivity": {}}
-    name, pl = chosen[0]
-    out: dict[str, Any] = {"name": name, "bound": float(pl.value_bound), "sensitivity": {}}
-    out["default_run"], given = _default_run(name, pl, scene, horizon, budget_s)
-    if condition and given is not None and given.status is RunStatus.OK:
-        moved, _refused, _chosen = prepare(perturbed(data), [p], horizon)
-        try:
-            other = run_limited(name, pl, moved, horizon, budget_s) if moved else None
-        except (OverTime, _Raised):
-            other = None
-        if other is not None and other.status is RunStatus.OK:
-            out["sensitivity"] = _own_errors(given, other)
-    if not tighten:
-        return out
-    given_settings = pl.default_settings(scene)
-    tight_settings = pl.tightened(scene, given_settings)
-    out["settings"] = [
-        pl.describe(given_settings),
-        pl.describe(tight_settings) if tight_settings is not None else "",
-    ]
-    out.update(untightened="", tight=None, own_errors={})
-    if tight_settings is None:
-        out["untightened"] = f"the {name} plant cannot tighten its settings"
-        return out
-    try:
-        tight = run_limited(name, pl, scene, horizon, budget_s, tight_settings)
-    except (OverTime, _Raised) as exc:
-        out["untightened"] = str(exc)
-        return out
-    if tight.status is RunStatus.INTERRUPTED:
-        raise KeyboardInterrupt(tight.message)
-    out["tight"] = tight
-    if tight.status is RunStatus.OK and given is not None and given.status is RunStatus.OK:
-        out["own_errors"] = _own_errors(given, tight)
-    return out
-
-
-def settle_collect(
-    scene: Any, horizon: float, refused: dict[str, str], parts: Sequence[Mapping[str, Any]]
-) -> dict[str, Any]:
-    """The settling task's result (what :func:`settle` reads) from each plant's part
-    (:func:`settle_plant`, in the plants' order): the tightened runs judged together."""
-    if scene is None:
-        return {"own_errors": {}, "settings": {}, "untightened": dict(refused),
-                "default_runs": {}, "bounds": {}, "sensitivity": {}, "interval": math.nan,
-                "tightened": Outcome(refused=dict(refused)).to_dict()}
-    untightened = dict(refused)
-    own, described, runs, found = {}, {}, [], []
-    for part in parts:
-        name = part["name"]
-        if "settings" in part:
-            described[name] = list(part["settings"])
-        if part.get("untightened"):
-            untightened[name] = part["untightened"]
-        if part.get("own_errors"):
-            own[name] = dict(part["own_errors"])
-        tight = part.get("tight")
-        if tight is not None:
-            runs.append((name, tight))
-            if tight.status is not RunStatus.OK:
-                found.append(Disagreement(Kind.STOPPED, str(tight.status.value), name))
-    tightened = judge_runs(scene, horizon, [t for _n, t in runs], [n for n, _t in runs], found)
-    return {
-        "own_errors": own,
-        "settings": described,
-        "untightened": untightened,
-        "default_runs": {p["name"]: p["default_run"] for p in parts},
-        "bounds": {p["name"]: p["bound"] for p in parts},
-        "sensitivity": {p["name"]: dict(p["sensitivity"]) for p in parts if p.get("sensitivity")},
-        "interval": 1.0 / scene.output.rate,
-        "tightened": tightened.to_dict(),
-    }
-
-
-def settle_data(
-    data: dict[str, Any],
-    plants: Sequence[Plant | str],
-    horizon: float,
-    budget_s: float = RUN_BUDGET_S,
-    tighten: Sequence[str] | None = None,
-) -> dict[str, Any]:
-    """Settling's runs of the scene file's dict ``data``, one plant after the other here: each
-    plant's :func:`settle_plant` (tightened unless ``tighten`` names others; None: every plant),
-    collected by :func:`settle_collect`. Plain data back: ``own_errors``, ``settings``,
-    ``untightened`` (plants that cannot tighten, or whose tightened run did not finish: plant ->
-    why), ``tightened`` (``Outcome.to_dict()``), ``default_runs`` (plant -> how its run at its
-    default settings ended), ``bounds`` (plant -> ``value_bound``) and ``interval`` (the output
-    interval, s). A campaign submits each plant's part as its own task instead."""
-    scene, refused, chosen = prepare(data, plants, horizon)
-    parts = [
-        settle_plant(data, pl, horizon, budget_s, tighten is None or name in tighten, i == 0)
-        for i, (name, pl) in enumerate(chosen)
-    ]
-    return settle_collect(scene, horizon, refused, parts)
-
-
 def _fmt(x: float) -> str:
-    return f"{x:.2g}"
+    return f"{x:.3g}"
+
+
+def _pair_of(label: str) -> tuple[tuple[str, ...], str]:
+    """The plants and the quantity of a check label: ``analytic_vs_pinocchio.rod_positions`` ->
+    ``(("analytic", "pinocchio"), "rod_positions")``, a plant's own ``mujoco.energy`` ->
+    ``(("mujoco",), "energy")``, the reference pair's bare ``rod_positions`` -> its two plants
+    (``validation.compare.checks.Check.label``)."""
+    subject, dot, name = label.rpartition(".")
+    if not dot:
+        return tuple(Subject.BOTH.plants), label
+    return tuple(subject.split("_vs_")), name
 
 
 def _involved(d: Disagreement, outcome: Outcome, plants: Sequence[str]) -> list[str]:
     """The plants a disagreement is about: the outlier and the group it is separated from, a failed
     pair's two plants, a plant's own check's plant, a plant that failed."""
     if d.kind is Kind.OUTLIER:
-        for v in outcome.verdicts:
-            if v.get("quantity") == d.what:
-                return [d.plant, *[g for g in v.get("group", []) if g != d.plant]]
-        return [d.plant]
+        return [d.plant, *[g for g in _group(d, outcome) if g != d.plant]]
     if d.kind is Kind.CHECK:
-        subject = d.what.split(".", 1)[0]
-        return [p for p in plants if p in subject.split("_vs_")] or list(plants)
+        pair = _pair_of(d.what)[0]
+        return [p for p in plants if p in pair] or list(plants)
     return [d.plant]
 
 
+def _verdict(d: Disagreement, outcome: Outcome) -> Mapping[str, Any]:
+    return next((v for v in outcome.verdicts if v.get("quantity") == d.what), {})
+
+
+def _group(d: Disagreement, outcome: Outcome) -> list[str]:
+    """The majority group the referee separated the outlier ``d`` from."""
+    return [str(g) for g in _verdict(d, outcome).get("group", []) if g != d.plant]
+
+
 def _quantity(d: Disagreement) -> str:
-    return d.what if d.kind is Kind.OUTLIER else d.what.split(".", 1)[-1]
+    return d.what if d.kind is Kind.OUTLIER else _pair_of(d.what)[1]
 
 
 def _check_value(d: Disagreement, outcome: Outcome) -> float:
@@ -367,19 +221,67 @@ def _check_value(d: Disagreement, outcome: Outcome) -> float:
 
 
 def _distance(d: Disagreement, outcome: Outcome) -> float:
-    for v in outcome.verdicts:
-        if v.get("quantity") == d.what:
-            for o in v.get("outliers", []):
-                if o.get("plant") == d.plant:
-                    return float(o["distance"])
+    for o in _verdict(d, outcome).get("outliers", []):
+        if o.get("plant") == d.plant:
+            return float(o["distance"])
     return math.nan
+
+
+def _cut_short(p: str, outcome: Outcome) -> Disagreement | None:
+    """Plant ``p``'s run in ``outcome`` cut short (its :data:`Kind.STOPPED`), None when it was not."""
+    return next((x for x in outcome.disagreements if x.kind is Kind.STOPPED and x.plant == p), None)
+
+
+def _end_text(p: str, outcome: Outcome) -> str:
+    """``at t = 0.41 s: unstable: bad qacc (MuJoCo reset the state)``: where and why a run ended."""
+    at = outcome.reached.get(p, math.nan)
+    where = f" at t = {at:.4g} s" if math.isfinite(at) else ""
+    why = outcome.messages.get(p, "")
+    return f"{where}{': ' + why if why else ''}"
+
+
+def _failed_pairs(group: Sequence[str], outcome: Outcome) -> list[str]:
+    """The pair checks between two members of ``group`` that fail in ``outcome``, each as
+    ``label value > threshold``."""
+    out = []
+    for label, (value, threshold, state) in outcome.checks.items():
+        pair = _pair_of(label)[0]
+        if len(pair) == 2 and set(pair) <= set(group) and state == CheckState.FAIL.value:
+            out.append(f"{label} {_fmt(value)} > threshold {_fmt(threshold)}")
+    return out
+
+
+def _scale(d: Disagreement, outcome: Outcome, involved: Sequence[str]) -> float:
+    """The divisor of a relative quantity's value (NaN when not recorded): a failed pair check's
+    own, or for an outlier the smallest of its pair checks with the group's members (the largest
+    own error bound relative to it: the margin test's benefit of the doubt goes to the settings)."""
+    if d.kind is Kind.CHECK:
+        return float(outcome.scales.get(d.what, math.nan))
+    q, members = d.what, set(involved) - {d.plant}
+    found = [
+        s for label, s in outcome.scales.items()
+        if _pair_of(label)[1] == q and d.plant in _pair_of(label)[0]
+        and set(_pair_of(label)[0]) - {d.plant} <= members
+    ]
+    return min(found) if found else math.nan
+
+
+def _unknown_why(p: str, task: Mapping[str, Any], untightened: Mapping[str, str]) -> str:
+    run = task.get("default_runs", {}).get(p, {})
+    status = run.get("status", "")
+    if status and status != "ok":
+        return f"its run at its default settings {'was ' if status == 'timeout' else ''}{status}"
+    if p in untightened:
+        return untightened[p]
+    return "its tightened run did not finish"
 
 
 def settle(
     d: Disagreement, outcome: Outcome, task: Mapping[str, Any], plants: Sequence[str]
 ) -> Settlement:
     """The cause of ``d``, shown by the minimal scene's ``outcome`` at default settings, given the
-    settling task's result ``task`` (:func:`settle_data`) on ``plants`` (module docstring)."""
+    settling task's result ``task`` (:func:`settle_data`) on ``plants`` (module docstring). Every
+    comparison the sentence quotes was made, with the numbers it quotes."""
     own = {p: dict(q) for p, q in task["own_errors"].items()}
     described = {p: list(s) for p, s in task["settings"].items()}
     tightened = Outcome.from_dict(task["tightened"])
@@ -391,61 +293,33 @@ def settle(
         return Settlement(cause, text, culprit, own, described, tightened)
 
     if d.kind in (Kind.RAISED, Kind.STOPPED):
-        tight = described.get(d.plant, ["", ""])[1]
-        if d.plant in tightened.ran and not any(
-            x.plant == d.plant and x.kind in (Kind.RAISED, Kind.STOPPED)
-            for x in tightened.disagreements
-        ):
+        return _settle_failure(d, outcome, task, make, described, tightened, untightened)
+    # 1. a comparison with a run its engine's guard cut short blames nothing on that engine's model
+    for p in involved:
+        stop = _cut_short(p, outcome)
+        if stop is None:
+            continue
+        st = settle(stop, outcome, task, plants)
+        head = (f"{d.kind.value} on {q} compares {p}'s run cut short by its engine"
+                f"{_end_text(p, outcome)}")
+        if st.cause in (Cause.SCENE, Cause.RANGE):
+            return make(st.cause, f"{head}; its stop is settled as {st.cause.value}: {st.text}")
+        if st.cause is not Cause.SETTINGS:
             return make(
-                Cause.SETTINGS,
-                f"a numerical limit of the settings: {d.plant} finishes at {tight}",
-                d.plant,
+                Cause.UNSETTLED,
+                f"not settled: {head}, which is no evidence against its model (its stop, a "
+                f"finding of its own: {st.cause.value}: {st.text})",
             )
-        why = untightened.get(d.plant, "")
-        if not tight or "over its time limit" in why:
-            return make(Cause.UNSETTLED, f"not settled: {d.plant}: {why}")
-        runs = dict(task.get("default_runs", {}))
-        others = {p: r for p, r in runs.items() if p != d.plant}
-        ends = {p: float(r["reached"]) for p, r in runs.items()
-                if r["status"] in ("stopped", "timeout") and math.isfinite(float(r["reached"]))}
-        interval = float(task.get("interval", math.nan))
-        if (
-            others
-            and d.plant in ends
-            and all(p in ends for p in others)
-            and max(ends.values()) - min(ends.values()) <= SINGULAR_SPREAD_SAMPLES * interval
-        ):
-            where = ", ".join(
-                f"{p} {'stopped' if runs[p]['status'] == 'stopped' else 'stalled'} at "
-                f"t = {t:.4g} s" for p, t in ends.items()
-            )
+        # p finishes at its tightened settings: judged there, below (its own error is unknown)
+    for p in involved:
+        if _cut_short(p, tightened) is not None:
             return make(
-                Cause.SCENE,
-                f"the motion itself ends near t = {min(ends.values()):.4g} s: every plant stops "
-                f"or stalls there ({where}; {d.plant} also at {tight}), a singularity of the "
-                "controlled motion rather than a plant's failure",
+                Cause.UNSETTLED,
+                f"not settled: {p}'s run at its tightened settings "
+                f"({described.get(p, ['', ''])[1]}) was cut short{_end_text(p, tightened)}",
             )
-        bound = float(task.get("bounds", {}).get(d.plant, math.inf))
-        finished = {p: r for p, r in others.items() if r["status"] == "ok"}
-        if (
-            finished
-            and all(r["status"] in ("ok", "timeout") for r in others.values())
-            and math.isfinite(bound)
-        ):
-            reach = max(
-                ((k, v, p) for p, r in finished.items() for k, v in r["largest"].items()),
-                key=lambda x: x[1],
-            )
-            if reach[1] > bound:
-                return make(
-                    Cause.RANGE,
-                    f"the motion leaves {d.plant}'s range: {reach[2]} reaches {reach[0]} "
-                    f"{reach[1]:.3g} (SI units) against {d.plant}'s bound {bound:g}, and "
-                    f"{d.plant} stops at its tightened settings too ({tight}); no other plant "
-                    "fails",
-                )
-        return make(Cause.MODEL, f"{d.plant} fails at its tightened settings too ({tight})")
     value = _distance(d, outcome) if d.kind is Kind.OUTLIER else _check_value(d, outcome)
+    # 2. the scene's conditioning
     for p, sens in task.get("sensitivity", {}).items() if q in ABSOLUTE_QUANTITIES else ():
         moved = float(sens.get(q, math.nan))
         if math.isfinite(value) and value > 0 and moved >= CONDITIONING_FRACTION * value:
@@ -453,8 +327,10 @@ def settle(
                 Cause.CONDITIONING,
                 f"the scene's conditioning: {p}'s run from an initial state moved by "
                 f"{PERTURBATION:g} relative differs from its own run by {_fmt(moved)} on {q}, "
-                f"against the disagreement's {_fmt(value)}: no two engines can agree closer",
+                f"≥ {CONDITIONING_FRACTION:g} × the disagreement's {_fmt(value)}: no two engines "
+                "can agree closer",
             )
+    # 3. a plant that could not be tightened
     missing = [p for p in involved if p in untightened]
     if missing:
         why = "; ".join(f"{p}: {untightened[p]}" for p in missing)
@@ -465,43 +341,148 @@ def settle(
     culprit = max(known_errors, key=known_errors.get) if known_errors else ""
     if not culprit and len(involved) == 1:  # a plant's own check (a balance): that plant
         culprit = involved[0]
-    own_text = ", ".join(
-        f"{p} {_fmt(e)} ({described[p][0]})" for p, e in known_errors.items()
-    )
+    own_text = ", ".join(f"{p} {_fmt(e)} ({described[p][0]})" for p, e in known_errors.items())
+    own_part = f"; own errors on {q} at the default settings: {own_text}" if own_text else ""
+    # 4. gone at tightened settings
     if not tightened.shows(d):
         return make(
             Cause.SETTINGS,
-            f"a numerical limit of the settings: gone at tightened settings ({tight_names}); "
-            f"own errors on {q} at the default settings: {own_text}",
+            f"a numerical limit of the settings: gone at tightened settings ({tight_names})"
+            f"{own_part}",
             culprit,
         )
+    # 5. an outlier needs a majority that agrees with itself, at both settings
     if d.kind is Kind.OUTLIER:
-        dist = _distance(d, outcome)
-        bound = errors.get(d.plant, math.nan) + max(
-            (e for p, e in errors.items() if p != d.plant), default=0.0
-        )
-        if (
-            q in ABSOLUTE_QUANTITIES
-            and math.isfinite(dist)
-            and math.isfinite(bound)
-            and dist <= SETTLE_MARGIN * bound
-        ):
-            return make(
-                Cause.SETTINGS,
-                f"a numerical limit of the settings: {d.plant}'s distance {_fmt(dist)} is within "
-                f"{SETTLE_MARGIN:g} × the own errors on {q} ({own_text})",
-                culprit,
-            )
+        group = _group(d, outcome)
+        for where, o in (("default", outcome), ("tightened", tightened)):
+            failed = _failed_pairs(group, o)
+            if failed:
+                return make(
+                    Cause.UNSETTLED,
+                    f"not settled: {' and '.join(group)}, the group that makes {d.plant} the "
+                    f"outlier on {q}, disagree with each other at the {where} settings "
+                    f"({'; '.join(failed)}): no majority to trust",
+                )
+    pair_check = d.kind is Kind.CHECK and len(_pair_of(d.what)[0]) == 2
+    if not (d.kind is Kind.OUTLIER or pair_check) or q not in ABSOLUTE_QUANTITIES | (
+        RELATIVE_DIFFERENCES
+    ):
+        return make(Cause.MODEL, f"persists at tightened settings ({tight_names}){own_part}")
+    # 6. the margin: the distance against the own errors that could explain it
+    explain = list(_pair_of(d.what)[0]) if pair_check else involved
+    if d.kind is Kind.OUTLIER and len(explain) < 2:
+        return make(Cause.UNSETTLED, f"not settled: the group {d.plant} is an outlier from is "
+                    "not recorded")
+    errors = {p: own.get(p, {}).get(q, math.nan) for p in explain}
+    unknown = [p for p in explain if not math.isfinite(errors[p])]
+    if unknown:
+        why = "; ".join(f"{p}: {_unknown_why(p, task, untightened)}" for p in unknown)
+        return make(Cause.UNSETTLED, f"not settled: no own error on {q} for {why}")
+    if d.kind is Kind.OUTLIER:
+        who = f"{d.plant}'s distance on {q}"
+        member = max(explain[1:], key=lambda p: errors[p])
+        terms = [(f"{d.plant}'s own error", errors[d.plant]),
+                 (f"the group's largest, {member}'s", errors[member])]
+    else:
+        a, b = explain
+        who = f"the {d.what} check's value"
+        terms = [(f"{a}'s own error", errors[a]), (f"{b}'s", errors[b])]
+    bound = sum(e for _n, e in terms)
+    over = ""
+    if q in RELATIVE_DIFFERENCES:
+        scale = _scale(d, outcome, involved)
+        if not (math.isfinite(scale) and scale > 0):
+            return make(Cause.UNSETTLED, f"not settled: the scale of the relative {q} is not known")
+        bound /= scale
+        over = f" / the check's scale {_fmt(scale)}"
+    if not math.isfinite(value):
+        return make(Cause.UNSETTLED, f"not settled: {who} could not be computed")
+    within = value <= SETTLE_MARGIN * bound
+    quoted = (f"{who} {_fmt(value)} {'≤' if within else '>'} {SETTLE_MARGIN:g} × ("
+              + " + ".join(f"{n} {_fmt(e)}" for n, e in terms) + f"){over} = "
+              f"{_fmt(SETTLE_MARGIN * bound)}")
+    if within:
         return make(
-            Cause.MODEL,
-            f"persists at tightened settings ({tight_names}) and {d.plant}'s distance "
-            f"{_fmt(dist)} exceeds {SETTLE_MARGIN:g} × the own errors on {q} ({own_text})",
+            Cause.SETTINGS, f"a numerical limit of the settings: {quoted}{own_part}", culprit
         )
     return make(
-        Cause.MODEL,
-        f"persists at tightened settings ({tight_names}); own errors on {q} at the default "
-        f"settings: {own_text}",
+        Cause.MODEL, f"persists at tightened settings ({tight_names}) and {quoted}{own_part}"
     )
+
+
+def _settle_failure(
+    d: Disagreement,
+    outcome: Outcome,
+    task: Mapping[str, Any],
+    make: Any,
+    described: Mapping[str, list[str]],
+    tightened: Outcome,
+    untightened: Mapping[str, str],
+) -> Settlement:
+    """A plant that raised or stopped (module docstring: settings, scene, range, model)."""
+    tight = described.get(d.plant, ["", ""])[1]
+    if d.plant in tightened.ran and not any(
+        x.plant == d.plant and x.kind in (Kind.RAISED, Kind.STOPPED)
+        for x in tightened.disagreements
+    ):
+        return make(
+            Cause.SETTINGS,
+            f"a numerical limit of the settings: {d.plant} finishes at {tight}",
+            d.plant,
+        )
+    why = untightened.get(d.plant, "")
+    if not tight or "over its time limit" in why:
+        return make(Cause.UNSETTLED, f"not settled: {d.plant}: {why}")
+    runs = dict(task.get("default_runs", {}))
+    others = {p: r for p, r in runs.items() if p != d.plant}
+    ends = {p: float(r["reached"]) for p, r in runs.items()
+            if r["status"] in ("stopped", "timeout") and math.isfinite(float(r["reached"]))}
+    interval = float(task.get("interval", math.nan))
+    if (
+        others
+        and d.plant in ends
+        and all(p in ends for p in others)
+        and max(ends.values()) - min(ends.values()) <= SINGULAR_SPREAD_SAMPLES * interval
+    ):
+        where = ", ".join(
+            f"{p} {'stopped' if runs[p]['status'] == 'stopped' else 'stalled'} at "
+            f"t = {t:.4g} s" for p, t in ends.items()
+        )
+        return make(
+            Cause.SCENE,
+            f"the motion itself ends near t = {min(ends.values()):.4g} s: every plant stops "
+            f"or stalls there ({where}; {d.plant} also at {tight}), a singularity of the "
+            "controlled motion rather than a plant's failure",
+        )
+    bound = float(task.get("bounds", {}).get(d.plant, math.inf))
+    finished = {p: r for p, r in others.items() if r["status"] == "ok"}
+    if (
+        finished
+        and all(r["status"] in ("ok", "timeout") for r in others.values())
+        and math.isfinite(bound)
+    ):
+        reach = max(
+            ((k, v, p) for p, r in finished.items() for k, v in r["largest"].items()),
+            key=lambda x: x[1],
+        )
+        if reach[1] > bound:
+            return make(
+                Cause.RANGE,
+                f"the motion leaves {d.plant}'s range: {reach[2]} reaches {reach[0]} "
+                f"{reach[1]:.3g} (SI units) against {d.plant}'s bound {bound:g}, and "
+                f"{d.plant} stops at its tightened settings too ({tight}); no other plant "
+                "fails",
+            )
+    others_ran = [p for p in outcome.ran if p != d.plant]
+    failed = _failed_pairs(others_ran, outcome) if len(others_ran) >= 2 else []
+    if failed:
+        return make(
+            Cause.UNSETTLED,
+            f"not settled: {d.plant} fails at its tightened settings too ({tight}), but "
+            f"{' and '.join(others_ran)}, the plants that ran, disagree with each other "
+            f"({'; '.join(failed)}): no majority to trust that the motion goes on",
+        )
+    return make(Cause.MODEL, f"{d.plant} fails at its tightened settings too ({tight})")
 
 
 __all__ = [

@@ -2,7 +2,8 @@
 
 The file is :func:`analytic.scene.dump.scene_to_toml` of the minimal scene (every table the loader
 resolves, so ``tumble validate FILE``, the pytest plugin and the hard-case runner read it as it
-is), its header the disagreement, the referee's verdicts and the command that reproduces it, and a
+is), its header the disagreement, the referee's verdicts and the command that reproduces it (with
+the campaign's per-run time limit, ``--time-limit SECONDS``), and a
 ``[hard_case]`` table: each plant but the analytic one against the analytic plant's run, bound
 by the comparison's own threshold (``hard_<quantity>`` in ``[thresholds]``). The case fails while
 the disagreement lasts and passes once it is fixed.
@@ -84,7 +85,8 @@ def counterexample_toml(ex: Counterexample, cfg: FuzzConfig) -> str:
     if ex.settlement is not None:
         lines.append(f"Cause: {ex.settlement.cause.value}: {ex.settlement.text}.")
     lines.append(
-        f"Reproduce: tumble validate FILE --plants {plants} --t-end {ex.horizon:g}"
+        f"Reproduce: tumble validate FILE --plants {plants} --t-end {ex.horizon:g} "
+        f"--time-limit {cfg.time_limit_s:g}"
     )
     return scene_to_toml(scene, header="\n".join(lines))
 
