@@ -5,9 +5,11 @@ checked before anything is started or written.
   may use): every worker of a ``LocalCluster`` is a process with its own threads, and a thousand
   of them on a small machine end minutes later in "can't start new thread" instead of running.
 * ``scheduler``: a TCP address (``tcp://``, ``tls://``, ``ws://``, ``wss://`` or no scheme; port
-  8786 when none is given) must accept a connection within :data:`SCHEDULER_PROBE_S` s; otherwise
-  a ``ValueError`` names the address (a cluster that is not there is said at once, not after
-  Dask's 30 s connect timeout). Other schemes are left to Dask.
+  8786 when none is given) must accept a connection within :data:`SCHEDULER_PROBE_S` s, and a
+  plain ``tcp://`` one must then send its first bytes within as long (a Dask scheduler writes its
+  handshake as soon as a connection opens; Dask's own client would wait forever on a port that
+  listens but says nothing); otherwise a ``ValueError`` names the address: a cluster that is not
+  there is said at once, not after Dask's 30 s connect timeout. Other schemes are left to Dask.
 """
 
 from __future__ import annotations
@@ -18,7 +20,7 @@ from urllib.parse import urlsplit
 
 WORKERS_PER_CORE = 4
 """Most ``--dask-workers`` per core this process may use."""
-SCHEDULER_PROBE_S = 3.0
+SCHEDULER_PROBE_S = 5.0
 """How long a scheduler's address may take to accept a TCP connection, s."""
 DEFAULT_SCHEDULER_PORT = 8786
 _TCP_SCHEMES = ("", "tcp", "tls", "ws", "wss")
@@ -77,11 +79,15 @@ def probe_scheduler(address: str, timeout_s: float = SCHEDULER_PROBE_S) -> None:
     hp = _host_port(address.strip())
     if hp is None:
         return
+    plain = urlsplit(address if "://" in address else f"tcp://{address}").scheme == "tcp"
     try:
-        with socket.create_connection(hp, timeout=timeout_s):
-            pass
+        with socket.create_connection(hp, timeout=timeout_s) as s:
+            if plain and not s.recv(1):
+                raise OSError("it closed the connection without a handshake")
     except OSError as exc:
-        why = "no answer" if isinstance(exc, TimeoutError) else (exc.strerror or str(exc))
+        why = (
+            "no answer" if isinstance(exc, TimeoutError) else (exc.strerror or str(exc))
+        )
         raise ValueError(
             f"scheduler: no Dask scheduler answers at {address} ({why} within {timeout_s:g} s)"
         ) from None
