@@ -406,6 +406,9 @@ def open_campaign(out: str | Path, config: dict[str, Any]) -> Iterator[CampaignD
                 root.mkdir(exist_ok=True)
             except OSError as exc:
                 raise OutputError(root, exc) from exc
+            place.prove_target()  # again: still a real directory (not a link put there), empty
+            if _prove(root, ignore) is not None:
+                raise NotOurs(f"out: {str(root)!r} was filled while the campaign started; not used")
             cd._write_manifest()
         else:
             cd = CampaignDir(root, m.run_id, m.config, dict(m.files), dict(m.previous))
