@@ -86,11 +86,11 @@ def probe_scheduler(address: str, timeout_s: float = SCHEDULER_PROBE_S) -> None:
                 raise OSError("it closed the connection without a handshake")
     except OSError as exc:
         why = (
-            "no answer" if isinstance(exc, TimeoutError) else (exc.strerror or str(exc))
+            f"no answer within {timeout_s:g} s"
+            if isinstance(exc, TimeoutError)
+            else (exc.strerror or str(exc))
         )
-        raise ValueError(
-            f"scheduler: no Dask scheduler answers at {address} ({why} within {timeout_s:g} s)"
-        ) from None
+        raise ValueError(f"scheduler: no Dask scheduler answers at {address} ({why})") from None
 
 
 def check_dask_options(scheduler: str | None, dask_workers: int | None) -> None:
