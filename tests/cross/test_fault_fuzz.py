@@ -261,3 +261,24 @@ def test_a_scheduler_that_is_not_there_is_refused_before_anything_is_written(tmp
     assert took < 20.0  # the probe's 5 s and slack on a busy machine; Dask alone took 31 s
     assert not out.exists()
     assert sorted(os.listdir(tmp_path)) == []
+
+
+def test_an_interrupted_campaign_is_marked_so_and_resumes(campaign, monkeypatch):
+    """Ctrl-C (KeyboardInterrupt) while a campaign judges its second scene -> the manifest says interrupted and lists the first scene's record; the next run resumes it without judging that scene again."""
+    real = campaign_mod.scene_plant_task
+
+    def interrupted(*a):
+        if a[1] == 1:
+            raise KeyboardInterrupt
+        return real(*a)
+
+    monkeypatch.setattr(campaign_mod, "scene_plant_task", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        fuzz(campaign, budget=2, seed=0, plants=PLANTS, horizon=HORIZON, executor=SerialExecutor())
+    manifest = json.loads((campaign / "manifest.json").read_text())
+    assert manifest["state"] == "interrupted" and RECORD in manifest["files"]
+    calls = []
+    monkeypatch.setattr(campaign_mod, "scene_plant_task", lambda *a: calls.append(a[1]) or real(*a))
+    res = fuzz(campaign, budget=2, seed=0, plants=PLANTS, horizon=HORIZON, executor=SerialExecutor())
+    assert set(calls) == {1} and res.complete and [r.index for r in res.scenes] == [0, 1]
+    assert json.loads((campaign / "manifest.json").read_text())["state"] == "complete"
