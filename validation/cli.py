@@ -646,7 +646,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--horizon", type=_positive_float, default=0.5, help="each scene's horizon, s (default 0.5)"
     )
-    p.add_argument("--out", help="output directory (default: out/fuzz_seed<seed>)")
+    p.add_argument(
+        "--out",
+        help="output directory: new, empty, or a campaign's to resume, proven by its manifest.json "
+        "(default: out/fuzz_seed<seed>)",
+    )
     p.add_argument(
         "--time-limit",
         type=_positive_float,

@@ -2,8 +2,11 @@
 
 Order of work:
 
-1. ``OUT/campaign_config.json`` is written (or, on resume, read and compared: a directory holding
-   another campaign is refused, naming ``out``);
+1. ``OUT`` is proven new, empty or this campaign's and locked, and ``OUT/manifest.json`` lists
+   every file the campaign writes there, before it is written
+   (:mod:`validation.studies.fuzz.directory`: a directory holding anything else, or another
+   campaign, is refused naming ``out``; a file changed since the campaign wrote it is refused
+   naming the file); ``OUT/campaign_config.json`` is written;
 2. scene ``i`` of the seed (:func:`validation.studies.fuzz.space.draw_scene_dict`) goes to the
    executor as :func:`judge_index` (a module-level task: process pool, Dask), at most
    ``2 × workers`` at a time, until the budget (scenes) or the time (minutes) is spent;
@@ -17,7 +20,8 @@ Order of work:
 Taking results in index order makes everything after the plants deterministic: a seed gives the
 same scenes, verdicts and counterexamples on a serial run, a process pool and Dask. An interrupted
 campaign keeps every scene and counterexample written; run again with the same ``out``, it skips
-the scenes already judged and the disagreements already shrunk.
+the scenes already judged and the disagreements already shrunk, reading back only files whose size
+and SHA-256 its manifest lists.
 """
 
 from __future__ import annotations
@@ -32,7 +36,16 @@ from typing import Any
 
 from analytic.plant import Plant
 from mj_bridge.plants import installed_plants, plant
-from validation.runs.atomic import write_text
+from validation.report.provenance import dumps
+from validation.studies.dask_options import check_dask_options
+from validation.studies.fuzz.directory import (
+    CONFIG_FILE,
+    COUNTEREXAMPLES_DIR,
+    SCENES_DIR,
+    CampaignDir,
+    ChangedRecord,
+    open_campaign,
+)
 from validation.studies.fuzz.judge import (
     RUN_BUDGET_S,
     Kind,
@@ -50,7 +63,7 @@ from validation.studies.fuzz.records import (
     FuzzConfig,
     SceneRecord,
 )
-from validation.studies.fuzz.report import write_campaign
+from validation.studies.fuzz.report import FIGURE, campaign_doc, campaign_markdown, campaign_png
 from validation.studies.fuzz.settle import Settlement, settle, settle_collect, settle_plant
 from validation.studies.fuzz.shrink import MAX_EVALUATIONS, shrink
 from validation.studies.fuzz.space import draw_scene_dict
@@ -66,9 +79,6 @@ SHRINK_BUDGET_MIN_S = 2.0
 """A shrink candidate's plant run gets this many times the slowest plant run of the scene it was
 found in (at least SHRINK_BUDGET_MIN_S s, at most judge.RUN_BUDGET_S) before it is stopped as over
 its time limit (then the candidate does not show the disagreement: not taken)."""
-CONFIG_FILE = "campaign_config.json"
-SCENES_DIR = "scenes"
-COUNTEREXAMPLES_DIR = "counterexamples"
 SCENE_WINDOW = 4
 """Scenes submitted ahead per worker: each scene's plants are separate tasks, and the queue must
 stay full while this process waits for a scene in index order or shrinks a finding (its
@@ -165,33 +175,76 @@ def _default_plants() -> tuple[str, ...]:
     return tuple(plant_name(p) for p in installed_plants())
 
 
-def _check_config(out: Path, cfg: FuzzConfig) -> None:
-    path = out / CONFIG_FILE
-    if path.exists():
-        old = json.loads(path.read_text())
-        if old != cfg.to_dict():
-            raise ValueError(
-                f"out: {str(out)!r} holds another campaign ({old}); give a new directory"
-            )
-    else:
-        write_text(path, json.dumps(cfg.to_dict(), indent=2) + "\n")
+def _json_bytes(doc: Any) -> bytes:
+    return (json.dumps(doc, indent=2) + "\n").encode("utf-8")
 
 
-def _scene_file(out: Path, index: int) -> Path:
-    return out / SCENES_DIR / f"{index:06d}.json"
+def _scene_rel(index: int) -> str:
+    return f"{SCENES_DIR}/{index:06d}.json"
 
 
-def _load_scene_record(out: Path, cfg: FuzzConfig, index: int) -> SceneRecord | None:
-    path = _scene_file(out, index)
-    if not path.exists():
+def _example_rel(key: str, suffix: str) -> str:
+    return f"{COUNTEREXAMPLES_DIR}/{slug(key)}{suffix}"
+
+
+def _malformed(cd: CampaignDir, rel: str, exc: BaseException) -> ChangedRecord:
+    """A record whose bytes the manifest lists but which does not read as one (a forged pair)."""
+    why = f"{type(exc).__name__}: {exc}".splitlines()[0][:120]
+    return ChangedRecord(
+        f"{cd.path(rel)}: not a record this campaign wrote ({why}); delete it to have the "
+        "campaign redo it, or give a new output directory"
+    )
+
+
+def _load_scene_record(cd: CampaignDir, cfg: FuzzConfig, index: int) -> SceneRecord | None:
+    rel = _scene_rel(index)
+    d = cd.read_json(rel)
+    if d is None:
         return None
-    d = json.loads(path.read_text())
-    return SceneRecord(index, draw_scene_dict(cfg.seed, index, cfg.horizon), Outcome.from_dict(d))
+    try:
+        outcome = Outcome.from_dict(d)
+    except (KeyError, TypeError, ValueError, AttributeError) as exc:
+        raise _malformed(cd, rel, exc) from None
+    return SceneRecord(index, draw_scene_dict(cfg.seed, index, cfg.horizon), outcome)
 
 
-def _load_counterexample(out: Path, key: str) -> dict[str, Any] | None:
-    path = out / COUNTEREXAMPLES_DIR / f"{slug(key)}.json"
-    return json.loads(path.read_text()) if path.exists() else None
+def _load_counterexample(cd: CampaignDir, target: Any) -> Counterexample | None:
+    """The counterexample of ``target`` shrunk before an interruption (kept as it was written)."""
+    rel = _example_rel(target.key, ".json")
+    done = cd.read_json(rel)
+    if done is None:
+        return None
+    try:
+        name = f"{slug(target.key)}.toml"
+        if done["file"] != name:
+            raise ValueError(f"file {str(done['file'])[:40]!r}, not {name!r}")
+        return Counterexample(
+            target,
+            int(done["found_in"]),
+            dict(done["scene"]),
+            float(done["horizon"]),
+            Outcome.from_dict(done["outcome"]),
+            int(done["evaluations"]),
+            str(done["known"]),
+            cd.path(f"{COUNTEREXAMPLES_DIR}/{name}"),
+            settlement=(
+                Settlement.from_dict(done["settlement"]) if done.get("settlement") else None
+            ),
+        )
+    except (KeyError, TypeError, ValueError, AttributeError) as exc:
+        raise _malformed(cd, rel, exc) from None
+
+
+def _write_report(cd: CampaignDir, res: CampaignResult) -> CampaignResult:
+    """``campaign.md``, ``campaign.json``, ``campaign.png`` (:mod:`validation.studies.fuzz.report`),
+    each listed in the campaign's manifest; the result with ``files`` set."""
+    doc = campaign_doc(res)
+    files = {
+        "png": cd.write(FIGURE, campaign_png(doc)),
+        "md": cd.write("campaign.md", campaign_markdown(res, doc).encode("utf-8")),
+        "json": cd.write("campaign.json", dumps(doc).encode("utf-8")),
+    }
+    return replace(res, files=files)
 
 
 def fuzz(
@@ -257,10 +310,35 @@ def fuzz(
         if isinstance(p, str):
             plant(p)
     cfg = FuzzConfig(seed, names, float(horizon), float(time_limit_s))
+    if executor is None:  # before anything is created: a bound on the count, the scheduler answers
+        check_dask_options(scheduler, dask_workers)
     out = Path(out_dir)
-    (out / SCENES_DIR).mkdir(parents=True, exist_ok=True)
-    (out / COUNTEREXAMPLES_DIR).mkdir(exist_ok=True)
-    _check_config(out, cfg)
+    with open_campaign(out, cfg.to_dict()) as cd:
+        if cd.read(CONFIG_FILE) is None:
+            cd.write(CONFIG_FILE, _json_bytes(cfg.to_dict()))
+        result = _campaign(
+            cd, cfg, chosen, budget, minutes, executor, scheduler, dask_workers,
+            shrink_evaluations, progress, report, time_limit_s,
+        )
+    return result
+
+
+def _campaign(
+    cd: CampaignDir,
+    cfg: FuzzConfig,
+    chosen: tuple[Plant | str, ...],
+    budget: int | None,
+    minutes: float | None,
+    executor: Executor | None,
+    scheduler: str | None,
+    dask_workers: int | None,
+    shrink_evaluations: int,
+    progress: Callable[[str], None] | None,
+    report: bool,
+    time_limit_s: float,
+) -> CampaignResult:
+    """The campaign's work in its proven, locked directory ``cd`` (:func:`fuzz`)."""
+    out, seed, names = cd.root, cfg.seed, cfg.plants
     say = progress or (lambda _m: None)
     t0 = time.perf_counter()
     deadline = t0 + 60.0 * minutes if minutes is not None else None
@@ -291,21 +369,9 @@ def fuzz(
         if not fresh:
             return
         target = min(fresh, key=lambda d: (PRIORITY[d.kind], d))
-        done = _load_counterexample(out, target.key)
+        done = _load_counterexample(cd, target)
         if done is not None:  # shrunk before an interruption: kept as it was written
-            ex = Counterexample(
-                target,
-                int(done["found_in"]),
-                done["scene"],
-                float(done["horizon"]),
-                Outcome.from_dict(done["outcome"]),
-                int(done["evaluations"]),
-                str(done["known"]),
-                out / COUNTEREXAMPLES_DIR / done["file"],
-                settlement=(
-                    Settlement.from_dict(done["settlement"]) if done.get("settlement") else None
-                ),
-            )
+            ex = done
         else:
             say(f"scene {rec.index}: {target.key}: shrinking")
             # a simpler scene costs less than the one found: a candidate taking far longer (a
@@ -327,7 +393,7 @@ def fuzz(
                 rec.data, cfg.horizon, target, evaluate, shrink_evaluations, rec.outcome,
                 submit, lookahead[0],
             )
-            path = out / COUNTEREXAMPLES_DIR / f"{slug(target.key)}.toml"
+            path = cd.path(_example_rel(target.key, ".toml"))
             # settled on the campaign's executor too: each plant at its default and tightened
             # settings, each run within the campaign's own limit (a tightened run costs more)
             # (a plant raising or stopping: only it tightened, every other plant at its default
@@ -349,8 +415,8 @@ def fuzz(
                 target, rec.index, s.data, s.horizon, s.outcome, s.evaluations,
                 recognise(rec.data, s.data, target), path, settlement=settled,
             )
-            write_text(path, counterexample_toml(ex, cfg))
-            write_text(path.with_suffix(".json"), json.dumps(ex.to_dict(), indent=2) + "\n")
+            cd.write(_example_rel(target.key, ".toml"), counterexample_toml(ex, cfg).encode())
+            cd.write(_example_rel(target.key, ".json"), _json_bytes(ex.to_dict()))
             say(f"  -> {path.name} ({s.evaluations} evaluations"
                 f"{', known: ' + ex.known if ex.known else ''}; {settled.cause.value}: {settled.text})")
         examples[target.key] = ex
@@ -372,7 +438,7 @@ def fuzz(
         try:
             while True:
                 while len(pending) < window and more(index):
-                    rec = _load_scene_record(out, cfg, index)
+                    rec = _load_scene_record(cd, cfg, index)
                     if rec is not None:  # resumed: judged before
                         pending[index] = rec
                     else:
@@ -391,9 +457,7 @@ def fuzz(
                     take(got)
                     continue
                 outcome = got.outcome()
-                write_text(
-                    _scene_file(out, first), json.dumps(outcome.to_dict(), indent=2) + "\n"
-                )
+                cd.write(_scene_rel(first), _json_bytes(outcome.to_dict()))
                 take(SceneRecord(first, draw_scene_dict(seed, first, cfg.horizon), outcome))
         finally:
             for got in pending.values():
@@ -410,7 +474,7 @@ def fuzz(
         complete,
     )
     if report:
-        result = write_campaign(result)
+        result = _write_report(cd, result)
     return result
 
 

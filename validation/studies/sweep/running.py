@@ -24,6 +24,7 @@ import analytic
 import mj_bridge
 from analytic.scene import Scene
 from mj_bridge.plants import PinocchioPlant, PinocchioSettings, plant
+from validation.studies.dask_options import check_dask_options
 from validation.studies.sweep.config import PINOCCHIO, RTOL_ENGINES, SweepConfig
 
 MAX_WORKERS = 4
@@ -177,14 +178,10 @@ def executor_for(
     ``LocalCluster`` of ``dask_workers`` single-threaded worker processes; else the local process
     pool of :func:`default_executor`. Dask is imported only when asked for (``pip install
     "dask[distributed]"``); ``ValueError`` naming ``scheduler`` / ``dask_workers`` for both given,
-    a bad count, or Dask not installed.
+    a bad count (:mod:`validation.studies.dask_options`), a scheduler that does not answer, or
+    Dask not installed.
     """
-    if scheduler is not None and dask_workers is not None:
-        raise ValueError("scheduler: give either --scheduler or --dask-workers, not both")
-    if dask_workers is not None and (
-        isinstance(dask_workers, bool) or not isinstance(dask_workers, int) or dask_workers < 1
-    ):
-        raise ValueError(f"dask_workers: must be a whole number ≥ 1 (got {dask_workers!r})")
+    check_dask_options(scheduler, dask_workers)  # a bound on the count, the scheduler answers
     if executor is not None:
         yield executor, default_workers()
         return
