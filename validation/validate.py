@@ -680,7 +680,7 @@ def _plant_outcome(
                 raise KeyboardInterrupt(str(exc)) from None
             if not (exc.killed and pl.engine in BUILTIN):
                 own = "" if exc.killed else ", by its own doing"
-                failures.append(f"{pl.label} plant: {_lost_sentence(exc)}{own}; not run again")
+                failures.append(f"{pl.label} plant: {_lost_sentence(exc)}{own} (not run again here)")
                 return None
             redone.append(f"{pl.label} plant: {exc}; run again in the main process")
             tr, wall = redo()
