@@ -40,6 +40,7 @@ from mj_bridge.plants import plant
 from validation.compare.checks import compare_plants
 from validation.compare.referee import VerdictKind, referee
 from validation.runs import warm_plants, warmup, workers
+from validation.runs.contract import ContractError, contract_problem
 from validation.studies.sweep.running import BudgetExceeded
 
 
@@ -393,7 +394,8 @@ class PlantRun:
 
 def run_one(name: str, pl: Plant, scene: Scene, horizon: float, budget_s: float) -> PlantRun:
     """Plant ``pl``'s run of ``scene`` over ``horizon`` s within ``budget_s`` s (:func:`run_limited`);
-    only an interrupt escapes."""
+    only an interrupt escapes. A return value that breaks the plant contract
+    (:func:`validation.runs.contract.contract_problem`) is the plant raising ``ContractError``."""
     t0 = time.perf_counter()
     try:
         tr = run_limited(name, pl, scene, horizon, budget_s)
@@ -403,6 +405,9 @@ def run_one(name: str, pl: Plant, scene: Scene, horizon: float, budget_s: float)
     except _Raised as exc:  # a plant failing is a finding, whatever it raises
         return PlantRun(name, None, time.perf_counter() - t0, None, exc.kind, str(exc))
     wall = time.perf_counter() - t0
+    why = contract_problem(tr, name, scene, horizon)  # what it returned, checked before it is compared
+    if why:
+        return PlantRun(name, None, wall, None, ContractError.__name__, f"broke the plant contract: {why}")
     if tr.status is RunStatus.INTERRUPTED:
         raise KeyboardInterrupt(tr.message)
     if tr.status is not RunStatus.OK:
