@@ -106,6 +106,15 @@ def test_plugin_segfault_fails_that_plant_alone(site, tmp_path):
     _fails_alone(proc, out, "Segv", "SIGSEGV", "not run again")
 
 
+def test_plugin_worker_killed_is_not_run_again_in_the_main_process(site, tmp_path):
+    """A plugin's worker killed by SIGKILL -> that plant FAILED ("exit -9", not run again in the
+    main process: a built-in's would be, a plugin's crash must not become the tool's), the others
+    compared, exit 1."""
+    proc, out, _ = _validate(site, tmp_path, "killed")
+    doc = _fails_alone(proc, out, "Killed", "exit -9", "SIGKILL", "not run again")
+    assert "redone" not in doc["run"]
+
+
 def test_plugin_naming_its_run_analytic_is_not_compared_as_the_analytic_plant(site, tmp_path):
     """A plugin returning its trajectory under the engine name ``analytic`` -> that plant FAILED
     (it broke the plant contract: not its own name), the real analytic-vs-MuJoCo comparison is

@@ -12,6 +12,7 @@ from __future__ import annotations
 import ctypes
 import dataclasses
 import os
+import signal
 import time
 from pathlib import Path
 
@@ -51,6 +52,16 @@ class SystemExitPlant(_Hostile):
 
     def _simulate(self, scene, settings, t_end, progress):
         raise SystemExit(0)
+
+
+class KilledPlant(_Hostile):
+    """Its run's process receives SIGKILL (as from ``kill -9`` or the out-of-memory killer)."""
+
+    engine = "killed"
+    label = "Killed"
+
+    def _simulate(self, scene, settings, t_end, progress):
+        os.kill(os.getpid(), signal.SIGKILL)
 
 
 class SegfaultPlant(_Hostile):
@@ -148,7 +159,7 @@ class DescribeRaisesPlant(_Hostile):
 
 
 HOSTILE = (
-    ExitPlant, SystemExitPlant, SegfaultPlant, HangPlant, LiarPlant, MutatorPlant,
+    ExitPlant, SystemExitPlant, KilledPlant, SegfaultPlant, HangPlant, LiarPlant, MutatorPlant,
     BadShapePlant, NonePlant, CheckRaisesPlant, DescribeRaisesPlant,
 )
 
