@@ -429,11 +429,15 @@ def _ignore(_msg: Any) -> None:
 @contextlib.contextmanager
 def _time_limited(name: str, limit_s: float | None):
     """The block stopped by :class:`OverTime` after ``limit_s`` s (a ``SIGALRM`` timer; main
-    thread only, and where ``setitimer`` exists: elsewhere the block runs as it is)."""
+    thread only, where ``setitimer`` exists and no one else's timer or ``SIGALRM`` handler is in
+    place, such as a test runner's timeout, which is left alone: elsewhere the block runs as it
+    is)."""
     usable = (
         limit_s is not None
         and hasattr(signal, "setitimer")
         and threading.current_thread() is threading.main_thread()
+        and signal.getitimer(signal.ITIMER_REAL) == (0.0, 0.0)
+        and signal.getsignal(signal.SIGALRM) in (signal.SIG_DFL, None)
     )
     if not usable:
         yield
