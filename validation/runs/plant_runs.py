@@ -104,6 +104,7 @@ def plant_task(pl: Any, settings: Any, sc: Scene, horizon: float, *, report) -> 
     tr = pl.simulate(sc, settings, t_end=horizon, progress=_throttled(report, horizon))
     return tr, time.perf_counter() - t0
 
+
 def run_plants(
     runs: Sequence[tuple[Any, Any]],
     sc: Scene,

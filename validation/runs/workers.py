@@ -443,8 +443,11 @@ def _time_limited(name: str, limit_s: float | None):
         yield
         return
 
+    armed = [True]
+
     def over(signum, frame) -> None:
-        raise _Alarm()
+        if armed[0]:  # a signal delivered as the block ends is not raised in its cleanup
+            raise _Alarm()
 
     previous = signal.signal(signal.SIGALRM, over)
     signal.setitimer(signal.ITIMER_REAL, limit_s)
@@ -453,6 +456,7 @@ def _time_limited(name: str, limit_s: float | None):
     except _Alarm:
         raise OverTime(name, limit_s) from None
     finally:
+        armed[0] = False
         signal.setitimer(signal.ITIMER_REAL, 0)
         signal.signal(signal.SIGALRM, previous)
 
