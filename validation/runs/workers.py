@@ -516,6 +516,7 @@ def start(
         daemon=True,
     )
     proc.start()
+    job.started = time.monotonic()
     child_conn.close()
     inbox_r.close()
     job.process, job.conn, job.inbox = proc, conn, inbox_w
@@ -607,6 +608,7 @@ def start_served(
             proc.start()
     finally:
         child_conn.close()
+    job.started = time.monotonic()  # the limit is the task's: the fork server's own start is not
     job.process, job.conn = proc, conn
     return job
 

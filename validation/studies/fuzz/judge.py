@@ -30,7 +30,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from enum import StrEnum
 from multiprocessing import RawValue
-from multiprocessing.connection import wait as mp_wait
 from typing import Any
 
 from analytic.plant import Plant
@@ -259,11 +258,14 @@ def run_limited(
     reached = RawValue("d", math.nan)
     if workers.can_fork():
         _load_kernels(name, scene)
-        job = workers.start(f"fuzz-{name}", _simulate_task, pl, scene, horizon, settings, reached)
+        job = workers.start(
+            f"fuzz-{name}", _simulate_task, pl, scene, horizon, settings, reached,
+            time_limit_s=limit_s,
+        )
     elif workers.can_serve():
         job = workers.start_served(
             f"fuzz-{name}", _simulate_task, pl, scene, horizon, settings, reached,
-            preload=SERVER_PRELOAD,
+            preload=SERVER_PRELOAD, time_limit_s=limit_s,
         )
     else:
         progress, over_budget = _budget_progress(limit_s)
@@ -276,10 +278,9 @@ def run_limited(
         except Exception as exc:
             raise _Raised(type(exc).__name__, _one_line(exc).partition(": ")[2]) from exc
     try:
-        # the task sends nothing but its result: the pipe is ready only when the run is done
-        if not mp_wait([job.conn, job.process.sentinel], timeout=limit_s):
-            raise OverTime(name, limit_s, reached.value)
-        return job.result()  # a finished worker exits on its own (validation.runs.workers)
+        return job.result()  # ended at the limit by the workers; a finished one exits on its own
+    except workers.OverTime as exc:
+        raise OverTime(name, limit_s, reached.value) from exc
     except workers.WorkerError as exc:
         raise _Raised(exc.kind, exc.message) from exc
     except workers.WorkerLost as exc:
