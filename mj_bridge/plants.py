@@ -226,13 +226,17 @@ def plant(name: str) -> Plant:
 def plants_for_scene(scene: Scene, engines: tuple[str, ...]) -> tuple[str, ...]:
     """Those of ``engines`` whose :meth:`~analytic.plant.Plant.check_scene` accepts ``scene`` (a
     default plant set without the ones that cannot run this scene, e.g. Pinocchio beyond
-    :data:`PINOCCHIO_MAX_MASSES` masses), in the same order."""
+    :data:`PINOCCHIO_MAX_MASSES` masses), in the same order. A plant whose ``check_scene`` raises
+    anything but the ``ValueError`` of a refusal (a plugin's own bug) is kept: the run fails that
+    plant alone, naming what it raised."""
     out = []
     for e in engines:
         try:
             plant(e).check_scene(scene)
         except ValueError:
             continue
+        except Exception:  # noqa: BLE001, S110  (not a refusal: the run fails it alone)
+            pass
         out.append(str(e))
     return tuple(out)
 

@@ -133,6 +133,7 @@ def cmd_validate(args: argparse.Namespace) -> int:
         dt=args.dt,
         t_end=args.t_end,
         figure_formats=args.figure_format,
+        time_limit=args.time_limit,
     )
     res = None
     # the analytic plant's last kernels may still compile while the plants start (warming)
@@ -494,6 +495,13 @@ def build_parser() -> argparse.ArgumentParser:
         "--figure-format",
         default="png",
         help="comma-separated figure formats: png, svg, pdf (default: png; e.g. png,svg for a paper)",
+    )
+    p.add_argument(
+        "--time-limit",
+        type=_positive_float,
+        metavar="SECONDS",
+        help="wall-time limit of each plant's run: a run over it is stopped and fails that plant, "
+        "the others are compared (default: none for the built-in plants, 600 s for a plugin)",
     )
     p.set_defaults(func=cmd_validate)
 

@@ -10,8 +10,19 @@ recording that could not be made) still writes what it has, marked FAILED; one a
 without comparison, figures or recording. The verdict is PASSED only when every check passed and every file the report
 names is in the committed directory, whole (:func:`_check_committed`); a file that cannot be
 written (a full disk, in this process or a worker) is an :class:`OutputError`: no verdict, the
-previous contents of ``out_dir`` kept. A stage whose worker process was lost (killed) is done
-again here, and the report says so. The teaching demo is :mod:`validation.studies.demo`.
+previous contents of ``out_dir`` kept. A built-in stage whose worker process was killed from
+outside (``kill -9``) is done again here, and the report says so. The teaching demo is
+:mod:`validation.studies.demo`.
+
+A plant is not trusted with anything but its own run (:mod:`validation.runs.contract`): it is
+given a read-only copy of the scene of its own; what it returns is checked against the plant
+contract before it is compared; a run over its time limit (:func:`plant_time_limit`: the caller's
+``time_limit``, else :data:`PLUGIN_TIME_LIMIT_S` for a plugin and none for a built-in) is stopped;
+and a plant whose worker exits, crashes or is killed, whose run raises anything (``SystemExit``
+too), breaks the contract, or whose ``check_scene`` (with anything but the ``ValueError`` of a
+refusal), ``default_settings`` or ``describe`` raises, fails alone, in one line naming it: the other
+plants run and are compared, and the verdict is FAILED (exit 1), never a crash of this process.
+A lost plugin worker is never run again here (its crash would become this process's).
 
 Inputs are checked once per boundary: :func:`validation_request` checks everything (scene,
 thresholds, plants, overrides, figure formats) into a frozen :class:`ValidationRequest`, which
@@ -22,8 +33,6 @@ apart (it names its output directory after the scene in between).
 from __future__ import annotations
 
 import dataclasses
-import inspect
-import math
 import time
 import traceback
 from collections.abc import Callable, Mapping, Sequence
@@ -34,7 +43,7 @@ from typing import Any
 from analytic.scene import Scene
 from analytic.scene.dump import scene_to_toml
 from analytic.threshold import Threshold
-from analytic.trajectory import Engine, RunStatus, Trajectory
+from analytic.trajectory import Engine, Trajectory
 from mj_bridge.plants import MujocoRunSettings, PinocchioPlant, plant
 from validation.compare.checks import Check, Comparison, compare_plants
 from validation.compare.referee import Verdict, referee
@@ -57,33 +66,23 @@ from validation.report.report import (
 )
 from validation.runs import workers
 from validation.runs.atomic import OutputError, write_text
-from validation.runs.interrupts import interrupt_name, raise_pending
+from validation.runs.contract import plant_scene
+from validation.runs.interrupts import interrupt_name
 from validation.runs.outputs import OutputRun, output_run, parse_manifest
+from validation.runs.plant_runs import (  # PLUGIN_TIME_LIMIT_S, plant_time_limit: re-exported
+    PLUGIN_TIME_LIMIT_S,
+    Progress,
+    check_time_limit,
+    plant_task,
+    plant_time_limit,
+    run_plants,
+    stage_progress,
+)
 from validation.scenes import (  # DEFAULT_SCENE re-exported: the one default of every command
     DEFAULT_SCENE,
     resolve_scene,
     with_threshold_overrides,
 )
-
-Progress = Callable[[str, float], None] | Callable[[float], None]
-"""``progress(stage, t)`` (stage ``analytic`` or ``mujoco``) or ``progress(t)``: t is the simulated
-time reached, s. A one-argument callable is told the analytic plant's progress only."""
-
-
-def _stage_progress(progress: Any, stage: str) -> Callable[[float], None] | None:
-    """Adapt either form of ``progress`` to the engines' ``progress(t)``."""
-    if progress is None:
-        return None
-    try:
-        params = inspect.signature(progress).parameters.values()
-        two = sum(
-            p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD) for p in params
-        ) >= 2 or any(p.kind is p.VAR_POSITIONAL for p in params)
-    except (TypeError, ValueError):
-        two = False
-    if two:
-        return lambda t: progress(stage, t)
-    return progress if stage == "analytic" else None
 
 
 @dataclass(frozen=True)
@@ -159,6 +158,10 @@ class ValidationRequest:
         figure_formats: the figures' file formats, each once.
         left_out: the plants of the default set or of ``--plants all`` that refused the scene,
             each with its reason (the report's referee note names them).
+        time_limit: the wall-time limit of each plant's run, s (None: :func:`plant_time_limit`'s
+            defaults).
+        unusable: plant -> why it cannot be run (its ``check_scene`` raised something other than
+            the ``ValueError`` of a refusal): that plant fails alone, the others run.
     """
 
     scene: Scene
@@ -170,6 +173,12 @@ class ValidationRequest:
     horizon: float
     figure_formats: tuple[FigureFormat, ...]
     left_out: tuple[LeftOut, ...] = ()
+    time_limit: float | None = None
+    unusable: Mapping[str, str] = field(default_factory=dict)
+
+    def limit_of(self, engine: str) -> float | None:
+        """Plant ``engine``'s wall-time limit, s (:func:`plant_time_limit`)."""
+        return plant_time_limit(engine, self.time_limit)
 
 
 def _figure_formats(formats: Sequence[FigureFormat | str] | str) -> tuple[FigureFormat, ...]:
@@ -191,18 +200,20 @@ def validation_request(
     t_end: float | None = None,
     figure_formats: Sequence[FigureFormat | str] | str = DEFAULT_FORMATS,
     thresholds: Mapping[str, Any] | None = None,
+    time_limit: float | None = None,
 ) -> ValidationRequest:
     """Check a validation's whole input, once: the scene (a :class:`Scene` as given, else
     :func:`validation.scenes.resolve_scene`) with ``thresholds`` (overrides, name -> number or
     ``{value, reason}``) laid over its ``[thresholds]``, and those thresholds
     (:func:`validation.compare.thresholds.thresholds_for`); the plants
     (:func:`validation_plants`); the overrides (:func:`check_validation_inputs`); the figure
-    formats; and that every plant accepts the scene (its ``check_scene``). Builds nothing and runs
-    nothing.
+    formats; the time limit (:func:`check_time_limit`); and that every plant accepts the scene
+    (its ``check_scene``; one that raises anything but ``ValueError`` is noted ``unusable``, to
+    fail alone). Builds nothing and runs nothing.
 
     Raises:
         ValueError: naming the field and the value (scene, thresholds, plants, integrator, dt,
-            t_end, figure_format).
+            t_end, figure_format, time_limit).
     """
     if not isinstance(scene, Scene):
         scene = resolve_scene(scene, check_thresholds=False)  # checked below, once
@@ -216,8 +227,15 @@ def validation_request(
     formats = _figure_formats(figure_formats)
     if t_end is not None and not (t_end > 0):
         raise ValueError(f"t_end: must be a positive time in s (got {t_end!r})")
+    limit = check_time_limit(time_limit)
+    unusable: dict[str, str] = {}
     for e in chosen:
-        plant(e).check_scene(sc)
+        try:
+            plant(e).check_scene(plant_scene(sc))
+        except ValueError:
+            raise  # the plant refuses the scene: bad input
+        except Exception as exc:  # a plant's own bug: that plant fails alone
+            unusable[e] = f"check_scene raised {_one_line(exc)}"
     return ValidationRequest(
         scene=sc,
         thresholds=checked_thresholds,
@@ -228,6 +246,8 @@ def validation_request(
         horizon=float(t_end) if t_end is not None else sc.output.t_end,
         figure_formats=formats,
         left_out=choice.left_out,
+        time_limit=limit,
+        unusable=unusable,
     )
 
 
@@ -255,6 +275,7 @@ def run_validation(
     plants: Sequence[Engine | str] | str | None = None,
     figure_formats: Sequence[FigureFormat | str] = DEFAULT_FORMATS,
     concurrent: bool = True,
+    time_limit: float | None = None,
 ) -> ValidationResult:
     """Run ``scene`` on every chosen plant under one controller, compare every pair, rule on
     disagreements, and write the report and ``run.rrd``.
@@ -279,14 +300,19 @@ def run_validation(
         concurrent: run the plants side by side, and the recording beside the figures, in
             worker processes where that is safe (:mod:`validation.runs.workers`); False runs every
             stage here, one after the other. The files are the same either way.
+        time_limit: wall-time limit of each plant's run, s (default :func:`plant_time_limit`'s:
+            :data:`PLUGIN_TIME_LIMIT_S` for a plugin, none for a built-in); a run over it is
+            stopped and fails that plant, naming the limit, and the others are compared. In a
+            worker the run is ended whatever it does; run here (no workers) it is stopped at its
+            next Python bytecode (a C call that never returns cannot be).
 
     Returns:
         a frozen :class:`ValidationResult`; ``passed`` is False when any check fails or a plant
         could not run.
 
     Raises:
-        ValueError: bad input (scene, plants, integrator, dt, t_end, out_dir), before any plant
-            runs.
+        ValueError: bad input (scene, plants, integrator, dt, t_end, time_limit, out_dir), before
+            any plant runs.
         OutputBusy: another run is writing into ``out_dir``.
         OutputError: the files could not be written (a full disk, in any stage: the report,
             a figure, the recording, in a worker too); ``out_dir`` keeps its previous contents
@@ -300,6 +326,7 @@ def run_validation(
         dt=dt,
         t_end=t_end,
         figure_formats=figure_formats,
+        time_limit=time_limit,
     )
     return run_request(request, out_dir, progress=progress, concurrent=concurrent)
 
@@ -318,9 +345,7 @@ def run_request(
     ``request.plants`` may then be fewer than two, or none); ``command``: the output set's
     command (its manifest)."""
     sc = request.scene
-    runs = [
-        (plant(e), _plant_settings(e, sc, request.integrator, request.dt)) for e in request.plants
-    ]
+    runs, names, refused = _prepared_plants(request)
     with output_run(out_dir, command) as run:
         res = _validate_into(
             run,
@@ -333,11 +358,44 @@ def run_request(
             thresholds=request.thresholds,
             joined=joined,
             left_out=request.left_out,
+            names=names,
+            refused=refused,
+            limits={pl.engine: request.limit_of(pl.engine) for pl, _ in runs},
         )
     files = {name: run.final(name) for name in res.files}
     files["manifest.json"] = run.final("manifest.json")
     _check_committed(run.target, files)
     return dataclasses.replace(res, out_dir=run.target, files=files)
+
+
+def _prepared_plants(
+    request: ValidationRequest,
+) -> tuple[list[tuple[Any, Any]], dict[str, str], list[str]]:
+    """Each plant of ``request`` with its settings and its one-line description, in order, and
+    the failures of those that cannot run: ``unusable`` ones, and those whose
+    ``default_settings`` or ``describe`` raises (or describes itself with no text)."""
+    runs: list[tuple[Any, Any]] = []
+    names: dict[str, str] = {}
+    refused: list[str] = []
+    for e in request.plants:
+        pl = plant(e)
+        if e in request.unusable:
+            refused.append(f"{pl.label} plant: not run: {request.unusable[e]}")
+            continue
+        call = "default_settings"
+        try:  # a plant's own bug in either: that plant fails alone
+            settings = _plant_settings(e, plant_scene(request.scene), request.integrator, request.dt)
+            call = "describe"
+            name = pl.describe(settings)
+        except Exception as exc:
+            refused.append(f"{pl.label} plant: not run: {call} raised {_one_line(exc)}")
+            continue
+        if not (isinstance(name, str) and name.strip()):
+            refused.append(f"{pl.label} plant: not run: describe returned {name!r}, not a line of text")
+            continue
+        runs.append((pl, settings))
+        names[pl.engine] = name.splitlines()[0]
+    return runs, names, refused
 
 
 def _check_committed(target: Path, files: dict[str, Path]) -> None:
@@ -365,27 +423,11 @@ def _check_committed(target: Path, files: dict[str, Path]) -> None:
             raise OutputError(path, f"{size} bytes after the commit, the manifest says {recorded}")
 
 
-def _throttled(report: Callable[[float], None], horizon: float, every_s: float = 0.1):
-    """``progress(t)`` passing at most one ``t`` per ``every_s`` seconds on, and the last one;
-    every call is a point where an interrupt compiled code swallowed is raised again (a plant in
-    a worker process compiles or loads its kernels there)."""
-    last = [-math.inf]
+_plant_task = plant_task
+"""One plant's run (:func:`validation.runs.plant_runs.plant_task`), by this name for the tests that
+replace it (a worker killed on its first call)."""
 
-    def progress(t: float) -> None:
-        raise_pending()
-        now = time.monotonic()
-        if now - last[0] >= every_s or t >= horizon:
-            last[0] = now
-            report(t)
-
-    return progress
-
-
-def _plant_task(pl: Any, settings: Any, sc: Scene, horizon: float, *, report) -> tuple[Any, float]:
-    """One plant's run (in a worker or here): its trajectory and its own wall time, s."""
-    t0 = time.perf_counter()
-    tr = pl.simulate(sc, settings, t_end=horizon, progress=_throttled(report, horizon))
-    return tr, time.perf_counter() - t0
+_stage_progress = stage_progress  # the name the report's tests know it by
 
 
 def _recording_task(
@@ -458,122 +500,6 @@ def _prepare_figures() -> None:
         prepare_drawing()
     except Exception:  # an optimisation only: the figures, drawn later, report their own errors
         pass
-
-
-def _run_plants(
-    runs: Sequence[tuple[Any, Any]],
-    sc: Scene,
-    horizon: float,
-    progress: Progress | None,
-    fork: bool,
-    walls: dict[str, float],
-    failures: list[str],
-    redone: list[str],
-    on_started: Callable[[Sequence[workers.Job]], None] | None = None,
-) -> tuple[list[Trajectory], bool]:
-    """Every plant's run, side by side in workers where ``fork`` (no more at a time than there are
-    CPUs), else one after the other here. Returns the trajectories (in ``runs``' order) and
-    whether the run was interrupted; each plant's own wall time goes into ``walls``, a plant
-    whose worker was lost is redone here (said in ``redone``). ``on_started(jobs)`` runs once,
-    here, as soon as every plant has started (``jobs``: those running in workers).
-
-    An interrupt (Ctrl-C, SIGTERM) stops every plant at once (the workers are told,
-    :func:`validation.runs.workers.wait`), starts no further one, and keeps what each reached."""
-    slots = workers.available_cpus() if fork else 1
-    queue = list(enumerate(runs))
-    running: list[tuple[int, Any, Any, workers.Job]] = []
-    done: dict[int, Trajectory] = {}
-    interrupted = False
-    try:
-        while queue or running:
-            while queue and len(running) < slots and not interrupted:
-                k, (pl, settings) = queue.pop(0)
-                name = pl.engine
-                report = _stage_progress(progress, name)  # None: the messages are dropped
-                job = workers.start(
-                    name, _plant_task, pl, settings, sc, horizon, on_message=report, fork=fork
-                )
-                running.append((k, pl, settings, job))
-            if on_started is not None and not queue:  # every plant has started
-                on_started, then = None, on_started
-                try:
-                    then([job for *_, job in running if job.forked])
-                except KeyboardInterrupt:  # the plants were told: collect what they reached
-                    interrupted = True
-            if interrupted:  # an interrupt stops the run, it does not start the next plant
-                failures += [f"{pl.label} plant: not run (interrupted)" for _, (pl, _) in queue]
-                queue = []
-            if all(job.forked for *_, job in running):
-                jobs = [job for *_, job in running]
-                interrupted |= workers.wait(jobs, first=not interrupted, interrupted=interrupted)
-                finished = [r for r in running if r[3].done]
-            else:  # a plant that runs here
-                finished = [next(r for r in running if not r[3].forked)]
-            for k, pl, settings, job in finished:
-                running.remove((k, pl, settings, job))
-                redo = _redo_plant(pl, settings, sc, horizon, progress)
-                tr = _plant_outcome(pl, job, walls, failures, redo, redone)
-                interrupted |= job.interrupted
-                if tr is None:
-                    continue
-                done[k] = tr
-                interrupted |= tr.status is RunStatus.INTERRUPTED
-                if tr.status is not RunStatus.OK:
-                    failures.append(f"{pl.engine} plant stopped early: {tr.message}")
-    except BaseException:
-        workers.stop([job for *_, job in running])
-        raise
-    return [done[k] for k in sorted(done)], interrupted
-
-
-def _redo_plant(
-    pl: Any, settings: Any, sc: Scene, horizon: float, progress: Progress | None
-) -> Callable[[], tuple[Any, float]]:
-    """The plant's run done here (its worker was lost): ``() -> (trajectory, wall)``."""
-    report = _stage_progress(progress, pl.engine) or _drop
-    return lambda: _plant_task(pl, settings, sc, horizon, report=report)
-
-
-def _drop(_msg: Any) -> None:
-    pass
-
-
-def _plant_outcome(
-    pl: Any,
-    job: workers.Job,
-    walls: dict[str, float],
-    failures: list[str],
-    redo: Callable[[], tuple[Any, float]],
-    redone: list[str],
-) -> Trajectory | None:
-    """The plant's trajectory (its wall time into ``walls``), or None with the failure said. A
-    plant whose worker was lost (killed, ``kill -9``; not by an interrupt) is run again here,
-    and ``redone`` says so."""
-    try:
-        try:
-            tr, wall = job.result()
-        except workers.WorkerLost as exc:
-            if job.interrupted:
-                raise KeyboardInterrupt(str(exc)) from None
-            redone.append(f"{pl.label} plant: {exc}; run again in the main process")
-            tr, wall = redo()
-    except OutputError:
-        raise  # a file that could not be written: no verdict
-    except workers.WorkerError as exc:
-        # Bad input was refused before any plant started (run_validation's checks): whatever a
-        # plant raises now, a ValueError from deep in an engine included, is that plant failing,
-        # and the run keeps what it has, marked failed.
-        failures.append(f"{pl.label} plant: {exc}")
-        return None
-    except KeyboardInterrupt:
-        job.interrupted = True
-        failures.append(f"{pl.label} plant: not run (interrupted)")
-        return None
-    except Exception as exc:
-        failures.append(f"{pl.label} plant: {_one_line(exc)}")
-        return None
-    walls[pl.engine] = wall
-    return tr
 
 
 def _worker_result(job: workers.Job, redo: Callable[[], Any], redone: list[str]) -> Any:
@@ -668,9 +594,14 @@ def _validate_into(
     thresholds: Mapping[str, Threshold] | None = None,
     joined: JoinedRuns = NO_JOINED,
     left_out: Sequence[LeftOut] = (),
+    names: Mapping[str, str] | None = None,
+    refused: Sequence[str] = (),
+    limits: Mapping[str, float | None] | None = None,
 ) -> ValidationResult:
     """:func:`run_validation`'s work, writing into the staging directory ``run.path``; the
-    ``joined`` runs follow the plants' (:class:`JoinedRuns`).
+    ``joined`` runs follow the plants' (:class:`JoinedRuns`). ``names``: plant -> its one-line
+    description (None: each plant's ``describe``); ``refused``: the failures of the plants that
+    could not be run (:func:`_prepared_plants`); ``limits``: plant -> its wall-time limit, s.
 
     With ``concurrent`` (and where :func:`validation.runs.workers.can_fork`), the plants run side by
     side in workers, and two more workers import rerun and matplotlib meanwhile, then write the
@@ -683,7 +614,7 @@ def _validate_into(
     """
     out = run.path
     walls: dict[str, float] = {}
-    failures: list[str] = []
+    failures: list[str] = list(refused)
     redone: list[str] = []
     t_all = time.perf_counter()
     fork = concurrent and workers.can_fork()
@@ -691,7 +622,9 @@ def _validate_into(
     trajectories: list[Trajectory] = []
     cmp: Comparison | None = None
     verdicts: tuple[Verdict, ...] = ()
-    names = {pl.engine: pl.describe(settings) for pl, settings in runs}
+    if names is None:
+        names = {pl.engine: pl.describe(settings) for pl, settings in runs}
+    names = dict(names)
     interrupted = False
 
     def start_evidence(plant_jobs: Sequence[workers.Job] = ()) -> None:
@@ -716,7 +649,7 @@ def _validate_into(
         ]
 
     try:
-        trajectories, interrupted = _run_plants(
+        trajectories, interrupted = run_plants(
             runs,
             sc,
             horizon,
@@ -726,6 +659,8 @@ def _validate_into(
             failures,
             redone,
             on_started=start_evidence,
+            limits=limits,
+            task=_plant_task,  # looked up here, at the call: a test may replace it
         )
         trajectories += joined.trajectories
         names.update(joined.names)
@@ -768,7 +703,9 @@ def _validate_into(
     if len(runs) + len(joined.trajectories) < 2 and not failure:
         failure = "only one plant: nothing to compare it with"
     if len(trajectories) < len(runs) + len(joined.trajectories) and not failure:
-        failure = "a plant has no trajectory"
+        got = {tr.engine for tr in trajectories}
+        missing = [pl.engine for pl, _ in runs if pl.engine not in got]
+        failure = f"no trajectory from {', '.join(missing) or 'a plant'}"
     walls["total"] = time.perf_counter() - t_all
     meta["wall_times_s"] = dict(walls)
     t0 = time.perf_counter()
@@ -926,8 +863,10 @@ def _keep_only(out: Path, files: dict[str, Path]) -> None:
 
 __all__ = [
     "DEFAULT_SCENE",
+    "PLUGIN_TIME_LIMIT_S",
     "ValidationRequest",
     "ValidationResult",
+    "plant_time_limit",
     "run_request",
     "run_validation",
     "validation_request",

@@ -9,10 +9,14 @@ elsewhere, and whenever forking is not safe, each runs here, in order, with the 
   inputs exist (``prepare`` runs at once: a child imports matplotlib or rerun while the plants run)
   and be given them later with :meth:`Job.give`.
 * :func:`wait` collects jobs, forwarding each child's messages (a plant's progress) as they come.
-* A job whose child dies (killed, ``kill -9``), or cannot deliver its result, raises
-  :class:`WorkerLost`; the caller then does that stage here and says so in its report
-  (:mod:`validation.validate`: a plant, the figures, the recording), so nothing is lost to a
-  worker.
+* A job whose child dies (killed, ``kill -9``; or it exits, or crashes, on its own), or cannot
+  deliver its result, raises :class:`WorkerLost` with the child's exit code; the caller decides
+  whether to do that stage here (:mod:`validation.validate` does a built-in stage again after an
+  outside ``kill -9``, and fails a stage whose child ended by its own doing).
+* A job may have a wall-time limit (``time_limit_s``): a child still running past it is ended
+  (SIGTERM, then SIGKILL) and its job raises :class:`OverTime`, whether or not its task ever
+  reports progress. A job run here has the limit as a ``SIGALRM`` timer (main thread only): it
+  stops Python code at its next bytecode, not a C call that never returns.
 * Every child ends with its parent, even one killed with SIGKILL (:mod:`validation.runs.lifetime`:
   ``PR_SET_PDEATHSIG`` on Linux); so does every child of the fork server (:func:`start_served`).
 * A file the child could not write (a full disk) comes back as the same
@@ -70,7 +74,32 @@ Report = Callable[[Any], None]
 
 
 class WorkerLost(RuntimeError):
-    """A worker process ended without delivering its result (killed, or it could not pickle it)."""
+    """A worker process ended without delivering its result (killed, crashed, exited, or it could
+    not pickle it). ``exitcode``: the child's (``-N``: ended by signal N; None: unknown)."""
+
+    def __init__(self, message: str, exitcode: int | None = None):
+        super().__init__(message)
+        self.exitcode = exitcode
+
+    @property
+    def killed(self) -> bool:
+        """Ended by SIGKILL: from outside (``kill -9``, the kernel's out-of-memory killer), as a
+        child never ends itself; an exit, a crash signal (SIGSEGV, SIGABRT ...) is its own doing."""
+        return self.exitcode == -signal.SIGKILL
+
+
+class OverTime(RuntimeError):
+    """A job passed its wall-time limit (``limit_s``, s) and was stopped."""
+
+    def __init__(self, name: str, limit_s: float):
+        super().__init__(f"{name}: over its time limit of {limit_s:g} s")
+        self.name = name
+        self.limit_s = limit_s
+
+
+class _Alarm(BaseException):
+    """The time limit's timer, in this process: a BaseException, so a task's ``except
+    Exception`` does not swallow it (:func:`_time_limited`)."""
 
 
 class WorkerError(RuntimeError):
@@ -300,6 +329,7 @@ class Job:
         name: what the stage is (for messages).
         task: ``task(*args, report=...)``.
         on_message: called with each message the task sends (in the parent).
+        limit_s: wall-time limit of the task, s, from ``started`` (``time.monotonic``); None: none.
     """
 
     name: str
@@ -313,6 +343,8 @@ class Job:
     done: bool = False
     outcome: tuple = ()
     interrupted: bool = False
+    limit_s: float | None = None
+    started: float = 0.0
 
     @property
     def forked(self) -> bool:
@@ -380,7 +412,9 @@ class Job:
                 if self.prepare is not None:
                     self.prepare()
                 self.done = True
-                self.outcome = ("ok", self.task(*self.args, report=self.on_message or _ignore))
+                with _time_limited(self.name, self.limit_s):
+                    out = self.task(*self.args, report=self.on_message or _ignore)
+                self.outcome = ("ok", out)
             return self.outcome[1]
         if wait([self]):
             self.interrupted = True
@@ -395,11 +429,55 @@ class Job:
             if interrupted:
                 raise KeyboardInterrupt(message)
             raise WorkerError(name, message)
-        raise WorkerLost(f"{self.name}: {self.outcome[-1]}")
+        if kind == "overtime":
+            raise OverTime(self.name, self.outcome[1])
+        raise WorkerLost(f"{self.name}: {self.outcome[-1]}", self.process.exitcode)
+
+    def over_time(self, now: float) -> bool:
+        """Whether this forked job is still running past its limit at ``now``."""
+        return (
+            self.forked and not self.done and self.limit_s is not None
+            and now - self.started >= self.limit_s
+        )
 
 
 def _ignore(_msg: Any) -> None:
     pass
+
+
+@contextlib.contextmanager
+def _time_limited(name: str, limit_s: float | None):
+    """The block stopped by :class:`OverTime` after ``limit_s`` s (a ``SIGALRM`` timer; main
+    thread only, where ``setitimer`` exists and no one else's timer or ``SIGALRM`` handler is in
+    place, such as a test runner's timeout, which is left alone: elsewhere the block runs as it
+    is)."""
+    usable = (
+        limit_s is not None
+        and hasattr(signal, "setitimer")
+        and threading.current_thread() is threading.main_thread()
+        and signal.getitimer(signal.ITIMER_REAL) == (0.0, 0.0)
+        and signal.getsignal(signal.SIGALRM) in (signal.SIG_DFL, None)
+    )
+    if not usable:
+        yield
+        return
+
+    armed = [True]
+
+    def over(signum, frame) -> None:
+        if armed[0]:  # a signal delivered as the block ends is not raised in its cleanup
+            raise _Alarm()
+
+    previous = signal.signal(signal.SIGALRM, over)
+    signal.setitimer(signal.ITIMER_REAL, limit_s)
+    try:
+        yield
+    except _Alarm:
+        raise OverTime(name, limit_s) from None
+    finally:
+        armed[0] = False
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, previous)
 
 
 def flush_std_streams() -> None:
@@ -421,6 +499,7 @@ def start(
     on_message: Report | None = None,
     fork: bool = True,
     idle_until_given: bool = False,
+    time_limit_s: float | None = None,
 ) -> Job:
     """Start ``task(*args, report=...)`` in a forked child when :func:`can_fork` (and ``fork``),
     else return a job that runs it here on :meth:`Job.result`.
@@ -435,8 +514,11 @@ def start(
         idle_until_given: the child prepares at the lowest priority (Linux ``SCHED_IDLE``: only on
             a CPU nothing else wants, so the plants keep theirs) and runs at the normal one once
             it is given its inputs.
+        time_limit_s: the task's wall-time limit, s, from now (None: none): past it the child
+            is ended and :meth:`Job.result` raises :class:`OverTime` (module docstring).
     """
-    job = Job(name, task, _LATER if later else args, on_message, prepare)
+    job = Job(name, task, _LATER if later else args, on_message, prepare, limit_s=time_limit_s)
+    job.started = time.monotonic()
     if not (fork and can_fork()):
         return job
 
@@ -453,6 +535,7 @@ def start(
         daemon=True,
     )
     proc.start()
+    job.started = time.monotonic()
     child_conn.close()
     inbox_r.close()
     job.process, job.conn, job.inbox = proc, conn, inbox_w
@@ -487,6 +570,7 @@ def start_served(
     *args: Any,
     preload: Sequence[str] = (),
     on_message: Report | None = None,
+    time_limit_s: float | None = None,
 ) -> Job:
     """Start ``task(*args, report=...)`` in a child forked by ``multiprocessing``'s fork server
     when :func:`can_serve`, else return a job that runs it here on :meth:`Job.result`.
@@ -497,9 +581,10 @@ def start_served(
     first call is the one kept). ``task`` and ``args``
     travel to the child pickled (module-level functions and picklable inputs, as for a process
     pool); the job is then a :class:`Job` like any other (:meth:`Job.result`, :func:`wait`,
-    :func:`stop`).
+    :func:`stop`), its ``time_limit_s`` as :func:`start`'s.
     """
-    job = Job(name, task, args, on_message, None)
+    job = Job(name, task, args, on_message, None, limit_s=time_limit_s)
+    job.started = time.monotonic()
     if not can_serve():
         return job
     ctx = mp.get_context("forkserver")
@@ -516,6 +601,7 @@ def start_served(
         proc.start()
     finally:
         child_conn.close()
+    job.started = time.monotonic()  # the limit is the task's: the fork server's own start is not
     job.process, job.conn = proc, conn
     return job
 
@@ -523,6 +609,9 @@ def start_served(
 def wait(jobs: Sequence[Job], first: bool = False, interrupted: bool = False) -> bool:
     """Collect the forked ``jobs`` until each has its outcome (``first``: until one more has),
     forwarding their messages. In-process jobs are left for :meth:`Job.result`.
+
+    A job past its time limit (:attr:`Job.limit_s`) is ended there and then, its outcome
+    :class:`OverTime` (the others go on).
 
     Returns whether a Ctrl-C (or SIGTERM) reached this process meanwhile (``interrupted``: it
     had already). It does not stop the collecting: every running child is told at once
@@ -544,8 +633,13 @@ def wait(jobs: Sequence[Job], first: bool = False, interrupted: bool = False) ->
             break
         try:
             mp_wait([j.conn for j in pending] + [j.process.sentinel for j in pending], POLL_S)
+            now = time.monotonic()
             for j in pending:
                 j._receive()
+                if j.over_time(now):
+                    j._finish(("overtime", j.limit_s))
+                    stop([j])
+                    continue
                 if not j.done and not j.process.is_alive():
                     j._receive()  # what it sent before it ended
                     if not j.done:
@@ -599,6 +693,7 @@ def stop(jobs: Sequence[Job]) -> None:
 __all__ = [
     "ENV_SWITCH",
     "Job",
+    "OverTime",
     "WorkerError",
     "WorkerLost",
     "available_cpus",

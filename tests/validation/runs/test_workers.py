@@ -289,3 +289,105 @@ def test_the_dask_workers_the_tool_starts_may_serve_and_the_setting_is_scoped():
     with executor_for(dask_workers=1) as (ex, _width):
         assert ex.submit(_daemonic).result(timeout=120) == (False, True)
     assert dask.config.get("distributed.worker.daemon") == before
+
+LIMIT_SCRIPT = """
+import json, os, signal, time
+from validation.runs import workers
+assert workers.can_fork(), "a fresh interpreter with one thread should fork"
+
+def spin(*, report):
+    while True:  # never reports, never returns
+        pass
+
+def segv(*, report):
+    os.kill(os.getpid(), signal.SIGSEGV)
+
+def killed(*, report):
+    os.kill(os.getpid(), signal.SIGKILL)
+
+def vanish(*, report):
+    os._exit(0)
+
+out = {}
+t0 = time.monotonic()
+job = workers.start("spin", spin, time_limit_s=1.0)
+try:
+    job.result()
+except workers.OverTime as exc:
+    out["spin"] = [exc.limit_s, time.monotonic() - t0, job.process.is_alive()]
+for name, task in (("segv", segv), ("killed", killed), ("vanish", vanish)):
+    try:
+        workers.start(name, task).result()
+    except workers.WorkerLost as exc:
+        out[name] = [exc.exitcode, exc.killed]
+print(json.dumps(out))
+"""
+
+
+@pytest.fixture(scope="module")
+def limited():
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1")
+    env.pop(workers.ENV_SWITCH, None)
+    proc = subprocess.run(
+        [sys.executable, "-c", LIMIT_SCRIPT], capture_output=True, text=True, env=env, timeout=120
+    )
+    assert proc.returncode == 0, proc.stderr
+    return json.loads(proc.stdout.splitlines()[-1])
+
+
+@needs_fork
+def test_a_forked_job_past_its_time_limit_is_ended_and_says_so(limited):
+    limit, took, alive = limited["spin"]
+    assert limit == 1.0 and 1.0 <= took < 10.0 and not alive
+
+
+@needs_fork
+def test_a_lost_worker_says_how_it_ended(limited):
+    """A crash (SIGSEGV) and an exit are the child's own doing; only SIGKILL reads as killed."""
+    assert limited["segv"] == [-11, False]
+    assert limited["vanish"] == [0, False]
+    assert limited["killed"] == [-9, True]
+
+
+def _sleep_forever(*, report):
+    while True:
+        time.sleep(0.01)
+
+
+def test_a_job_run_here_is_stopped_at_its_time_limit_by_a_timer():
+    import signal
+    import threading
+
+    if not hasattr(signal, "setitimer") or threading.current_thread() is not threading.main_thread():
+        pytest.skip("the timer needs setitimer and the main thread")
+    t0 = time.monotonic()
+    with pytest.raises(workers.OverTime, match=r"over its time limit of 0\.3 s"):
+        workers.start("sleep", _sleep_forever, fork=False, time_limit_s=0.3).result()
+    assert time.monotonic() - t0 < 5.0
+    assert signal.getitimer(signal.ITIMER_REAL) == (0.0, 0.0)
+    assert signal.getsignal(signal.SIGALRM) == signal.SIG_DFL
+
+
+def test_a_job_run_here_leaves_someone_elses_timer_alone():
+    """A timer already set (a test runner's timeout) is not replaced, cancelled or mistaken for
+    the job's limit: the job runs without a timer of its own."""
+    import signal
+    import threading
+
+    if not hasattr(signal, "setitimer") or threading.current_thread() is not threading.main_thread():
+        pytest.skip("the timer needs setitimer and the main thread")
+    fired: list[int] = []
+
+    def theirs(signum, frame):
+        fired.append(signum)
+
+    previous = signal.signal(signal.SIGALRM, theirs)
+    try:
+        signal.setitimer(signal.ITIMER_REAL, 30.0)
+        assert workers.start("quick", lambda *, report: 7, fork=False, time_limit_s=0.1).result() == 7
+        left, _ = signal.getitimer(signal.ITIMER_REAL)
+        assert 0 < left <= 30.0 and signal.getsignal(signal.SIGALRM) is theirs
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, previous)
+    assert not fired

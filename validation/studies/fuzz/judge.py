@@ -35,7 +35,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from enum import StrEnum
 from multiprocessing import RawValue
-from multiprocessing.connection import wait as mp_wait
 from typing import Any
 
 import numpy as np
@@ -47,6 +46,7 @@ from mj_bridge.plants import plant
 from validation.compare.checks import compare_plants
 from validation.compare.referee import VerdictKind, referee
 from validation.runs import warm_plants, warmup, workers
+from validation.runs.contract import ContractError, contract_problem
 from validation.studies.sweep.running import BudgetExceeded
 
 RELATIVE_DIFFERENCES = frozenset(("control_torque", "rod_forces"))
@@ -276,11 +276,14 @@ def run_limited(
     reached = RawValue("d", math.nan)
     if workers.can_fork():
         _load_kernels(name, scene)
-        job = workers.start(f"fuzz-{name}", _simulate_task, pl, scene, horizon, settings, reached)
+        job = workers.start(
+            f"fuzz-{name}", _simulate_task, pl, scene, horizon, settings, reached,
+            time_limit_s=limit_s,
+        )
     elif workers.can_serve():
         job = workers.start_served(
             f"fuzz-{name}", _simulate_task, pl, scene, horizon, settings, reached,
-            preload=SERVER_PRELOAD,
+            preload=SERVER_PRELOAD, time_limit_s=limit_s,
         )
     else:
         progress, over_budget = _budget_progress(limit_s)
@@ -293,10 +296,9 @@ def run_limited(
         except Exception as exc:
             raise _Raised(type(exc).__name__, _one_line(exc).partition(": ")[2]) from exc
     try:
-        # the task sends nothing but its result: the pipe is ready only when the run is done
-        if not mp_wait([job.conn, job.process.sentinel], timeout=limit_s):
-            raise OverTime(name, limit_s, reached.value)
-        return job.result()  # a finished worker exits on its own (validation.runs.workers)
+        return job.result()  # ended at the limit by the workers; a finished one exits on its own
+    except workers.OverTime as exc:
+        raise OverTime(name, limit_s, reached.value) from exc
     except workers.WorkerError as exc:
         raise _Raised(exc.kind, exc.message) from exc
     except workers.WorkerLost as exc:
@@ -436,7 +438,8 @@ def cut_short(tr: Trajectory) -> str:
 
 def run_one(name: str, pl: Plant, scene: Scene, horizon: float, budget_s: float) -> PlantRun:
     """Plant ``pl``'s run of ``scene`` over ``horizon`` s within ``budget_s`` s (:func:`run_limited`);
-    only an interrupt escapes."""
+    only an interrupt escapes. A return value that breaks the plant contract
+    (:func:`validation.runs.contract.contract_problem`) is the plant raising ``ContractError``."""
     t0 = time.perf_counter()
     try:
         tr = run_limited(name, pl, scene, horizon, budget_s)
@@ -446,6 +449,9 @@ def run_one(name: str, pl: Plant, scene: Scene, horizon: float, budget_s: float)
     except _Raised as exc:  # a plant failing is a finding, whatever it raises
         return PlantRun(name, None, time.perf_counter() - t0, None, exc.kind, str(exc))
     wall = time.perf_counter() - t0
+    why = contract_problem(tr, name, scene, horizon)  # what it returned, checked before it is compared
+    if why:
+        return PlantRun(name, None, wall, None, ContractError.__name__, f"broke the plant contract: {why}")
     if tr.status is RunStatus.INTERRUPTED:
         raise KeyboardInterrupt(tr.message)
     if tr.status is not RunStatus.OK:
