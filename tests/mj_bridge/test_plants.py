@@ -224,3 +224,27 @@ def test_a_plugin_package_installed_from_tests_runs_in_tumble_validate(tmp_path)
     assert "echo" in (out / "report.md").read_text()
     assert (out / "run.rrd").stat().st_size > 0
 
+
+
+def test_a_plant_whose_check_scene_has_a_bug_stays_in_the_set_to_fail_alone(monkeypatch):
+    """A plant set meets a plant whose ``check_scene`` raises something other than the
+    ``ValueError`` of a refusal (a plugin's own bug): the set keeps it, so that the run fails that
+    plant alone, naming what it raised, instead of the set's resolution raising it; a refusal still
+    leaves the plant out."""
+    from validation.scenes import resolve_scene
+
+    real = plants_mod.plant
+
+    class _Buggy:
+        def check_scene(self, scene):
+            raise RuntimeError("a plugin's own bug")
+
+    class _Refusing:
+        def check_scene(self, scene):
+            raise ValueError("masses: cannot hold this scene")
+
+    fakes = {"buggy": _Buggy(), "refusing": _Refusing()}
+    monkeypatch.setattr(plants_mod, "plant", lambda name: fakes.get(name) or real(name))
+    sc = resolve_scene("paper_example1")
+    got = plants_mod.plants_for_scene(sc, ("analytic", "buggy", "refusing", "mujoco"))
+    assert got == ("analytic", "buggy", "mujoco")
