@@ -39,6 +39,7 @@ from validation.recording.style import (
 )
 from validation.recording.world import difference_factors
 from validation.report.figures import Drawing, FigureFormat
+from validation.runs import interrupts
 from validation.runs.atomic import write_bytes, write_text
 from validation.runs.outputs import OutputRun, output_run
 from validation.scenes import resolve_scene
@@ -823,7 +824,8 @@ def run_steps(
     if mujoco:
         try:
             from mj_bridge import simulate as mj_simulate
-        except ImportError:  # pragma: no cover - the twin is part of the package
+        except ImportError as exc:  # pragma: no cover - the twin is part of the package
+            interrupts.raise_if_interrupt(exc)  # an import a signal cut is the signal
             mj_simulate = None
     walls: dict[str, float] = {}
     runs: list[StepRun] = []

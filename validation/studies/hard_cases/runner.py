@@ -25,6 +25,7 @@ from analytic.scene import Scene, load_scene
 from analytic.trajectory import RunStatus
 from mj_bridge import plants as _plants
 from validation.compare.checks import Check, Subject, completed_check, judge
+from validation.runs import interrupts
 from validation.runs.outputs import output_run
 from validation.scenes import HARD_DIR
 from validation.studies.hard_cases.criterion import (
@@ -267,6 +268,7 @@ def run_case(name: str, plants: Iterable[str] | None = None) -> HardCaseRow:
     except KeyboardInterrupt:
         raise
     except Exception as exc:  # a crash of a case is a finding: reported, the suite goes on
+        interrupts.raise_if_interrupt(exc)  # not when a signal caused it (an import it cut)
         tb = traceback.extract_tb(exc.__traceback__)[-1]
         error = f"{type(exc).__name__}: {exc}"
         ev = Evaluation((), (), {}, (f"raised at {Path(tb.filename).name}:{tb.lineno}",))
