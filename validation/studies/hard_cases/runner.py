@@ -307,10 +307,15 @@ def _run_into(
             progress(name, i, len(selected))
         try:
             rows.append(run_case(name, plants))
-        except KeyboardInterrupt:
+        except BaseException as exc:
+            ki = interrupts.interrupt_of(exc)  # also an exception a signal caused
+            if ki is None:
+                raise
             current = table(False, f"interrupted during {name}")
             write_table(current, out)
-            raise
+            if ki is exc:
+                raise
+            raise ki from exc
         done = i + 1 == len(selected)
         current = table(done, "" if done else f"{len(selected) - i - 1} cases still to run")
         write_table(current, out)
