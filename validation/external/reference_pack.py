@@ -48,6 +48,7 @@ from validation.external.read import read_trajectory, size_limit
 from validation.external.record import ExternalTrajectory
 from validation.external.write import write_trajectory
 from validation.runs.atomic import write_text
+from validation.runs.interrupts import checkpoint
 from validation.runs.outputs import output_run
 from validation.scenes import resolve_scene
 
@@ -135,9 +136,10 @@ def estimate_accuracy(scene: Scene) -> tuple[Any, tuple[Accuracy, ...]]:
         RuntimeError: a run did not reach the scene's horizon.
     """
     analytic = plant("analytic")
-    # an interrupted run stops the pack (its partial samples are no reference)
-    ref = analytic.simulate(scene, REFERENCE_SETTINGS).raise_if_interrupted()
-    tight = analytic.simulate(scene, CHECK_SETTINGS).raise_if_interrupted()
+    # an interrupted run stops the pack (its partial samples are no reference); checkpoint: a
+    # signal compiled code swallowed stops the run at its next report
+    ref = analytic.simulate(scene, REFERENCE_SETTINGS, progress=checkpoint).raise_if_interrupted()
+    tight = analytic.simulate(scene, CHECK_SETTINGS, progress=checkpoint).raise_if_interrupted()
     for tr, s in ((ref, REFERENCE_SETTINGS), (tight, CHECK_SETTINGS)):
         if tr.status is not RunStatus.OK:
             raise RuntimeError(f"the analytic plant at rtol {s.rtol:g} stopped: {tr.message}")

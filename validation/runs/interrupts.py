@@ -102,6 +102,16 @@ def raise_pending() -> None:
         raise exc
 
 
+def checkpoint(t: float | None = None) -> None:
+    """A plant's ``progress(t)`` for a run that reports to nobody: raises the interrupt a C caller
+    swallowed (:func:`raise_pending`), and a new one once a signal was received at all (code
+    that caught it went on: this run was started after it), so that such a run stops within one
+    report of the signal (the plant returns the samples it reached, marked interrupted)."""
+    raise_pending()
+    if _received:
+        raise interrupt()
+
+
 def pending() -> bool:
     """Whether an interrupt was swallowed and has not been raised again yet."""
     return _pending is not None

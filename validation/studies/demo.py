@@ -832,14 +832,16 @@ def run_steps(
     for step in steps:
         sc = step_scene(step)
         t0 = time.perf_counter()
-        tr = simulate(sc, t_end=t_end, rtol=rtol).raise_if_interrupted()
+        # checkpoint: a signal compiled code swallowed stops the run at its next report
+        tr = simulate(sc, t_end=t_end, rtol=rtol, progress=interrupts.checkpoint)
+        tr = tr.raise_if_interrupted()
         walls[step.prefix] = time.perf_counter() - t0
         if tr.status is not RunStatus.OK:
             raise RuntimeError(f"demo step {step.title!r} failed: {tr.message}")
         plants = [tr]
         if mj_simulate is not None:
             t0 = time.perf_counter()
-            tm = mj_simulate(sc, t_end=t_end).raise_if_interrupted()
+            tm = mj_simulate(sc, t_end=t_end, progress=interrupts.checkpoint).raise_if_interrupted()
             walls[f"{step.prefix}_mujoco"] = time.perf_counter() - t0
             if tm.status is not RunStatus.OK:
                 raise RuntimeError(f"demo step {step.title!r} failed on MuJoCo: {tm.message}")
@@ -860,7 +862,8 @@ def _baseline(
     if earlier is not None:
         return earlier.plants[0]
     t0 = time.perf_counter()
-    tr = simulate(resolve_scene(step.scene), t_end=t_end, rtol=rtol).raise_if_interrupted()
+    tr = simulate(resolve_scene(step.scene), t_end=t_end, rtol=rtol, progress=interrupts.checkpoint)
+    tr = tr.raise_if_interrupted()
     walls[f"{step.prefix}_baseline"] = time.perf_counter() - t0
     if tr.status is not RunStatus.OK:
         raise RuntimeError(f"demo step {step.title!r}: the full scene failed: {tr.message}")
