@@ -8,8 +8,10 @@ paths are built from a sanitised slug of the scene's name, always under ``out/``
 
 Only the standard library is imported before ``main`` has installed its signal handlers, so a
 Ctrl-C during start-up (numpy, MuJoCo, numba loading) is one line too; an interrupt that lands
-inside compiled code's Python callback is kept and raised at the next progress report
-(:mod:`validation.runs.interrupts`).
+inside compiled code's Python callback is kept and raised at the next progress report, and one
+that cuts an import (a C extension's initialisation then fails as ``ImportError``) or causes any
+other exception ends the command as interrupted too, every command alike
+(:mod:`validation.runs.interrupts`). ``--plants`` is refused when it names no plant.
 """
 
 from __future__ import annotations
