@@ -171,6 +171,20 @@ def _plugin_problem(name: str, value: str, obj: Any) -> str:
     return ""
 
 
+def _interrupt_behind(exc: BaseException) -> KeyboardInterrupt | None:
+    """The ``KeyboardInterrupt`` ``exc`` was raised from or while handling, if any (a C
+    extension whose initialisation Ctrl-C or SIGTERM cut raises ``ImportError: initialization
+    failed`` from it): the user's interrupt, not the plugin's fault."""
+    seen: set[int] = set()
+    e: BaseException | None = exc
+    while e is not None and id(e) not in seen:
+        if isinstance(e, KeyboardInterrupt):
+            return e
+        seen.add(id(e))
+        e = e.__cause__ or e.__context__
+    return None
+
+
 @functools.cache
 def _load() -> tuple[dict[str, type[Plant]], tuple[PluginError, ...]]:
     """Every plant (built-ins, then the plugins that load, by name) and the plugins left out."""
@@ -185,6 +199,8 @@ def _load() -> tuple[dict[str, type[Plant]], tuple[PluginError, ...]]:
         except BaseException as exc:  # ImportError, SyntaxError, SystemExit from a plugin ...
             if isinstance(exc, KeyboardInterrupt):
                 raise
+            if (ki := _interrupt_behind(exc)) is not None:  # a signal cut a C extension's init
+                raise ki from exc
             errors.append(
                 PluginError(ep.name, _one_line(f"cannot import {ep.value}: {type(exc).__name__}: {exc}"))
             )

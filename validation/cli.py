@@ -8,8 +8,10 @@ paths are built from a sanitised slug of the scene's name, always under ``out/``
 
 Only the standard library is imported before ``main`` has installed its signal handlers, so a
 Ctrl-C during start-up (numpy, MuJoCo, numba loading) is one line too; an interrupt that lands
-inside compiled code's Python callback is kept and raised at the next progress report
-(:mod:`validation.runs.interrupts`).
+inside compiled code's Python callback is kept and raised at the next progress report, and one
+that cuts an import (a C extension's initialisation then fails as ``ImportError``) or causes any
+other exception ends the command as interrupted too, every command alike
+(:mod:`validation.runs.interrupts`). ``--plants`` is refused when it names no plant.
 """
 
 from __future__ import annotations
@@ -40,6 +42,15 @@ def _positive_float(s: str) -> float:
     if not v > 0 or v != v or v == float("inf"):
         raise argparse.ArgumentTypeError(f"must be a positive finite number (got {s!r})")
     return v
+
+
+def _plant_names(s: str) -> str:
+    """A ``--plants`` value: comma-separated names, at least one (``''`` or ``','`` would
+    otherwise read as "not given" and run the default plants); ``ArgumentTypeError`` quoting it.
+    The names themselves are checked by the command (:func:`mj_bridge.plants.parse_plants`)."""
+    if not any(x.strip() for x in s.split(",")):
+        raise argparse.ArgumentTypeError(f"give at least one plant name (got {s!r})")
+    return s
 
 
 class _OneLineParser(argparse.ArgumentParser):
@@ -270,7 +281,7 @@ def cmd_hard_cases(args: argparse.Namespace) -> int:
 
     out = Path(args.out) if args.out else Path("out") / "hard_cases"
     plants = None
-    if args.plants:
+    if args.plants is not None:
         from mj_bridge.plants import parse_plants
 
         plants = list(parse_plants(args.plants))
@@ -332,7 +343,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 def cmd_fuzz(args: argparse.Namespace) -> int:
     from validation.studies.fuzz.campaign import fuzz
 
-    plants = [x.strip() for x in args.plants.split(",") if x.strip()] if args.plants else None
+    plants = None if args.plants is None else [x.strip() for x in args.plants.split(",") if x.strip()]
     out = Path(args.out) if args.out else Path("out") / f"fuzz_seed{args.seed}"
 
     def progress(line: str) -> None:
@@ -486,6 +497,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--t-end", type=_positive_float, help="horizon in seconds")
     p.add_argument(
         "--plants",
+        type=_plant_names,
         help="comma-separated plants to run: built-ins (analytic, mujoco, pinocchio) and "
         "installed plant plugins (drake; docs/plugins.md) by name, or 'all' for every installed "
         "one (default: every installed default plant, analytic,mujoco,pinocchio; with three or "
@@ -526,6 +538,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument(
         "--plants",
+        type=_plant_names,
         help="comma-separated built-in plants to run beside the file (default: every installed "
         "one that can run the scene)",
     )
@@ -611,6 +624,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--case", action="append", help="run only this case (repeatable)")
     p.add_argument(
         "--plants",
+        type=_plant_names,
         help="comma-separated plants, plugins included, or 'all' (default: every installed "
         "default plant, analytic,mujoco,pinocchio)",
     )
@@ -650,7 +664,11 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--budget", type=_positive_int, help="scenes to judge (default 40)")
     g.add_argument("--minutes", type=_positive_float, help="judge scenes for this long")
     p.add_argument("--seed", type=int, default=0, help="the campaign's seed (default 0)")
-    p.add_argument("--plants", help="comma-separated plant names (default: every installed one)")
+    p.add_argument(
+        "--plants",
+        type=_plant_names,
+        help="comma-separated plant names (default: every installed one)",
+    )
     p.add_argument(
         "--horizon", type=_positive_float, default=0.5, help="each scene's horizon, s (default 0.5)"
     )
@@ -754,7 +772,11 @@ left out named)."""
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run one ``tumble`` command; returns the exit status (see the module docstring)."""
+    """Run one ``tumble`` command; returns the exit status (see the module docstring).
+
+    Every command runs under :func:`validation.runs.interrupts.handled`: a signal that arrives at
+    any moment (an import of a C extension, a plant's run, a write) ends it with 130 / 143 and one
+    line, whatever exception the code it landed in raised instead (:func:`_interrupted`)."""
     with interrupts.handled():
         try:
             with user_warnings():
@@ -763,29 +785,8 @@ def main(argv: list[str] | None = None) -> int:
                 if getattr(args, "command", None) in _PLANT_COMMANDS:
                     warn_skipped_plugins()
                 status = args.func(args)
-        except ValueError as exc:  # bad input (also OutputBusy: another run holds the directory)
-            print(f"tumble: error: {exc}", file=sys.stderr)
-            return EXIT_USAGE
-        except MemoryError as exc:  # often without a message: one line saying what it is
-            print(f"tumble: error: {_out_of_memory(exc)}", file=sys.stderr)
-            return EXIT_FAILED
-        except OSError as exc:
-            from validation.runs.atomic import OutputError
-
-            if isinstance(exc, OutputError):  # the run happened; its results could not be written
-                print(f"tumble: error: {exc}", file=sys.stderr)
-                return EXIT_FAILED
-            where = f": {exc.filename}" if exc.filename else ""
-            print(f"tumble: error: {exc.strerror or exc}{where}", file=sys.stderr)
-            return EXIT_USAGE
-        except KeyboardInterrupt as exc:
-            sigterm = isinstance(exc, interrupts.Terminated) or interrupts.received_sigterm()
-            print(
-                f"tumble: {'terminated' if sigterm else 'interrupted'}; "
-                "partial results (if any) are kept, marked interrupted",
-                file=sys.stderr,
-            )
-            return EXIT_SIGTERM if sigterm else EXIT_SIGINT
+        except BaseException as exc:
+            return _failed(exc)
         if interrupts.pending():  # swallowed by compiled code after the last progress report
             sigterm = interrupts.received_sigterm()
             print(
@@ -794,7 +795,44 @@ def main(argv: list[str] | None = None) -> int:
                 file=sys.stderr,
             )
             return EXIT_SIGTERM if sigterm else EXIT_SIGINT
+        if interrupts.received():  # caught and turned into a result by code that went on
+            return _interrupted(interrupts.interrupt())
         return status
+
+
+def _interrupted(exc: KeyboardInterrupt) -> int:
+    """The one line and the status of a command a signal stopped."""
+    sigterm = isinstance(exc, interrupts.Terminated) or interrupts.received_sigterm()
+    print(
+        f"tumble: {'terminated' if sigterm else 'interrupted'}; "
+        "partial results (if any) are kept, marked interrupted",
+        file=sys.stderr,
+    )
+    return EXIT_SIGTERM if sigterm else EXIT_SIGINT
+
+
+def _failed(exc: BaseException) -> int:
+    """The one line and the status of a command that raised ``exc``; an exception that is not
+    one of a bad input, memory or a file is re-raised (a bug: its traceback is the report)."""
+    from validation.runs.atomic import OutputError
+
+    if isinstance(exc, OutputError):  # the run happened; its results could not be written
+        print(f"tumble: error: {exc}", file=sys.stderr)
+        return EXIT_FAILED
+    ki = interrupts.interrupt_of(exc)  # also an ImportError of an import the signal cut
+    if ki is not None:
+        return _interrupted(ki)
+    if isinstance(exc, ValueError):  # bad input (also OutputBusy: another run holds the directory)
+        print(f"tumble: error: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    if isinstance(exc, MemoryError):  # often without a message: one line saying what it is
+        print(f"tumble: error: {_out_of_memory(exc)}", file=sys.stderr)
+        return EXIT_FAILED
+    if isinstance(exc, OSError):
+        where = f": {exc.filename}" if exc.filename else ""
+        print(f"tumble: error: {exc.strerror or exc}{where}", file=sys.stderr)
+        return EXIT_USAGE
+    raise exc
 
 
 def run(argv: list[str] | None = None) -> None:

@@ -34,6 +34,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from validation.bench.verdicts import SPREAD_BOUND, Verdict
+from validation.runs import interrupts
 
 # deferred, in every function below: `tumble`'s parser imports this module for the options of
 # `tumble bench` on every command, and numpy, the engines and the goals cost ~2.1 s more
@@ -68,7 +69,8 @@ def mujoco_forward_cost(scene: Scene) -> float | None:
         import mujoco
 
         from model_xml import build_spec
-    except ImportError:
+    except ImportError as exc:
+        interrupts.raise_if_interrupt(exc)  # an import a signal cut is the signal
         return None
     from validation.bench.timing import time_call
 

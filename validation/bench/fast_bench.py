@@ -25,6 +25,7 @@ from analytic import fast
 from analytic.kernel import jit
 from analytic.model import TumblingModel
 from validation.bench.timing import chain_scene, time_call
+from validation.runs import interrupts
 
 NS = (2, 5, 10, 50, 1000)
 
@@ -37,7 +38,8 @@ def _mujoco(scene):
         from model_xml import build_spec
 
         m = build_spec(scene).compile()
-    except Exception:  # the twin is optional here (ImportError, or a builder in progress)
+    except Exception as exc:  # the twin is optional here (ImportError, or a builder in progress)
+        interrupts.raise_if_interrupt(exc)  # an import a signal cut is the signal
         return None
     d = mujoco.MjData(m)
     mujoco.mj_forward(m, d)

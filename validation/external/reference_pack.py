@@ -50,6 +50,7 @@ from validation.external.read import read_trajectory, size_limit
 from validation.external.record import ExternalTrajectory
 from validation.external.write import write_trajectory
 from validation.runs.atomic import write_text
+from validation.runs.interrupts import checkpoint
 from validation.runs.outputs import output_run
 from validation.scenes import resolve_scene
 
@@ -137,8 +138,10 @@ def estimate_accuracy(scene: Scene) -> tuple[Any, tuple[Accuracy, ...]]:
         RuntimeError: a run did not reach the scene's horizon.
     """
     analytic = plant("analytic")
-    ref = analytic.simulate(scene, REFERENCE_SETTINGS)
-    tight = analytic.simulate(scene, CHECK_SETTINGS)
+    # an interrupted run stops the pack (its partial samples are no reference); checkpoint: a
+    # signal compiled code swallowed stops the run at its next report
+    ref = analytic.simulate(scene, REFERENCE_SETTINGS, progress=checkpoint).raise_if_interrupted()
+    tight = analytic.simulate(scene, CHECK_SETTINGS, progress=checkpoint).raise_if_interrupted()
     for tr, s in ((ref, REFERENCE_SETTINGS), (tight, CHECK_SETTINGS)):
         if tr.status is not RunStatus.OK:
             raise RuntimeError(f"the analytic plant at rtol {s.rtol:g} stopped: {tr.message}")
@@ -174,10 +177,11 @@ def write_pack(scene: Scene | str | Path | None, out_dir: str | Path) -> PackRes
 
     sc = scene if isinstance(scene, Scene) else resolve_scene(scene)
     thresholds = thresholds_for(sc)
-    ref, accuracy = estimate_accuracy(sc)
     scene_text = scene_to_toml(sc, header=f"reference pack of the scene {sc.name!r}")
+    # the runs inside the output run: a signal during them leaves OUT marked interrupted
     with output_run(out_dir, "reference") as run:
         files = {SCENE_FILE: write_text(run.path / SCENE_FILE, scene_text)}
+        ref, accuracy = estimate_accuracy(sc)
         files[TRAJECTORY_FILE] = write_trajectory(run.path / TRAJECTORY_FILE, sc, ref)
         record = {
             "pack_format": PACK_FORMAT,

@@ -67,6 +67,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from validation.runs import interrupts
 from validation.runs.atomic import OutputError, write_text
 from validation.runs.locks import OutputBusy, hold_lock
 from validation.runs.manifest import (
@@ -178,7 +179,9 @@ def output_run(target: str | Path, command: str, run_id: str | None = None) -> I
     lock file it did not create, another run holding it) is checked before the block runs. On
     leaving the block the files are listed in ``manifest.json`` and put at ``target``: state
     COMPLETE (or FAILED after :meth:`OutputRun.mark_failed`); FAILED when the block raised;
-    INTERRUPTED on KeyboardInterrupt (re-raised after the commit). A ``ValueError`` (bad input
+    INTERRUPTED on KeyboardInterrupt, on an exception a signal caused, and when a signal arrived
+    during a block that ended normally (another layer caught it: the set may be partial;
+    :mod:`validation.runs.interrupts`), the interrupt raised after the commit. A ``ValueError`` (bad input
     found late) or an :class:`OutputError` (a file could not be written) commits nothing: the
     staging directory is removed and ``target`` left as it was.
 
@@ -222,13 +225,19 @@ def output_run(target: str | Path, command: str, run_id: str | None = None) -> I
             if isinstance(exc, OutputError):
                 raise _unchanged(_public(exc, staging, tgt), tgt) from exc
             raise
-        except KeyboardInterrupt as exc:
+        except BaseException as exc:
+            # an interrupt, or what a signal's interrupt became (an ImportError of an import
+            # it cut ...; interrupts.interrupt_of): the set is interrupted, not failed
+            pending = interrupts.interrupt_of(exc)
+            if pending is None:
+                pending = _public(exc, staging, tgt)
+                run.mark_failed(f"{type(pending).__name__}: {pending}".splitlines()[0])
+        else:
+            if interrupts.received():  # a signal another layer caught (a plant's interrupted run)
+                pending = interrupts.interrupt()
+        if isinstance(pending, KeyboardInterrupt):
             run.state = RunState.INTERRUPTED
             run.reason = "; ".join(r for r in (run.reason, "interrupted") if r)
-            pending = exc
-        except BaseException as exc:
-            pending = _public(exc, staging, tgt)
-            run.mark_failed(f"{type(pending).__name__}: {pending}".splitlines()[0])
         try:
             _commit(run, place)
         except HalfCommitted:

@@ -49,6 +49,7 @@ from importlib import metadata
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from validation.runs import interrupts
 from validation.runs.atomic import write_text
 from validation.runs.lifetime import pool_initializer
 from validation.runs.workers import flush_std_streams
@@ -320,6 +321,7 @@ def run_task(task: Task) -> StageTime:
     except KeyboardInterrupt:
         raise
     except Exception as exc:  # the plant's own run will compile and report
+        interrupts.raise_if_interrupt(exc)  # not a failure a signal caused
         error = f"{type(exc).__name__}: {exc}".splitlines()[0]
     return StageTime(task.title, time.perf_counter() - t0, error, time.process_time() - c0)
 

@@ -39,6 +39,7 @@ from validation.recording.style import (
 )
 from validation.recording.world import difference_factors
 from validation.report.figures import Drawing, FigureFormat
+from validation.runs import interrupts
 from validation.runs.atomic import write_bytes, write_text
 from validation.runs.outputs import OutputRun, output_run
 from validation.scenes import resolve_scene
@@ -823,21 +824,24 @@ def run_steps(
     if mujoco:
         try:
             from mj_bridge import simulate as mj_simulate
-        except ImportError:  # pragma: no cover - the twin is part of the package
+        except ImportError as exc:  # pragma: no cover - the twin is part of the package
+            interrupts.raise_if_interrupt(exc)  # an import a signal cut is the signal
             mj_simulate = None
     walls: dict[str, float] = {}
     runs: list[StepRun] = []
     for step in steps:
         sc = step_scene(step)
         t0 = time.perf_counter()
-        tr = simulate(sc, t_end=t_end, rtol=rtol).raise_if_interrupted()
+        # checkpoint: a signal compiled code swallowed stops the run at its next report
+        tr = simulate(sc, t_end=t_end, rtol=rtol, progress=interrupts.checkpoint)
+        tr = tr.raise_if_interrupted()
         walls[step.prefix] = time.perf_counter() - t0
         if tr.status is not RunStatus.OK:
             raise RuntimeError(f"demo step {step.title!r} failed: {tr.message}")
         plants = [tr]
         if mj_simulate is not None:
             t0 = time.perf_counter()
-            tm = mj_simulate(sc, t_end=t_end).raise_if_interrupted()
+            tm = mj_simulate(sc, t_end=t_end, progress=interrupts.checkpoint).raise_if_interrupted()
             walls[f"{step.prefix}_mujoco"] = time.perf_counter() - t0
             if tm.status is not RunStatus.OK:
                 raise RuntimeError(f"demo step {step.title!r} failed on MuJoCo: {tm.message}")
@@ -858,7 +862,8 @@ def _baseline(
     if earlier is not None:
         return earlier.plants[0]
     t0 = time.perf_counter()
-    tr = simulate(resolve_scene(step.scene), t_end=t_end, rtol=rtol).raise_if_interrupted()
+    tr = simulate(resolve_scene(step.scene), t_end=t_end, rtol=rtol, progress=interrupts.checkpoint)
+    tr = tr.raise_if_interrupted()
     walls[f"{step.prefix}_baseline"] = time.perf_counter() - t0
     if tr.status is not RunStatus.OK:
         raise RuntimeError(f"demo step {step.title!r}: the full scene failed: {tr.message}")

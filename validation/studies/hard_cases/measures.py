@@ -32,6 +32,7 @@ from validation.compare.checks import (
     omega_error_reference,
 )
 from validation.compare.summary import drift_figures
+from validation.runs.interrupts import checkpoint
 from validation.studies.hard_cases.criterion import CheckSpec, Criterion, Measure, Reference
 from validation.studies.hard_cases.references import (
     centre_of_mass,
@@ -58,7 +59,9 @@ def run_plant(
 ) -> Trajectory:
     """``scene`` on the plant ``engine`` through the plant protocol (its settings default to the
     scene's); the user's Ctrl-C stops the suite, not only the current case."""
-    return _plants.plant(engine).simulate(scene, settings, t_end=t_end).raise_if_interrupted()
+    pl = _plants.plant(engine)
+    # checkpoint: a signal compiled code swallowed stops the run at its next report
+    return pl.simulate(scene, settings, t_end=t_end, progress=checkpoint).raise_if_interrupted()
 
 
 @dataclass(frozen=True)

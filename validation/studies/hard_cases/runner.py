@@ -25,6 +25,7 @@ from analytic.scene import Scene, load_scene
 from analytic.trajectory import RunStatus
 from mj_bridge import plants as _plants
 from validation.compare.checks import Check, Subject, completed_check, judge
+from validation.runs import interrupts
 from validation.runs.outputs import output_run
 from validation.scenes import HARD_DIR
 from validation.studies.hard_cases.criterion import (
@@ -267,6 +268,7 @@ def run_case(name: str, plants: Iterable[str] | None = None) -> HardCaseRow:
     except KeyboardInterrupt:
         raise
     except Exception as exc:  # a crash of a case is a finding: reported, the suite goes on
+        interrupts.raise_if_interrupt(exc)  # not when a signal caused it (an import it cut)
         tb = traceback.extract_tb(exc.__traceback__)[-1]
         error = f"{type(exc).__name__}: {exc}"
         ev = Evaluation((), (), {}, (f"raised at {Path(tb.filename).name}:{tb.lineno}",))
@@ -305,10 +307,15 @@ def _run_into(
             progress(name, i, len(selected))
         try:
             rows.append(run_case(name, plants))
-        except KeyboardInterrupt:
+        except BaseException as exc:
+            ki = interrupts.interrupt_of(exc)  # also an exception a signal caused
+            if ki is None:
+                raise
             current = table(False, f"interrupted during {name}")
             write_table(current, out)
-            raise
+            if ki is exc:
+                raise
+            raise ki from exc
         done = i + 1 == len(selected)
         current = table(done, "" if done else f"{len(selected) - i - 1} cases still to run")
         write_table(current, out)

@@ -33,10 +33,11 @@ from analytic.kinematics import omega_of
 from analytic.model import TumblingModel
 from analytic.scene import Scene
 from analytic.stepping import Stepped, step_and_sample
-from analytic.trajectory import Engine, Trajectory
+from analytic.trajectory import Engine, RunStatus, Trajectory
 from mj_bridge.pinocchio_model import pinocchio_to_paper_acc
 from mj_bridge.pinocchio_plant import PinocchioDynamics
 from model_xml.coordinates import mujoco_to_paper_acc
+from validation.runs.interrupts import checkpoint
 
 N_STATES = 6
 """States at which the pointwise properties are evaluated, spread evenly over a short run."""
@@ -254,7 +255,10 @@ def _integrate_conflict(
         rtol=RTOL,
         atol=ATOL,
         n_motion=2 * nq,
+        progress=checkpoint,  # a signal compiled code swallowed stops the run at its next report
     )
+    if run.status is RunStatus.INTERRUPTED:  # the loop keeps what it reached: the suite stops
+        raise KeyboardInterrupt(run.message)
     t, q, qd = run.t, run.y[:, :nq], run.y[:, nq:]
     w = omega_of(q[:, 3:7], qd[:, 3:7])
     omega = scene.control.omega
