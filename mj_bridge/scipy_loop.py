@@ -22,7 +22,7 @@ class LoopDynamics(Protocol):
     nq: int
     nv: int
     nfev: int
-    error_groups: ErrorGroups
+    error_groups: ErrorGroups | None
     fallbacks: int
     controller: Any
 
