@@ -91,10 +91,10 @@ from analytic.effects import SolverMethod, Stepper
 from analytic.error_scale import (
     PROBE_STEPS,
     ErrorGroups,
+    RoundoffWatch,
     atol_vector,
     follow_scales,
     group_scales,
-    roundoff_limited,
 )
 from analytic.stepping import Stepped, step_and_sample
 from analytic.trajectory import RunStatus
@@ -488,6 +488,7 @@ def _compiled(f: Callable, t_eval: np.ndarray, y0: np.ndarray, fast: Any, kw: di
     scales = None if groups is None else group_scales(y0, groups)
     atols = atol_vector(float(kw["atol"]), ny, kw["n_motion"], groups, scales)
     rescales = 0
+    watch = RoundoffWatch(f, float(kw["rtol"]), kw["n_motion"])
     max_step = float(kw["max_step"])
     progress = kw["progress"]
     t_end = float(t_eval[-1])
@@ -536,9 +537,7 @@ def _compiled(f: Callable, t_eval: np.ndarray, y0: np.ndarray, fast: Any, kw: di
                 progress(t_now)
             if groups is not None and nsteps >= probe_at and t_now < t_end:
                 probe_at = nsteps + PROBE_STEPS
-                why = roundoff_limited(
-                    f, t_now, y_now, first, atols, float(rtol[0]), kw["n_motion"]
-                )
+                why = watch.check(t_now, y_now, first, atols)
                 if why:
                     status, message = RunStatus.FAILED, why
                     break

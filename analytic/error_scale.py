@@ -31,22 +31,26 @@ a vector's error should be: isotropic, independent of how the inertial frame's a
 What it leaves alone. ``s_g = 1`` while every component of the group stays below
 ``2 · GROUP_UNIT`` in magnitude: a scene whose state stays within a few hundred SI units (the
 paper's examples over 2 s) gets exactly the fixed ``atol`` it had, and its trajectory is
-bit-identical. ``s_g`` is a power of two; a loop follows it up at once and down only when it has fallen to a
-quarter (:func:`follow_scales`: a swinging magnitude changes the vector once), so the scale stays
-within ``2 M_g``. scipy's loop rebuilds its solver where the scales change (from where it is, with
-the step it had), the compiled loop recomputes the vector at the start of each of its calls. ``atol`` scales the whole vector, so ``Plant.tightened`` (``atol / 100``)
-tightens the floor with it and the own-error estimate keeps its meaning.
+bit-identical. ``s_g`` is a power of two; a loop follows it up at once and down only when it has
+fallen to a quarter (:func:`follow_scales`: a swinging magnitude changes the vector once), so
+``atol · s_g`` stays within twice ``atol · M_g / GROUP_UNIT``. scipy's loop rebuilds its solver
+where the scales change (from where it is, with the step it had), the compiled loop recomputes the
+vector at the start of each of its calls. ``atol`` scales the whole vector, so
+``Plant.tightened`` (``atol / 100``) tightens the floor with it and the own-error estimate keeps
+its meaning.
 
 Beyond double precision. The scaling removes the grinding that a fixed ``atol`` causes, not the
 one a motion's own conditioning causes: where the accelerations follow an ε-relative change of the
 state by 1e-7 of their size (the same fuzz scene 0.15 s later), no tolerance the scene asks for can
 be met, and a step's error estimate is round-off at any step size. Every :data:`PROBE_STEPS`
 steps the loops therefore ask :func:`roundoff_limited`: does a one-ulp change of the state move
-the last step's increment ``h · ẏ`` of some component by its whole tolerance? Then the error
-control is steering on round-off; the run stops ``failed`` with that reason (the component, the
+the last step's increment ``h · ẏ`` of some component by its whole tolerance? When
+:data:`PROBES_IN_A_ROW` probes in a row find so, the error control is steering on round-off, not
+for a moment; the run stops ``failed`` with that reason (the component, the
 size of the change, the tolerance), as a plant stops at a singular matrix. On a state whose
-accelerations are computed to round-off (any O(1) scene) that change is ~1e4 times smaller than
-the tolerance, so the probe never stops a run that the error control can judge.
+accelerations are computed to round-off (an O(1) scene: ``d ~ ε |ẏ|``, steps of ~1e-2 s) that
+change is 1e4 times smaller than the tolerance or more, so the probe does not stop a run that the
+error control can judge.
 """
 
 from __future__ import annotations
@@ -61,12 +65,16 @@ GROUP_UNIT = 100.0
 
 RESCALE_STEPS = 200
 """scipy's loop re-reads the groups' scales every this many steps (the compiled loop at the start of
-each of its calls, at most as many steps apart): a magnitude that grows by orders of magnitude in
-fewer steps than this is not integrable anyway, and a rebuild cuts the step it proposed back to the
-last one taken."""
+each of its calls, at most as many steps apart, so both loops follow the state alike): a rebuild
+costs an evaluation and cuts the step the solver proposed back to the last one taken, so it is
+not done at every step."""
 
 PROBE_STEPS = 2000
 """Steps between two :func:`roundoff_limited` probes (three right-hand sides each)."""
+
+PROBES_IN_A_ROW = 2
+"""A run stops round-off limited when this many probes in a row find it so (:class:`RoundoffWatch`):
+a moment of ill-conditioning that the steps pass through does not end a run."""
 
 QUADRATURE_ATOL = 1e300
 """``atol`` of the quadratures (work, impulses): large enough that they never take part in the
@@ -178,12 +186,32 @@ def roundoff_limited(
     )
 
 
+class RoundoffWatch:
+    """The probe as the loops ask it: :meth:`check` every :data:`PROBE_STEPS` steps answers the
+    reason to stop once :data:`PROBES_IN_A_ROW` probes in a row found the run round-off limited
+    ("" otherwise)."""
+
+    def __init__(self, f: Callable[[float, np.ndarray], np.ndarray], rtol: float, n_motion: int):
+        self.f, self.rtol, self.n_motion = f, float(rtol), int(n_motion)
+        self.in_a_row = 0
+
+    def check(self, t: float, y: np.ndarray, h: float, atol: np.ndarray) -> str:
+        """Probe at ``(t, y)`` after a step of ``h`` under ``atol``; the reason to stop, or ""."""
+        why = roundoff_limited(self.f, t, y, h, atol, self.rtol, self.n_motion)
+        self.in_a_row = self.in_a_row + 1 if why else 0
+        if self.in_a_row < PROBES_IN_A_ROW:
+            return ""
+        return f"{why} (found at {PROBES_IN_A_ROW} probes in a row, {PROBE_STEPS} steps apart)"
+
+
 __all__ = [
     "GROUP_UNIT",
+    "PROBES_IN_A_ROW",
     "PROBE_STEPS",
     "QUADRATURE_ATOL",
     "RESCALE_STEPS",
     "ErrorGroups",
+    "RoundoffWatch",
     "atol_vector",
     "follow_scales",
     "group_scales",

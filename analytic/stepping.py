@@ -12,7 +12,7 @@ magnitude (:mod:`analytic.error_scale`): when a group's scale changes (its magni
 of two above 2; read every :data:`~analytic.error_scale.RESCALE_STEPS` steps) the solver is
 rebuilt where it stands, with the size of its last step as its first;
 and every :data:`~analytic.error_scale.PROBE_STEPS` steps a run whose step size is set by round-off
-(:func:`~analytic.error_scale.roundoff_limited`) ends ``failed`` with that reason.
+(:class:`~analytic.error_scale.RoundoffWatch`) ends ``failed`` with that reason.
 
 Steps are taken one at a time (what ``solve_ivp`` does internally) and the samples between steps
 come from the method's dense output, so a run that fails or is interrupted part way keeps every
@@ -34,10 +34,10 @@ from analytic.error_scale import (
     QUADRATURE_ATOL,
     RESCALE_STEPS,
     ErrorGroups,
+    RoundoffWatch,
     atol_vector,
     follow_scales,
     group_scales,
-    roundoff_limited,
 )
 from analytic.trajectory import RunStatus
 
@@ -140,6 +140,7 @@ def step_and_sample(
     scales = None if groups is None else group_scales(y0, groups)
     atol_vec = atol_vector(atol, len(y0), n_motion, groups, scales)
     rescales = 0
+    watch = RoundoffWatch(f, rtol, n_motion)
     status, message = RunStatus.OK, ""
     ys = [y0]
     ts = [t_eval[0]]
@@ -171,9 +172,7 @@ def step_and_sample(
                     progress(float(solver.t))
             if groups is not None and solver.status == "running" and nsteps % RESCALE_STEPS == 0:
                 if nsteps % PROBE_STEPS == 0:
-                    why = roundoff_limited(
-                        f, solver.t, solver.y, solver.step_size, atol_vec, rtol, n_motion
-                    )
+                    why = watch.check(solver.t, solver.y, solver.step_size, atol_vec)
                     if why:
                         status, message = RunStatus.FAILED, why
                         break
