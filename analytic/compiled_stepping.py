@@ -488,7 +488,7 @@ def _compiled(f: Callable, t_eval: np.ndarray, y0: np.ndarray, fast: Any, kw: di
     scales = None if groups is None else group_scales(y0, groups)
     atols = atol_vector(float(kw["atol"]), ny, kw["n_motion"], groups, scales)
     rescales = 0
-    watch = RoundoffWatch(f, float(kw["rtol"]), kw["n_motion"])
+    watch = RoundoffWatch(f, float(kw["rtol"]), kw["n_motion"], t_eval[0], t_eval[-1])
     max_step = float(kw["max_step"])
     progress = kw["progress"]
     t_end = float(t_eval[-1])
@@ -537,7 +537,7 @@ def _compiled(f: Callable, t_eval: np.ndarray, y0: np.ndarray, fast: Any, kw: di
                 progress(t_now)
             if groups is not None and nsteps >= probe_at and t_now < t_end:
                 probe_at = nsteps + PROBE_STEPS
-                why = watch.check(t_now, y_now, first, atols)
+                why = watch.check(t_now, y_now, first, atols, nsteps)
                 if why:
                     status, message = RunStatus.FAILED, why
                     break

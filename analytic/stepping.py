@@ -140,7 +140,7 @@ def step_and_sample(
     scales = None if groups is None else group_scales(y0, groups)
     atol_vec = atol_vector(atol, len(y0), n_motion, groups, scales)
     rescales = 0
-    watch = RoundoffWatch(f, rtol, n_motion)
+    watch = RoundoffWatch(f, rtol, n_motion, t_eval[0], t_eval[-1])
     status, message = RunStatus.OK, ""
     ys = [y0]
     ts = [t_eval[0]]
@@ -172,7 +172,7 @@ def step_and_sample(
                     progress(float(solver.t))
             if groups is not None and solver.status == "running" and nsteps % RESCALE_STEPS == 0:
                 if nsteps % PROBE_STEPS == 0:
-                    why = watch.check(solver.t, solver.y, solver.step_size, atol_vec)
+                    why = watch.check(solver.t, solver.y, solver.step_size, atol_vec, nsteps)
                     if why:
                         status, message = RunStatus.FAILED, why
                         break
