@@ -17,6 +17,7 @@ from analytic.error_scale import (
     PROBE_STEPS,
     PROBES_IN_A_ROW,
     ErrorGroups,
+    RoundoffWatch,
     atol_vector,
     follow_scales,
     group_scales,
@@ -162,3 +163,30 @@ def test_a_runaway_scene_stops_round_off_limited_within_bounded_steps(stepper):
     a1 = model.acceleration(float(tr.t[-1]), q * (1 + signs), qd * (1 - signs))[0]
     assert np.max(np.abs(a1 - a0)) / np.max(np.abs(a0)) > 1e4 * eps
 
+
+
+def _sensitive(t, y):
+    """``ẏ = 1e6 y``: a one-ulp change of y moves ẏ by 1e6 ε |y|, past rtol 1e-12 in steps of 1e-2."""
+    return 1e6 * y
+
+
+@pytest.mark.parametrize(
+    ("advance", "stops"),
+    [(20.0, False), (2e-3, True)],
+    ids=["steady pace: finishes", "steps shrunk a thousandfold: stops"],
+)
+def test_a_round_off_limited_run_stops_only_while_it_grinds(advance, stops):
+    """Probes that find round-off at every call stop the run only when its steps have shrunk
+    against its average (or the horizon is out of reach at their pace), never at the first."""
+    y = np.array([1.0, 0.0])
+    atol = atol_vector(1e-13, 2, 1)
+    watch = RoundoffWatch(_sensitive, 1e-12, 1, 0.0, 1000.0)
+    t, n, answers = 0.0, 0, []
+    for k in range(4):
+        pace = 0.01 if k < 2 else advance / PROBE_STEPS  # s per step over the next probe's steps
+        t, n = t + pace * PROBE_STEPS, n + PROBE_STEPS
+        answers.append(watch.check(t, y, 0.01, atol, n))
+    assert answers[0] == ""  # never at the first probe
+    assert (answers[-1] != "") is stops
+    if stops:
+        assert "round-off limited" in answers[-1] and "probes in a row" in answers[-1]
