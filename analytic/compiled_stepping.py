@@ -44,6 +44,13 @@ steps or 1 s of simulated time, whichever comes first. Against one unbroken run 
 more evaluation (the derivative at its start) and, when it ends on a whole second, a step cut short
 to land there.
 
+Tolerances: with the plant's ``groups`` the ``atol`` vector follows the coupled groups' magnitudes
+(:mod:`analytic.error_scale`); CyRK takes a vector ``atol`` per call, fixed within it, so it is
+recomputed from the state each call starts at (a call is at most :data:`CHUNK_STEPS` steps): on a
+state that stays O(1) it is the fixed vector of every call, and the run is unchanged. Every
+:data:`~analytic.error_scale.PROBE_STEPS` steps (checked between calls) the round-off probe may end
+the run ``failed``, as in scipy's loop.
+
 Failures: the right-hand side records a non-finite ``ẏ`` (:data:`analytic.fast_rhs.STATUS_NONFINITE`)
 or a kernel that declines (any other nonzero status: the numpy model must answer) in an array shared
 with Python, and from then on returns NaN, so the C++ loop stops within that call (its step size
@@ -81,7 +88,15 @@ from typing import Any
 import numpy as np
 
 from analytic.effects import SolverMethod, Stepper
-from analytic.stepping import QUADRATURE_ATOL, Stepped, step_and_sample
+from analytic.error_scale import (
+    PROBE_STEPS,
+    ErrorGroups,
+    RoundoffWatch,
+    atol_vector,
+    follow_scales,
+    group_scales,
+)
+from analytic.stepping import Stepped, step_and_sample
 from analytic.trajectory import RunStatus
 
 CHUNK_STEPS = 200
@@ -420,14 +435,16 @@ def integrate(
     linalg_failure: str = "linear algebra failed",
     stepper: Stepper | str = Stepper.AUTO,
     fast: Any = None,
+    groups: ErrorGroups | None = None,
 ) -> Stepped:
     """Integrate and sample as :func:`analytic.stepping.step_and_sample`, on the loop
     :func:`choose` picks.
 
     Args:
         f: the Python right-hand side (scipy's loop, and the compiled loop's hand-over).
-        t_eval, y0, method, rtol, atol, n_motion, max_step, progress, linalg_failure: as for
-            :func:`~analytic.stepping.step_and_sample`.
+        t_eval, y0, method, rtol, atol, n_motion, max_step, progress, linalg_failure, groups: as
+            for :func:`~analytic.stepping.step_and_sample` (here the ``atol`` vector follows the
+            groups' scales at the start of each call).
         stepper: ``auto``, ``compiled`` or ``scipy``.
         fast: the :class:`analytic.fast.FastModel` whose packed constants ``f`` evaluates with
             :func:`analytic.fast_rhs.rhs_into` (None: the numpy model answers; scipy's loop). With
@@ -444,6 +461,7 @@ def integrate(
         max_step=max_step,
         progress=progress,
         linalg_failure=linalg_failure,
+        groups=groups,
     )
     if choose(stepper, method, fast) is Stepper.SCIPY:
         return step_and_sample(f, t_eval, y0, **kw)
@@ -466,9 +484,11 @@ def _compiled(f: Callable, t_eval: np.ndarray, y0: np.ndarray, fast: Any, kw: di
     kernel = _Kernel(rt.layout, fast, ny)
     method_int = rt.methods[SolverMethod(kw["method"])]
     rtol = np.array([float(kw["rtol"])])
-    atols = np.concatenate(
-        [np.full(kw["n_motion"], float(kw["atol"])), np.full(ny - kw["n_motion"], QUADRATURE_ATOL)]
-    )
+    groups = kw["groups"]
+    scales = None if groups is None else group_scales(y0, groups)
+    atols = atol_vector(float(kw["atol"]), ny, kw["n_motion"], groups, scales)
+    rescales = 0
+    watch = RoundoffWatch(f, float(kw["rtol"]), kw["n_motion"], t_eval[0], t_eval[-1])
     max_step = float(kw["max_step"])
     progress = kw["progress"]
     t_end = float(t_eval[-1])
@@ -477,10 +497,15 @@ def _compiled(f: Callable, t_eval: np.ndarray, y0: np.ndarray, fast: Any, kw: di
     ys: list[np.ndarray] = [y0[None, :]]
     status, message = RunStatus.OK, ""
     i_next, t_now, y_now, first = 1, float(t_eval[0]), y0, 0.0
-    nsteps, norm_err, handed_over = 0, 0.0, None
+    nsteps, norm_err, handed_over, probe_at = 0, 0.0, None, PROBE_STEPS
     wall0 = time.perf_counter()
     try:
         while t_now < t_end:
+            if groups is not None and t_now > t_eval[0]:
+                now = follow_scales(scales, y_now, groups)
+                if now is not scales:
+                    scales, rescales = now, rescales + 1
+                    atols = atol_vector(float(kw["atol"]), ny, kw["n_motion"], groups, scales)
             t_stop = min(t_end, (math.floor(t_now / period) + 1) * period)
             c = _call(
                 rt, kernel, method_int, t_now, y_now, t_stop, t_eval[i_next:], rtol, atols,
@@ -497,6 +522,7 @@ def _compiled(f: Callable, t_eval: np.ndarray, y0: np.ndarray, fast: Any, kw: di
                 ys.append(run.y[1:])
                 status, message = run.status, run.message
                 nsteps += run.nsteps
+                rescales += run.rescales
                 norm_err = max(norm_err, run.max_quat_norm_error_at_steps)
                 break
             ts.append(t_eval[i_next : i_next + len(c.samples)])
@@ -509,6 +535,12 @@ def _compiled(f: Callable, t_eval: np.ndarray, y0: np.ndarray, fast: Any, kw: di
             norm_err = max(norm_err, c.quat_err)
             if progress is not None:
                 progress(t_now)
+            if groups is not None and nsteps >= probe_at and t_now < t_end:
+                probe_at = nsteps + PROBE_STEPS
+                why = watch.check(t_now, y_now, first, atols, nsteps)
+                if why:
+                    status, message = RunStatus.FAILED, why
+                    break
     except KeyboardInterrupt:
         status = RunStatus.INTERRUPTED
     wall = time.perf_counter() - wall0
@@ -527,6 +559,7 @@ def _compiled(f: Callable, t_eval: np.ndarray, y0: np.ndarray, fast: Any, kw: di
         stepper=Stepper.COMPILED,
         nfev_compiled=kernel.nfev,
         scipy_from_t=handed_over,
+        rescales=rescales,
     )
 
 

@@ -209,7 +209,9 @@ class AnalyticSettings:
 
     Attributes:
         method: the scipy method.
-        rtol, atol: tolerances on the motion (dimensionless; atol in the state's SI units).
+        rtol, atol: tolerances on the motion (dimensionless; atol in the state's SI units, raised
+            for a group of coupled components whose magnitude exceeds a few hundred by the
+            loop's rule, :mod:`analytic.error_scale`; the setting itself is kept as given).
         backend: the right-hand side, compiled or the numpy reference (:class:`Backend`).
         stepper: the loop that steps the method: ``auto`` (CyRK's compiled loop for DOP853, RK45
             and RK23 on the compiled right-hand side, else scipy's), ``compiled`` (an error where

@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from analytic.effects import Backend, Effect, SolverMethod, Stepper
+from analytic.error_scale import ErrorGroups
 from analytic.trajectory import Engine, RunStatus, Trajectory
 
 if TYPE_CHECKING:  # imported where they are used: ``import analytic`` stays cheap
@@ -112,6 +113,18 @@ def _positive(x: float, name: str) -> float:
     return float(x)
 
 
+def error_groups(nq: int) -> ErrorGroups:
+    """The coupled groups of the state ``[R, u, p, Ṙ, u̇, ṗ, quadratures]`` (``n = nq - 7``):
+    positions ``{R, p}``, ``u``, velocities ``{Ṙ, ṗ}``, ``u̇`` (:mod:`analytic.error_scale`)."""
+    return ErrorGroups.of(
+        2 * nq,
+        np.r_[0:3, 7:nq],
+        np.arange(3, 7),
+        np.r_[nq : nq + 3, nq + 7 : 2 * nq],
+        np.arange(nq + 3, nq + 7),
+    )
+
+
 def simulate(
     scene: Scene,
     *,
@@ -122,6 +135,7 @@ def simulate(
     progress: Callable[[float], None] | None = None,
     backend: Backend | str = Backend.AUTO,
     stepper: Stepper | str = Stepper.AUTO,
+    scale_atol: bool = True,
 ) -> Trajectory:
     """Integrate ``scene`` with the analytic model; returns the samples at the scene's output rate.
 
@@ -136,6 +150,9 @@ def simulate(
     side, else scipy's), ``compiled`` or ``scipy`` (:mod:`analytic.compiled_stepping`).
 
     Samples: ``0, 1/rate, 2/rate, ...`` and ``t_end`` exactly (:meth:`analytic.scene.OutputSettings.times`).
+    ``scale_atol``: the motion's ``atol`` follows the magnitude of each group of coupled
+    components (:mod:`analytic.error_scale`, :func:`error_groups`); False keeps it fixed.
+
     A bad ``t_end``, ``method``, ``rtol``, ``atol``, ``backend`` or ``stepper`` raises ``ValueError`` naming it,
     before any work.
     """
@@ -167,6 +184,7 @@ def simulate(
         linalg_failure="mass matrix not positive definite",
         stepper=stepper,
         fast=getattr(accel, "__self__", None),
+        groups=error_groups(nq) if scale_atol else None,
     )
     return _assemble(
         model,

@@ -6,7 +6,13 @@ The state is ``y = [motion (n_motion), quadratures]``: the coordinates and veloc
 (``y[3:7]`` its attitude quaternion, in either order of components) followed by integrals that ride
 along (the work and impulses of :mod:`analytic.assemble`). The quadratures are left out of the error
 control (their ``atol`` is huge) so that round-off in the power of a zero control cannot shrink the
-steps; they are integrated with the steps the motion needs, to the same order.
+steps; they are integrated with the steps the motion needs, to the same order. With the plant's
+``groups`` (:class:`analytic.error_scale.ErrorGroups`) the motion's ``atol`` follows each group's
+magnitude (:mod:`analytic.error_scale`): when a group's scale changes (its magnitude crosses a power
+of two above 2; read every :data:`~analytic.error_scale.RESCALE_STEPS` steps) the solver is
+rebuilt where it stands, with the size of its last step as its first;
+and every :data:`~analytic.error_scale.PROBE_STEPS` steps a run whose step size is set by round-off
+(:class:`~analytic.error_scale.RoundoffWatch`) ends ``failed`` with that reason.
 
 Steps are taken one at a time (what ``solve_ivp`` does internally) and the samples between steps
 come from the method's dense output, so a run that fails or is interrupted part way keeps every
@@ -23,6 +29,16 @@ from dataclasses import dataclass
 import numpy as np
 
 from analytic.effects import SolverMethod, Stepper
+from analytic.error_scale import (
+    PROBE_STEPS,
+    QUADRATURE_ATOL,
+    RESCALE_STEPS,
+    ErrorGroups,
+    RoundoffWatch,
+    atol_vector,
+    follow_scales,
+    group_scales,
+)
 from analytic.trajectory import RunStatus
 
 SOLVERS: dict[SolverMethod, str] = {
@@ -42,10 +58,6 @@ def solver_class(method: SolverMethod) -> type:
     from scipy import integrate
 
     return getattr(integrate, SOLVERS[method])
-
-
-QUADRATURE_ATOL = 1e300
-"""``atol`` of the quadratures: large enough that they never take part in the error control."""
 
 
 class NonFinite(ArithmeticError):
@@ -70,6 +82,8 @@ class Stepped:
             evaluations through ``f`` are counted by the caller's ``f``.
         scipy_from_t: when a compiled run handed over to this loop part way, the time it did, s
             (None otherwise).
+        rescales: times the motion's ``atol`` vector changed with the groups' scales (scipy's
+            loop: solver rebuilds; the compiled loop: calls that started with a new vector).
     """
 
     t: np.ndarray
@@ -82,6 +96,7 @@ class Stepped:
     stepper: Stepper = Stepper.SCIPY
     nfev_compiled: int = 0
     scipy_from_t: float | None = None
+    rescales: int = 0
 
     def stepper_info(self) -> dict[str, object]:
         """What a plant's ``info`` records about the loop: ``stepper``, and ``scipy_from_t_s`` when
@@ -89,6 +104,8 @@ class Stepped:
         info: dict[str, object] = {"stepper": self.stepper.value}
         if self.scipy_from_t is not None:
             info["scipy_from_t_s"] = self.scipy_from_t
+        if self.rescales:
+            info["atol_rescales"] = self.rescales
         return info
 
 
@@ -104,6 +121,7 @@ def step_and_sample(
     max_step: float = np.inf,
     progress: Callable[[float], None] | None = None,
     linalg_failure: str = "linear algebra failed",
+    groups: ErrorGroups | None = None,
 ) -> Stepped:
     """Integrate ``y' = f(t, y)`` from ``y0`` at ``t_eval[0]`` and sample it at ``t_eval``.
 
@@ -115,10 +133,14 @@ def step_and_sample(
         method, rtol, max_step (s): passed to the solver; atol: of the motion components.
         progress: called with the time reached, s, after each step that passes a sample.
         linalg_failure: what the message says when ``f`` raises ``LinAlgError``.
+        groups: the coupled groups of the motion components whose ``atol`` follows their
+            magnitude (:mod:`analytic.error_scale`), with the round-off probe; None: ``atol`` on
+            every one, fixed, and no probe.
     """
-    atol_vec = np.concatenate(
-        [np.full(n_motion, atol), np.full(len(y0) - n_motion, QUADRATURE_ATOL)]
-    )
+    scales = None if groups is None else group_scales(y0, groups)
+    atol_vec = atol_vector(atol, len(y0), n_motion, groups, scales)
+    rescales = 0
+    watch = RoundoffWatch(f, rtol, n_motion, t_eval[0], t_eval[-1])
     status, message = RunStatus.OK, ""
     ys = [y0]
     ts = [t_eval[0]]
@@ -148,6 +170,20 @@ def step_and_sample(
                 i_next = j
                 if progress is not None:
                     progress(float(solver.t))
+            if groups is not None and solver.status == "running" and nsteps % RESCALE_STEPS == 0:
+                if nsteps % PROBE_STEPS == 0:
+                    why = watch.check(solver.t, solver.y, solver.step_size, atol_vec, nsteps)
+                    if why:
+                        status, message = RunStatus.FAILED, why
+                        break
+                now = follow_scales(scales, solver.y, groups)
+                if now is not scales:
+                    scales, rescales = now, rescales + 1
+                    atol_vec = atol_vector(atol, len(y0), n_motion, groups, scales)
+                    solver = solver_class(method)(
+                        f, solver.t, solver.y.copy(), t_eval[-1], rtol=rtol, atol=atol_vec,
+                        max_step=max_step, first_step=min(solver.step_size, t_eval[-1] - solver.t),
+                    )  # fmt: skip
     except NonFinite as exc:
         status, message = RunStatus.FAILED, str(exc)
     except KeyboardInterrupt:
@@ -163,6 +199,7 @@ def step_and_sample(
         nsteps=nsteps,
         max_quat_norm_error_at_steps=norm_err_steps,
         wall_time_s=wall,
+        rescales=rescales,
     )
 
 

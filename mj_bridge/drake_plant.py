@@ -68,6 +68,7 @@ from collections.abc import Callable
 import numpy as np
 
 from analytic.assemble import N_AUX, assemble
+from analytic.error_scale import ErrorGroups
 from analytic.fast import FastModel
 from analytic.kernel import compile_lock
 from analytic.kernel.jit import jit
@@ -195,6 +196,19 @@ finish = jit(_finish)
 # ----------------------------------------------------------------------------------------------
 
 
+def error_groups(n: int) -> ErrorGroups:
+    """The coupled groups of ``y = [R, u, p | ω_W, Ṙ, ṗ | quadratures]`` (:mod:`analytic.error_scale`):
+    positions ``{R, p}``, the quaternion, ω_W, velocities ``{Ṙ, ṗ}``."""
+    nq = n + 7
+    return ErrorGroups.of(
+        2 * n + 13,
+        np.r_[0:3, 7:nq],
+        np.arange(3, 7),
+        np.arange(nq, nq + 3),
+        np.r_[nq + 3 : nq + 6, nq + 6 : nq + 6 + n],
+    )
+
+
 class DrakeDynamics:
     """One scene on Drake, with the analytic controller in every derivative evaluation.
 
@@ -208,6 +222,7 @@ class DrakeDynamics:
         analytic: the numpy :class:`~analytic.model.TumblingModel` (constants, numpy controller).
         fast: the :class:`~analytic.fast.FastModel` (packed constants, compiled controller).
         nfev: right-hand sides evaluated; fallbacks: evaluations whose control the numpy model gave.
+        error_groups: the coupled groups whose ``atol`` follows their magnitude (:func:`error_groups`).
     """
 
     def __init__(
@@ -222,6 +237,7 @@ class DrakeDynamics:
         self.n = n = scene.n
         self.nq, self.nv = n + 7, n + 6
         self.ny = 2 * n + 13 + N_AUX
+        self.error_groups = error_groups(n)
         self.k = self.analytic.k
         self.controlled = self.k > 0
         self.fp, self.ip = self.fast.fp, self.fast.ip

@@ -56,6 +56,7 @@ from analytic import aux_rates as _aux
 from analytic.assemble import N_AUX, assemble
 from analytic.aux_rates import rates
 from analytic.effects import Effect
+from analytic.error_scale import ErrorGroups
 from analytic.fast import FastModel
 from analytic.kernel import compile_lock
 from analytic.kernel.entry import Solver, evaluate_as, solver_of
@@ -329,6 +330,19 @@ finish = jit(_finish)
 # ----------------------------------------------------------------------------------------------
 
 
+def error_groups(n: int) -> ErrorGroups:
+    """The coupled groups of ``y = [x, q_xyzw, p | Ṙ, ω, ṗ | quadratures]`` (:mod:`analytic.error_scale`):
+    positions ``{x, p}``, the quaternion, velocities ``{Ṙ, ṗ}``, ω."""
+    nq = n + 7
+    return ErrorGroups.of(
+        2 * n + 13,
+        np.r_[0:3, 7:nq],
+        np.arange(3, 7),
+        np.r_[nq : nq + 3, nq + 6 : nq + 6 + n],
+        np.arange(nq + 3, nq + 6),
+    )
+
+
 class PinocchioDynamics:
     """One scene on Pinocchio, with the analytic controller in every right-hand side.
 
@@ -343,6 +357,7 @@ class PinocchioDynamics:
         analytic: the numpy :class:`~analytic.model.TumblingModel` (constants, numpy controller).
         fast: the :class:`~analytic.fast.FastModel` (packed constants, compiled controller).
         nfev: right-hand sides evaluated; fallbacks: stages whose control the numpy model gave.
+        error_groups: the coupled groups whose ``atol`` follows their magnitude (:func:`error_groups`).
     """
 
     def __init__(
@@ -359,6 +374,7 @@ class PinocchioDynamics:
         self.n = n = scene.n
         self.nq, self.nv = n + 7, n + 6
         self.ny = 2 * n + 13 + N_AUX
+        self.error_groups = error_groups(n)
         self.k = self.analytic.k
         self.controlled = self.k > 0
         self.fp, self.ip = self.fast.fp, self.fast.ip

@@ -10,6 +10,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from analytic.error_scale import ErrorGroups
 from analytic.scene import OutputSettings, Scene
 from analytic.stepping import Stepped, step_and_sample
 from mj_bridge.scipy_loop_settings import ScipyLoopSettings
@@ -21,6 +22,7 @@ class LoopDynamics(Protocol):
     nq: int
     nv: int
     nfev: int
+    error_groups: ErrorGroups | None
     fallbacks: int
     controller: Any
 
@@ -45,7 +47,8 @@ def integrate(
     """Step ``plant`` over the scene's output grid (to ``t_end`` when given) at the settings'
     tolerances (the scene's where None); returns the run and its ``info`` (method, tolerances,
     controller, evaluations, steps, controller fallbacks, wall time, largest quaternion-norm
-    error at the steps), to which the plant adds its engine's version."""
+    error at the steps), to which the plant adds its engine's version. The motion's ``atol``
+    follows the magnitudes of the plant's ``error_groups`` (:mod:`analytic.error_scale`)."""
     rtol, atol, max_step = settings.resolved(scene)
     out = scene.output if t_end is None else OutputSettings(t_end=t_end, rate=scene.output.rate)
     run = step_and_sample(
@@ -58,6 +61,7 @@ def integrate(
         n_motion=plant.nq + plant.nv,
         max_step=max_step,
         progress=progress,
+        groups=plant.error_groups,
     )
     info = {
         "method": settings.method.value,
@@ -69,6 +73,7 @@ def integrate(
         "controller_fallbacks": plant.fallbacks,
         "wall_time_s": run.wall_time_s,
         "max_quat_norm_error_at_steps": run.max_quat_norm_error_at_steps,
+        **({"atol_rescales": run.rescales} if run.rescales else {}),
     }
     return run, info
 
