@@ -81,7 +81,12 @@ horizon (:class:`RoundoffWatch`)."""
 
 SLOWDOWN = 10.0
 """A round-off limited run is stopped when its last steps are this many times shorter than its
-average step so far (:class:`RoundoffWatch`)."""
+average step so far (:class:`RoundoffWatch`), unless its horizon is at most :data:`PROBE_STEPS`
+steps away at that pace: finishing costs less than the run has already spent between two probes,
+so a run that slows down just before its horizon finishes."""
+
+ROUNDOFF_LIMITED = "round-off limited"
+"""How the message of a run stopped by :class:`RoundoffWatch` begins (:func:`is_roundoff_stop`)."""
 
 PROBES_IN_A_ROW = 2
 """A run stops round-off limited when this many probes in a row find it so (:class:`RoundoffWatch`):
@@ -190,11 +195,18 @@ def roundoff_limited(
         return ""
     scale = float(np.max(np.abs(base))) or 1.0
     return (
-        f"round-off limited at t = {t:.6g} s: a one-ulp change of the state moves ẏ[{i}] by "
+        f"{ROUNDOFF_LIMITED} at t = {t:.6g} s: a one-ulp change of the state moves ẏ[{i}] by "
         f"{d[i]:.3g} (~{d[i] / scale:.1g} of the largest rate {scale:.3g}), so a step of "
         f"{abs(h):.3g} s moves component {i} by {ratio[i]:.2g} × its tolerance "
         f"{tol[i]:.3g}: the motion is beyond what double precision resolves at rtol {rtol:g}"
     )
+
+
+def is_roundoff_stop(message: str) -> bool:
+    """Whether a run's ``message`` says :class:`RoundoffWatch` stopped it: the motion beyond what
+    double precision resolves at the run's tolerance (a statement about the scene and the
+    tolerance, never about a plant's model)."""
+    return str(message).startswith(ROUNDOFF_LIMITED)
 
 
 class RoundoffWatch:
@@ -229,7 +241,7 @@ class RoundoffWatch:
         pace = (t - last[0]) / (nsteps - last[1])  # s per step since the probe before
         average = (t - self.t0) / nsteps  # s per step over the run so far
         projected = (self.t_end - t) / pace if pace > 0 else math.inf
-        if projected <= PROJECTED_STEPS and pace * SLOWDOWN >= average:
+        if projected <= PROBE_STEPS or (projected <= PROJECTED_STEPS and pace * SLOWDOWN >= average):
             return ""
         return (
             f"{why} (at {PROBES_IN_A_ROW} probes in a row, {PROBE_STEPS} steps apart; the last "
@@ -245,11 +257,13 @@ __all__ = [
     "PROJECTED_STEPS",
     "QUADRATURE_ATOL",
     "RESCALE_STEPS",
+    "ROUNDOFF_LIMITED",
     "SLOWDOWN",
     "ErrorGroups",
     "RoundoffWatch",
     "atol_vector",
     "follow_scales",
     "group_scales",
+    "is_roundoff_stop",
     "roundoff_limited",
 ]

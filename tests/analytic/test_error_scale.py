@@ -190,3 +190,25 @@ def test_a_round_off_limited_run_stops_only_while_it_grinds(advance, stops):
     assert (answers[-1] != "") is stops
     if stops:
         assert "round-off limited" in answers[-1] and "probes in a row" in answers[-1]
+
+
+def test_a_run_that_slows_down_just_before_its_horizon_finishes():
+    """Steps shrunk a thousandfold, round-off limited at every probe, but the horizon 1000 steps
+    away at that pace (fewer than the steps between two probes): the run is not stopped, since
+    finishing costs less than it spent since the last probe; the same run with its horizon far
+    away stops."""
+    y = np.array([1.0, 0.0])
+    atol = atol_vector(1e-13, 2, 1)
+
+    def answers(t_end: float) -> list[str]:
+        watch = RoundoffWatch(_sensitive, 1e-12, 1, 0.0, t_end)
+        t, n, out = 0.0, 0, []
+        for k in range(3):
+            pace = 0.01 if k < 2 else 1e-6  # s per step
+            t, n = t + pace * PROBE_STEPS, n + PROBE_STEPS
+            out.append(watch.check(t, y, 0.01, atol, n))
+        return out
+
+    near = 2 * 0.01 * PROBE_STEPS + 1e-6 * PROBE_STEPS + 1000 * 1e-6
+    assert answers(near) == ["", "", ""]
+    assert answers(1000.0)[-1].startswith("round-off limited")

@@ -197,8 +197,10 @@ def campaign_markdown(res: CampaignResult, doc: dict[str, Any]) -> str:
          "disagreement with that plant's run up to its stop)",
          lambda e: not e["known"] and cause(e) == "range"),
         ("Ill-conditioned motions", "the motion amplifies a round-off-sized change of its "
-         "initial state into a tenth of the disagreement or more: no two engines can agree "
-         "closer", lambda e: not e["known"] and cause(e) == "conditioning"),
+         "initial state into a tenth of the disagreement or more, or a plant stops round-off "
+         "limited at its default and tightened settings (a one-ulp change of its state moves a "
+         "step by its whole tolerance): beyond what double precision can judge, no two engines "
+         "can agree closer", lambda e: not e["known"] and cause(e) == "conditioning"),
         ("Known findings", "", lambda e: bool(e["known"])),
     )
     for title, what, keep in sections:

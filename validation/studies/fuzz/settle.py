@@ -25,6 +25,10 @@ The cause (:class:`Cause`) of a plant that raised or stopped:
   limit), and a run that finished reaches a coordinate, velocity or acceleration beyond the
   stopped plant's ``value_bound`` (MuJoCo's ``mjMAXVAL`` = 1e10: a mass flung off a spinning rod
   without a spring runs away exponentially): the motion left that engine's range, by its design;
+* ``conditioning``: it stops round-off limited (:func:`analytic.error_scale.is_roundoff_stop`: a
+  one-ulp change of its state moves a step by its whole tolerance, and its steps shrink to
+  nothing) at its default and its tightened settings: the motion is beyond what double
+  precision resolves at that tolerance, which says nothing of the plant's model;
 * ``unsettled``: it cannot tighten, or its tightened run passed its time limit; or the other
   plants that ran fail a pair check between each other (a majority that disagrees with itself
   beyond a threshold confirms nothing, not even that the motion goes on);
@@ -36,7 +40,7 @@ Of an outlier or a failed check, the first rule that applies, in this order:
    run its engine's guard ended (a reset, a stop, a non-finite state:
    :func:`validation.studies.fuzz.judge.cut_short`) was compared only up to its stop, so the
    comparison is no evidence against that plant's model: the disagreement takes its stop's cause
-   when that is ``scene`` or ``range``, is judged at tightened settings (below) when the plant
+   when that is ``scene``, ``range`` or ``conditioning``, is judged at tightened settings (below) when the plant
    finishes there (``settings``; its own error at default settings is then unknown), and is
    ``unsettled`` otherwise (the stop, a finding of its own, carries its cause). A run cut short
    at tightened settings: ``unsettled``.
@@ -80,6 +84,7 @@ from dataclasses import dataclass, field
 from enum import StrEnum
 from typing import Any
 
+from analytic.error_scale import is_roundoff_stop
 from validation.compare.checks import CheckState, Subject
 from validation.studies.fuzz.judge import RELATIVE_DIFFERENCES, Disagreement, Kind, Outcome
 from validation.studies.fuzz.settle_runs import (
@@ -302,7 +307,7 @@ def settle(
         st = settle(stop, outcome, task, plants)
         head = (f"{d.kind.value} on {q} compares {p}'s run cut short by its engine"
                 f"{_end_text(p, outcome)}")
-        if st.cause in (Cause.SCENE, Cause.RANGE):
+        if st.cause in (Cause.SCENE, Cause.RANGE, Cause.CONDITIONING):
             return make(st.cause, f"{head}; its stop is settled as {st.cause.value}: {st.text}")
         if st.cause is not Cause.SETTINGS:
             return make(
@@ -473,6 +478,15 @@ def _settle_failure(
                 f"{d.plant} stops at its tightened settings too ({tight}); no other plant "
                 "fails",
             )
+    default_why = outcome.messages.get(d.plant, "")
+    tight_why = tightened.messages.get(d.plant, "")
+    if is_roundoff_stop(default_why) and is_roundoff_stop(tight_why):
+        return make(
+            Cause.CONDITIONING,
+            f"beyond double precision: {d.plant} stops round-off limited at its default and at its "
+            f"tightened settings ({tight}){_end_text(d.plant, outcome)}; a tighter tolerance only "
+            "asks for more digits than the state carries, and no engine's run is judgeable there",
+        )
     others_ran = [p for p in outcome.ran if p != d.plant]
     failed = _failed_pairs(others_ran, outcome) if len(others_ran) >= 2 else []
     if failed:

@@ -274,3 +274,33 @@ def test_a_stop_against_plants_that_disagree_with_each_other_is_unsettled():
     out = Outcome(ran=PLANTS, checks=passing, disagreements=(STOP,))
     task["tightened"] = out.to_dict()
     assert settle(STOP, out, task, PLANTS).cause is Cause.MODEL
+
+
+ROUNDOFF = (
+    "round-off limited at t = 1.2 s: a one-ulp change of the state moves ẏ[14] by 1.3e-08, so a "
+    "step of 3.3e-05 s moves component 14 by 1.6 × its tolerance 2.7e-13"
+)
+
+
+def test_a_plant_stopped_round_off_limited_at_both_settings_is_conditioning_not_model():
+    """The analytic plant stops round-off limited (its own probe: a one-ulp change of its state
+    moves a step by its whole tolerance) at its default and its tightened settings, while the
+    others finish and agree: beyond double precision, ``conditioning``, never ``model``; an
+    outlier on its run up to the stop takes that cause. A stop for another reason keeps the
+    rules it had (``model`` here), and a round-off stop at the default settings alone is the
+    settings."""
+    stop = Disagreement(Kind.STOPPED, "failed", "analytic")
+    tight = Outcome(ran=PLANTS, disagreements=(stop,), messages={"analytic": ROUNDOFF})
+    out = Outcome(ran=PLANTS, disagreements=(stop,), messages={"analytic": ROUNDOFF},
+                  reached={"analytic": 1.2})
+    st = settle(stop, out, _task({}, tight), PLANTS)
+    assert st.cause is Cause.CONDITIONING, st.text
+    assert "round-off limited" in st.text and "analytic" in st.text
+    outlier = Disagreement(Kind.OUTLIER, "rod_positions", "analytic")
+    both = Outcome(ran=PLANTS, disagreements=(outlier, stop), messages={"analytic": ROUNDOFF},
+                   verdicts=(_verdict(outlier, 1.0),))
+    assert settle(outlier, both, _task({}, tight), PLANTS).cause is Cause.CONDITIONING
+    other = Outcome(ran=PLANTS, disagreements=(stop,), messages={"analytic": "LSODA failed"})
+    assert settle(stop, other, _task({}, other), PLANTS).cause is Cause.MODEL
+    finished = Outcome(ran=PLANTS)
+    assert settle(stop, out, _task({}, finished), PLANTS).cause is Cause.SETTINGS
