@@ -588,6 +588,13 @@ def main(argv: list[str] | None = None) -> int:
         help="also the two campaign goals (wall against the plants' compute on a process pool of "
         "two; two Dask workers against one): about 8 minutes",
     )
+    parser.add_argument(
+        "--runaway",
+        action="store_true",
+        help="also the runaway campaign's goals (seed 7, 40 violent scenes over 2 s: no model "
+        "finding, no run over its time limit, its wall, every counterexample reproduced by its "
+        "command; validation.studies.fuzz.runaway_goal): about 4 minutes",
+    )
     args = parser.parse_args(argv)
     if args.rounds < 1:
         parser.error(f"rounds: must be a whole number ≥ 1 (got {args.rounds})")
@@ -613,6 +620,11 @@ def main(argv: list[str] | None = None) -> int:
                 )
             else:
                 print(g.line())
+    if args.runaway:
+        from validation.studies.fuzz.runaway_goal import runaway_campaign
+
+        for line in runaway_campaign().lines():
+            print(line)
     return 0
 
 
