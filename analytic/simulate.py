@@ -228,20 +228,25 @@ def _assemble(
     """The record of the samples ``Y`` (N, 2 nq + 7): q̈ and the controller's output evaluated at
     each sample (NaN and none where the model cannot be evaluated), then :func:`assemble`.
 
-    An interrupted run's record is made with ``progress`` called again at the time reached every
-    :data:`ASSEMBLY_REPORT_SAMPLES` samples: a caller whose ``progress`` raises once it has been
-    interrupted (one that discards the run) stops there instead of waiting for a long record (some
-    100 µs a sample)."""
+    An interrupted run's record is made with ``progress`` called again at the time reached after
+    every :data:`ASSEMBLY_REPORT_SAMPLES` samples: when it raises ``KeyboardInterrupt`` (a caller
+    that discards an interrupted run, :func:`validation.runs.interrupts.checkpoint`), the record
+    ends at the samples made so far (still ``interrupted``, never fewer than
+    :data:`ASSEMBLY_REPORT_SAMPLES`) instead of making every sample reached, some 100 µs each."""
     from analytic.assemble import assemble
 
     nq = model.nq
+    report = progress if status is RunStatus.INTERRUPTED else None
     q, qd = Y[:, :nq], Y[:, nq : 2 * nq]
     qdd = np.zeros((len(t), nq))
     controls = []
-    report = progress if status is RunStatus.INTERRUPTED and len(t) else None
     for i in range(len(t)):
-        if report is not None and i % ASSEMBLY_REPORT_SAMPLES == 0:
-            report(float(t[-1]))
+        if report is not None and i and i % ASSEMBLY_REPORT_SAMPLES == 0:
+            try:
+                report(float(t[-1]))
+            except KeyboardInterrupt:  # the caller discards the run: its record ends here
+                t, Y, q, qd, qdd = t[:i], Y[:i], q[:i], qd[:i], qdd[:i]
+                break
         try:
             qdd[i], c = accel(t[i], q[i], qd[i])
         except (np.linalg.LinAlgError, ValueError):
