@@ -22,7 +22,9 @@ temporary directory unless ``out`` is given.
 
 from __future__ import annotations
 
+import functools
 import json
+import os
 import shlex
 import subprocess
 import sys
@@ -31,6 +33,8 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+
+from validation.runs.lifetime import die_with_parent
 
 RUNAWAY_SEED = 7
 """The campaign's seed: its 40 scenes hold two runaways that ground the adaptive plants to their
@@ -146,7 +150,7 @@ def reproduce(command: str, key: str, out: Path) -> Reproduction:
         subprocess.run(
             [sys.executable, "-m", "validation", *args[1:], "--out", str(out)],
             capture_output=True, text=True, timeout=REPRODUCE_TIMEOUT_S, stdin=subprocess.DEVNULL,
-            check=False,
+            check=False, preexec_fn=functools.partial(die_with_parent, os.getpid()),
         )  # fmt: skip
     except subprocess.TimeoutExpired:
         return Reproduction(key, False, f"not done in {REPRODUCE_TIMEOUT_S:g} s",
