@@ -22,6 +22,7 @@ from pathlib import Path
 
 import pytest
 
+from tests.support.trees import tree as _tree
 from validation.cli import EXIT_USAGE, main
 from validation.runs.atomic import OutputError
 from validation.studies.fuzz import campaign as campaign_mod
@@ -52,21 +53,6 @@ def campaign(judged, tmp_path) -> Path:
     """A copy of :func:`judged` of this test's own."""
     out = tmp_path / "campaign"
     shutil.copytree(judged, out, symlinks=True)
-    return out
-
-
-def _tree(d: Path) -> dict[str, bytes | str]:
-    out: dict[str, bytes | str] = {}
-    for p in sorted(d.rglob("*")):
-        rel = str(p.relative_to(d))
-        if p.is_symlink():
-            out[rel] = f"-> {os.readlink(p)}"
-        elif p.is_dir():
-            out[rel] = "dir"
-        elif p.is_fifo():
-            out[rel] = "fifo"
-        else:
-            out[rel] = p.read_bytes()
     return out
 
 

@@ -23,6 +23,7 @@ from pathlib import Path
 
 import pytest
 
+from tests.support.trees import tree as _tree
 from validation.cli import EXIT_USAGE, main
 from validation.runs import staging as outputs_mod  # the commit's renames and mount test
 from validation.runs.atomic import OutputError, write_bytes, write_text
@@ -47,20 +48,6 @@ def _fake_run(target: Path, files: dict[str, bytes] | None = None):
         for name, data in files.items():
             write_bytes(run.path / name, data)
     return run
-
-
-def _tree(d: Path) -> dict[str, bytes | str]:
-    """Every entry under ``d`` (links as their target text, directories as "dir")."""
-    out: dict[str, bytes | str] = {}
-    for p in sorted(d.rglob("*")):
-        rel = str(p.relative_to(d))
-        if p.is_symlink():
-            out[rel] = f"-> {os.readlink(p)}"
-        elif p.is_dir():
-            out[rel] = "dir"
-        else:
-            out[rel] = p.read_bytes()
-    return out
 
 
 def _validate(out: Path, capsys) -> tuple[int, list[str]]:
