@@ -235,3 +235,57 @@ def test_a_signal_cutting_an_import_once_the_output_set_is_staged_is_interrupted
     assert took is not None and took < 3.0, f"{took} s from the cut to the exit"
     _one_interrupted_line(rest, "SIGTERM")
     assert _state(tmp_path / "o") == "interrupted"
+
+
+def _children(pid: int) -> set[int]:
+    """The live children of process ``pid`` (Linux ``/proc/PID/task/*/children``)."""
+    out: set[int] = set()
+    for f in Path(f"/proc/{pid}/task").glob("*/children"):
+        try:
+            out |= {int(x) for x in f.read_text().split()}
+        except OSError:
+            pass
+    return out
+
+
+@pytest.mark.parametrize(
+    "args",
+    [["sweep", "--quick", "--t-end", "60", "--out", "sw"],
+     ["fuzz", "--budget", "4", "--horizon", "30", "--out", "fz"]],
+    ids=["sweep", "fuzz"],
+)
+def test_sigterm_while_a_process_pool_runs_stops_at_once(tmp_path, args):
+    """SIGTERM into ``tumble sweep`` / ``tumble fuzz`` while their process pool runs long tasks
+    (seconds to stop before: the pool's shutdown waited for the running tasks) -> exit 143 within a second,
+    one line, the output marked interrupted, and every worker of the pool gone within seconds."""
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "validation", *args], stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE, text=True, env=_env(), cwd=tmp_path,
+    )  # fmt: skip
+    try:
+        if not Path(f"/proc/{proc.pid}/task").exists():
+            pytest.skip("needs /proc to see the command's pool")
+        deadline = time.monotonic() + 120
+        while len(_children(proc.pid)) < 2 and time.monotonic() < deadline:
+            assert proc.poll() is None, proc.communicate()
+            time.sleep(0.05)
+        time.sleep(2.0)  # the pool's tasks under way
+        workers = _children(proc.pid)
+        assert proc.poll() is None and workers, "no pool to interrupt"
+        proc.send_signal(signal.SIGTERM)
+        t0 = time.monotonic()
+        _, err = proc.communicate(timeout=60)
+        took = time.monotonic() - t0
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    assert proc.returncode == 143, err
+    assert took < 1.5, f"{took:.1f} s to stop"
+    _one_interrupted_line(err.strip().splitlines(), "SIGTERM")
+    assert _state(tmp_path / args[-1]) == "interrupted"
+    deadline = time.monotonic() + 10
+    while any(Path(f"/proc/{w}").exists() for w in workers) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    left = [w for w in workers if Path(f"/proc/{w}").exists()]
+    assert not left, f"workers left running: {left}"

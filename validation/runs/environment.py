@@ -42,14 +42,25 @@ def _wants_no_color() -> bool:
     return NO_COLOR not in os.environ and not os.isatty(2)
 
 
+TRACKER_QUIET = "ignore:resource_tracker:UserWarning"
+"""A ``PYTHONWARNINGS`` entry for the program's children: a command interrupted while a process
+pool runs stops without waiting for the pool's running tasks (its workers end with it) and ends
+with ``os._exit``, so multiprocessing's resource tracker, a child of its own, unlinks the pool's
+semaphores itself and would add a two-line "leaked semaphore objects" warning after the one line
+that says the command was interrupted."""
+
+
 def set_process_env() -> None:
     """For the ``tumble`` program's process only, before numpy is imported: each of
-    :data:`BLAS_VARS` to ``1`` unless set, and ``NO_COLOR=1`` when stderr is not a terminal
-    (unless set)."""
+    :data:`BLAS_VARS` to ``1`` unless set, ``NO_COLOR=1`` when stderr is not a terminal (unless
+    set), and :data:`TRACKER_QUIET` added to ``PYTHONWARNINGS`` (for the children it starts)."""
     for var in BLAS_VARS:
         os.environ.setdefault(var, "1")
     if _wants_no_color():
         os.environ[NO_COLOR] = "1"
+    given = os.environ.get("PYTHONWARNINGS", "")
+    if TRACKER_QUIET not in given.split(","):
+        os.environ["PYTHONWARNINGS"] = f"{given},{TRACKER_QUIET}" if given else TRACKER_QUIET
 
 
 def as_program() -> None:

@@ -164,6 +164,16 @@ def default_executor() -> Executor:
     )
 
 
+def shut_down(ex: Executor, exc: BaseException) -> None:
+    """Shut a pool of this process's own down as ``exc`` leaves the work it ran: pending tasks
+    cancelled; after an interrupt (Ctrl-C, SIGTERM, or any error once a signal arrived) without
+    waiting for the tasks that are running, so the command stops at once (the pool's workers end
+    with this process, :func:`validation.runs.lifetime.pool_initializer`); else after them."""
+    from validation.runs.interrupts import interrupt_of
+
+    ex.shutdown(wait=interrupt_of(exc) is None, cancel_futures=True)
+
+
 @contextmanager
 def executor_for(
     executor: Executor | None = None,
@@ -189,8 +199,10 @@ def executor_for(
         ex = default_executor()
         try:
             yield ex, default_workers()
-        finally:
-            ex.shutdown(wait=True, cancel_futures=True)
+        except BaseException as exc:
+            shut_down(ex, exc)
+            raise
+        ex.shutdown(wait=True, cancel_futures=True)
         return
     try:  # deferred: Dask is optional (the [test] extra has it)
         from distributed import Client, LocalCluster

@@ -171,9 +171,12 @@ def _sweep_into(
         t = stage("series", t)
         stabilization = [f.result() for f in stab_futs]
         effects = effects_f.result() if effects_f is not None else None
-    finally:
+    except BaseException as exc:
         if own:
-            ex.shutdown(wait=True, cancel_futures=True)
+            running.shut_down(ex, exc)
+        raise
+    if own:
+        ex.shutdown(wait=True, cancel_futures=True)
     if effects is None:
         effects = effects_cost(sc, cfg.effects_repeats)
     t = stage("stabilization_and_effects", t)
