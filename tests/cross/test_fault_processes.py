@@ -181,3 +181,30 @@ def test_process_pool_parent_killed_with_sigkill_leaves_no_pool_worker(tmp_path)
         return ran and any("spawn_main" in _cmdline(p) for p in kids)
 
     _kill_and_require_all_gone([sys.executable, "-c", POOL_SCRIPT], tmp_path, started)
+
+
+SLOW_SERVER_SCRIPT = """
+import os
+from validation.runs import workers
+assert workers.can_serve()
+job = workers.start_served("slow", os.getpid, preload=["tests.support.slow_preload"])
+"""
+
+
+def test_a_fork_server_whose_client_is_killed_during_its_preload_ends():
+    """The fork server's client killed with SIGKILL while the server still imports its preload
+    (a minute here, as compiling numba's kernels into a cold cache can take; the server watched
+    nothing until its loop and ran on to the preload's end) -> the server ends within seconds."""
+
+    def serving(root: int, kids: set[int]) -> bool:
+        return any("forkserver" in _cmdline(p) for p in kids)
+
+    root = Path(__file__).resolve().parents[2]
+    env_path = os.pathsep.join(p for p in (str(root), os.environ.get("PYTHONPATH")) if p)
+    os.environ.setdefault("PYTHONPATH", "")
+    old = os.environ["PYTHONPATH"]
+    os.environ["PYTHONPATH"] = env_path  # the script and the server import the tests' support
+    try:
+        _kill_and_require_all_gone([sys.executable, "-c", SLOW_SERVER_SCRIPT], root, serving)
+    finally:
+        os.environ["PYTHONPATH"] = old

@@ -16,10 +16,9 @@ it forks should inherit, set once in the server after its other imports.
   environment of the process that asked for it, a user's maybe).
 * Every child the server forks ends when the server does
   (:func:`validation.runs.lifetime.forks_die_with_parent`), and the server ends when the process
-  that started it does, also one killed with SIGKILL (:func:`validation.runs.lifetime.die_with`,
-  a watch of that process, not only ``multiprocessing``'s pipe: a server whose Dask worker was
-  killed was seen still running 15 s later, its pipe's far end held elsewhere): a served plant
-  run does not outlive a ``tumble`` killed with SIGKILL.
+  that started it does, also one killed with SIGKILL, from its first preload on
+  (:mod:`validation.runs.server_watch`): a served plant run does not outlive a ``tumble``
+  killed with SIGKILL.
 
 Import it only on purpose: it does its work at import.
 """
@@ -27,17 +26,15 @@ Import it only on purpose: it does its work at import.
 from __future__ import annotations
 
 import gc
-import os
 import warnings
 
 from validation.runs.environment import limit_blas_threads
-from validation.runs.lifetime import die_with, forks_die_with_parent
+from validation.runs.lifetime import forks_die_with_parent
 
 RUNPY_RERUN = r".* found in sys\.modules after import of package .*"
 """The message (a regular expression) of runpy's warning silenced here."""
 
 warnings.filterwarnings("ignore", message=RUNPY_RERUN, category=RuntimeWarning)
-die_with(os.getppid())  # the process that started the server (before any child is forked)
 forks_die_with_parent()
 gc.freeze()
 limit_blas_threads()  # last: after the preload's imports (numpy, scipy)

@@ -544,6 +544,13 @@ def start(
     return job
 
 
+SERVER_WATCH = "validation.runs.server_watch"
+"""The fork server's first preload: the server ends with the process that started it."""
+
+CLIENT_ENV = "TUMBLE_FORK_SERVER_CLIENT"
+"""The variable that names the server's client to it (:mod:`validation.runs.server_watch`, which
+cannot import this module first: it is the server's lightest preload)."""
+
 SERVER_SETUP = "validation.runs.server_setup"
 """The fork server's last preload: what its children inherit (warnings, a frozen heap)."""
 
@@ -588,7 +595,7 @@ def start_served(
     if not can_serve():
         return job
     ctx = mp.get_context("forkserver")
-    ctx.set_forkserver_preload([*preload, *_main_module(), SERVER_SETUP])
+    ctx.set_forkserver_preload([SERVER_WATCH, *preload, *_main_module(), SERVER_SETUP])
     conn, child_conn = ctx.Pipe(duplex=False)
     flush_std_streams()
     proc = ctx.Process(
@@ -597,9 +604,15 @@ def start_served(
         name=f"tumble-{name}",
         daemon=True,
     )
+    previous = os.environ.get(CLIENT_ENV)
+    os.environ[CLIENT_ENV] = str(os.getpid())  # read by the server if this starts it (server_watch)
     try:
         proc.start()
     finally:
+        if previous is None:
+            os.environ.pop(CLIENT_ENV, None)
+        else:
+            os.environ[CLIENT_ENV] = previous
         child_conn.close()
     job.started = time.monotonic()  # the limit is the task's: the fork server's own start is not
     job.process, job.conn = proc, conn
