@@ -91,6 +91,17 @@ CLOEXEC = getattr(os, "O_CLOEXEC", 0)
 DIRECTORY = getattr(os, "O_DIRECTORY", 0)
 
 
+def json_object(data: bytes) -> dict:
+    """``data`` as a JSON object; ValueError "not JSON" / "not a JSON object" otherwise (the
+    manifests' first test, this module's and the fuzzing campaign's)."""
+    try:
+        doc = json.loads(data.decode("utf-8"))
+    except (UnicodeDecodeError, ValueError):
+        raise ValueError("not JSON") from None
+    if not isinstance(doc, dict):
+        raise ValueError("not a JSON object")
+    return doc
+
 def lstat_or_none(path: Path) -> os.stat_result | None:
     """``os.lstat(path)`` (a link is not followed), None when nothing is there."""
     try:
@@ -153,12 +164,7 @@ def parse_manifest(data: bytes) -> dict[str, ManifestEntry]:
     Raises:
         ValueError: saying in a few words why ``data`` is not such a manifest.
     """
-    try:
-        doc = json.loads(data.decode("utf-8"))
-    except (UnicodeDecodeError, ValueError):
-        raise ValueError("not JSON") from None
-    if not isinstance(doc, dict):
-        raise ValueError("not a JSON object")
+    doc = json_object(data)
     schema = doc.get("schema")
     if schema is None and set(doc) != _LEGACY_MANIFEST_KEYS:
         raise ValueError(f"no schema {MANIFEST_SCHEMA!r}")

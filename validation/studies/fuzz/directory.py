@@ -52,6 +52,7 @@ from validation.runs.manifest import (
     MANIFEST_SCHEMA,
     ManifestEntry,
     NotOurs,
+    json_object,
     lstat_or_none,
     size_and_digest,
 )
@@ -121,12 +122,7 @@ class _Manifest:
 
 def _parse(data: bytes) -> _Manifest:
     """A campaign's manifest, or ValueError saying in a few words why ``data`` is not one."""
-    try:
-        doc = json.loads(data.decode("utf-8"))
-    except (UnicodeDecodeError, ValueError):
-        raise ValueError("not JSON") from None
-    if not isinstance(doc, dict):
-        raise ValueError("not a JSON object")
+    doc = json_object(data)
     if doc.get("schema") != CAMPAIGN_SCHEMA:
         raise ValueError(f"schema {str(doc.get('schema'))[:40]!r}, not {CAMPAIGN_SCHEMA!r}")
     if not is_run_id(doc.get("run_id")):
