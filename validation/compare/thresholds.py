@@ -244,7 +244,7 @@ REFEREE_NOISE_FRACTION = 1e-3
 plants that all agree a thousand times better than the threshold asks have no outlier worth
 naming, and round-off-level differences (1e-12 m beside a 1e-6 m bound) do not decide verdicts.
 It is the threshold part of the referee's noise floor; the round-off part below takes over where a
-quantity's own scale makes its round-off larger (:class:`validation.compare.referee.NoiseFloor`).
+quantity's own scale makes its round-off larger (:class:`validation.compare.noise_floor.NoiseFloor`).
 The fraction is of the threshold's absolute part (its ``value``), not of the effective bound
 ``value + rtol · scale``: the relative part is a margin for the integrators' relative error
 (:data:`STATE_RTOL`, 1e-7 of the scale), and a thousandth of it (1e-10 of the scale) would call

@@ -30,17 +30,8 @@ from mj_bridge.plants import (
 )
 from tests.support.mj_scenes import paper_scene
 from validation.compare.checks import Check, Comparison, Group, Series, Subject, compare_plants
-from validation.compare.referee import (
-    Clause,
-    FloorPart,
-    NoiseFloor,
-    Outlier,
-    VerdictKind,
-    decide,
-    referee,
-    roundoff_scales,
-    rule,
-)
+from validation.compare.noise_floor import FloorPart
+from validation.compare.referee import Clause, Outlier, VerdictKind, decide, referee, rule
 from validation.compare.thresholds import (
     DEFAULTS,
     REFEREE_NOISE_FRACTION,
@@ -357,20 +348,6 @@ def test_round_off_on_a_zero_signal_is_not_an_outlier():
     small = referee(_zero_torque_comparison(1.0))[0]  # forces of 1 N: the threshold part rules
     assert small.floor_set_by is FloorPart.THRESHOLD and small.floor == pytest.approx(1e-9)
     assert small.kind is VerdictKind.OUTLIER and small.outlier == "analytic"
-
-
-def test_round_off_scale_is_the_largest_force_across_plants():
-    """The scale is the largest |F| of any plant over the run (independently: the sine's peak
-    on the grid), and the floor's round-off part is REFEREE_ROUNDOFF_FORCE ε × scale / 1 N·m."""
-    cmp = _zero_torque_comparison(2.5e5)
-    peak = 2.5e5 * np.abs(np.sin(3 * np.linspace(0.0, 1.0, 11))).max()
-    scale = roundoff_scales(cmp)["control_torque"]
-    assert scale.value == pytest.approx(peak, rel=1e-15)
-    floor = NoiseFloor.of(1e-6, scale, divisor=1.0)
-    assert floor.roundoff_part == pytest.approx(
-        REFEREE_ROUNDOFF_FORCE * 2.220446049250313e-16 * peak
-    )
-    assert floor.value == floor.roundoff_part and floor.threshold_part == pytest.approx(1e-9)
 
 
 # ---------------------------------------------------------------------------------------------
