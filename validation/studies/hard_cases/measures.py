@@ -1,4 +1,4 @@
-"""What each measure of :data:`validation.studies.hard_cases.criterion.MEASURES` computes, on the runs of
+"""What each measure of :data:`validation.studies.hard_cases.catalogue.MEASURES` computes, on the runs of
 one case.
 
 A :class:`CaseRuns` holds one case's scene, its plants and every run and reference it has made
@@ -28,7 +28,8 @@ from validation.compare.differences import attitude_angle
 from validation.compare.summary import drift_figures
 from validation.compare.tracking_laws import mass_error_reference, omega_error_reference
 from validation.runs.interrupts import checkpoint
-from validation.studies.hard_cases.criterion import CheckSpec, Criterion, Measure, Reference
+from validation.studies.hard_cases.catalogue import Measure, Reference
+from validation.studies.hard_cases.criterion import CheckSpec, Criterion
 from validation.studies.hard_cases.references import (
     centre_of_mass,
     crossings,
