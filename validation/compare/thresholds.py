@@ -8,8 +8,8 @@ the scene loader keeps verbatim in ``scene.extra["thresholds"]``::
     attitude = { value = 1e-7, reason = "tighter dt" }  # or a table with a value and a reason
     rod_velocities = { value = 1e-5, rtol = 1e-8 }      # and, for a scaled one, its rtol
 
-An override without an ``rtol`` has none: its value is the whole bound, as it was before bounds had
-a relative part (give ``rtol`` to keep one).
+An override without an ``rtol`` has none: its value is the whole bound (give ``rtol`` to keep a
+relative part).
 
 Two kinds of threshold:
 
