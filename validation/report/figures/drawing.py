@@ -22,13 +22,11 @@ class FigureFormat(StrEnum):
 
 DEFAULT_FORMATS = (FigureFormat.PNG,)
 PNG_DPI = 150  # pixels per inch of the PNG files (10 in wide: 1500 px)
-PNG_COMPRESS_LEVEL = 3  # zlib level of the PNGs (Pillow's default 6: 1.6x the time, 8 % smaller)
-SVG_HASH_SALT = (
-    "validation.report.figures"  # salt of the SVG element ids (matplotlib: a random uuid)
-)
+PNG_COMPRESS_LEVEL = 3  # zlib level of the PNGs (below Pillow's 6: docs/performance.md)
+SVG_HASH_SALT = "validation.report.figures"  # salt of the SVG ids (matplotlib: a random uuid)
 TEXT_RASTER = {"text.hinting": "no_hinting"}
 """How Agg rasterises text: glyphs unhinted. Matplotlib's default (FreeType hinting each glyph to
-the pixel grid) looks the same at 150 dpi and adds about a sixth to the drawing time."""
+the pixel grid) looks the same at 150 dpi and costs drawing time (``docs/performance.md``)."""
 
 
 @dataclass(frozen=True)
@@ -67,9 +65,9 @@ def _png(figure: Any) -> bytes:
     """``figure`` as PNG: the pixels matplotlib's Agg renderer draws at :data:`PNG_DPI`, written as
     RGB when every pixel is opaque (the figures have an opaque background), else RGBA.
 
-    matplotlib's ``savefig`` always writes RGBA, and Pillow's PNG row filters then take twice as
-    long as for RGB, which carries the same picture when the alpha channel is all 255; the file
-    records the resolution and no time stamp or software version."""
+    matplotlib's ``savefig`` always writes RGBA, whose PNG row filters cost more than those of the
+    RGB that carries the same picture when the alpha channel is all 255 (``docs/performance.md``);
+    the file records the resolution and no time stamp or software version."""
     import matplotlib as mpl
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from PIL import Image

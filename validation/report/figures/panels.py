@@ -124,7 +124,7 @@ def prepare_drawing() -> None:
 
     ``tumble validate`` calls it at idle priority while the plants run; the evidence workers
     forked afterwards inherit all of it, and their first figure costs what a second one would
-    (measured on the error figure: 0.9-1.25 s first in a process, 0.55-0.6 s after this)."""
+    (``docs/performance.md``, Report figures)."""
     fig, axes = new_figure(1, "prepare")
     t = np.linspace(0.0, 1.0, 5)
     log_panel(axes[0], [(Subject.BOTH, t, 10.0**-t)], 1e-3)

@@ -42,8 +42,8 @@ CAMPAIGN_WORKERS = 2
 """Workers of the timed process pool: the 2-core development machine's cores."""
 CAMPAIGN_WALL_LIMIT = 1.3
 """Campaign wall x workers / the plants' compute, at most: what is not a plant run (the
-comparison and referee of each scene, about a tenth of its runs' time on Example 1; drawing and
-loading scenes; files; the pool's start) may add 30 %."""
+comparison and referee of each scene; drawing and loading scenes; files; the pool's start) may add
+30 % (``docs/performance.md``)."""
 DASK_SPEEDUP_GOAL = 1.7
 """Two Dask workers on two cores must judge the campaign at least this many times as fast as one:
 85 % of the ideal 2, the rest for what cannot run side by side (the cluster's scheduling, the
@@ -55,9 +55,8 @@ DASK_RATIO_LIMIT = 1.0 / DASK_SPEEDUP_GOAL
 OTHERS_BOUND_CPUS = 0.1
 """The most CPU other processes may have used during a timed campaign (on average, CPUs) for its
 goal to get a verdict; above it the verdict is TOO_BUSY. A campaign's workers fill the cores, so
-work of another process takes a core from them: a tenth of a CPU changes a two-worker wall by at
-most about 5 %, against the goals' margins (1.3 against 1.0-1.1 measured alone on one worker; 1.7
-against 2)."""
+work of another process takes a core from them, and a tenth of a CPU is small against the goals'
+margins (``docs/performance.md``)."""
 
 
 def campaign_verdict(goal: Goal, others_cpus: float | None) -> Verdict:

@@ -26,8 +26,8 @@ from validation.studies.fuzz.campaign import fuzz
 
 CAMPAIGN_SCENES = 16
 """Scenes of the timed campaign: eight per worker of the pool, enough that the pool's start (a
-spawned worker imports the engines, about 2 s) is not most of the wall, few enough to time in
-about two minutes on the 2-core machine."""
+spawned worker imports the engines) is not most of the wall, few enough to time in minutes
+(``docs/performance.md``)."""
 CAMPAIGN_SEED = 0
 
 
