@@ -202,7 +202,9 @@ def _load() -> tuple[dict[str, type[Plant]], tuple[PluginError, ...]]:
             if (ki := _interrupt_behind(exc)) is not None:  # a signal cut a C extension's init
                 raise ki from exc
             errors.append(
-                PluginError(ep.name, _one_line(f"cannot import {ep.value}: {type(exc).__name__}: {exc}"))
+                PluginError(
+                    ep.name, _one_line(f"cannot import {ep.value}: {type(exc).__name__}: {exc}")
+                )
             )
             continue
         why = _plugin_problem(ep.name, ep.value, obj)
