@@ -34,8 +34,4 @@ class DrakePlant(ScipyLoopPlant):
         return drake_unavailable()
 
 
-SUPPORTED_EFFECTS = DrakePlant.effects
-"""The effects the Drake plant simulates (derived from the functions that implement them)."""
-
-
-__all__ = ["SUPPORTED_EFFECTS", "DrakePlant", "DrakeSettings"]
+__all__ = ["DrakePlant", "DrakeSettings"]

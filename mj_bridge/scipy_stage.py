@@ -117,7 +117,8 @@ def work_layout(n: int, k: int) -> dict[str, tuple[int, int]]:
 
 def _make_stage(deps: int, solver: int):
     """The stage closing over ``deps`` (:data:`DEPS`: the sources it embeds, see
-    :func:`analytic.kernel.jit.jit_entry`) and the solve it embeds (``solver``, a :class:`Solver`; numba drops the other branches)."""
+    :func:`analytic.kernel.jit.jit_entry`) and the solve it embeds (``solver``, a
+    :class:`Solver`; numba drops the other branches)."""
 
     def stage(t, y, fp, ip, work, ydot, mode):  # pragma: no cover - compiled
         """Everything of ``ẏ`` but ``v̇``, and ``aba``'s arguments (the module docstring).
