@@ -218,7 +218,7 @@ class DrakeDynamics(ScipyDynamics):
     """
 
     engine = ENGINE
-    compile_lock = COMPILE_LOCK
+    lock_name = COMPILE_LOCK
     settings_type = DrakeSettings
     sample_errors = (*ScipyDynamics.sample_errors, RuntimeError)
 

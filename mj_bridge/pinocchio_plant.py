@@ -123,7 +123,7 @@ class PinocchioDynamics(ScipyDynamics):
     """
 
     engine = Engine.PINOCCHIO.value
-    compile_lock = compile_lock.PINOCCHIO
+    lock_name = compile_lock.PINOCCHIO
     settings_type = PinocchioSettings
 
     def build(self, scene: Scene) -> None:

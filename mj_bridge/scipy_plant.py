@@ -49,7 +49,7 @@ class ScipyDynamics(abc.ABC):
         controller: ``analytic_fast`` (default) or ``analytic`` (:class:`ScipyLoopSettings`).
 
     Class attributes a subclass sets:
-        engine: the name of its trajectories. compile_lock: the :mod:`analytic.kernel.compile_lock`
+        engine: the name of its trajectories. lock_name: the :mod:`analytic.kernel.compile_lock`
         name held while it is built and compiled. settings_type: its settings record.
         sample_errors: what :meth:`sample` may raise at a sample it cannot evaluate (NaN there).
 
@@ -64,7 +64,7 @@ class ScipyDynamics(abc.ABC):
     """
 
     engine: ClassVar[str]
-    compile_lock: ClassVar[str]
+    lock_name: ClassVar[str]
     settings_type: ClassVar[type[ScipyLoopSettings]] = ScipyLoopSettings
     sample_errors: ClassVar[tuple[type[BaseException], ...]] = (
         NonFinite,
@@ -254,7 +254,7 @@ def simulate(
     """
     settings = settings or dynamics.settings_type()
     check_t_end(t_end)
-    with compile_lock.compiling(dynamics.compile_lock):  # a first run's helper may be at it
+    with compile_lock.compiling(dynamics.lock_name):  # a first run's helper may be at it
         plant = dynamics(scene, settings.controller)
         plant.compile()
     run, info = integrate(plant, settings, scene, t_end, progress)
