@@ -16,11 +16,11 @@ Why. A component is computed from the terms of its whole group: ``Ṙ_z`` from t
 mass, whose size follows the largest velocities and positions; ``R_z`` enters every mass position
 summed with ``R_x``, ``R_y`` and ``p``. Its round-off is therefore a few ε of the *group's*
 magnitude ``M_g``, not of its own value, and is amplified by the conditioning of the mass matrix
-(measured on a runaway fuzz scene, masses flung 4.5e4 m out along the rod: the accelerations'
-response to an ε-relative change of the state was ~1e-8 of their magnitude). A fixed ``atol``
+(on a runaway scene by many decades: ``docs/performance.md``, The analytic layer's tolerances
+and limits). A fixed ``atol``
 (1e-13 by default, ~450 ε) asks a component that stays small while its group grows to 1e5 or 1e8
 for digits no evaluation carries: the error estimate is then round-off, linear in the step, and
-the steps shrink until the run grinds (hundreds of thousands of steps per simulated second). The
+the steps shrink until the run grinds (``docs/performance.md``, Runaway scenes). The
 round-off of a group, a few ε·M_g (say 4 ε·M_g after a handful of operations), reaches the default
 ``atol`` (~450 ε) at M_g ≈ :data:`GROUP_UNIT` = 100 (SI units); above it the floor
 ``atol · M_g / 100`` is ~4.5 ε *relative to the group* at the default ``atol``: the error control
@@ -41,18 +41,18 @@ its meaning.
 
 Beyond double precision. The scaling removes the grinding that a fixed ``atol`` causes, not the
 one a motion's own conditioning causes: where the accelerations follow an ε-relative change of the
-state by 1e-7 of their size (the same fuzz scene 0.15 s later), no tolerance the scene asks for can
-be met, and a step's error estimate is round-off at any step size. Every :data:`PROBE_STEPS`
-steps the loops therefore ask :func:`roundoff_limited`: does a one-ulp change of the state move
-the last step's increment ``h · ẏ`` of some component by its whole tolerance? When
-:data:`PROBES_IN_A_ROW` probes in a row find so, the error control is steering on round-off, not
-for a moment, and when its steps have become :data:`SLOWDOWN` times shorter than its average (or
-would take more than :data:`PROJECTED_STEPS` further steps to the horizon), the run grinds on it;
-it then stops ``failed`` with that reason (the component, the
-size of the change, the tolerance), as a plant stops at a singular matrix. On a state whose
-accelerations are computed to round-off (an O(1) scene: ``d ~ ε |ẏ|``, steps of ~1e-2 s) that
-change is 1e4 times smaller than the tolerance or more, so the probe does not stop a run that the
-error control can judge.
+state by more than the scene's tolerance (the same runaway scene later in its run, in
+``docs/performance.md``), no tolerance the scene asks for can be met, and a step's error estimate
+is round-off at any step size. Every :data:`PROBE_STEPS` steps the loops therefore ask
+:func:`roundoff_limited`: does a one-ulp change of the state move the last step's increment
+``h · ẏ`` of some component by its whole tolerance? When :data:`PROBES_IN_A_ROW` probes in a row
+find so, the error control is steering on round-off, not for a moment, and when its steps have
+become :data:`SLOWDOWN` times shorter than its average (or would take more than
+:data:`PROJECTED_STEPS` further steps to the horizon), the run grinds on it; it then stops
+``failed`` with that reason (the component, the size of the change, the tolerance), as a plant
+stops at a singular matrix. On a state whose accelerations are computed to round-off (an O(1)
+scene: ``d ~ ε |ẏ|``, steps of ~1e-2 s) that change is 1e4 times smaller than the tolerance or
+more, so the probe does not stop a run that the error control can judge.
 """
 
 from __future__ import annotations

@@ -38,9 +38,9 @@ TIGHTER_RTOL = 100.0
 """:meth:`Plant.tightened` of a tolerance-driven plant divides its tolerances by this: an adaptive
 method's global error follows its tolerance about proportionally, so its error at the tighter
 settings is about a hundredth of the one at the given settings, and the difference between the
-two runs estimates the given settings' error to about 1 % (measured on the fast-spin hard case:
-a second run at 10 × rtol estimated the error at rtol to ~20 %, a factor of 10 apart; 100 leaves a
-decade more)."""
+two runs estimates the given settings' error to about 1 %. A factor of 10 leaves the tighter
+run's own error large enough to spoil the estimate by tens of percent on a fast spin; 100 leaves a
+decade more (the figure: ``docs/performance.md``, The analytic layer's tolerances and limits)."""
 
 RTOL_FLOOR = 100 * 2.220446049250313e-16
 """The smallest relative tolerance scipy's ``solve_ivp`` accepts (it raises smaller ones to

@@ -1,6 +1,6 @@
 """MuJoCo's process-global callbacks, installed only for the duration of a ``with`` block.
 
-MuJoCo 4.0, as measured on it: Python ``mjcb_*`` callbacks are global, compiling a model
+On MuJoCo 4.0, Python ``mjcb_*`` callbacks are global, compiling a model
 fails while one is installed, and with RK4 ``mjcb_control`` / ``mjcb_act_bias`` run at each of the
 four stages (a force computed there keeps RK4 fourth order; one set once per step is first order).
 :class:`installed` sets them after the model has been compiled and always removes them, also when

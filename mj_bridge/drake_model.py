@@ -23,7 +23,7 @@ The springs, the given torque and the control are generalized forces fed to the 
 generalized-force input port by whoever drives it (:mod:`mj_bridge.drake_plant`); the plant has no
 damping, armature, limits or contact.
 
-**Drake's state** (the plant's continuous state, measured for Drake 1.51): positions
+**Drake's state** (the plant's continuous state, as Drake 1.51 lays it out): positions
 ``q_d = [qw, qx, qy, qz, x, y, z, p…]`` (n + 7: the paper's u, w first, body -> inertial, then R = C)
 and velocities ``v_d = [ω_W, v_W, ṗ…]`` (n + 6) with ``ω_W = S(u) ω`` the angular velocity of BR in
 **inertial** axes (not body axes) and ``v_W = Ṙ``; ``v̇_d = [α_W, R̈, p̈]`` with ``α_W = S(u) ω̇``

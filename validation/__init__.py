@@ -31,7 +31,9 @@ __all__ = sorted(_LAZY)
 
 def __getattr__(name: str):
     if name in _LAZY:
-        import importlib  # deferred: `import validation` stays at ~1 ms (the pytest plugin imports it in every run)
+        # deferred: `import validation` imports no submodule (the pytest plugin imports it in
+        # every run; docs/performance.md, Import costs)
+        import importlib
 
         value = getattr(importlib.import_module(_LAZY[name]), name)
         globals()[name] = value

@@ -43,8 +43,9 @@ MAX_SCENE_NESTING = 16
 # 1 KB for the paper scenes, n + 7 ≤ 12): 10⁶ samples are ~1 GB per plant before the comparison,
 # figures and recording, and a hundred times the largest built-in grid (1000 s at 10 Hz).
 MAX_OUTPUT_SAMPLES = 1_000_000
-# MuJoCo steps of one run: 10⁹ steps at the measured 10-17 µs per RK4 step with the controller
-# are three to five hours; the longest built-in run is 2·10⁶ steps (hard/long_horizon).
+# MuJoCo steps of one run: 10⁹ RK4 steps with the controller are three to five hours (its cost
+# per step: docs/performance.md, The analytic layer's tolerances and limits); the longest
+# built-in run is 2·10⁶ steps (hard/long_horizon).
 MAX_MUJOCO_STEPS = 1_000_000_000
 # t_end·rate within this distance of an integer (in sample intervals, so the last interval is never
 # longer than 1/rate by more than this fraction) puts t_end on the output grid: decimal horizons

@@ -9,9 +9,9 @@ same output. It prints
   ``mj_forward`` on the same body (median thread CPU time of repeats, µs);
 * every goal of :mod:`validation.bench.goals` with its ratio, the spread of its per-round ratios,
   the share of a CPU the process had, and its verdict: HOLDS, FAILS, or TOO_BUSY when the rounds
-  disagree too much for a verdict (:mod:`validation.bench.verdicts`); the 60 s Example 1 goal
-  takes about a minute (``--skip-long`` leaves it out); the Pinocchio plant's goal is skipped,
-  with the reason printed, when ``pin`` is not installed;
+  disagree too much for a verdict (:mod:`validation.bench.verdicts`); the 60 s Example 1 goal,
+  the longest (``docs/performance.md``), is left out by ``--skip-long``; the Pinocchio plant's
+  goal is skipped, with the reason printed, when ``pin`` is not installed;
 * the load average before and after, and, when any goal was TOO_BUSY, one line saying the machine
   was too busy for a verdict on it;
 * with ``--out DIR``, the same numbers in ``DIR/bench.json`` (with ``DIR/manifest.json``, one run
@@ -37,8 +37,8 @@ from validation.bench.verdicts import SPREAD_BOUND, Verdict
 from validation.runs import interrupts
 
 # deferred, in every function below: `tumble`'s parser imports this module for the options of
-# `tumble bench` on every command, and numpy, the engines and the goals cost ~2.1 s more
-# (python -X importtime -c "import validation.bench.goals"; this module alone: ~0.09 s)
+# `tumble bench` on every command, so it imports neither numpy nor the engines nor the goals,
+# which take seconds to import (docs/performance.md, Import costs)
 if TYPE_CHECKING:
     from analytic.scene import Scene
     from validation.bench.goal import Goal

@@ -2,15 +2,16 @@
 
 **Drake plant**: the controlled Example 1 over 20 s, DOP853 at rtol 1e-12 (atol 1e-13), on the Drake
 plant (:class:`mj_bridge.drake_plugin.DrakePlant`) / on the analytic plant, both through the plant
-protocol. At this tolerance the two are equally accurate (each is within ~1e-9 m of its own
-rtol-2.5e-14 run: Drake 1.1e-9 m, analytic 2.6e-9 m, measured), and they agree to 1.7e-9 m; the
-distance of their positions of C is recorded as the check that both ran the same motion. As for the
-Pinocchio plant's goal, both step on scipy's loop (the analytic plant with ``stepper="scipy"``), so
-the ratio compares the plants, not the loops; one run of the analytic plant on its default
-(compiled) loop is printed beside it, with that ratio. Each plant runs once first (compilation,
-cache loads), then the two alternate for ``rounds`` repeats; each round's ratio is of the CPU times
-of the integrations (:class:`validation.bench.timing.CpuMeter`), the goal's value their median.
-Holds when ≤ :data:`DRAKE_LIMIT`. Skipped, with the reason, when Drake is not installed. About 15 s.
+protocol. At this tolerance the two are equally accurate (each within a few 1e-9 m of its own
+rtol-2.5e-14 run, and of each other: ``docs/performance.md``, The plants on scipy's loop), so the
+ratio compares equal work; the distance of their positions of C is recorded as the check that both
+ran the same motion. As for the Pinocchio plant's goal, both step on scipy's loop (the analytic
+plant with ``stepper="scipy"``), so the ratio compares the plants, not the loops; one run of the
+analytic plant on its default (compiled) loop is printed beside it, with that ratio. Each plant
+runs once first (compilation, cache loads), then the two alternate for ``rounds`` repeats; each
+round's ratio is of the CPU times of the integrations (:class:`validation.bench.timing.CpuMeter`),
+the goal's value their median. Holds when ≤ :data:`DRAKE_LIMIT`. Skipped, with the reason, when
+Drake is not installed (its duration: ``docs/performance.md``, Speed goals' timing and verdicts).
 """
 
 from __future__ import annotations
@@ -30,9 +31,11 @@ from validation.scenes import resolve_scene
 
 DRAKE_GOAL = "Drake plant: 20 s controlled Example 1 at rtol 1e-12, Drake CPU / analytic CPU"
 DRAKE_LIMIT = 20.0
-"""From the goal set when Drake was measured outside the project (19.5 with the springs as a
-Python system); this plant, its per-evaluation work compiled, measured ~4.4 on scipy's loop (and
-~33 against the analytic plant's compiled loop)."""
+"""The Drake plant may cost up to twenty times the analytic plant: the goal set for a Drake plant
+whose per-evaluation work is not compiled (one with its springs as a Python system just meets it).
+This plant, its per-evaluation work compiled, sits far below it (its ratios, on scipy's loop and
+against the analytic plant's compiled loop: ``docs/performance.md``, Speed goals' timing and
+verdicts)."""
 
 
 def goal_drake(

@@ -7,16 +7,12 @@ three benchmark modules, so that none of them imports another (the import graph 
 
 **The clock is the thread's CPU time** (:func:`time.thread_time_ns`), not the wall clock. What is
 timed in-process (a compiled evaluation, ``mj_forward``, ``mj_step``) runs in the calling thread
-alone (one BLAS thread, no pool), so its thread CPU time is its cost. The wall clock also counts
-the time the thread waits while the scheduler runs another process on its core: on the shared
-2-core machine, beside one CPU-bound job, the thread is preempted two to three times in every
-10 ms batch, and where those preemptions land follows the rhythm of the alternating batches, not
-the work. Measured (same process, same batches): the controller-in-RK4 goal of Example 2 read
-1.94 by wall-clock medians of 2 ms batches and 0.28 by thread CPU time, the evaluation goal (n = 2)
-0.38-0.63 by wall and 0.56-0.58 by CPU time, while a CPU-bound job pinned to the *other* core
-changed the CPU time per call by under 2% (two vCPUs, one thread per core: no sibling to share a
-core with). :class:`Batch` keeps both clocks and the involuntary context switches, so the share of
-a CPU the thread had is printed beside every goal.
+alone (one BLAS thread, no pool), so its thread CPU time is its cost, and it stays so beside other
+work. The wall clock also counts the time the thread waits while the scheduler runs another
+process on its core, and where those preemptions land follows the rhythm of the alternating
+batches, not the work: a ratio of wall times beside a CPU-bound job measures the scheduler (the
+figures: ``docs/performance.md``, On a busy machine). :class:`Batch` keeps both clocks and the
+involuntary context switches, so the share of a CPU the thread had is printed beside every goal.
 """
 
 from __future__ import annotations

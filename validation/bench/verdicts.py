@@ -36,14 +36,13 @@ limit, for which ``tumble bench`` gives a verdict; above it, or when the limit l
 range (a quarter or more of the rounds on the other side of it), the verdict is
 :attr:`Verdict.TOO_BUSY`.
 
-Why a fifth of the limit: measured on the 2-core machine with the timings in thread CPU time
-(:mod:`validation.bench.timing`), the interquartile range of the per-evaluation goals stays within
-0.01-0.025 of their limit (0.57 and 0.48 against 1) and that of the controller-in-RK4 goals (a
-difference of two step costs, which amplifies their noise about four times) within 0.03-0.09, idle
-and beside one or two CPU-bound jobs alike; the former wall-clock timings spread 0.17-0.2 (the
-evaluation, 10 ms batches) to 0.65-2 (the controller) beside one such job. A range wider than a
-fifth of the limit therefore means the machine disturbed the measurement itself (not only took
-the CPU away), and a ratio near its limit cannot be judged from rounds on both sides of it."""
+Why a fifth of the limit: timed in thread CPU time (:mod:`validation.bench.timing`), a goal's
+rounds spread by a few hundredths of its limit on the 2-core machine, idle or beside one or two
+CPU-bound jobs alike, and the controller-in-RK4 goals (a difference of two step costs, which
+amplifies their noise about four times) by under a tenth (the figures: ``docs/performance.md``,
+Speed goals' timing and verdicts). Taking the CPU away therefore leaves the rounds well inside a
+fifth of the limit; a range wider than that means the machine disturbed the measurement itself,
+and a ratio near its limit cannot be judged from rounds on both sides of it."""
 
 
 @dataclass(frozen=True)

@@ -91,13 +91,15 @@ class SweepConfig:
 
     t_end: float = PAPER_HORIZON_S
     solvers: tuple[str, ...] = ("DOP853", "RK45", "Radau", "LSODA")
-    # two decades apart: the errors over 20 s go from ~1e-2 (rtol 1e-4) to ~3e-11 (rtol 1e-12),
-    # just above the reference's floor; every level of LEVELS is reached by some rtol
+    # two decades apart, from a loose rtol to one whose error over 20 s is just above the
+    # reference's floor, so every level of LEVELS is reached by some rtol (the errors per rtol:
+    # docs/performance.md, The accuracy sweep's grid)
     rtols: tuple[float, ...] = (1e-4, 1e-6, 1e-8, 1e-10, 1e-12)
     atol_ratio: float = 0.1
     integrators: tuple[str, ...] = ("RK4", "Euler", "implicitfast", "implicit")
-    # a quarter per step: RK4's error falls 256x (it reaches the floor at 1.6e-4 s), the
-    # first-order integrators' 4x (1e-3 at 3.9e-5 s)
+    # a quarter per step: RK4's error falls 4⁴ = 256x, the first-order integrators' 4x; RK4
+    # reaches the reference's floor within the grid (where each integrator gets to:
+    # docs/performance.md, The accuracy sweep's grid)
     dts: tuple[float, ...] = tuple(1e-2 / 4**k for k in range(5))  # 1e-2 … 3.9e-5 s
     repeats: int = 3
     repeat_budget_s: float = 1.0
@@ -136,7 +138,8 @@ class SweepConfig:
             rtols=(1e-3, 1e-5, 1e-7, 1e-9, 1e-11),
             dts=tuple(1e-2 / 2**k for k in range(5)),
             # three timings of every run under 0.1 s in all: the cheapest setting is picked from
-            # timings with their spread, and a quick sweep stays ~10 s
+            # timings with their spread, and a quick sweep stays short (its duration:
+            # docs/performance.md, The accuracy sweep's grid)
             repeats=3,
             repeat_budget_s=0.1,
             max_run_wall_s=60.0,

@@ -195,7 +195,8 @@ MARK_SYMBOLS = {
 
 def render_png(data: FigureData) -> bytes:
     """The figure as PNG bytes (matplotlib, Agg; no global pyplot state)."""
-    # deferred: matplotlib ~0.3 s (python -X importtime), only when the figure is drawn
+    # deferred: matplotlib is imported only when the figure is drawn (docs/performance.md,
+    # Import costs)
     from matplotlib.figure import Figure
 
     fig = Figure(figsize=(11.5, 6.4))
