@@ -2,7 +2,7 @@
 
 Importing this package changes nothing in the process: no environment variable, no thread pool
 (the ``tumble`` program sets its own numerical environment at start,
-:mod:`validation.runs.environment`, with the measured reason).
+:mod:`validation.runs.environment`, which states why).
 
 Public names (imported on first use, so ``import validation`` stays cheap: the pytest plugin
 :mod:`validation.testing.pytest_plugin` imports this package in every pytest run):
