@@ -109,8 +109,8 @@ def pack(model: TumblingModel) -> tuple[np.ndarray, np.ndarray]:
     fp[L.F_TDT : L.F_TDT + 48] = model.T_d.ravel()
     fp[o_m:o_pe] = model.m
     fp[o_pe:o_kl] = model.p_e
-    fp[o_kl:o_kn] = model.k_l
-    fp[o_kn:o_l] = model.k_n
+    fp[o_kl:o_kn] = model.spring_coefficients[Effect.SPRINGS_LINEAR]
+    fp[o_kn:o_l] = model.spring_coefficients[Effect.SPRINGS_CUBIC]
     if model.mass_track:
         mt = model.mass_track
         fp[o_l:o_lam] = mt.l
