@@ -25,6 +25,7 @@ import numpy as np
 from analytic import aux_rates as _aux
 from analytic.aux_rates import rates
 from analytic.kernel.entry import Solver, evaluate_as, solver_of
+from analytic.kernel.forces import dissipated_power
 from analytic.kernel.jit import HAVE_NUMBA, KERNEL_SOURCES, inline_always, jit, source_fingerprint
 from analytic.kernel.layout import (
     F_MBR,
@@ -78,6 +79,8 @@ def rhs_body(solver, t, y, fp, ip, work, out):  # pragma: no cover - compiled
         fp[F_MBR] + fp[F_MU0],  # m_T = m_BR + μ0, as TumblingModel.m_T
         out[2 * nq :],
     )
+    if out.shape[0] > 2 * nq + 7:  # D, with a dissipative effect on (analytic.assemble)
+        out[2 * nq + 7] = dissipated_power(qd, fp, ip)
     for i in range(out.shape[0]):
         if not math.isfinite(out[i]):
             return STATUS_NONFINITE
@@ -90,10 +93,12 @@ def _make(deps: int, solver: int):
     solve it embeds (``solver``, a :class:`Solver`: numba drops the other branches)."""
 
     def rhs_into(t, y, fp, ip, work, out):  # pragma: no cover - compiled
-        """Fill ``out`` (2 nq + 7) with ``ẏ``; ``work`` (2 nq + 3 + k) receives the kernel's output.
+        """Fill ``out`` (2 nq + 7, or 2 nq + 8 with ``D``) with ``ẏ``; ``work`` (2 nq + 3 + k)
+        receives the kernel's output.
 
         Args:
-            t: time, s. y: ``[q (nq), q̇ (nq), W, I_L (3), I_P (3)]``.
+            t: time, s. y: ``[q (nq), q̇ (nq), W, I_L (3), I_P (3)(, D)]``
+                (:func:`analytic.assemble.aux_count`).
             fp, ip: packed parameters (:func:`analytic.fast.pack`).
         """
         if deps < 0:  # never true: ties numba's cache key to the sources this embeds

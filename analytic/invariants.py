@@ -35,12 +35,12 @@ class Balance(StrEnum):
 
     LINEAR_MOMENTUM = "linear_momentum"  # P - (P(0) + m_T g t + ∫F_C dt)
     ANGULAR_MOMENTUM = "angular_momentum"  # L - L(0) - ∫S τ dt, about the system CoM
-    ENERGY = "energy"  # E - E(0) - W
+    ENERGY = "energy"  # E - E(0) + D - W
 
 
 def balance_residual(inv: Invariants, balance: Balance | str) -> np.ndarray:
     """The balance's residual magnitude at each sample, shape (N,), in the balanced quantity's
-    unit: ``‖P − P_expected‖₂`` (kg·m/s), ``‖L − L(0) − ∫Sτ dt‖₂`` (kg·m²/s), ``|E − E(0) − W|``
+    unit: ``‖P − P_expected‖₂`` (kg·m/s), ``‖L − L(0) − ∫Sτ dt‖₂`` (kg·m²/s), ``|E − E(0) + D − W|``
     (J). Zero for exact dynamics."""
     b = Balance(balance)
     if b is Balance.ENERGY:
@@ -63,13 +63,14 @@ def _max_norm(x: np.ndarray) -> float:
 
 def balance_scale(inv: Invariants, balance: Balance | str) -> float:
     """The magnitude of what the balance balances, in its unit (before any floor):
-    ``max ‖P‖``; ``max(max ‖L‖, max ‖∫Sτ dt‖)``; ``max(max |E|, max |W|)``."""
+    ``max ‖P‖``; ``max(max ‖L‖, max ‖∫Sτ dt‖)``; ``max(max |E|, max |W|, max |D|)``."""
     b = Balance(balance)
     if b is Balance.LINEAR_MOMENTUM:
         return _max_norm(inv.linear_momentum)
     if b is Balance.ANGULAR_MOMENTUM:
         return max(_max_norm(inv.angular_momentum), _max_norm(inv.angular_impulse))
-    return max(_max_norm(inv.energy), _max_norm(inv.work))
+    scale = max(_max_norm(inv.energy), _max_norm(inv.work))
+    return scale if inv.dissipated is None else max(scale, _max_norm(inv.dissipated))
 
 
 def relative_balance(inv: Invariants, balance: Balance | str, floor: float) -> float:
@@ -110,8 +111,10 @@ def compute_invariants(
     work: np.ndarray,
     angular_impulse: np.ndarray,
     linear_impulse: np.ndarray,
+    dissipated: np.ndarray | None = None,
 ) -> Invariants:
-    """Invariants for N samples. ``work`` (N,), impulses (N, 3) are integrals since t = 0."""
+    """Invariants for N samples. ``work`` (N,), impulses (N, 3) and ``dissipated`` (N,; None
+    without a dissipative effect) are integrals since t = 0."""
     m, m_BR, m_T = model.m, model.m_BR, model.m_T
     u, ud = q[:, 3:7], qdot[:, 3:7]
     R, Rd = q[:, :3], qdot[:, :3]
@@ -140,6 +143,7 @@ def compute_invariants(
         angular_impulse=angular_impulse,
         energy=T + U,
         work=work,
+        dissipated=dissipated,
     )
 
 

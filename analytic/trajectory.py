@@ -49,6 +49,9 @@ class Invariants:
         energy: kinetic + gravitational + spring energy of the scene's effects, J, shape (N,).
         work: work done by the control (``τ·ω + F·ṗ + F_C·Ṙ``) and the given torque since t = 0,
             J, shape (N,).
+        dissipated: ``D``, the energy the scene's dissipative effects took out of the motion
+            since t = 0 (``∫ Σ c ė² dt`` of the spring dampers), J, shape (N,); None when no
+            dissipative effect is on (zero).
     """
 
     quat_norm_error: np.ndarray
@@ -58,14 +61,17 @@ class Invariants:
     angular_impulse: np.ndarray
     energy: np.ndarray
     work: np.ndarray
+    dissipated: np.ndarray | None = None
 
     def angular_momentum_balance(self) -> np.ndarray:
         """``L(t) - L(0) - ∫S τ dt``, shape (N, 3): zero for exact dynamics."""
         return self.angular_momentum - self.angular_momentum[0] - self.angular_impulse
 
     def energy_balance(self) -> np.ndarray:
-        """``E(t) - E(0) - W(t)``, shape (N,): zero for exact dynamics."""
-        return self.energy - self.energy[0] - self.work
+        """``E(t) - E(0) + D(t) - W(t)``, shape (N,): zero for exact dynamics."""
+        if self.dissipated is None:
+            return self.energy - self.energy[0] - self.work
+        return self.energy - self.energy[0] + self.dissipated - self.work
 
     def linear_momentum_balance(self) -> np.ndarray:
         return self.linear_momentum - self.linear_momentum_expected

@@ -214,3 +214,11 @@ def body_forces(t, q, qd, fp, ip, w):
             + w[WS_LD + 4 + c] * xd1
             + w[WS_LD + 8 + c] * xd2
         )
+
+
+@inner
+def dissipated_power(qd, fp, ip):
+    """``Ḋ = Σ_j c_j δ(e_j, ė_j)``, W: the power the dissipative spring laws that are on take out
+    of the motion (:func:`analytic.model.dissipated_power`, the same sum), from ``ṗ`` alone.
+    Zero while the kernel carries no dissipative law."""
+    return 0.0
