@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from analytic.invariants import compute_invariants, tracking_errors
+from analytic.invariants import compute_invariants, dissipated_from_samples, tracking_errors
 from analytic.kinematics import omega_of
 from analytic.model import ControlOutput, TumblingModel, dissipates
 from analytic.trajectory import RunStatus, Trajectory
@@ -64,7 +64,9 @@ def assemble(
         controls: the controller's output at each sample (N entries), None where there is none
             (uncontrolled, or not evaluated): zeros then.
         quadratures: ``[W, I_L, I_P(, D)]`` per sample, shape (N, aux_count(model)) (module
-            docstring).
+            docstring); a plant that does not integrate ``D`` along its motion gives the first
+            :data:`N_AUX` and ``D`` is integrated over its samples
+            (:func:`analytic.invariants.dissipated_from_samples`).
         status, message, info: how the run ended and the plant's metadata.
         omega: body-axis angular velocity per sample, rad/s, shape (N, 3), as the plant has it;
             default ``H(u) u̇`` (Eq. 12).
@@ -85,7 +87,18 @@ def assemble(
             res[i] = float(np.linalg.norm(c.residual))
     if omega is None:
         omega = omega_of(q[:, 3:7], qdot[:, 3:7])
-    quadratures = np.asarray(quadratures, dtype=float).reshape(N, aux_count(model))
+    quadratures = np.asarray(quadratures, dtype=float).reshape(N, -1)
+    if quadratures.shape[1] not in (N_AUX, aux_count(model)):
+        raise ValueError(
+            f"quadratures: {quadratures.shape[1]} columns, expected {aux_count(model)}"
+        )
+    dissipated = None
+    if dissipates(model):
+        dissipated = (
+            np.ascontiguousarray(quadratures[:, AUX_D])
+            if quadratures.shape[1] > AUX_D
+            else dissipated_from_samples(model, t, q[:, 7:], qdot[:, 7:], qddot[:, 7:])
+        )
     invariants = compute_invariants(
         model,
         t,
@@ -94,7 +107,7 @@ def assemble(
         np.ascontiguousarray(quadratures[:, 0]),
         np.ascontiguousarray(quadratures[:, 1:4]),
         np.ascontiguousarray(quadratures[:, 4:7]),
-        np.ascontiguousarray(quadratures[:, AUX_D]) if dissipates(model) else None,
+        dissipated,
     )
     return Trajectory(
         engine=engine,

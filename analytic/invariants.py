@@ -26,7 +26,7 @@ import numpy as np
 
 from analytic.effects import Effect
 from analytic.kinematics import T_H, S_batch
-from analytic.model import TumblingModel, spring_energy
+from analytic.model import TumblingModel, dissipated_power, dissipated_power_rate, spring_energy
 from analytic.trajectory import Invariants, Tracking
 
 
@@ -145,6 +145,21 @@ def compute_invariants(
         work=work,
         dissipated=dissipated,
     )
+
+
+def dissipated_from_samples(
+    model: TumblingModel, t: np.ndarray, p: np.ndarray, pd: np.ndarray, pdd: np.ndarray
+) -> np.ndarray:
+    """``D(t) = ∫₀ᵗ Ḋ dt`` over a run's samples, for a plant that does not integrate it along its
+    motion: per interval the two-point Hermite rule ``h/2 (Ḋ₀ + Ḋ₁) + h²/12 (D̈₀ − D̈₁)``, exact for
+    cubics (fourth order in the sample interval), with ``Ḋ`` (:func:`analytic.model.
+    dissipated_power`) and its rate ``D̈`` (:func:`analytic.model.dissipated_power_rate`) from
+    the samples' ``p, ṗ, p̈`` (each (N, n)). Shape (N,), J."""
+    rate = dissipated_power(model, p, pd)
+    accel = dissipated_power_rate(model, p, pd, pdd)
+    h = np.diff(np.asarray(t, float))
+    steps = 0.5 * h * (rate[1:] + rate[:-1]) + h * h / 12.0 * (accel[:-1] - accel[1:])
+    return np.concatenate([[0.0], np.cumsum(steps)])
 
 
 def tracking_errors(

@@ -394,6 +394,30 @@ def dissipated_power(model: TumblingModel, p: np.ndarray, pd: np.ndarray) -> np.
     return D
 
 
+def dissipated_power_rate(
+    model: TumblingModel, p: np.ndarray, pd: np.ndarray, pdd: np.ndarray
+) -> np.ndarray:
+    """``d Ḋ / dt``, W/s: the rate of :func:`dissipated_power` along a motion with ``p̈``, by the
+    chain rule through each dissipative law's ``δ(e, ė)`` (a central difference of ``δ`` in each
+    argument, exact for the quadratic ``δ`` of a viscous law); shapes (..., n) -> (...)."""
+    D = np.zeros(np.shape(p)[:-1])
+    if model.n == 0:
+        return D
+    e = _element_differences(np.asarray(p) - model.p_e)
+    ed = _element_differences(pd)
+    edd = _element_differences(pdd)
+    for law in model.spring_laws:
+        if law.dissipation is None:
+            continue
+        c = model.spring_coefficients[law.effect]
+        he = 1e-3 * (1.0 + np.abs(e))
+        hd = 1e-3 * (1.0 + np.abs(ed))
+        d_e = (law.dissipation(e + he, ed) - law.dissipation(e - he, ed)) / (2 * he)
+        d_ed = (law.dissipation(e, ed + hd) - law.dissipation(e, ed - hd)) / (2 * hd)
+        D = D + (d_e * ed + d_ed * edd) @ c
+    return D
+
+
 def dissipates(model: TumblingModel) -> bool:
     """Whether a law that is on takes energy out of the motion (the run then integrates ``D``)."""
     return any(law.dissipation is not None for law in model.spring_laws)
@@ -403,6 +427,7 @@ __all__ = [
     "ControlOutput",
     "TumblingModel",
     "dissipated_power",
+    "dissipated_power_rate",
     "dissipates",
     "spring_energy",
 ]

@@ -8,6 +8,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 
 from analytic.effects import Effect
+from analytic.effects import damping as _damping
 from analytic.effects import springs as _springs
 from analytic.effects.declaration import Declaration, SpringLaw
 
@@ -25,6 +26,7 @@ DECLARATIONS: tuple[Declaration, ...] = (
         "Track the mass-position requirement `[control.masses]` (Eqs. 77–81).",
     ),
     *_springs.DECLARATIONS,
+    _damping.DECLARATION,
     Declaration(
         Effect.MASS_INERTIA,
         "The masses' own rotational inertia (Remark 1, Eq. 54), from `masses.ring_radius`, "
