@@ -87,6 +87,7 @@ from typing import Any
 
 import numpy as np
 
+from analytic.assemble import aux_count
 from analytic.effects import SolverMethod, Stepper
 from analytic.error_scale import (
     PROBE_STEPS,
@@ -448,7 +449,8 @@ def integrate(
         stepper: ``auto``, ``compiled`` or ``scipy``.
         fast: the :class:`analytic.fast.FastModel` whose packed constants ``f`` evaluates with
             :func:`analytic.fast_rhs.rhs_into` (None: the numpy model answers; scipy's loop). With
-            it, ``y0`` is ``[q, q̇, W, I_L, I_P]`` (``2 nq + 7``) and ``n_motion = 2 nq``.
+            it, ``y0`` is ``[q, q̇, W, I_L, I_P(, D)]`` (``2 nq + 7``, ``+ 1`` with a dissipative
+            effect: :func:`analytic.assemble.aux_count`) and ``n_motion = 2 nq``.
 
     Raises:
         ValueError: naming ``stepper`` (:func:`choose`), before any step.
@@ -465,9 +467,10 @@ def integrate(
     )
     if choose(stepper, method, fast) is Stepper.SCIPY:
         return step_and_sample(f, t_eval, y0, **kw)
-    if len(y0) != 2 * fast.nq + 7 or n_motion != 2 * fast.nq:
+    ny = 2 * fast.nq + aux_count(fast.model)
+    if len(y0) != ny or n_motion != 2 * fast.nq:
         raise ValueError(
-            f"y0: the compiled loop integrates [q, q̇, W, I_L, I_P] of {2 * fast.nq + 7} components "
+            f"y0: the compiled loop integrates [q, q̇, W, I_L, I_P(, D)] of {ny} components "
             f"with {2 * fast.nq} under error control (got {len(y0)} and n_motion={n_motion})"
         )
     t_eval = np.ascontiguousarray(t_eval, dtype=np.float64)
