@@ -48,6 +48,9 @@ class SpringLaw:
             the motion, ``P = c δ`` W (a dissipative law); else None.
         random: ``(lo, hi)``: random scenes draw ``c ~ m̄ U(lo, hi)`` (``m̄`` the mean mass), in the
             law's unit.
+        fuzz: ``(lo, hi)``: the fuzzer draws ``c = m_min 10^U(lo, hi)`` (``m_min`` the lightest
+            mass), for a law that is not ``seeded`` (the seeded ones have their own rules in
+            :mod:`validation.studies.fuzz.space`).
         seeded: its coefficients are part of the random scenes' seeded stream (drawn in the order
             of the laws, whatever the effects listed); a law added later is drawn after every
             other draw, and only when its effect is listed, so the seeded scenes of the others do
@@ -60,6 +63,7 @@ class SpringLaw:
     potential: Shape | None
     dissipation: Shape | None
     random: tuple[float, float]
+    fuzz: tuple[float, float] = (-2.0, 1.0)
     seeded: bool = False
 
     def __post_init__(self) -> None:

@@ -24,6 +24,7 @@ DECLARATIONS: tuple[Declaration, ...] = (
     Declaration(
         Effect.CONTROL_MASSES,
         "Track the mass-position requirement `[control.masses]` (Eqs. 77–81).",
+        needs_masses=True,
     ),
     *_springs.DECLARATIONS,
     _damping.DECLARATION,
@@ -32,6 +33,7 @@ DECLARATIONS: tuple[Declaration, ...] = (
         "The masses' own rotational inertia (Remark 1, Eq. 54), from `masses.ring_radius`, "
         "`inertia_axial` + `inertia_transverse` or `inertia_body`; without it the masses are "
         "points.",
+        needs_masses=True,
     ),
 )
 """Every effect, once, in the order of the reference."""
