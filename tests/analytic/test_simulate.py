@@ -13,7 +13,7 @@ import pytest
 from analytic import fast
 from analytic.scene import load_scene
 from analytic.simulate import simulate
-from validation.compare.checks import attitude_angle
+from validation.compare.differences import attitude_angle
 from validation.scenes import scene_path
 
 # Two integrations of right-hand sides equal to ~1e-13 at rtol 1e-12 over 1 s: the step sequences

@@ -25,7 +25,7 @@ from mj_bridge.plants import (
     registered,
 )
 from tests.support.plugins import install_project
-from validation.compare.checks import Subject, subject_order_key
+from validation.compare.subject import Subject, subject_order_key
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "support" / "plugin_example"
 VENV_BIN = Path(sys.executable).parent

@@ -2,9 +2,15 @@
 closed-form tracking laws and its balances, the named thresholds, and the referee.
 
 * :mod:`.checks`: ``compare_plants`` (every pair's difference series and every plant's checks) and
-  the ``Check`` record;
+  the records every output serialises (``Check``, ``Series``, ``Comparison``);
+* :mod:`.subject`: whose quantity a series or check is (a plant, a pair), in report order;
+* :mod:`.differences`: what two plants' difference is, and the scale of its bound;
+* :mod:`.tracking_laws`: the closed-form error dynamics (Eqs. 78, 84);
+* :mod:`.balances`: the balances of energy and momenta, from each plant's terms;
+* :mod:`.reductions`: a vector per sample to a scalar, a run to its largest magnitude;
 * :mod:`.thresholds`: ``thresholds_for``, the named agreement thresholds of a scene;
-* :mod:`.referee`: ``referee``, which plant is the outlier of each quantity;
+* :mod:`.referee`: ``referee``, which plant is the outlier of each quantity; :mod:`.noise_floor`,
+  the distance below which differences decide nothing;
 * :mod:`.summary`: one-line sentences and drift figures for reports and the console.
 """
 

@@ -1,28 +1,23 @@
-"""Diff of two :class:`~analytic.trajectory.Trajectory` records over time, summaries and checks.
+"""The comparison of N plants: its records, and how every pair and every plant is judged.
 
-What is compared (every quantity a scalar per output sample, so it can be summarised as max, RMS,
-final value and time of the max, plotted on a log axis and logged to Rerun):
+:func:`compare_plants` diffs every pair of plants (:func:`difference_series`, the quantities of
+:mod:`validation.compare.differences`) and judges each plant on its own (:func:`plant_series`: its
+tracking errors against the requirement ``|e_ω|`` (rad/s) and ``max_i |e_p,i|`` (m), their
+deviations from the closed-form error dynamics of :mod:`validation.compare.tracking_laws`, the
+quaternion norm error ``|uᵀu - 1|``, the balances of :mod:`validation.compare.balances`, the control
+torque ``|τ|`` and each rod force). Every quantity is a scalar per output sample, so it can be
+summarised as max, RMS, final value and time of the max (:class:`Summary`), plotted on a log axis
+and logged to Rerun. Keys: ``diff.<name>`` for analytic vs MuJoCo, ``diff_<pair>.<name>`` for any
+other pair, ``<plant>.<name>`` for one plant's.
 
-* analytic vs MuJoCo (key ``diff.<name>``): position of C ``|R_a - R_m|`` (m, inertial); attitude,
-  the angle of the relative quaternion ``conj(u_a) ⊗ u_m``, ``2·atan2(|vec|, |w|)`` (rad, so q and -q
-  are the same attitude); rod positions ``max_i |p_a,i - p_m,i|`` (m); velocity of C (m/s); rod
-  velocities (m/s); body angular velocity ``|ω_a - ω_m|`` (rad/s, body axes); control torque
-  ``|τ_a - τ_m|`` (N·m, body axes); rod forces ``max_i |F_a,i - F_m,i|`` (N);
-* each plant (key ``<plant>.<name>``): tracking errors against the requirement ``|e_ω|`` (rad/s) and
-  ``max_i |e_p,i|`` (m); their deviations from the closed-form error dynamics (``docs/errata.md``, item 3:
-  ``e_ω(t) = exp(-P t) e_ω(0)``, and ``ë + α ė + β e = 0`` for each controlled mass, Eq. 78);
-  the quaternion norm error ``|uᵀu - 1|``; the balances of linear momentum (against gravity),
-  angular momentum about the system centre of mass (against the impulse of the control torque) and
-  energy (against the work of the control); the control torque ``|τ|`` and each rod force.
-
-Each check compares one summarised value with a named threshold from :mod:`validation.compare.thresholds`
-(the scene's ``[thresholds]`` override the defaults). For the states' differences and the tracking
-laws the bound is ``value + rtol · scale`` (:meth:`analytic.threshold.Threshold.bound`), ``scale``
-the quantity's own magnitude: the largest over time and over the compared plants of C's departure
-from its uniformly accelerated motion (position and velocity of C), ``|p_i|`` (rod positions),
-``|ṗ_i|``, ``|ω|`` (:data:`MAGNITUDES`); for
-a tracking law the plant's own ``|ω|`` or controlled ``|p_i|``. Non-finite samples are left out
-of a scale (a diverged run's difference is infinite and fails anyway). Quaternions are w first.
+Each check (:class:`Check`) compares one summarised value with a named threshold from
+:mod:`validation.compare.thresholds` (the scene's ``[thresholds]`` override the defaults). For the
+states' differences and the tracking laws the bound is ``value + rtol · scale``
+(:meth:`analytic.threshold.Threshold.bound`), ``scale`` the quantity's own magnitude over the run
+(:data:`validation.compare.differences.MAGNITUDES`; for a tracking law the plant's own ``|ω|`` or
+controlled ``|p_i|``); a relative check divides by its reference signal's largest magnitude.
+The records here are what every output serialises (``report.json``'s checks and summaries): a
+change to their shape costs this module; a change to what is compared costs the module named above.
 """
 
 from __future__ import annotations
@@ -33,18 +28,18 @@ import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from enum import StrEnum
-from typing import Any, ClassVar
+from typing import Any
 
 import numpy as np
 
-from analytic.effects import Effect
-from analytic.invariants import Balance, balance_residual, balance_scale
 from analytic.threshold import Bound, BoundPart
-from analytic.trajectory import Engine, RunStatus, Trajectory
+from analytic.trajectory import RunStatus, Trajectory
+from validation.compare.balances import BALANCES, BalanceTerms
+from validation.compare.differences import TIME_MATCH_TOL, Difference, differences, pair_magnitude
+from validation.compare.reductions import largest_row_norm, maxabs, norm
+from validation.compare.subject import Subject, diff_key, pair_subject
 from validation.compare.thresholds import Threshold, thresholds_for
-
-# Two sample times are the same sample when they agree to this (s).
-TIME_MATCH_TOL = 1e-9
+from validation.compare.tracking_laws import law_deviations, tracking_magnitudes
 
 
 class Group(StrEnum):
@@ -54,113 +49,6 @@ class Group(StrEnum):
     TRACKING = "tracking"
     INVARIANT = "invariant"
     CONTROL = "control"
-
-
-class Difference(StrEnum):
-    """The quantities compared between two plants, in report order (the names of their
-    thresholds in :mod:`validation.compare.thresholds`); the last two are relative to the reference
-    plant's largest control force, ``rod_forces`` only with masses."""
-
-    POSITION_C = "position_C"
-    ATTITUDE = "attitude"
-    ROD_POSITIONS = "rod_positions"
-    VELOCITY_C = "velocity_C"
-    ROD_VELOCITIES = "rod_velocities"
-    ANGULAR_VELOCITY = "angular_velocity"
-    CONTROL_TORQUE = "control_torque"
-    ROD_FORCES = "rod_forces"
-
-
-PAIR_SEPARATOR = " vs "
-
-
-class Subject(str):
-    """Whose quantity a series or check is: one plant (its name, ``"mujoco"``) or the difference of
-    two (``"analytic vs mujoco"``, the two in report order: :func:`mj_bridge.registry.order_key`).
-
-    Open: any plant name, a built-in's, a plugin's or another label (ordered last). A ``str``, so
-    it equals, hashes and serialises as its text; compare subjects with ``==``, not ``is``. The
-    built-in plants and their pairs are the class constants :attr:`ANALYTIC`, :attr:`MUJOCO`,
-    :attr:`PINOCCHIO`, :attr:`BOTH` (the reference pair, analytic vs MuJoCo),
-    :attr:`ANALYTIC_PINOCCHIO` and :attr:`MUJOCO_PINOCCHIO`.
-    """
-
-    __slots__ = ()
-
-    ANALYTIC: ClassVar[Subject]
-    MUJOCO: ClassVar[Subject]
-    PINOCCHIO: ClassVar[Subject]
-    BOTH: ClassVar[Subject]
-    ANALYTIC_PINOCCHIO: ClassVar[Subject]
-    MUJOCO_PINOCCHIO: ClassVar[Subject]
-
-    def __new__(cls, text: str) -> Subject:
-        text = str(text)
-        parts = text.split(PAIR_SEPARATOR)
-        if len(parts) > 2 or not all(p and p == p.strip() for p in parts):
-            raise ValueError(
-                f"subject: a plant name or 'a vs b', each a non-empty name (got {text!r})"
-            )
-        return super().__new__(cls, text)
-
-    @classmethod
-    def plant(cls, name: str) -> Subject:
-        """The subject of plant ``name`` alone (``ValueError`` for a name holding ``" vs "``)."""
-        s = cls(name)
-        if s.is_pair:
-            raise ValueError(f"subject: a plant name cannot hold {PAIR_SEPARATOR!r} (got {name!r})")
-        return s
-
-    @classmethod
-    def pair(cls, a: str, b: str) -> Subject:
-        """The subject of the difference of plants ``a`` and ``b`` (names, either order), the
-        two in report order."""
-        # deferred: mj_bridge.registry reads installed metadata (importlib.metadata, ~20 ms by python -X importtime), paid only when plants are ordered
-        from mj_bridge.registry import order_key
-
-        first, second = sorted((str(cls.plant(a)), str(cls.plant(b))), key=order_key)
-        if first == second:
-            raise ValueError(f"subject: a pair of two different plants (got {a!r} twice)")
-        return cls(f"{first}{PAIR_SEPARATOR}{second}")
-
-    @property
-    def value(self) -> str:
-        """The text, a plain ``str`` (as an enum member's ``value``)."""
-        return str.__str__(self)
-
-    @property
-    def is_pair(self) -> bool:
-        return PAIR_SEPARATOR in self
-
-    @property
-    def plants(self) -> tuple[str, ...]:
-        """The plant names this subject is about (two for a pair)."""
-        return tuple(self.value.split(PAIR_SEPARATOR))
-
-    @property
-    def slug(self) -> str:
-        """``analytic_vs_mujoco``: the subject in keys, labels and entity paths."""
-        return self.value.replace(PAIR_SEPARATOR, "_vs_")
-
-    def __repr__(self) -> str:
-        return f"Subject({self.value!r})"
-
-
-Subject.ANALYTIC = Subject(Engine.ANALYTIC.value)
-Subject.MUJOCO = Subject(Engine.MUJOCO.value)
-Subject.PINOCCHIO = Subject(Engine.PINOCCHIO.value)
-Subject.BOTH = Subject("analytic vs mujoco")
-Subject.ANALYTIC_PINOCCHIO = Subject("analytic vs pinocchio")
-Subject.MUJOCO_PINOCCHIO = Subject("mujoco vs pinocchio")
-
-
-def subject_order_key(subject: str) -> tuple:
-    """Sort key of subjects in report order: the plants first (in report order), then the pairs
-    (by their first plant, then their second)."""
-    from mj_bridge.registry import order_key
-
-    s = Subject(subject)
-    return (len(s.plants), *(order_key(p) for p in s.plants))
 
 
 def _frozen(a: Any) -> np.ndarray:
@@ -405,180 +293,24 @@ class Comparison:
 
 
 # ----------------------------------------------------------------------------------------------
-# Elementary measures
-# ----------------------------------------------------------------------------------------------
-
-
-def attitude_angle(u_a: np.ndarray, u_b: np.ndarray) -> np.ndarray:
-    """Angle of the relative rotation between two attitudes, rad, in [0, π].
-
-    ``conj(u_a) ⊗ u_b = (w, vec)`` with ``w = u_a·u_b`` and ``vec = a0 b⃗ - b0 a⃗ - a⃗ × b⃗``; the
-    angle is ``2·atan2(|vec|, |w|)``, so q and -q give 0. Quaternions need not be unit (the ratio is
-    scale-free). Shapes (N, 4), (N, 4) -> (N,), or (4,), (4,) -> ().
-    """
-    a = np.asarray(u_a, float)
-    b = np.asarray(u_b, float)
-    if a.shape != b.shape or a.shape[-1] != 4:
-        raise ValueError(f"u_b: shape must equal u_a's (..., 4) = {a.shape} (got {b.shape})")
-    w = np.sum(a * b, axis=-1)
-    vec = a[..., :1] * b[..., 1:] - b[..., :1] * a[..., 1:] - np.cross(a[..., 1:], b[..., 1:])
-    return 2.0 * np.arctan2(np.linalg.norm(vec, axis=-1), np.abs(w))
-
-
-def _norm(x: np.ndarray) -> np.ndarray:
-    return np.linalg.norm(x, axis=1) if x.ndim == 2 else np.abs(x)
-
-
-def _maxabs(x: np.ndarray) -> np.ndarray:
-    """Max over columns of |x|, shape (N, k) -> (N,); zeros when k = 0."""
-    if x.shape[1] == 0:
-        return np.zeros(x.shape[0])
-    return np.max(np.abs(x), axis=1)
-
-
-def _common(a: Trajectory, b: Trajectory) -> int:
-    """Number of leading samples the two trajectories share (same times)."""
-    n = min(a.t.shape[0], b.t.shape[0])
-    if n == 0:
-        return 0
-    same = np.abs(a.t[:n] - b.t[:n]) <= TIME_MATCH_TOL * np.maximum(1.0, np.abs(a.t[:n]))
-    if not same[0]:
-        raise ValueError(
-            f"t: the two trajectories start at different times ({a.t[0]} vs {b.t[0]} s)"
-        )
-    return int(np.argmin(same)) if not same.all() else n
-
-
-# ----------------------------------------------------------------------------------------------
 # Series
 # ----------------------------------------------------------------------------------------------
 
 
-def pair_subject(a: Trajectory, b: Trajectory) -> Subject:
-    """The subject of ``a`` vs ``b``; two runs of one engine are compared as the reference pair."""
-    if a.engine == b.engine:
-        return Subject.BOTH
-    return Subject.pair(a.engine, b.engine)
-
-
-def diff_key(subject: Subject, name: str) -> str:
-    """Key of a difference series: ``diff.<name>`` for analytic vs MuJoCo (the two-plant report's
-    keys), ``diff_<pair slug>.<name>`` for any other pair."""
-    return f"diff.{name}" if subject == Subject.BOTH else f"diff_{subject.slug}.{name}"
-
-
 def difference_series(a: Trajectory, b: Trajectory) -> tuple[Series, ...]:
-    """Differences of two plants on their common samples (see the module docstring)."""
-    if a.n != b.n:
-        raise ValueError(f"q: the trajectories have different numbers of masses ({a.n} vs {b.n})")
-    k = _common(a, b)
-    t = a.t[:k]
-    qa, qb, va, vb = a.q[:k], b.q[:k], a.qdot[:k], b.qdot[:k]
+    """Differences of two plants on their common samples
+    (:func:`validation.compare.differences.differences`), as series of the pair."""
+    t, values = differences(a, b)
     D, S = Group.DIFFERENCE, pair_subject(a, b)
-    rows = [
-        ("position_C", "position of C |R_a − R_m|", "m", _norm(qa[:, :3] - qb[:, :3])),
-        (
-            "attitude",
-            "attitude angle of conj(u_a)⊗u_m",
-            "rad",
-            attitude_angle(qa[:, 3:7], qb[:, 3:7]),
-        ),
-        ("rod_positions", "rod positions max_i |p_a − p_m|", "m", _maxabs(qa[:, 7:] - qb[:, 7:])),
-        ("velocity_C", "velocity of C |Ṙ_a − Ṙ_m|", "m/s", _norm(va[:, :3] - vb[:, :3])),
-        (
-            "rod_velocities",
-            "rod velocities max_i |ṗ_a − ṗ_m|",
-            "m/s",
-            _maxabs(va[:, 7:] - vb[:, 7:]),
-        ),
-        (
-            "angular_velocity",
-            "body angular velocity |ω_a − ω_m|",
-            "rad/s",
-            _norm(a.omega[:k] - b.omega[:k]),
-        ),
-        ("control_torque", "control torque |τ_a − τ_m|", "N·m", _norm(a.torque[:k] - b.torque[:k])),
-        (
-            "rod_forces",
-            "rod forces max_i |F_a − F_m|",
-            "N",
-            _maxabs(a.rod_forces[:k] - b.rod_forces[:k]),
-        ),
-    ]
-    return tuple(Series(diff_key(S, n), lab, u, D, S, t, v) for n, lab, u, v in rows)
-
-
-def _propagate(A: np.ndarray, x0: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """``x(t) = exp(A (t - t0)) x0`` at every time of ``t``, shape (N, k).
-
-    Output times are uniform (``analytic.scene.output_times``): then ``x_{i+1} = exp(A h) x_i``
-    with one matrix exponential, exact up to rounding that grows at most like ``i`` ulps for a
-    stable ``A`` (below 1e-12 relative over 10⁴ samples, far under the tracking thresholds).
-    Other time grids take one exponential per time (scipy's batched ``expm``)."""
-    from scipy.linalg import expm  # here: scipy.linalg costs 0.2 s to import, at start-up
-
-    t = np.asarray(t, float)
-    x0 = np.asarray(x0, float)
-    out = np.empty((t.shape[0], x0.shape[0]))
-    if t.shape[0] == 0:
-        return out
-    h = np.diff(t)
-    if h.size and np.all(np.abs(h - h[0]) <= 1e-12 * max(abs(h[0]), abs(t[-1]))):
-        step = expm(A * h[0])
-        out[0] = x0
-        for i in range(1, t.shape[0]):
-            out[i] = step @ out[i - 1]
-        return out
-    return expm(A[None] * (t - t[0])[:, None, None]) @ x0
-
-
-def omega_error_reference(t: np.ndarray, e0: np.ndarray, gain: np.ndarray) -> np.ndarray:
-    """``e_ω(t) = exp(-P (t - t0)) e_ω(t0)`` (Eq. 84 with ``docs/errata.md``, item 3), shape (N, k), rad/s."""
-    t = np.asarray(t, float)
-    gain = np.asarray(gain, float)
-    if gain.size == 0:
-        return np.zeros((t.shape[0], 0))
-    return _propagate(-gain, e0, t)
-
-
-def mass_error_reference(
-    t: np.ndarray, e0: np.ndarray, edot0: np.ndarray, alpha: np.ndarray, beta: np.ndarray
-) -> np.ndarray:
-    """Solution of ``ë + α ė + β e = 0`` (Eq. 78) per controlled mass, shape (N, k), m."""
-    t = np.asarray(t, float)
-    out = np.zeros((t.shape[0], len(e0)))
-    for j in range(len(e0)):
-        A = np.array([[0.0, 1.0], [-beta[j], -alpha[j]]])
-        out[:, j] = _propagate(A, np.array([e0[j], edot0[j]]), t)[:, 0]
-    return out
-
-
-def _tracking_law(traj: Trajectory, scene: Any) -> tuple[np.ndarray | None, np.ndarray | None]:
-    """Deviations of the tracking errors from their closed-form dynamics, or None when untracked."""
-    tr, t = traj.tracking, traj.t
-    dev_w = dev_p = None
-    if tr.omega_components and scene.control.omega is not None and t.size:
-        e = tr.e_omega
-        ref = omega_error_reference(t, e[0], scene.control.omega.gain)
-        dev_w = _norm(e - ref)
-    if tr.mass_indices and scene.control.masses is not None and t.size:
-        mt = scene.control.masses
-        pos = [list(mt.indices).index(i) for i in tr.mass_indices]
-        l, lam = np.asarray(mt.l)[pos], np.asarray(mt.lam)[pos]
-        # p̄ = p_e + l cos(λ t) (Eq. 75), so ė(t0) = ṗ(t0) + l λ sin(λ t0).
-        edot0 = traj.qdot[0, 7 + np.array(tr.mass_indices)] + l * lam * np.sin(lam * t[0])
-        ref = mass_error_reference(
-            t, tr.e_p[0], edot0, np.asarray(mt.alpha)[pos], np.asarray(mt.beta)[pos]
-        )
-        dev_p = _maxabs(tr.e_p - ref)
-    return dev_w, dev_p
+    return tuple(
+        Series(diff_key(S, d.quantity.value), d.label, d.unit, D, S, t, d.values) for d in values
+    )
 
 
 def plant_series(traj: Trajectory, scene: Any = None) -> tuple[Series, ...]:
     """One plant's tracking errors, invariants' balances and control forces (module docstring)."""
     subj = Subject.plant(traj.engine)
     t = traj.t
-    inv = traj.invariants
     out: list[Series] = []
 
     def add(name, label, unit, group, values):
@@ -586,32 +318,26 @@ def plant_series(traj: Trajectory, scene: Any = None) -> tuple[Series, ...]:
 
     T, I, C = Group.TRACKING, Group.INVARIANT, Group.CONTROL
     if traj.tracking.omega_components:
-        add("e_omega", "tracking error |ω − ω̄|", "rad/s", T, _norm(traj.tracking.e_omega))
+        add("e_omega", "tracking error |ω − ω̄|", "rad/s", T, norm(traj.tracking.e_omega))
     if traj.tracking.mass_indices:
-        add("e_p", "tracking error max_i |p_i − p̄_i|", "m", T, _maxabs(traj.tracking.e_p))
+        add("e_p", "tracking error max_i |p_i − p̄_i|", "m", T, maxabs(traj.tracking.e_p))
     if scene is not None:
-        dev_w, dev_p = _tracking_law(traj, scene)
+        dev_w, dev_p = law_deviations(traj, scene)
         if dev_w is not None:
             add("e_omega_law", "|e_ω − exp(−P t) e_ω(0)|", "rad/s", T, dev_w)
         if dev_p is not None:
             add("e_p_law", "max_i |e_p − e_ref| (ë + αė + βe = 0)", "m", T, dev_p)
-    add("quat_norm", "quaternion norm error |uᵀu − 1|", "1", I, np.abs(inv.quat_norm_error))
     add(
-        "linear_momentum",
-        "linear momentum balance |P − P_expected|",
-        "kg·m/s",
+        "quat_norm",
+        "quaternion norm error |uᵀu − 1|",
+        "1",
         I,
-        balance_residual(inv, Balance.LINEAR_MOMENTUM),
+        np.abs(traj.invariants.quat_norm_error),
     )
-    add(
-        "angular_momentum",
-        "angular momentum balance |L − L(0) − ∫Sτ dt|",
-        "kg·m²/s",
-        I,
-        balance_residual(inv, Balance.ANGULAR_MOMENTUM),
-    )
-    add("energy", "energy balance |E − E(0) − W|", "J", I, balance_residual(inv, Balance.ENERGY))
-    add("torque", "control torque |τ| (body axes)", "N·m", C, _norm(traj.torque))
+    terms = BalanceTerms.of(traj.invariants)
+    for b in BALANCES:
+        add(b.balance.value, b.label, b.unit, I, b.residual(terms))
+    add("torque", "control torque |τ| (body axes)", "N·m", C, norm(traj.torque))
     for i in range(traj.n):
         add(f"rod_force_{i + 1}", f"rod force on mass {i + 1}", "N", C, traj.rod_forces[:, i])
     return tuple(out)
@@ -685,10 +411,6 @@ def judge(
 def completed_check(traj: Trajectory, t_end: float | None = None) -> Check:
     """The ``completed`` check of one run: status ``ok`` and its last sample at ``t_end`` (s;
     default the run's own last sample)."""
-    return _completed_check(traj, t_end)
-
-
-def _completed_check(traj: Trajectory, t_end: float | None) -> Check:
     reached = float(traj.t[-1]) if traj.t.size else math.nan
     horizon = float(t_end) if t_end is not None else reached
     ok = traj.status is RunStatus.OK and traj.t.size > 0 and reached >= horizon - TIME_MATCH_TOL
@@ -698,90 +420,6 @@ def _completed_check(traj: Trajectory, t_end: float | None) -> Check:
         else f"the run did not finish: {traj.message or traj.status.value}"
     )
     return Check("completed", Subject.plant(traj.engine), reached, horizon, "s", bool(ok), reason)
-
-
-def _largest(x: np.ndarray, rows: bool) -> float:
-    """The largest finite magnitude of ``x`` (shape (N, k)): of each row's Euclidean norm when
-    ``rows`` (a vector per sample), else of every entry; 0 when there is none."""
-    a = np.asarray(x, float)
-    if a.size == 0:
-        return 0.0
-    m = np.linalg.norm(a, axis=1) if rows else np.abs(a)
-    m = m[np.isfinite(m)]
-    return float(m.max()) if m.size else 0.0
-
-
-def _departure(tr: Trajectory, k: int, g: np.ndarray, velocity: bool) -> float:
-    """The largest departure of C's motion over the first ``k`` samples from the uniformly
-    accelerated one its first sample and gravity ``g`` (inertial, m/s², zeros without the effect)
-    give: ``|R - (R(0) + Ṙ(0) t + ½ g t²)|`` (m), or ``|Ṙ - (Ṙ(0) + g t)|`` (m/s) for
-    ``velocity``. The uniformly accelerated part is a polynomial of degree two that both kinds of
-    integrator (Runge-Kutta methods of order 4 and 8) reproduce to round-off, so it is not a scale
-    of their error, however far it carries C (1.6 km of free fall in the paper scenes)."""
-    k = min(k, tr.t.shape[0])
-    if k == 0:
-        return 0.0
-    t = (tr.t[:k] - tr.t[0])[:, None]
-    R, V = tr.q[:k, :3], tr.qdot[:k, :3]
-    if velocity:
-        return _largest(V - (V[0] + g * t), True)
-    return _largest(R - (R[0] + V[0] * t + 0.5 * g * t * t), True)
-
-
-MAGNITUDES: Mapping[str, Any] = {
-    "position_C": lambda tr, k, g: _departure(tr, k, g, False),  # m
-    "rod_positions": lambda tr, k, g: _largest(tr.q[:k, 7:], False),  # |p_i|, m
-    "velocity_C": lambda tr, k, g: _departure(tr, k, g, True),  # m/s
-    "rod_velocities": lambda tr, k, g: _largest(tr.qdot[:k, 7:], False),  # |ṗ_i|, m/s
-    "angular_velocity": lambda tr, k, g: _largest(tr.omega[:k], True),  # |ω|, rad/s (body axes)
-}
-"""Difference quantity -> ``(trajectory, k, g) -> its largest magnitude over the first k
-samples``, in the quantity's unit: the scale of its bound's relative part (the pair's is the
-larger of the two plants'). For C, its departure from the uniformly accelerated motion
-(:func:`_departure`); for the others, their own magnitude. The attitude has none
-(:data:`validation.compare.thresholds.SCALED`)."""
-
-
-def scene_gravity(scene: Any) -> np.ndarray:
-    """The scene's gravity vector (inertial, m/s², shape (3,)); zeros without the effect or
-    without a scene."""
-    if scene is None or not scene.has(Effect.GRAVITY):
-        return np.zeros(3)
-    return np.asarray(scene.gravity, float)
-
-
-def pair_magnitude(
-    name: str, a: Trajectory, b: Trajectory, k: int | None = None, scene: Any = None
-) -> float:
-    """The scale of difference ``name``'s relative part for plants ``a`` and ``b``: the largest
-    magnitude over their first ``k`` samples (default all) and over the two, in the quantity's
-    unit (:data:`MAGNITUDES`; ``scene`` gives C's gravity); 0 for a quantity without one."""
-    of = MAGNITUDES.get(name)
-    if of is None:
-        return 0.0
-    if k is None:
-        k = min(a.t.shape[0], b.t.shape[0])
-    g = scene_gravity(scene)
-    return max(of(a, k, g), of(b, k, g))
-
-
-def _tracking_magnitudes(traj: Trajectory) -> tuple[float, float]:
-    """The scales of one plant's tracking laws: its largest ``|ω|`` (rad/s) and the largest
-    ``|p_i|`` of its controlled masses (m), over the run."""
-    idx = list(traj.tracking.mass_indices)
-    p = _largest(traj.q[:, [7 + i for i in idx]], False) if idx else 0.0
-    return _largest(traj.omega, True), p
-
-
-def _scale_max(x: np.ndarray) -> float:
-    if x.size == 0:
-        return 0.0
-    v = (
-        _norm(x)
-        if x.ndim == 2 and x.shape[1] > 1
-        else np.abs(x).reshape(x.shape[0], -1).max(axis=1)
-    )
-    return float(np.max(v)) if v.size else 0.0
 
 
 def compare(
@@ -814,7 +452,7 @@ def compare(
     plants = [p for p in (analytic, mujoco) if p is not None]
 
     for p in plants:
-        checks.append(_completed_check(p, t_end))
+        checks.append(completed_check(p, t_end))
         if p.status is not RunStatus.OK:
             notes.append(
                 f"{p.engine} run failed: {p.message} (compared up to t = {p.t[-1]:.6g} s)"
@@ -837,7 +475,7 @@ def compare(
                     th["control_torque"],
                     pair,
                     by["control_torque"],
-                    _scale_max(analytic.torque[:k]),
+                    largest_row_norm(analytic.torque[:k]),
                 )
             )
         else:
@@ -869,17 +507,18 @@ def compare(
         series.extend(ps)
         by = {s.name: s for s in ps}
         subj = Subject.plant(p.engine)
-        w_size, p_size = _tracking_magnitudes(p)
+        w_size, p_size = tracking_magnitudes(p)
         if "e_omega_law" in by:
             checks.append(
                 _bound_check(th["tracking_omega"], subj, by["e_omega_law"], magnitude=w_size)
             )
         if "e_p_law" in by:
             checks.append(_bound_check(th["tracking_p"], subj, by["e_p_law"], magnitude=p_size))
-        inv = p.invariants
         checks.append(_bound_check(th["quat_norm"], subj, by["quat_norm"]))
-        for b in Balance:  # relative to the balanced quantity: analytic.invariants.relative_balance
-            checks.append(_bound_check(th[b.value], subj, by[b.value], balance_scale(inv, b)))
+        terms = BalanceTerms.of(p.invariants)
+        for b in BALANCES:  # relative to the balanced quantity (validation.compare.balances)
+            name = b.balance.value
+            checks.append(_bound_check(th[name], subj, by[name], b.scale(terms)))
 
     t = series[0].t if series else analytic.t
     return Comparison(
@@ -931,26 +570,17 @@ def compare_plants(
 
 
 __all__ = [
-    "MAGNITUDES",
-    "PAIR_SEPARATOR",
     "Check",
+    "CheckState",
     "Comparison",
-    "Difference",
     "Group",
     "Series",
     "Subject",
     "Summary",
-    "attitude_angle",
     "compare",
     "compare_plants",
     "completed_check",
-    "diff_key",
     "difference_series",
     "judge",
-    "mass_error_reference",
-    "omega_error_reference",
-    "pair_magnitude",
-    "pair_subject",
     "plant_series",
-    "subject_order_key",
 ]

@@ -25,25 +25,13 @@ rule is (:class:`Clause`; :func:`rule_text` prints it under the report's table):
 With three plants, ``d1 ≤ d2 ≤ d3``, clauses 1-2 are the three-plant rule: all agree when
 ``d3 ≤ f``; the plant outside the closest pair is the outlier when ``d2 ≥ k · max(d1, f)`` (a pair
 is the only group a majority of three can be, and only the closest pair can be separated); three
-plants never split. The differences from the three-plant rule as first written are degenerate
-cases where that rule named a plant by the pairs' order: every distance infinite (no plant's values
-could be compared), or a floor of 0 (a threshold of 0 and no round-off scale) with the two smallest
-distances 0 (the "outlier" would sit at distance 0 from a member); here no plant is named.
+plants never split. In the degenerate cases, every distance infinite (no plant's values could be
+compared) or a floor of 0 (a threshold of 0 and no round-off scale) with the two smallest distances
+0 (an "outlier" would sit at distance 0 from a member), no plant is named.
 
-The noise floor (:class:`NoiseFloor`) is the larger of two parts, each in the quantity's unit:
-``REFEREE_NOISE_FRACTION × threshold`` (distances a thousand times inside the threshold decide
-nothing; the threshold's absolute part, its ``value``, not the effective bound ``value + rtol ·
-scale`` of a state's check: a thousandth of the relative part would be 1e-10 of the state, an
-integrator's own error, which is what the referee attributes; ``REFEREE_NOISE_FRACTION``) and
-the quantity's **round-off**, ``ε_round × ε × scale`` with ``ε`` the float64 machine
-epsilon: for a state (position of C, rod positions, velocities, angular velocity, attitude) its
-largest magnitude over the run across the plants with ``ε_round = REFEREE_ROUNDOFF_STATE``; for
-the control torque and rod forces the largest control force across the plants (torque in N·m and
-rod forces in N, one vector in SI as the controller's solve handles them) with
-``ε_round = REFEREE_ROUNDOFF_FORCE``, divided by the relative check's scale. A quantity zero in
-exact arithmetic (the torque of a rod through C with only the masses controlled) thus keeps its
-round-off residue below the floor. Each verdict records its floor and which part decided it, and
-its sentence states it.
+The noise floor ``f`` of each quantity, the larger of a fraction of its threshold and its
+round-off, is :mod:`validation.compare.noise_floor`'s; each verdict records it and its sentence
+states it.
 
 With fewer than three plants :func:`referee` gives no verdict: a disagreement between two plants
 cannot be attributed to either (:func:`decide` still rules on two: agree or disagree).
@@ -57,15 +45,17 @@ from dataclasses import dataclass, field
 from enum import StrEnum
 from typing import Any
 
-import numpy as np
-
-from validation.compare.checks import Check, Comparison, Difference, Group
-from validation.compare.thresholds import (
-    REFEREE_NOISE_FRACTION,
-    REFEREE_ROUNDOFF_FORCE,
-    REFEREE_ROUNDOFF_STATE,
-    REFEREE_SEPARATION,
+from validation.compare.checks import Check, Comparison
+from validation.compare.differences import Difference
+from validation.compare.noise_floor import (
+    FORCE_QUANTITIES,
+    FloorPart,
+    NoiseFloor,
+    floor_rule_text,
+    fmt,
+    roundoff_scales,
 )
+from validation.compare.thresholds import REFEREE_SEPARATION
 
 QUANTITIES = tuple(d.value for d in Difference)
 """The difference quantities the referee rules on (names of :mod:`validation.compare.thresholds`)."""
@@ -80,12 +70,6 @@ LABELS = {
     "control_torque": "control torque (relative)",
     "rod_forces": "rod forces (relative)",
 }
-
-EPS = float(np.finfo(float).eps)
-"""float64 machine epsilon (2.2e-16): the unit of the round-off part of the noise floor."""
-
-FORCE_QUANTITIES = frozenset({"control_torque", "rod_forces"})
-"""The quantities whose round-off follows the largest control force (``REFEREE_ROUNDOFF_FORCE``)."""
 
 
 class VerdictKind(StrEnum):
@@ -107,113 +91,14 @@ class Clause(StrEnum):
     OVER_THRESHOLD = "over threshold"  # 4: no group, some pair fails
 
 
-class FloorPart(StrEnum):
-    """Which part of the noise floor decided its value."""
-
-    THRESHOLD = "threshold"  # REFEREE_NOISE_FRACTION × threshold
-    ROUND_OFF = "round-off"  # ε_round × ε × the quantity's scale
-
-
-@dataclass(frozen=True)
-class RoundoffScale:
-    """The magnitude whose round-off a quantity carries.
-
-    Attributes:
-        value: the largest magnitude over the run across the plants, in ``unit`` (0: unknown).
-        unit: its unit (``m``; ``N·m, N`` for the control forces).
-        what: what it is, for people (``largest |R|``).
-        multiplier: ``ε_round`` (``REFEREE_ROUNDOFF_STATE`` or ``REFEREE_ROUNDOFF_FORCE``).
-    """
-
-    value: float
-    unit: str
-    what: str
-    multiplier: float
-
-
-@dataclass(frozen=True)
-class NoiseFloor:
-    """A quantity's noise floor and its two parts, in the quantity's unit.
-
-    Attributes:
-        threshold_part: ``REFEREE_NOISE_FRACTION × threshold``.
-        roundoff_part: ``multiplier × ε × scale / divisor`` (0 when the scale is unknown).
-        scale: the magnitude whose round-off it is (None: not known, no round-off part).
-        divisor: a relative check's scale (its reference signal's largest magnitude, in
-            ``scale.unit``); 1.0 for an absolute quantity.
-    """
-
-    threshold_part: float
-    roundoff_part: float = 0.0
-    scale: RoundoffScale | None = None
-    divisor: float = 1.0
-
-    @classmethod
-    def of(
-        cls, threshold: float, scale: RoundoffScale | None = None, divisor: float = 1.0
-    ) -> NoiseFloor:
-        """The floor of a quantity with this threshold and round-off scale."""
-        part = 0.0
-        if scale is not None and math.isfinite(scale.value) and scale.value > 0:
-            d = divisor if math.isfinite(divisor) and divisor > 0 else 1.0
-            part = scale.multiplier * EPS * scale.value / d
-        return cls(REFEREE_NOISE_FRACTION * threshold, part, scale, divisor)
-
-    @property
-    def value(self) -> float:
-        """``max(threshold_part, roundoff_part)``."""
-        return max(self.threshold_part, self.roundoff_part)
-
-    @property
-    def decided_by(self) -> FloorPart:
-        if self.roundoff_part > self.threshold_part:
-            return FloorPart.ROUND_OFF
-        return FloorPart.THRESHOLD
-
-    def phrase(self, unit: str) -> str:
-        """``1e-09 m = 0.001 × threshold``, or the round-off that decided it."""
-        head = f"{_fmt(self.value, unit)} = "
-        if self.decided_by is FloorPart.THRESHOLD or self.scale is None:
-            return head + f"{REFEREE_NOISE_FRACTION:g} × threshold"
-        s = self.scale
-        out = f"round-off, {_sci(s.multiplier)} ε × {s.what} {s.value:.2g} {s.unit}"
-        if self.divisor != 1.0:
-            out += f" / the check's scale {self.divisor:.2g}"
-        return head + out
-
-    def to_dict(self) -> dict[str, Any]:
-        s = self.scale
-        return {
-            "value": self.value,
-            "decided_by": self.decided_by.value,
-            "threshold_part": self.threshold_part,
-            "roundoff_part": self.roundoff_part,
-            "scale": s.value if s else None,
-            "scale_unit": s.unit if s else "",
-            "scale_of": s.what if s else "",
-            "multiplier": s.multiplier if s else None,
-            "divisor": self.divisor,
-        }
-
-
-def noise_floor(threshold: float) -> float:
-    """The threshold part of the referee's noise floor (same unit as the threshold)."""
-    return REFEREE_NOISE_FRACTION * threshold
-
-
 def rule_text() -> str:
     """The whole rule in words, with its constants, as the report prints it under the table."""
     k = REFEREE_SEPARATION
     return (
         "The rule, for each row's distances d (each pair's maximum over time; relative for the "
         "forces; a value that could not be computed counts as infinite). "
-        f"The noise floor is the larger of {REFEREE_NOISE_FRACTION:g} × the threshold (its "
-        "absolute part) and the "
-        f"quantity's round-off, {_sci(REFEREE_ROUNDOFF_STATE)} ε × its largest magnitude over the run "
-        f"across the plants for a state, {_sci(REFEREE_ROUNDOFF_FORCE)} ε × the largest control force "
-        "(relative to the check's scale) for the torque and rod forces, ε = 2.2e-16 (column "
-        "*floor set by*). "
-        "(1) All agree when every d ≤ the noise floor. "
+        + floor_rule_text()
+        + "(1) All agree when every d ≤ the noise floor. "
         "(2) Else a group (two or more plants, not all) is separated when every plant outside it "
         f"is at least {k:g} × max(s, noise floor) from every member, s being the group's largest "
         "internal distance; groups are nested or disjoint, and the plants outside the innermost "
@@ -411,16 +296,6 @@ class Verdict:
         }
 
 
-def _sci(x: float) -> str:
-    """``1e5`` for 1e5, ``0.001`` for 1e-3: a constant as the rule's text writes it."""
-    return f"{x:.0e}".replace("e+0", "e").replace("e+", "e") if x >= 1e3 else f"{x:g}"
-
-
-def _fmt(x: float, unit: str) -> str:
-    u = "" if unit in ("", "1") else f" {unit}"
-    return f"{x:.2g}{u}"
-
-
 def _names(items: Sequence[str]) -> str:
     items = list(items)
     if len(items) <= 2:
@@ -436,19 +311,19 @@ def _sentence(
     fl = f"the noise floor {floor.phrase(unit)}"
     everyone = "both" if n == 2 else ("all three" if n == 3 else f"all {n}")
     if r.clause is Clause.BELOW_FLOOR:
-        return f"{everyone} agree: every pair is below {fl} (largest {_fmt(r.spread, unit)})"
+        return f"{everyone} agree: every pair is below {fl} (largest {fmt(r.spread, unit)})"
     if r.kind is VerdictKind.OUTLIER:
         who = [nm(p) for p in r.group]
         inside = (
-            f"agree to {_fmt(r.spread, unit)} ({fl})"
+            f"agree to {fmt(r.spread, unit)} ({fl})"
             if r.spread >= f
-            else f"agree below {fl} ({_fmt(r.spread, unit)})"
+            else f"agree below {fl} ({fmt(r.spread, unit)})"
         )
         if len(r.outliers) == 1:
             (o,) = r.outliers
-            head = f"{nm(o.plant)} is the outlier, {_fmt(o.distance, unit)} from the others"
+            head = f"{nm(o.plant)} is the outlier, {fmt(o.distance, unit)} from the others"
         else:
-            far = ", ".join(f"{nm(o.plant)} {_fmt(o.distance, unit)}" for o in r.outliers)
+            far = ", ".join(f"{nm(o.plant)} {fmt(o.distance, unit)}" for o in r.outliers)
             head = f"{len(r.outliers)} outliers, each at its distance from the group: {far}"
         return f"{head}; {_names(who)} {inside}"
     if r.kind is VerdictKind.SPLIT:
@@ -464,10 +339,10 @@ def _sentence(
         return (
             f"no outlier (no plant is {REFEREE_SEPARATION:g}× farther from the others than they "
             f"are from each other); {everyone} agree within their threshold (largest difference "
-            f"{_fmt(r.spread, unit)}, threshold {_fmt(threshold, unit)}; {fl})"
+            f"{fmt(r.spread, unit)}, threshold {fmt(threshold, unit)}; {fl})"
         )
     return (
-        f"{everyone} disagree (over the threshold {_fmt(threshold, unit)}); no two plants confirm "
+        f"{everyone} disagree (over the threshold {fmt(threshold, unit)}); no two plants confirm "
         f"each other ({fl})"
     )
 
@@ -542,58 +417,6 @@ def rule(
 
 
 # ----------------------------------------------------------------------------------------------
-# The round-off scales
-# ----------------------------------------------------------------------------------------------
-
-
-def _largest(x: Any, axis_norm: bool) -> float:
-    a = np.asarray(x, float)
-    if a.size == 0:
-        return 0.0
-    if axis_norm and a.ndim == 2:
-        a = np.linalg.norm(a, axis=1)
-    a = np.abs(a)
-    a = a[np.isfinite(a)]
-    return float(a.max()) if a.size else 0.0
-
-
-_STATE_SCALES: Mapping[str, tuple[str, str, Any]] = {
-    # quantity -> (what, unit, largest magnitude of one trajectory)
-    "position_C": ("largest |R|", "m", lambda tr: _largest(tr.q[:, :3], True)),
-    "attitude": ("|u|", "1", lambda tr: 1.0),  # a unit quaternion's components are O(1)
-    "rod_positions": ("largest |p_i|", "m", lambda tr: _largest(tr.q[:, 7:], False)),
-    "velocity_C": ("largest |Ṙ|", "m/s", lambda tr: _largest(tr.qdot[:, :3], True)),
-    "rod_velocities": ("largest |ṗ_i|", "m/s", lambda tr: _largest(tr.qdot[:, 7:], False)),
-    "angular_velocity": ("largest |ω|", "rad/s", lambda tr: _largest(tr.omega, True)),
-}
-
-
-def roundoff_scales(cmp: Comparison, trajectories: Sequence[Any] = ()) -> dict[str, RoundoffScale]:
-    """Quantity -> the magnitude whose round-off it carries, over the run and across the plants.
-
-    The control torque and rod forces: the largest control force, ``max(|τ|, |F_i|)`` over every
-    plant's control series in ``cmp`` (N·m and N as one SI vector, as the controller's solve
-    computes them together). The states: their largest magnitude over ``trajectories`` (none
-    given: no round-off part for them). Non-finite samples are left out."""
-    out: dict[str, RoundoffScale] = {}
-    forces = [
-        _largest(s.values, False)
-        for s in cmp.series
-        if s.group is Group.CONTROL and not s.subject.is_pair
-    ]
-    if forces:
-        f = RoundoffScale(max(forces), "N·m, N", "largest control force", REFEREE_ROUNDOFF_FORCE)
-        for q in FORCE_QUANTITIES:
-            out[q] = f
-    if trajectories:
-        for q, (what, unit, of) in _STATE_SCALES.items():
-            out[q] = RoundoffScale(
-                max(of(tr) for tr in trajectories), unit, what, REFEREE_ROUNDOFF_STATE
-            )
-    return out
-
-
-# ----------------------------------------------------------------------------------------------
 # The referee of a comparison
 # ----------------------------------------------------------------------------------------------
 
@@ -665,17 +488,12 @@ def summary_lines(verdicts: Sequence[Verdict]) -> list[str]:
 __all__ = [
     "QUANTITIES",
     "Clause",
-    "FloorPart",
-    "NoiseFloor",
     "Outlier",
-    "RoundoffScale",
     "Ruling",
     "Verdict",
     "VerdictKind",
     "decide",
-    "noise_floor",
     "referee",
-    "roundoff_scales",
     "rule",
     "rule_text",
     "summary_lines",

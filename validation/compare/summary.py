@@ -12,9 +12,10 @@ import math
 
 import numpy as np
 
-from analytic.invariants import Balance, relative_balance
+from analytic.invariants import Balance
 from analytic.threshold import BoundPart
 from analytic.trajectory import Trajectory
+from validation.compare.balances import BalanceTerms, relative
 from validation.compare.checks import Check
 from validation.compare.thresholds import DEFAULTS
 
@@ -89,7 +90,7 @@ under the balance's threshold name (``analytic.angular_momentum`` ...)."""
 def drift_figures(tr: Trajectory) -> dict[str, float]:
     """The norm error and the invariants' balances (max over the run), relative: exactly the
     values of ``tumble validate``'s checks of the same run, by the one definition
-    :func:`analytic.invariants.relative_balance` (the largest residual norm divided by
+    :func:`validation.compare.balances.relative` (the largest residual norm divided by
     ``max(scale, floor)``, the scale that of the balanced quantity, the floor its threshold's in
     :mod:`validation.compare.thresholds`).
 
@@ -98,8 +99,9 @@ def drift_figures(tr: Trajectory) -> dict[str, float]:
     """
     iv = tr.invariants
     out = {"quat_norm_error_max": float(np.max(np.abs(iv.quat_norm_error)))}
+    terms = BalanceTerms.of(iv)
     for b, key in DRIFT_KEYS.items():
-        out[key] = relative_balance(iv, b, DEFAULTS[b.value].floor)
+        out[key] = relative(terms, b, DEFAULTS[b.value].floor)
     return out
 
 

@@ -8,8 +8,8 @@ the scene loader keeps verbatim in ``scene.extra["thresholds"]``::
     attitude = { value = 1e-7, reason = "tighter dt" }  # or a table with a value and a reason
     rod_velocities = { value = 1e-5, rtol = 1e-8 }      # and, for a scaled one, its rtol
 
-An override without an ``rtol`` has none: its value is the whole bound, as it was before bounds had
-a relative part (give ``rtol`` to keep one).
+An override without an ``rtol`` has none: its value is the whole bound (give ``rtol`` to keep a
+relative part).
 
 Two kinds of threshold:
 
@@ -24,14 +24,12 @@ Two kinds of threshold:
   forces: the analytic plant's; for balances: the quantity balanced) and ``floor`` (in the signal's
   unit) keeps an identically-zero signal (an uncontrolled run's torque) from dividing by zero.
 
-The numbers are set for the paper scenes with the analytic plant at its scene tolerance
-(DOP853, rtol 1e-12) or the quick-run tolerance (rtol 1e-10), and MuJoCo's RK4 at dt = 2.5e-4 s.
-At those settings both integrators' global errors are far below these bounds over 20 s (RK4:
-``O((ω h)^4)`` per unit time with ω h ≤ 15·2.5e-4 ≈ 4e-3, i.e. ~1e-10 relative; DOP853 at rtol
-1e-10 measured ~1e-9 m on a trajectory of ~30 m over 2 s). The margin of about two to three
-decades covers the growth of the errors over a tumbling 20 s run (the free motion is sensitive to
-initial conditions) without hiding a modelling difference, which shows at 1e-3 or larger (a missing
-inertia term, a wrong spring force, a sign).
+The numbers are set for the paper scenes with the analytic plant at its scene or quick-run
+tolerance and MuJoCo's RK4 at its scene step: two to three decades above both integrators' global
+errors over a tumbling 20 s run (the free motion is sensitive to initial conditions) and well below
+a modelling difference (a missing inertia term, a wrong spring force, a sign). The figures behind
+each number are in ``docs/performance.md`` (section *Comparison thresholds and the referee's noise
+floor*); each threshold's ``reason`` states its own in every report.
 
 Each bound is an :class:`analytic.threshold.Threshold` (value, unit, reason), the one record type
 of the project; the tolerances only the tests use are records of the same type in
@@ -56,26 +54,19 @@ _RK4_DOP = (
 
 STATE_RTOL = 1e-7
 """The relative part of the state and tracking bounds (``rtol`` in ``value + rtol · scale``),
-dimensionless. Both integrators' errors are relative to the state's magnitude: DOP853 holds each
-step's local error to ``rtol · |y|`` (rtol 1e-12..1e-10 at the scene settings: ~1e-9 of the state
-over a run, as for ``_RK4_DOP``), and RK4 at dt = 2.5e-4 s loses ``O((ω h)^4)`` of the state per
-second, ~2e-10 at ω h = 15·2.5e-4 ≈ 4e-3, so ~4e-9 over 20 s at that rate and ~1e-10 at the
-paper's ≤ 2π rad/s. Over a 20 s run their global errors are thus a few 1e-9 of the state's
-magnitude or smaller; the margin of the absolute bounds (``_RK4_DOP``: two to three decades, for
-the growth over a tumbling run) put above the typical 1e-9 gives 1e-7, a factor 25 above the
-worst estimate (15 rad/s for 20 s), while a modelling difference (a missing inertia term, a wrong
-spring force, a sign) shows at 1e-3 of the motion or larger, four decades above. A velocity's error
-and its scale are both its position's times the rate of the motion, so one rtol serves positions
-and velocities. The absolute parts keep deciding at the scales they were set for: at 10 m (or
-10 m/s, 10 rad/s) the relative part is at most the absolute one; it decides where the motion is
-larger (masses running away at hundreds of m/s). For the position and velocity of C the scale is
-C's departure from its uniformly accelerated motion ``R(0) + Ṙ(0) t + ½ g t²``, not ``|R|``: that
-polynomial is reproduced to round-off by both integrators, so the paper scenes' free fall to
-|R| ≈ 1.6 km (4.9e3 km on hard/long_horizon) does not loosen their bound (with ``|R|`` it would
-have been 1.6e-4 m and 0.49 m, against measured differences of 1e-8..2.4e-7 m).
-Stiff scenes are the exception the absolute part covers: RK4 on springs of high frequency errs by
-more than 1e-7 of the state (hard/stiff_springs: 9e-6 m/s at |ṗ| = 10 m/s, 9e-7 relative,
-within the absolute 1e-5 m/s)."""
+dimensionless. Both integrators' errors are relative to the state's magnitude (DOP853 holds each
+step's local error to ``rtol · |y|``; RK4's error per unit time is ``O((ω h)^4)`` of the state), so
+the bound's relative part follows the state; the absolute bounds' margin (``_RK4_DOP``) put above
+their global errors over a run gives this value, four decades below a modelling difference. A
+velocity's error and its scale are both its position's times the rate of the motion, so one rtol
+serves positions and velocities. The absolute parts keep deciding at the scales they were set for:
+at 10 m (or 10 m/s, 10 rad/s) the relative part is at most the absolute one; it decides where the
+motion is larger (masses running away at hundreds of m/s). For the position and velocity of C the
+scale is C's departure from its uniformly accelerated motion ``R(0) + Ṙ(0) t + ½ g t²``, not
+``|R|``: that polynomial is reproduced to round-off by both integrators, so a long free fall does
+not loosen their bound. Stiff scenes are the exception the absolute part covers: RK4 on springs of
+high frequency errs by more than this fraction of the state, within the absolute part. The
+figures: ``docs/performance.md``, *Comparison thresholds and the referee's noise floor*."""
 
 SCALED = frozenset(
     (
@@ -244,13 +235,13 @@ REFEREE_NOISE_FRACTION = 1e-3
 plants that all agree a thousand times better than the threshold asks have no outlier worth
 naming, and round-off-level differences (1e-12 m beside a 1e-6 m bound) do not decide verdicts.
 It is the threshold part of the referee's noise floor; the round-off part below takes over where a
-quantity's own scale makes its round-off larger (:class:`validation.compare.referee.NoiseFloor`).
+quantity's own scale makes its round-off larger (:class:`validation.compare.noise_floor.NoiseFloor`).
 The fraction is of the threshold's absolute part (its ``value``), not of the effective bound
 ``value + rtol · scale``: the relative part is a margin for the integrators' relative error
 (:data:`STATE_RTOL`, 1e-7 of the scale), and a thousandth of it (1e-10 of the scale) would call
 agreement what is an integrator's own error, the difference the referee is there to attribute
-(MuJoCo's RK4 1e-9 of |Ṙ| away from two DOP853 plants that agree to 2e-13 of it, in
-``paper_example2``). Where a state's size makes round-off matter, the round-off part scales it."""
+(MuJoCo's RK4 away from two DOP853 plants in ``paper_example2``: ``docs/performance.md``). Where
+a state's size makes round-off matter, the round-off part scales it."""
 
 REFEREE_ROUNDOFF_FORCE = 1e5
 """The round-off part of the noise floor of the control torque and rod forces, in float64 epsilons
@@ -258,14 +249,12 @@ REFEREE_ROUNDOFF_FORCE = 1e5
 in N as one SI vector, as the controller's solve computes them together, analytic/fundamental.py).
 A force zero in exact arithmetic comes out of that solve as a cancellation residue of the large
 ones: with the rod through C and only the masses controlled (identity weighting) the torque is zero,
-yet the analytic plant gives up to 1.6e4 ε × max |F| (measured over 2 s on 40 variants of
-``hard/rod_through_C`` with the masses controlled, random rod axes, mass ratios over four decades
-and inertias 1e2-1e6 kg·m², max |F| 4e6-2e7 N: from 0.9 ε to 1.6e4 ε, i.e. up to 7e-5 N·m; 0.7 ε
-on the scene itself), while MuJoCo and Pinocchio give 1e-9-1e-8 N·m on the two worst. Under the
-absolute part alone (1e-9) that residue named the analytic plant the outlier of runs where every
-check passed. 1e5 ε (2.2e-11 relative) leaves a factor 6 above the largest; it decides only when
-the torque is over 45 times smaller than the rod forces (or they than it), where a difference
-below 2.2e-11 of the largest force is round-off, not a modelling slip."""
+yet each plant gives a residue of some ε × max |F|, which under the absolute part alone would name
+a plant the outlier of runs where every check passed. 1e5 ε (2.2e-11 relative) sits above the
+largest residue measured (``docs/performance.md``, *Comparison thresholds and the referee's noise
+floor*); it decides only when the torque is over 45 times smaller than the rod forces (or they
+than it), where a difference below 2.2e-11 of the largest force is round-off, not a modelling
+slip."""
 
 REFEREE_ROUNDOFF_STATE = 1e3
 """The round-off part of the noise floor of a state (position of C, rod positions, velocities,

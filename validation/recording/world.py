@@ -45,7 +45,8 @@ from scipy.spatial.transform import Rotation
 
 from analytic.effects import ShapeKind
 from analytic.trajectory import Trajectory
-from validation.compare.checks import Comparison, Difference, Group, Subject
+from validation.compare.checks import Comparison, Group, Subject
+from validation.compare.differences import Difference
 from validation.recording.style import (
     MASS_RGBA,
     OMEGA_RGBA,

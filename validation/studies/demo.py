@@ -327,7 +327,7 @@ run `tumble simulate` again; read `|e_p| (masses 1,2) m`.
 `e(0) = p(0) − p̄(0) = (5 − 3, 11 − 14) = (2, −3)` m and `ė(0) = (−0.4, 0.3)` m/s the closed form
 gives `|e_p(20)| = (7.28e-5, 1.07e-4)` m for α = 1, against `(4.21e-9, 6.38e-9)` m for the scene's
 α = 2: half the damping rate, the envelope at 20 s is `exp(−10)` instead of `exp(−20)`. Check the
-numbers with `validation.compare.checks.mass_error_reference`.""",
+numbers with `validation.compare.tracking_laws.mass_error_reference`.""",
     ),
     (
         "Switch off the cubic springs under control and predict what changes",

@@ -31,7 +31,7 @@ PAIR_CHECKS = (
     "rod_forces",
 )
 """Checks made on every pair of plants, in report order (``rod_forces`` only with masses): the
-values of :class:`validation.compare.checks.Difference`, spelled out here so that importing the plugin
+values of :class:`validation.compare.differences.Difference`, spelled out here so that importing the plugin
 does not import numpy (``tests/validation/testing/test_pytest_plugin.py`` checks the two agree)."""
 
 

@@ -8,22 +8,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from scipy.spatial.transform import Rotation
 
 from analytic.effects import Effect
 from analytic.scene import load_scene
 from analytic.simulate import simulate
 from analytic.threshold import BoundPart
 from analytic.trajectory import Engine, RunStatus, Trajectory
-from validation.compare.checks import (
-    Check,
-    Difference,
-    Subject,
-    attitude_angle,
-    compare,
-    mass_error_reference,
-    omega_error_reference,
-)
+from validation.compare.checks import Check, Subject, compare
+from validation.compare.differences import Difference
 from validation.compare.thresholds import DEFAULTS, thresholds_for
 
 SCENES = Path(__file__).resolve().parents[3] / "analytic" / "scenes"
@@ -54,105 +46,6 @@ def quat_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     w = a0 * b0 - np.sum(av * bv, axis=-1, keepdims=True)
     v = a0 * bv + b0 * av + np.cross(av, bv)
     return np.concatenate([w, v], axis=-1)
-
-
-# ----------------------------------------------------------------------------------------------
-# attitude angle
-# ----------------------------------------------------------------------------------------------
-
-
-def test_attitude_angle_q_and_minus_q_agree():
-    rng = np.random.default_rng(1)
-    u = rng.normal(size=(50, 4))
-    u /= np.linalg.norm(u, axis=1, keepdims=True)
-    # exact on any machine: x·(-y) = -(x·y) in IEEE arithmetic, so the vector part cancels to 0
-    assert np.all(attitude_angle(u, -u) == 0.0)
-    assert np.all(attitude_angle(u, u) == 0.0)
-
-
-@pytest.mark.parametrize("theta", [1e-9, 1e-4, 0.3, 1.0, 2.5, math.pi - 1e-6])
-def test_attitude_angle_of_a_known_rotation(theta):
-    rng = np.random.default_rng(2)
-    u = rng.normal(size=(20, 4))
-    u /= np.linalg.norm(u, axis=1, keepdims=True)
-    n = rng.normal(size=(20, 3))
-    n /= np.linalg.norm(n, axis=1, keepdims=True)
-    dq = np.concatenate([np.full((20, 1), math.cos(theta / 2)), math.sin(theta / 2) * n], axis=1)
-    # body-fixed (right) and space-fixed (left) perturbations are both rotations by theta
-    np.testing.assert_allclose(attitude_angle(u, quat_mul(u, dq)), theta, rtol=1e-9, atol=1e-15)
-    np.testing.assert_allclose(attitude_angle(u, quat_mul(dq, u)), theta, rtol=1e-9, atol=1e-15)
-    # and a sign flip of the perturbed quaternion does not matter
-    np.testing.assert_allclose(attitude_angle(u, -quat_mul(u, dq)), theta, rtol=1e-9, atol=1e-15)
-
-
-def test_attitude_angle_matches_scipy_and_ignores_scale():
-    rng = np.random.default_rng(3)
-    a = rng.normal(size=(30, 4))
-    b = rng.normal(size=(30, 4))
-    ra = Rotation.from_quat(a, scalar_first=True)
-    rb = Rotation.from_quat(b, scalar_first=True)
-    expected = (ra.inv() * rb).magnitude()
-    np.testing.assert_allclose(attitude_angle(a, b), expected, atol=1e-12)
-    np.testing.assert_allclose(attitude_angle(3.0 * a, 0.5 * b), expected, atol=1e-12)
-
-
-def test_attitude_angle_rejects_bad_shapes():
-    with pytest.raises(ValueError, match="u_b"):
-        attitude_angle(np.zeros((3, 4)), np.zeros((3, 3)))
-
-
-# ----------------------------------------------------------------------------------------------
-# closed-form tracking references
-# ----------------------------------------------------------------------------------------------
-
-
-def test_omega_reference_is_exponential_decay():
-    t = np.linspace(0.0, 5.0, 51)
-    e0 = np.array([11.0, 9.0, 14.5])
-    ref = omega_error_reference(t, e0, 0.6 * np.eye(3))
-    np.testing.assert_allclose(ref, np.exp(-0.6 * t)[:, None] * e0, rtol=1e-12)
-
-
-def test_mass_reference_is_the_damped_oscillator():
-    t = np.linspace(0.0, 4.0, 41)
-    alpha, beta = np.array([2.0]), np.array([12.0])
-    e0, ed0 = np.array([0.3]), np.array([-0.4])
-    wd = math.sqrt(beta[0] - alpha[0] ** 2 / 4)
-    closed = np.exp(-alpha[0] * t / 2) * (
-        e0[0] * np.cos(wd * t) + (ed0[0] + alpha[0] * e0[0] / 2) / wd * np.sin(wd * t)
-    )
-    np.testing.assert_allclose(
-        mass_error_reference(t, e0, ed0, alpha, beta)[:, 0], closed, atol=1e-13
-    )
-
-
-def test_mass_reference_critically_damped_over_a_long_uniform_grid():
-    """Critical damping, α² = 4β: e(t) = (e0 + (ė0 + α e0 / 2) t) exp(-α t / 2); 10⁴ uniform samples
-    (the one-step propagator's rounding grows with the sample count)."""
-    t = np.linspace(0.0, 20.0, 10_001)
-    alpha, beta = np.array([3.0]), np.array([2.25])
-    e0, ed0 = np.array([0.3]), np.array([-0.4])
-    closed = (e0[0] + (ed0[0] + alpha[0] * e0[0] / 2) * t) * np.exp(-alpha[0] * t / 2)
-    np.testing.assert_allclose(
-        mass_error_reference(t, e0, ed0, alpha, beta)[:, 0], closed, atol=1e-13
-    )
-
-
-@pytest.mark.parametrize("grid", ["uniform", "uneven"])
-def test_omega_reference_with_a_coupled_gain_matches_one_exponential_per_time(grid):
-    """A non-symmetric, non-diagonal gain P: each sample equals its own expm(-P t) e0 (scipy),
-    on a uniform grid (one-step propagator) and on an uneven one (batched exponentials)."""
-    from scipy.linalg import expm
-
-    rng = np.random.default_rng(7)
-    gain = np.diag([0.4, 0.9, 1.7]) + 0.3 * rng.standard_normal((3, 3))
-    assert np.all(np.linalg.eigvals(gain).real > 0)
-    t = np.linspace(0.5, 12.5, 2_001)
-    if grid == "uneven":
-        t = np.sort(rng.uniform(0.5, 12.5, 400))
-    e0 = np.array([11.0, -9.0, 14.5])
-    want = np.stack([expm(-gain * (ti - t[0])) @ e0 for ti in t])
-    np.testing.assert_allclose(omega_error_reference(t, e0, gain), want, rtol=0, atol=1e-12)
 
 
 # ----------------------------------------------------------------------------------------------

@@ -9,7 +9,7 @@ import tomllib
 import pytest
 
 from analytic.scene import builtin_scene_path, scene_from_dict
-from validation.compare.checks import MAGNITUDES, Difference
+from validation.compare.differences import MAGNITUDES, Difference
 from validation.compare.thresholds import (
     DEFAULTS,
     REFEREE_NOISE_FRACTION,

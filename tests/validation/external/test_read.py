@@ -14,7 +14,7 @@ import pytest
 from analytic.scene import load_scene
 from analytic.trajectory import Engine
 from tests.support import tolerances as tol
-from validation.compare.checks import attitude_angle
+from validation.compare.differences import attitude_angle
 from validation.external import ColumnGroup, TrajectoryFileError, read_trajectory
 from validation.external.columns import OPTIONAL_GROUPS
 from validation.external.write import trajectory_table

@@ -10,7 +10,7 @@ from analytic.invariants import Balance, relative_balance
 from analytic.scene import load_scene
 from analytic.trajectory import Engine
 from tests.support import tolerances as tol
-from validation.compare.checks import attitude_angle
+from validation.compare.differences import attitude_angle
 from validation.compare.thresholds import DEFAULTS
 from validation.external import (
     ColumnGroup,

@@ -241,7 +241,7 @@ def test_assert_agree_passes_on_the_paper_examples(name: str) -> None:
 
 
 def test_pair_checks_are_the_compared_differences():
-    from validation.compare.checks import Difference
+    from validation.compare.differences import Difference
     from validation.testing.agree import PAIR_CHECKS
 
     assert PAIR_CHECKS == tuple(d.value for d in Difference)

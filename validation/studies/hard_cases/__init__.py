@@ -7,6 +7,7 @@ Each case is a scene file in ``validation/scenes/hard/`` that carries its criter
 Pinocchio), each through the plant protocol, and ends as one row: the criterion, each plant's
 figures and verdict, the case's verdict and wall time.
 
+* :mod:`.catalogue`: what may be measured against which reference (the closed set a file names);
 * :mod:`.criterion`: the ``[hard_case]`` format, read and validated (nothing in it is evaluated);
 * :mod:`.references`: the independent references, one module per kind;
 * :mod:`.measures`: what each measure computes on a case's runs;
@@ -17,7 +18,8 @@ figures and verdict, the case's verdict and wall time.
 
 from validation.scenes import SCENES_DIR
 from validation.studies.hard_cases import references
-from validation.studies.hard_cases.criterion import Criterion, Measure, Reference, parse_criterion
+from validation.studies.hard_cases.catalogue import Measure, Reference
+from validation.studies.hard_cases.criterion import Criterion, parse_criterion
 from validation.studies.hard_cases.measures import label, run_plant
 from validation.studies.hard_cases.runner import (
     HARD_DIR,

@@ -1,4 +1,4 @@
-"""What each measure of :data:`validation.studies.hard_cases.criterion.MEASURES` computes, on the runs of
+"""What each measure of :data:`validation.studies.hard_cases.catalogue.MEASURES` computes, on the runs of
 one case.
 
 A :class:`CaseRuns` holds one case's scene, its plants and every run and reference it has made
@@ -6,7 +6,7 @@ A :class:`CaseRuns` holds one case's scene, its plants and every run and referen
 ``(what, against)`` pair for one plant. The agreement with the analytic plant is the comparison's
 own difference series (:func:`validation.compare.checks.difference_series`); the balances are
 :func:`validation.compare.summary.drift_figures`; the tracking laws' closed forms are
-:func:`validation.compare.checks.omega_error_reference` and ``mass_error_reference``.
+:func:`validation.compare.tracking_laws.omega_error_reference` and ``mass_error_reference``.
 """
 
 from __future__ import annotations
@@ -23,17 +23,13 @@ from analytic.effects import SolverMethod
 from analytic.scene import Scene
 from analytic.trajectory import Engine, RunStatus, Trajectory
 from mj_bridge import plants as _plants
-from validation.compare.checks import (
-    Check,
-    Subject,
-    attitude_angle,
-    difference_series,
-    mass_error_reference,
-    omega_error_reference,
-)
+from validation.compare.checks import Check, Subject, difference_series
+from validation.compare.differences import attitude_angle
 from validation.compare.summary import drift_figures
+from validation.compare.tracking_laws import mass_error_reference, omega_error_reference
 from validation.runs.interrupts import checkpoint
-from validation.studies.hard_cases.criterion import CheckSpec, Criterion, Measure, Reference
+from validation.studies.hard_cases.catalogue import Measure, Reference
+from validation.studies.hard_cases.criterion import CheckSpec, Criterion
 from validation.studies.hard_cases.references import (
     centre_of_mass,
     crossings,

@@ -28,15 +28,8 @@ from validation.compare.checks import Check, Subject, completed_check, judge
 from validation.runs import interrupts
 from validation.runs.outputs import output_run
 from validation.scenes import HARD_DIR
-from validation.studies.hard_cases.criterion import (
-    MEASURES,
-    Applies,
-    CheckSpec,
-    Criterion,
-    Measure,
-    Reference,
-    parse_criterion,
-)
+from validation.studies.hard_cases.catalogue import MEASURES, Applies, Measure, Reference
+from validation.studies.hard_cases.criterion import CheckSpec, Criterion, parse_criterion
 from validation.studies.hard_cases.measures import ANALYTIC, CaseRuns, finite, label, measure
 from validation.studies.hard_cases.references.pinv_law import ENGINE_LAW_PLANTS
 from validation.studies.hard_cases.references.solvers import SCIPY_PLANTS

@@ -3,7 +3,7 @@
 Three measures, each as a maximum over the trajectory and at the final sample:
 
 * **position of C**, ``|R - R_ref|`` relative to the largest displacement of C in the reference;
-* **attitude**, the angle of the relative rotation, rad (:func:`validation.compare.checks.attitude_angle`);
+* **attitude**, the angle of the relative rotation, rad (:func:`validation.compare.differences.attitude_angle`);
 * **rod positions**, ``max_i |p_i - p_ref,i|`` relative to the largest ``|p|`` in the reference.
 
 ``error`` is the largest of the three maxima: the accuracy the sweep's levels refer to. Also here:
@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from validation.compare.checks import attitude_angle
+from validation.compare.differences import attitude_angle
 from validation.compare.summary import drift_figures
 
 ERROR_MEASURE = (

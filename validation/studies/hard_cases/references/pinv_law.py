@@ -155,7 +155,7 @@ class PinvFindings:
 
     Attributes:
         redundant_acceleration, redundant_residual, conflict_residual, other_residuals: maxima
-            over the sampled states (see :data:`validation.studies.hard_cases.criterion.MEASURES`).
+            over the sampled states (see :data:`validation.studies.hard_cases.catalogue.MEASURES`).
         conflict_tracking: of the integrated conflicting run.
         engine_law: plant -> the law from its own matrices against the analytic ``q̈``.
         residual_norm: ``|residual|`` of the conflicting rows at the last state (δ/√2 exactly).
