@@ -107,7 +107,10 @@ class Plant(abc.ABC):
         engine: its name, a ``str`` (the name used on the command line, in reports, keys and
             entity paths; a built-in's is an :class:`Engine` value, a plugin's its entry point's).
         label: how reports name it (``"MuJoCo"``).
-        effects: the :class:`Effect` members it can simulate.
+        effects: the :class:`Effect` members it can simulate, listed by each plant: none by
+            default, so a plant claims no effect it does not name (a scene with any effect on is
+            refused by :meth:`check_scene`), and an effect added to :class:`Effect` is claimed by
+            no plant until its code lists it.
         settings_type: its frozen settings dataclass.
         default: whether it is among the plants a run uses when none are named
             (``mj_bridge.plants.installed_plants``); False keeps an optional engine out of
@@ -121,7 +124,7 @@ class Plant(abc.ABC):
 
     engine: ClassVar[str]
     label: ClassVar[str]
-    effects: ClassVar[frozenset[Effect]] = frozenset(Effect)
+    effects: ClassVar[frozenset[Effect]] = frozenset()
     settings_type: ClassVar[type]
     default: ClassVar[bool] = True
     value_bound: ClassVar[float] = math.inf
@@ -158,8 +161,9 @@ class Plant(abc.ABC):
         """``ValueError`` naming ``scene.effects`` and the effects this plant cannot simulate."""
         missing = sorted(e.value for e in scene.effects - self.effects)
         if missing:
+            none = "" if self.effects else " (it declares no effects: Plant.effects)"
             raise ValueError(
-                f"scene.effects: the {self.engine} plant cannot simulate {', '.join(missing)}"
+                f"scene.effects: the {self.engine} plant cannot simulate {', '.join(missing)}{none}"
             )
 
     def simulate(
@@ -238,6 +242,18 @@ class AnalyticPlant(Plant):
 
     engine = Engine.ANALYTIC.value
     label = "analytic"
+    effects = frozenset(
+        {
+            Effect.GRAVITY,
+            Effect.SPRINGS_LINEAR,
+            Effect.SPRINGS_CUBIC,
+            Effect.MASS_INERTIA,
+            Effect.EXTERNAL_TORQUE,
+            Effect.CONTROL_OMEGA,
+            Effect.CONTROL_MASSES,
+        }
+    )
+    """Every effect the paper's model assembles (:class:`analytic.model.TumblingModel`)."""
     settings_type = AnalyticSettings
 
     def default_settings(self, scene: Scene) -> AnalyticSettings:

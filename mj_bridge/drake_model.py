@@ -10,10 +10,14 @@ MJCF twin, whose ``<tendon>`` springs Drake's MJCF parser ignores, and not from 
   floating joint itself when the plant is finalised.
 * ``rod``: a frame fixed on BR at ``d`` (O′), not rotated.
 * ``mass1 … massN``: rigid bodies of mass ``m_i`` and rotational inertia ``J_i`` about their centre
-  (body axes; :func:`mass_inertias`: the scene's with the ``mass_inertia`` effect, else zero), each
+  (body axes; the scene's with the ``mass_inertia`` effect, else zero), each
   joined to ``rod`` by ``PrismaticJoint("p<i>", rod, mass_i, a)`` without limits or damping: its
   centre is at ``O′ + a p_i`` and it keeps BR's orientation. Every ``p_i`` is measured from O′.
 * gravity: the scene's vector with the ``gravity`` effect, else zero.
+
+Those two are the effects Drake implements itself: each has its function in
+:data:`mj_bridge.drake_effects.EFFECTS`, which sets its part of the plant
+(:class:`~mj_bridge.drake_effects.Parts`) before the plant is built.
 
 The springs, the given torque and the control are generalized forces fed to the plant's applied
 generalized-force input port by whoever drives it (:mod:`mj_bridge.drake_plant`); the plant has no
@@ -37,7 +41,7 @@ import numpy as np
 
 from analytic.kinematics import S_batch
 from analytic.scene import Scene
-from mj_bridge.pinocchio_model import gravity_vector, mass_inertias
+from mj_bridge.drake_effects import EFFECTS, Parts
 from model_xml.builder import BODY, joint_name, mass_name
 from model_xml.coordinates import (
     IPOS_AT_C,
@@ -114,16 +118,17 @@ def build_model(scene: Scene) -> DrakeModel:
         )
     )
     axis = np.asarray(scene.rod.axis, dtype=float)
+    point = d.RotationalInertia(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    parts = Parts(mass_inertias=[None] * scene.n)
+    for effect, switch_on in EFFECTS.items():
+        if scene.has(effect):
+            switch_on(scene, parts)
     joints = []
-    for i, Ji in enumerate(mass_inertias(scene)):
-        Ji = 0.5 * (Ji + Ji.T)
-        inertia = d.RotationalInertia(
-            Ji[0, 0], Ji[1, 1], Ji[2, 2], Ji[0, 1], Ji[0, 2], Ji[1, 2]
-        )
+    for i, inertia in enumerate(parts.mass_inertias):
         body = plant.AddRigidBody(
             mass_name(i),
             d.SpatialInertia.MakeFromCentralInertia(
-                float(scene.masses.mass[i]), np.zeros(3), inertia
+                float(scene.masses.mass[i]), np.zeros(3), point if inertia is None else inertia
             ),
         )
         joints.append(
@@ -131,7 +136,7 @@ def build_model(scene: Scene) -> DrakeModel:
                 d.PrismaticJoint(joint_name(i), rod, body.body_frame(), axis, -np.inf, np.inf, 0.0)
             )
         )
-    plant.mutable_gravity_field().set_gravity_vector(gravity_vector(scene))
+    plant.mutable_gravity_field().set_gravity_vector(parts.gravity)
     plant.Finalize()
     n = scene.n
     layout = (

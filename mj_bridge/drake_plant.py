@@ -6,7 +6,9 @@ Drake (PyPI ``drake`` >= 1.51) is optional: it is imported when a :class:`DrakeD
 The plant is :class:`mj_bridge.drake_plugin.DrakePlant` (``DrakePlant().simulate(scene)``, which runs
 :func:`simulate` here), a plant plugin registered by the project's own entry point
 (``pyproject.toml``, group ``tumbling_testbed.plants``: ``drake``); it is not among the default
-plants (``default = False``): ``--plants analytic,mujoco,drake`` runs it.
+plants (``default = False``): ``--plants analytic,mujoco,drake`` runs it. It is one of the plants on
+scipy's loop (:class:`mj_bridge.scipy_plant.ScipyDynamics`): this module provides the engine, its
+state and its accelerations only.
 
 State integrated by scipy (one ``OdeSolver`` step at a time, :func:`analytic.stepping.step_and_sample`,
 the analytic and Pinocchio plants' loop)::
@@ -22,17 +24,17 @@ the quaternion normalised (û); the integrated one is never renormalised.
 
 Every derivative evaluation:
 
-1. a compiled map of ``y`` (:func:`_to_stage`) into Drake's ``[q_d, v_d]`` (with û), into the
-   Pinocchio plant's layout ``[R, qx, qy, qz, qw, p | Ṙ, ω, ṗ | quadratures]`` and into the paper
-   state the controller gets: ``q = [R, u, p]``, ``q̇ = [Ṙ, ½ u ⊗ (0, ω), ṗ]`` with u **as
-   integrated** (not normalised), as the analytic plant's controller sees its own state;
-2. the analytic controller (Eq. 89) at that state: the compiled kernel
-   (:meth:`analytic.fast.FastModel.qddot_and_forces`, the numpy model where it declines) or,
-   with ``ControllerSource.ANALYTIC``, the numpy model;
-3. the Pinocchio plant's compiled stage (:func:`mj_bridge.pinocchio_plant.stage_for`, given that
-   control), shared so that the springs ``F^S = −∂U_s/∂p`` of Eq. (38), the given torque of Remark 2,
-   the quaternion rate and the rates of :mod:`analytic.aux_rates` are the code the Pinocchio plant
-   runs;
+1. a compiled map of ``y`` (:func:`_to_stage`) into Drake's ``[q_d, v_d]`` (with û), into the stage
+   state of :mod:`mj_bridge.scipy_stage` ``[R, qx, qy, qz, qw, p | Ṙ, ω, ṗ | quadratures]`` and into
+   the paper state the controller gets: ``q = [R, u, p]``, ``q̇ = [Ṙ, ½ u ⊗ (0, ω), ṗ]`` with u **as
+   integrated** (not normalised), as the analytic plant's controller sees its own state (which
+   keeps the closed loop's integration error small under a fast spin, ``docs/performance.md``);
+2. the analytic controller (Eq. 89) at that state
+   (:meth:`~mj_bridge.scipy_plant.ScipyDynamics.control_into`: the compiled kernel, the numpy model
+   where it declines, or with ``ControllerSource.ANALYTIC`` the numpy model);
+3. the shared compiled stage (:func:`mj_bridge.scipy_stage.stage_for`, given that control): the
+   force effects of :mod:`mj_bridge.scipy_forces` (the springs ``F^S = −∂U_s/∂p`` of Eq. (38), the
+   given torque of Remark 2), the quaternion rate and the rates of :mod:`analytic.aux_rates`;
 4. a compiled map of the stage's forces into Drake's generalized force (:func:`_drake_force`), fed
    to the plant's applied generalized-force port:
 
@@ -44,20 +46,12 @@ Every derivative evaluation:
 
 5. ``plant.SetPositionsAndVelocities`` and ``plant.EvalTimeDerivatives`` once each, and a compiled
    copy into ``ẏ`` that checks it is finite (:func:`_finish`). The dynamics (mass matrix,
-   gyroscopic and Coriolis terms, gravity) are Drake's alone.
+   gyroscopic and Coriolis terms, gravity, the masses' inertia: :mod:`mj_bridge.drake_effects`) are
+   Drake's alone.
 
-Why the controller gets the integrated u, not û: under the controlled Example 1's fast spin the
-closed loop's integration error depends on it. At rtol 1e-12 (DOP853), C over 20 s is off its own
-rtol-2.5e-14 run by 1.1e-9 m with u as integrated and by 7.5e-9 m with û (the analytic plant:
-2.6e-9 m), and off the analytic plant by 1.7e-9 m and 8.0e-9 m; at rtol 2.5e-14 all agree to
-2e-10 m. Integrating the body-axis ω (the Pinocchio plant's choice) gave 6.5e-9 m with û.
-
-Speed: Drake's own ``Simulator`` (``runge_kutta5``) needed accuracy 1e-13 and ~220x the analytic
-plant's evaluations to reach ~1e-9 m on the controlled Example 1 (measured outside the project); scipy's
-DOP853 at the scene's tolerances on ``EvalTimeDerivatives`` is the fast path. One evaluation costs
-12-19 µs on the paper scenes (n = 2; ~70 µs at n = 30, ~0.5 ms at n = 300: O(n), so no size limit),
-the 20 s controlled Example 1 ~0.9 s of integration, ~4.5x the analytic plant on the same scipy loop
-(:mod:`validation.bench.drake_goal`).
+scipy's DOP853 at the scene's tolerances on ``EvalTimeDerivatives`` is the fast path (Drake's own
+``Simulator`` and what one evaluation costs: ``docs/performance.md``); one evaluation is O(n), so
+the plant has no size limit.
 """
 
 from __future__ import annotations
@@ -67,27 +61,26 @@ from collections.abc import Callable
 
 import numpy as np
 
-from analytic.assemble import N_AUX, assemble
+from analytic.assemble import N_AUX
 from analytic.error_scale import ErrorGroups
-from analytic.fast import FastModel
-from analytic.kernel import compile_lock
 from analytic.kernel.jit import jit
-from analytic.model import ControlOutput, TumblingModel
+from analytic.model import ControlOutput
 from analytic.scene import Scene
 from analytic.stepping import NonFinite
-from analytic.trajectory import RunStatus, Trajectory
+from analytic.trajectory import Trajectory
+from mj_bridge import scipy_plant
 from mj_bridge.drake_model import build_model, drake_to_paper_batch, import_drake, paper_to_drake
 from mj_bridge.drake_settings import DrakeSettings
-from mj_bridge.pinocchio_plant import MODE_GIVEN, stage_for, work_layout
-from mj_bridge.scipy_loop import check_t_end, integrate
+from mj_bridge.scipy_plant import ScipyDynamics, numba_types
+from mj_bridge.scipy_stage import MODE_GIVEN
 from mj_bridge.stages import ControllerSource
 
 ENGINE = "drake"
 """The plant's name in its trajectories: :attr:`mj_bridge.drake_plugin.DrakePlant.engine`."""
 
 COMPILE_LOCK = "drake-stage"
-"""The :mod:`analytic.kernel.compile_lock` name held while the maps below (and the Pinocchio stage
-they share) are compiled or loaded from numba's cache."""
+"""The :mod:`analytic.kernel.compile_lock` name held while the maps below and the shared stage
+(:mod:`mj_bridge.scipy_stage`) are compiled or loaded from numba's cache."""
 
 
 # ----------------------------------------------------------------------------------------------
@@ -97,7 +90,7 @@ they share) are compiled or loaded from numba's cache."""
 
 def _to_stage(y, yp, xd, qc, qdc):  # pragma: no cover - compiled
     """The integrated state ``y`` (2n + 20: ``[R, u, p | ω_W, Ṙ, ṗ | quadratures]``) -> the
-    Pinocchio stage's ``yp`` (2n + 20: ``[R, qx, qy, qz, qw, p | Ṙ, ω, ṗ | quadratures]``,
+    stage state ``yp`` (2n + 20: ``[R, qx, qy, qz, qw, p | Ṙ, ω, ṗ | quadratures]``,
     ``ω = S(û)ᵀ ω_W``), Drake's ``xd`` (2n + 13: ``[û, R, p | ω_W, Ṙ, ṗ]``, û the normalised
     quaternion) and the controller's paper state ``qc``, ``qdc`` (n + 7 each: ``[R, u, p]``,
     ``[Ṙ, ½ u ⊗ (0, ω), ṗ]`` with u as integrated, as the analytic plant's controller sees it)."""
@@ -148,11 +141,13 @@ def _to_stage(y, yp, xd, qc, qdc):  # pragma: no cover - compiled
 
 
 def _drake_force(work, o_tau, o_tt, o_ctl, o_rot, f):  # pragma: no cover - compiled
-    """Drake's generalized force ``f`` (n + 6) from the Pinocchio stage's work array: ``[S (τ_c +
+    """Drake's generalized force ``f`` (n + 6) from the shared stage's work array: ``[S (τ_c +
     τ_g), F_C, F + F^S]`` (see the module docstring); False when one is not finite."""
     t0, t1, t2 = work[o_tt], work[o_tt + 1], work[o_tt + 2]
     for r in range(3):
-        f[r] = work[o_rot + 3 * r] * t0 + work[o_rot + 3 * r + 1] * t1 + work[o_rot + 3 * r + 2] * t2
+        f[r] = (
+            work[o_rot + 3 * r] * t0 + work[o_rot + 3 * r + 1] * t1 + work[o_rot + 3 * r + 2] * t2
+        )
         f[3 + r] = work[o_ctl + 3 + r]
     for i in range(6, f.shape[0]):
         f[i] = work[o_tau + i]
@@ -165,7 +160,7 @@ def _drake_force(work, o_tau, o_tt, o_ctl, o_rot, f):  # pragma: no cover - comp
 
 def _finish(xdot, ydp, y, ydot):  # pragma: no cover - compiled
     """``ẏ`` (2n + 20) from Drake's time derivatives ``xdot`` (2n + 13, its ``v̇`` after ``q̇``), the
-    Pinocchio stage's ``ydp`` (the raw quaternion's rate, x, y, z, w, and the quadratures' rates)
+    stage's ``ydp`` (the raw quaternion's rate, x, y, z, w, and the quadratures' rates)
     and ``y``; False when one is a NaN or an infinity."""
     nv = (xdot.shape[0] - 1) // 2
     nq = nv + 1
@@ -209,51 +204,41 @@ def error_groups(n: int) -> ErrorGroups:
     )
 
 
-class DrakeDynamics:
-    """One scene on Drake, with the analytic controller in every derivative evaluation.
+class DrakeDynamics(ScipyDynamics):
+    """One scene on Drake, with the analytic controller in every derivative evaluation
+    (:class:`~mj_bridge.scipy_plant.ScipyDynamics`).
 
     Args:
         scene: a validated scene.
         controller: ``analytic_fast`` (default) or ``analytic`` (see :class:`DrakeSettings`).
 
     Attributes:
+        pydrake: the ``pydrake.all`` module.
         drake: the :class:`~mj_bridge.drake_model.DrakeModel` (plant, context, force port value).
-        n, nq (= n + 7, also Drake's), nv (= n + 6), ny (= 2n + 20): sizes.
-        analytic: the numpy :class:`~analytic.model.TumblingModel` (constants, numpy controller).
-        fast: the :class:`~analytic.fast.FastModel` (packed constants, compiled controller).
-        nfev: right-hand sides evaluated; fallbacks: evaluations whose control the numpy model gave.
-        error_groups: the coupled groups whose ``atol`` follows their magnitude (:func:`error_groups`).
     """
 
-    def __init__(
-        self, scene: Scene, controller: ControllerSource | str = ControllerSource.ANALYTIC_FAST
-    ):
+    engine = ENGINE
+    lock_name = COMPILE_LOCK
+    settings_type = DrakeSettings
+    sample_errors = (*ScipyDynamics.sample_errors, RuntimeError)
+
+    def build(self, scene: Scene) -> None:
         self.pydrake = import_drake()
-        self.scene = scene
-        self.controller = DrakeSettings(controller=controller).controller
         self.drake = build_model(scene)
-        self.analytic = TumblingModel(scene)
-        self.fast = FastModel(scene, self.analytic)
-        self.n = n = scene.n
-        self.nq, self.nv = n + 7, n + 6
-        self.ny = 2 * n + 13 + N_AUX
-        self.error_groups = error_groups(n)
-        self.k = self.analytic.k
-        self.controlled = self.k > 0
-        self.fp, self.ip = self.fast.fp, self.fast.ip
-        self._kernel_stage = stage_for(self.ip)
-        layout = work_layout(n, self.k)
-        self.work = np.zeros(max(stop for _, stop in layout.values()))
-        self._o = tuple(layout[k][0] for k in ("tau", "tt", "ctl", "rot"))
-        self._ctl = self.work[slice(*layout["ctl"])]
+
+    def setup(self) -> None:
+        self._o = tuple(self.layout[k][0] for k in ("tau", "tt", "ctl", "rot"))
         self._yp = np.zeros(self.ny)
         self._ydp = np.zeros(self.ny)
         self._xd = np.zeros(self.nq + self.nv)
         self._qc = np.zeros(self.nq)
         self._qdc = np.zeros(self.nq)
         self._f = np.zeros(self.nv)
-        self.nfev = 0
-        self.rhs = self._make_rhs()
+
+    groups = staticmethod(error_groups)
+
+    def versions(self) -> dict[str, str]:
+        return {"drake_version": _drake_version()}
 
     @property
     def fallbacks(self) -> int:
@@ -272,33 +257,10 @@ class DrakeDynamics:
         q_d, v_d = paper_to_drake(np.asarray(q, dtype=float), np.asarray(qdot, dtype=float))
         return np.concatenate([q_d[4:7], q_d[:4], q_d[7:], v_d, np.zeros(N_AUX)])
 
-    def initial_state(self) -> np.ndarray:
-        """``y(0)`` from the scene's ``[initial]`` table."""
-        return self.state_from_paper(self.scene.initial.q0(), self.scene.initial.qdot0())
+    def control_state(self) -> tuple[np.ndarray, np.ndarray]:
+        return self._qc, self._qdc
 
     # -- the right-hand side ----------------------------------------------------------------
-
-    def _make_control(self) -> Callable[[float], None]:
-        """``control(t)``: the controller at the paper state ``(qc, qdc)`` last mapped, into the
-        stage's control slots ``[τ_c, F_C, F]`` (nothing for an uncontrolled scene)."""
-        qc, qdc, ctl = self._qc, self._qdc, self._ctl
-        if not self.controlled:
-            return lambda t: None
-        if self.controller is ControllerSource.ANALYTIC:
-            numpy_model = self.analytic.acceleration
-
-            def control(t: float) -> None:
-                c = numpy_model(t, qc.copy(), qdc.copy())[1]
-                ctl[0:3], ctl[3:6], ctl[6:] = c.torque, c.force_at_C, c.rod_forces
-
-            return control
-        forces = self.fast.qddot_and_forces  # the compiled kernel, numpy where it declines
-
-        def control(t: float) -> None:
-            _, torque, rod, force_at_c, _ = forces(t, qc, qdc)
-            ctl[0:3], ctl[3:6], ctl[6:] = torque, force_at_c, rod
-
-        return control
 
     def _make_rhs(self) -> Callable[[float, np.ndarray], np.ndarray]:
         """``f(t, y) -> ẏ`` for scipy (see the module docstring for its steps)."""
@@ -313,7 +275,7 @@ class DrakeDynamics:
         ny = self.ny
         empty = np.empty
         stage = self._kernel_stage
-        control = self._make_control()
+        control = self.control_into(qc, qdc)
 
         def f(t: float, y: np.ndarray) -> np.ndarray:
             self.nfev += 1
@@ -335,16 +297,13 @@ class DrakeDynamics:
     def compile(self) -> None:
         """Compile (or load from numba's cache) the maps and the shared stage for the argument
         types :attr:`rhs` passes them, without running them."""
-        import numba
-
         y = self.initial_state()
-        sig = numba.typeof
-        to_stage.compile(tuple(sig(a) for a in (y, self._yp, self._xd, self._qc, self._qdc)))
-        drake_force.compile(tuple(sig(a) for a in (self.work, *self._o, self._f)))
+        to_stage.compile(numba_types(y, self._yp, self._xd, self._qc, self._qdc))
+        drake_force.compile(numba_types(self.work, *self._o, self._f))
         xdot = np.zeros(self.nq + self.nv)
-        finish.compile(tuple(sig(a) for a in (xdot, self._ydp, y, np.empty(self.ny))))
+        finish.compile(numba_types(xdot, self._ydp, y, np.empty(self.ny)))
         args = (0.0, self._yp, self.fp, self.ip, self.work, self._ydp, MODE_GIVEN)
-        self._kernel_stage.compile(tuple(sig(a) for a in args))
+        self._kernel_stage.compile(numba_types(*args))
 
     # -- one state, paper coordinates -------------------------------------------------------
 
@@ -372,19 +331,19 @@ class DrakeDynamics:
         qdd = drake_to_paper_batch(_drake_q(y[:nq]), y[nq : nq + nv], ydot[nq : nq + nv])[2]
         return qdd[0], self.control_output(t)
 
-    def control_output(self, t: float) -> ControlOutput | None:
-        """The controller's full output at the paper state last mapped into the work array."""
-        if not self.controlled:
-            return None
-        q, qd = self._qc.copy(), self._qdc.copy()
-        if self.controller is ControllerSource.ANALYTIC:
-            return self.analytic.acceleration(t, q, qd)[1]
-        return self.fast.acceleration(t, q, qd)[1]
+    # -- the record -------------------------------------------------------------------------
 
+    def sample_size(self) -> int:
+        return self.nv
 
-# ----------------------------------------------------------------------------------------------
-# simulate
-# ----------------------------------------------------------------------------------------------
+    def sample(self, t: float, y: np.ndarray) -> np.ndarray:
+        """Drake's ``v̇`` at the sample ``y``."""
+        nq, nv = self.nq, self.nv
+        return self.rhs(t, np.ascontiguousarray(y))[nq : nq + nv]
+
+    def to_paper(self, Y, rows):
+        nq, nv = self.nq, self.nv
+        return drake_to_paper_batch(_drake_q(Y[:, :nq]), Y[:, nq : nq + nv], rows)
 
 
 def simulate(
@@ -393,28 +352,10 @@ def simulate(
     t_end: float | None = None,
     progress: Callable[[float], None] | None = None,
 ) -> Trajectory:
-    """Integrate ``scene`` on Drake; samples at the scene's output rate, paper coordinates.
-
-    Args:
-        scene: a validated scene.
-        settings: solver, tolerances and controller (default :class:`DrakeSettings()`: DOP853 at
-            the scene's tolerances, the compiled controller).
-        t_end: horizon, s (default ``scene.output.t_end``).
-        progress: called with the simulated time reached after each step that passes a sample, s.
-
-    Returns:
-        a :class:`Trajectory` with ``engine = drake``; a run that fails (solver failure, non-finite
-        state) returns the samples reached with ``status = failed``, one interrupted
-        (KeyboardInterrupt) with ``status = interrupted``.
-    """
-    settings = settings or DrakeSettings()
-    check_t_end(t_end)
-    with compile_lock.compiling(COMPILE_LOCK):
-        plant = DrakeDynamics(scene, settings.controller)
-        plant.compile()
-    run, info = integrate(plant, settings, scene, t_end, progress)
-    info["drake_version"] = _drake_version()
-    return _assemble(plant, run.t, run.y, run.status, run.message, info)
+    """Integrate ``scene`` on Drake (:func:`mj_bridge.scipy_plant.simulate`): a :class:`Trajectory`
+    with ``engine = drake``, the settings' default :class:`DrakeSettings()` (DOP853 at the scene's
+    tolerances, the compiled controller)."""
+    return scipy_plant.simulate(DrakeDynamics, scene, settings, t_end, progress)
 
 
 def _drake_version() -> str:
@@ -430,44 +371,6 @@ def _drake_q(x: np.ndarray) -> np.ndarray:
     """Drake's positions ``[u, R, p]`` of the integrated ones ``[R, u, p]`` ((n+7,) or (N, n+7))."""
     x = np.asarray(x)
     return np.concatenate([x[..., 3:7], x[..., :3], x[..., 7:]], axis=-1)
-
-
-def _assemble(
-    plant: DrakeDynamics,
-    t: np.ndarray,
-    Y: np.ndarray,
-    status: RunStatus,
-    message: str,
-    info: dict,
-) -> Trajectory:
-    """The record of the samples ``Y`` (N, ny): Drake's ``v̇`` and the controller's output at each
-    sample (NaN and none where they cannot be evaluated), mapped to paper coordinates, then
-    :func:`analytic.assemble.assemble`."""
-    N, nq, nv = len(t), plant.nq, plant.nv
-    vdot = np.full((N, nv), np.nan)
-    controls: list[ControlOutput | None] = [None] * N
-    for i in range(N):
-        try:
-            vdot[i] = plant.rhs(float(t[i]), np.ascontiguousarray(Y[i]))[nq : nq + nv]
-            controls[i] = plant.control_output(float(t[i]))
-        except (NonFinite, np.linalg.LinAlgError, ValueError, RuntimeError):
-            continue
-    # the integrated quaternion as it is (not renormalised: its norm error is the run's)
-    q, qd, qdd, omega = drake_to_paper_batch(_drake_q(Y[:, :nq]), Y[:, nq : nq + nv], vdot)
-    return assemble(
-        plant.analytic,
-        ENGINE,
-        t,
-        q,
-        qd,
-        qdd,
-        controls,
-        Y[:, nq + nv :],
-        status,
-        message,
-        info,
-        omega=omega,
-    )
 
 
 __all__ = [

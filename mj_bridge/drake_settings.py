@@ -23,9 +23,8 @@ def drake_unavailable() -> str:
 
 @dataclass(frozen=True)
 class DrakeSettings(ScipyLoopSettings):
-    """How the Drake plant integrates (:class:`~mj_bridge.scipy_loop_settings.ScipyLoopSettings`;
-    Drake's own integrators were ~10x slower at equal accuracy when measured, see
-    :mod:`mj_bridge.drake_plant`)."""
+    """How the Drake plant integrates (:class:`~mj_bridge.scipy_loop_settings.ScipyLoopSettings`:
+    scipy's methods, not Drake's own integrators, ``docs/performance.md``)."""
 
 
 __all__ = ["DRAKE_MISSING", "DrakeSettings", "drake_unavailable"]

@@ -12,9 +12,12 @@ Model (joint names as in the MJCF twin, :mod:`model_xml.builder`; mass indices 1
   chain: every ``p_i`` is measured from O'), placed at ``SE3(I, d)``; inertia ``(m_i, 0, J_i)`` with
   ``J_i`` the scene's ``masses.inertia[i]`` in body axes (Remark 1: ring, axial + transverse, or a
   full matrix) when the ``mass_inertia`` effect is on, else a point mass (``J_i = 0``).
-* ``gravity`` = the scene's vector when the ``gravity`` effect is on, else zero. Springs, the given
-  torque and the control are generalized forces applied by whoever drives the model
-  (:mod:`mj_bridge.pinocchio_plant`); the model has no armature, damping or friction.
+* ``gravity`` = the scene's vector when the ``gravity`` effect is on, else zero.
+
+The model is built with both effects off, then each effect of the scene that
+:data:`mj_bridge.pinocchio_effects.EFFECTS` implements is switched on by its function. Springs, the
+given torque and the control are generalized forces applied by whoever drives the model
+(:mod:`mj_bridge.pinocchio_plant`); the model has no armature, damping or friction.
 
 ``pin.buildModelFromMJCF`` of the exported twin (:func:`model_xml.to_mjcf`) gives the same tree and
 mass properties (``tests/mj_bridge/test_pinocchio_plant.py``), except that Pinocchio 4.1's reader ignores
@@ -34,6 +37,7 @@ import numpy as np
 
 from analytic.effects import Effect
 from analytic.scene import Scene
+from mj_bridge.pinocchio_effects import EFFECTS
 from model_xml.builder import BODY, ROOT, joint_name, mass_name
 from model_xml.coordinates import (
     paper_to_pinocchio,
@@ -94,13 +98,15 @@ def build_model(scene: Scene) -> pinocchio.Model:
     )
     frame = model.addBodyFrame(BODY, root, pin.SE3.Identity(), 0)
     at_d = pin.SE3(np.eye(3), d)
-    for i, J in enumerate(mass_inertias(scene)):
+    for i in range(scene.n):  # point masses: the mass_inertia effect gives them their inertia
         jid = model.addJoint(root, pin.JointModelPrismaticUnaligned(a), at_d, joint_name(i))
-        model.appendBodyToJoint(
-            jid, pin.Inertia(float(scene.masses.mass[i]), np.zeros(3), J), pin.SE3.Identity()
-        )
+        point = pin.Inertia(float(scene.masses.mass[i]), np.zeros(3), np.zeros((3, 3)))
+        model.appendBodyToJoint(jid, point, pin.SE3.Identity())
         model.addBodyFrame(mass_name(i), jid, pin.SE3.Identity(), frame)
-    model.gravity = pin.Motion(gravity_vector(scene), np.zeros(3))
+    model.gravity = pin.Motion(np.zeros(3), np.zeros(3))  # the gravity effect sets it
+    for effect, switch_on in EFFECTS.items():
+        if scene.has(effect):
+            switch_on(scene, model)
     return model
 
 

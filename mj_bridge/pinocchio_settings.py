@@ -18,12 +18,10 @@ class PinocchioSettings(ScipyLoopSettings):
     (:class:`~mj_bridge.scipy_loop_settings.ScipyLoopSettings`)."""
 
 
-# Pinocchio's ``Data`` for this model (n prismatic joints under one free flyer) grows as the cube
-# of n: ``pin.Model.createData()`` (pin 4.1) measured 0.04 s at n = 100, 2.2 s and 1.9 GB at
-# n = 300, 7.6 s and 4.3 GB at n = 400, 24 s and 8.1 GB at n = 500 (about 64 n³ bytes), so 10⁴
-# masses would need ~64 TB (it failed with an empty MemoryError after a minute). The Pinocchio
-# plant refuses more masses than this up front; the analytic and MuJoCo plants are not limited.
 PINOCCHIO_MAX_MASSES = 300
+"""The most masses the Pinocchio plant holds: its ``Data`` for this model (n prismatic joints under
+one free flyer) grows as n³ (``docs/performance.md``), so larger scenes are refused up front; the
+analytic and MuJoCo plants are not limited."""
 
 
 def check_pinocchio_size(scene: Scene) -> None:

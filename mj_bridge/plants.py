@@ -29,13 +29,14 @@ from analytic.plant import TIGHTER_STEP, AnalyticPlant, AnalyticSettings, Plant
 from analytic.scene import Scene
 from analytic.trajectory import Engine, Trajectory
 from mj_bridge.mujoco_settings import MujocoRunSettings
+from mj_bridge.pinocchio_effects import EFFECTS as PINOCCHIO_EFFECTS
 from mj_bridge.pinocchio_settings import (
     PINOCCHIO_MAX_MASSES,
     PinocchioSettings,
     check_pinocchio_size,
 )
 from mj_bridge.registry import NAME_PATTERN, RESERVED, entry_points, report_order
-from mj_bridge.scipy_loop_settings import tightened_scipy_loop
+from mj_bridge.scipy_loop_plant import ScipyLoopPlant
 
 
 class MujocoPlant(Plant):
@@ -43,6 +44,19 @@ class MujocoPlant(Plant):
 
     engine = Engine.MUJOCO.value
     label = "MuJoCo"
+    effects = frozenset(
+        {
+            Effect.GRAVITY,  # the model's gravity
+            Effect.SPRINGS_LINEAR,  # tendon or actuator springs (SpringModel)
+            Effect.SPRINGS_CUBIC,  # ... their cubic terms
+            Effect.MASS_INERTIA,  # the masses' bodies' inertia
+            Effect.EXTERNAL_TORQUE,  # applied with the control, inside every stage
+            Effect.CONTROL_OMEGA,
+            Effect.CONTROL_MASSES,
+        }
+    )
+    """The effects the twin (:func:`model_xml.builder.build_spec`) and its callbacks
+    (:mod:`mj_bridge.stages`) implement."""
     settings_type = MujocoRunSettings
     value_bound = 1e10
     """MuJoCo's ``mjMAXVAL``: ``mj_checkPos``/``mj_checkVel``/``mj_checkAcc`` reset the state and
@@ -72,12 +86,16 @@ class MujocoPlant(Plant):
         )
 
 
-class PinocchioPlant(Plant):
-    """The same body in Pinocchio (optional engine: the referee)."""
+class PinocchioPlant(ScipyLoopPlant):
+    """The same body in Pinocchio (optional engine: the referee). Its effects: gravity and the
+    masses' inertia are Pinocchio's model (:mod:`mj_bridge.pinocchio_effects`), the springs and the
+    given torque generalized forces (:mod:`mj_bridge.scipy_forces`), the control the controller's."""
 
     engine = Engine.PINOCCHIO.value
     label = "Pinocchio"
+    model_effects = frozenset(PINOCCHIO_EFFECTS)
     settings_type = PinocchioSettings
+    integration = "mj_bridge.pinocchio_plant"
 
     @classmethod
     def unavailable(cls) -> str:
@@ -92,21 +110,6 @@ class PinocchioPlant(Plant):
         """The effects (as every plant), and at most :data:`PINOCCHIO_MAX_MASSES` masses."""
         super().check_scene(scene)
         check_pinocchio_size(scene)
-
-    def default_settings(self, scene: Scene) -> PinocchioSettings:
-        return PinocchioSettings(scene.solver.method, scene.solver.rtol, scene.solver.atol)
-
-    def describe(self, settings: PinocchioSettings) -> str:
-        rtol = "the scene's" if settings.rtol is None else f"{settings.rtol:g}"
-        return f"Pinocchio {settings.method.value} rtol {rtol}"
-
-    def tightened(self, scene: Scene, settings: PinocchioSettings) -> PinocchioSettings | None:
-        return tightened_scipy_loop(scene, settings)
-
-    def _simulate(self, scene, settings, t_end, progress) -> Trajectory:
-        from mj_bridge.pinocchio_plant import simulate
-
-        return simulate(scene, settings, t_end=t_end, progress=progress)
 
 
 PLANTS: dict[str, type[Plant]] = {
@@ -202,7 +205,9 @@ def _load() -> tuple[dict[str, type[Plant]], tuple[PluginError, ...]]:
             if (ki := _interrupt_behind(exc)) is not None:  # a signal cut a C extension's init
                 raise ki from exc
             errors.append(
-                PluginError(ep.name, _one_line(f"cannot import {ep.value}: {type(exc).__name__}: {exc}"))
+                PluginError(
+                    ep.name, _one_line(f"cannot import {ep.value}: {type(exc).__name__}: {exc}")
+                )
             )
             continue
         why = _plugin_problem(ep.name, ep.value, obj)

@@ -8,7 +8,7 @@ Report order, everywhere a set of plants or a pair is listed (the order of ``--p
 columns of a table, which plant of a pair comes first, the colours of extra plants): the built-ins
 in :class:`Engine` order, then the plugins by name, then any other label by name
 (:func:`order_key`). The plugins' classes are loaded by :mod:`mj_bridge.plants`; this module only
-reads the entry points' names (``importlib.metadata``, ~25 ms once per process).
+reads the entry points' names (``importlib.metadata``, once per process).
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
-"""The run both engine plants on scipy's loop share (Pinocchio, Drake): their dynamics stepped by
+"""The run every engine plant on scipy's loop shares (Pinocchio, Drake): its dynamics stepped by
 :func:`analytic.stepping.step_and_sample` at the settings' tolerances, and the ``info`` every such
-trajectory carries. Each plant builds its own dynamics and assembles its own trajectory."""
+trajectory carries (:func:`mj_bridge.scipy_plant.simulate` runs it, then records the samples)."""
 
 from __future__ import annotations
 

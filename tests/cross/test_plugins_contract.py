@@ -205,13 +205,13 @@ def test_naming_a_plugin_that_refuses_the_scene_is_still_refused(with_picky):
 def test_the_referee_note_names_the_plants_left_out(with_picky):
     """A request made with ``all`` carries the plants left out; the report's referee note (shown
     in report.md beside the verdicts) says which and why."""
-    from validation.report.report import _referee_lines
+    from validation.report.markdown import referee_lines
     from validation.validate import validation_request
 
     with pytest.warns(UserWarning):
         req = validation_request(SCENE, plants="all")
     assert [x.engine for x in req.left_out] == ["picky"]
-    lines = _referee_lines([], {"referee_note": "; ".join(str(x) for x in req.left_out)})
+    lines = referee_lines([], {"referee_note": "; ".join(str(x) for x in req.left_out)})
     assert any("picky plant left out: scene.name: the picky plant runs no scene" in ln for ln in lines)
 
 

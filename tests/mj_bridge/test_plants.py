@@ -78,7 +78,9 @@ def _broken_distribution(root: Path) -> Path:
     )
     info = root / "tpx_broken_plugins-0.1.dist-info"
     info.mkdir(exist_ok=True)
-    (info / "METADATA").write_text("Metadata-Version: 2.1\nName: tpx-broken-plugins\nVersion: 0.1\n")
+    (info / "METADATA").write_text(
+        "Metadata-Version: 2.1\nName: tpx-broken-plugins\nVersion: 0.1\n"
+    )
     lines = ["[tumbling_testbed.plants]"] + [f"{k} = {v}" for k, (v, _) in BROKEN.items()]
     (info / "entry_points.txt").write_text("\n".join(lines) + "\n")
     return root
@@ -140,7 +142,11 @@ def test_report_order_and_subjects_of_any_plant():
     assert s.value == "analytic vs echo" and type(s.value) is str
     assert json.dumps({"subject": s}) == '{"subject": "analytic vs echo"}'
     subjects = [Subject("mujoco vs drake"), Subject("drake"), Subject("analytic vs mujoco")]
-    assert sorted(subjects, key=subject_order_key) == ["drake", "analytic vs mujoco", "mujoco vs drake"]
+    assert sorted(subjects, key=subject_order_key) == [
+        "drake",
+        "analytic vs mujoco",
+        "mujoco vs drake",
+    ]
     for bad in ("", " a", "a vs b vs c", "a vs "):
         with pytest.raises(ValueError, match="subject"):
             Subject(bad)
@@ -200,8 +206,17 @@ def test_a_plugin_package_installed_from_tests_runs_in_tumble_validate(tmp_path)
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(site), str(broken)]))
     out = tmp_path / "out"
     res = subprocess.run(
-        [str(VENV_BIN / "tumble"), "validate", "paper_example1_controlled", "--t-end", "0.5",
-         "--plants", "analytic,mujoco,echo", "--out", str(out)],
+        [
+            str(VENV_BIN / "tumble"),
+            "validate",
+            "paper_example1_controlled",
+            "--t-end",
+            "0.5",
+            "--plants",
+            "analytic,mujoco,echo",
+            "--out",
+            str(out),
+        ],
         capture_output=True,
         text=True,
         env=env,
@@ -212,7 +227,9 @@ def test_a_plugin_package_installed_from_tests_runs_in_tumble_validate(tmp_path)
     warnings = [line for line in res.stderr.splitlines() if "plant plugin" in line]
     assert len(warnings) == len(BROKEN), res.stderr
     for name, (_, says) in BROKEN.items():
-        mine = [w for w in warnings if w.startswith(f"tumble: warning: plant plugin {name!r} skipped: ")]
+        mine = [
+            w for w in warnings if w.startswith(f"tumble: warning: plant plugin {name!r} skipped: ")
+        ]
         assert len(mine) == 1 and says in mine[0], (name, warnings)
     doc = json.loads((out / "report.json").read_text())
     assert [p["engine"] for p in doc["plants"]] == ["analytic", "mujoco", "echo"]
@@ -223,7 +240,6 @@ def test_a_plugin_package_installed_from_tests_runs_in_tumble_validate(tmp_path)
     assert all(c["passed"] for c in doc["checks"] if c["subject"] == "analytic vs echo")
     assert "echo" in (out / "report.md").read_text()
     assert (out / "run.rrd").stat().st_size > 0
-
 
 
 def test_a_plant_whose_check_scene_has_a_bug_stays_in_the_set_to_fail_alone(monkeypatch):
@@ -248,3 +264,45 @@ def test_a_plant_whose_check_scene_has_a_bug_stays_in_the_set_to_fail_alone(monk
     sc = resolve_scene("paper_example1")
     got = plants_mod.plants_for_scene(sc, ("analytic", "buggy", "refusing", "mujoco"))
     assert got == ("analytic", "buggy", "mujoco")
+
+
+def _effect_scene(controlled: bool):
+    """A short random scene with every effect on (two output samples; the control effects only
+    when ``controlled``: tracked masses do not feel the springs), the masses off their rest
+    positions."""
+    import numpy as np
+
+    from analytic.scene import modified_scene
+    from analytic.scene.random_scenes import random_scene
+
+    sc = random_scene(np.random.default_rng(11), 2, external_torque=True, controlled=controlled)
+    stretched = [
+        float(x) for x in np.asarray(sc.masses.p_e) + np.array([0.5, -0.3])
+    ]  # every spring felt
+    return modified_scene(
+        sc, {"initial": {"p": stretched}, "output": {"t_end": 2.0 / sc.output.rate}}
+    )
+
+
+@pytest.mark.parametrize("name", [*PLANTS, "drake"])
+def test_every_effect_a_plant_claims_changes_its_motion(name):
+    """A plant claiming an effect it has no code for fails here: with the effect switched off the
+    plant's motion must differ from the one with every effect on (each claimed effect at a time;
+    the control effects on a controlled scene, the others on an uncontrolled one)."""
+    import numpy as np
+
+    from analytic.effects import CONTROL_EFFECTS
+
+    cls = registered().get(name)
+    if cls is None or cls.unavailable():
+        pytest.skip(f"{name}: not installed")
+    pl = cls()
+    scenes = {c: _effect_scene(c) for c in (False, True)}
+    full = {c: pl.simulate(sc) for c, sc in scenes.items()}
+    for effect in sorted(cls.effects):
+        c = effect in CONTROL_EFFECTS
+        sc = scenes[c]
+        assert effect in sc.effects
+        off = pl.simulate(sc.with_effects(sc.effects - {effect}))
+        same = np.array_equal(full[c].q, off.q) and np.array_equal(full[c].qddot, off.qddot)
+        assert not same, f"{name}: switching {effect.value} off changes nothing"

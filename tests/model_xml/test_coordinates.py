@@ -305,7 +305,7 @@ def test_compiled_pinocchio_stage_maps_as_numpy(n):
     controller's paper (q, q̇) as pinocchio_plant_to_pinocchio / pinocchio_plant_to_paper do, at
     states whose quaternion is off unit (as the integrated one drifts)."""
     from analytic.fast import FastModel
-    from mj_bridge import pinocchio_plant as pp
+    from mj_bridge import scipy_stage as pp
 
     scene = random_scene(np.random.default_rng(40 + n), n)
     fm = FastModel(scene)

@@ -1,7 +1,8 @@
 """The benchmark wing: every speed goal, as a ratio measured in one process.
 
 * :mod:`.command`: ``tumble bench`` (= ``python -m validation.bench``);
-* :mod:`.goals`: the speed goals, each a ``Goal``;
+* :mod:`.goals`: every speed goal (the registry, :data:`~.goals.GOALS`), each in its own module
+  (``*_goal.py``, ``evaluation_goals``), each a ``Goal`` (:mod:`.goal`);
 * :mod:`.verdicts`: a goal's spread over its rounds and its verdict (``Verdict``, ``SPREAD_BOUND``);
 * :mod:`.timing`: the chain scene and the timing loop the goals share (thread CPU time);
 * :mod:`.fast_bench`: the compiled kernel against the numpy reference and ``mj_forward``;
@@ -12,7 +13,7 @@ from validation._lazy import lazy_exports
 
 _PUBLIC = {
     "CpuMeter": "validation.bench.timing",
-    "Goal": "validation.bench.goals",
+    "Goal": "validation.bench.goal",
     "SPREAD_BOUND": "validation.bench.verdicts",
     "Spread": "validation.bench.verdicts",
     "Verdict": "validation.bench.verdicts",

@@ -41,7 +41,7 @@ from validation.runs import interrupts
 # (python -X importtime -c "import validation.bench.goals"; this module alone: ~0.09 s)
 if TYPE_CHECKING:
     from analytic.scene import Scene
-    from validation.bench.goals import Goal
+    from validation.bench.goal import Goal
 
 
 def analytic_eval_cost(scene: Scene, compiled: bool = False) -> float:
@@ -131,11 +131,6 @@ def measure_and_print(skip_long: bool = False, out=print) -> tuple[bool, dict[st
         )
     out("\nspeed goals, each a ratio measured in this process")
     measured = goals.measure(skip_long, progress=out)
-    if not skip_long:  # ~15 s; skipped, with the reason, where Drake is not installed
-        from validation.bench.drake_goal import goal_drake
-
-        measured.append(goal_drake(progress=out))
-        out(measured[-1].line())
     load_after = load_average()
     out("\nsummary")
     for g in measured:

@@ -1,4 +1,4 @@
-"""The Drake plant's speed goal, for ``tumble bench`` (:mod:`validation.bench.goals` wires it).
+"""The Drake plant's speed goal, for ``tumble bench`` (an entry of :data:`validation.bench.goals.GOALS`).
 
 **Drake plant**: the controlled Example 1 over 20 s, DOP853 at rtol 1e-12 (atol 1e-13), on the Drake
 plant (:class:`mj_bridge.drake_plugin.DrakePlant`) / on the analytic plant, both through the plant
@@ -23,7 +23,8 @@ import numpy as np
 
 from mj_bridge.drake_plugin import DrakePlant, DrakeSettings
 from mj_bridge.plants import AnalyticSettings, plant
-from validation.bench.goals import Goal, _share, plant_rounds
+from validation.bench.goal import Goal, run_share
+from validation.bench.plant_rounds import plant_rounds
 from validation.bench.verdicts import spread_of
 from validation.scenes import resolve_scene
 
@@ -67,7 +68,7 @@ def goal_drake(
     med_cpu = {name: statistics.median(v) for name, v in cpus.items()}
     med_call = {name: statistics.median(v) for name, v in calls.items()}
     ratios = [d / a for d, a in zip(cpus["drake"], cpus["analytic"], strict=True)]
-    spread = spread_of(ratios, _share(cpus, walls))
+    spread = spread_of(ratios, run_share(cpus, walls))
     default_s = float(default_loop.info["wall_time_s"])
     versus_default = statistics.median(walls["drake"]) / default_s if default_s > 0 else math.inf
     progress(

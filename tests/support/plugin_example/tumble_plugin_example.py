@@ -1,7 +1,8 @@
 """An example plant plugin: the analytic plant's integration, run under the name ``echo``.
 
 The smallest complete plant: a frozen settings dataclass, the class attributes the registry checks
-(``engine`` equal to the entry point's name, ``label``, ``settings_type``), ``default_settings``,
+(``engine`` equal to the entry point's name, ``label``, ``settings_type``), the ``effects`` it
+simulates (a plant claims none it does not list), ``default_settings``,
 ``describe`` and ``_simulate``, which returns a :class:`analytic.trajectory.Trajectory` in the
 paper's coordinates on the scene's output grid. A real plugin would integrate its own engine here
 and map its state to ``q = [R, u (w first), p]`` (``docs/plugins.md``).
@@ -36,6 +37,7 @@ class EchoPlant(Plant):
     engine = "echo"
     label = "Echo"
     settings_type = EchoSettings
+    effects = AnalyticPlant.effects  # what it runs: the analytic plant's
 
     def default_settings(self, scene):
         return EchoSettings(scene.solver.method, scene.solver.rtol, scene.solver.atol)

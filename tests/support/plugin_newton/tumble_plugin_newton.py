@@ -88,6 +88,17 @@ class NewtonEulerPlant(Plant):
     engine = "newton"
     label = "Newton-Euler"
     settings_type = NewtonSettings
+    effects = frozenset(  # what its equations below implement, each by name
+        {
+            Effect.GRAVITY,
+            Effect.SPRINGS_LINEAR,
+            Effect.SPRINGS_CUBIC,
+            Effect.MASS_INERTIA,
+            Effect.EXTERNAL_TORQUE,
+            Effect.CONTROL_OMEGA,
+            Effect.CONTROL_MASSES,
+        }
+    )
     coriolis = 2.0
     """The factor of ``ṗ_i ω × a`` in the masses' acceleration: 2 (the physics)."""
 

@@ -8,7 +8,7 @@ import math
 import pytest
 
 from validation.bench import command, goals
-from validation.bench.goals import Goal
+from validation.bench.goal import Goal
 from validation.bench.verdicts import SPREAD_BOUND, Spread
 
 

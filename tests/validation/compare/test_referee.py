@@ -461,7 +461,7 @@ def test_every_verdict_is_derivable_from_the_printed_rule(tmp_path):
     """The report's table and its printed rule give back every verdict: rows drawn over every
     clause (all below the floor with large ratios, as measured for the attitude; outliers with the
     closest pair below or above the floor; three similar values inside and over the threshold)."""
-    from validation.report.report import render_markdown
+    from validation.report.markdown import render_markdown
 
     rng = np.random.default_rng(7)
     th = 1e-6

@@ -292,11 +292,12 @@ def quick_bench(monkeypatch):
     speeds; tumble bench itself takes minutes)."""
     from validation.bench import command as bench
     from validation.bench import goals
+    from validation.bench.goal import Goal
     from validation.bench.verdicts import Spread
 
-    done = goals.Goal("a measured goal", 0.5, 1.0, "detail", data={"runs_s": [0.1, 0.2]})
-    busy = goals.Goal("a busy goal", 0.6, 1.0, "", spread=Spread(0.2, 0.6, 1.1, 21, 0.4))
-    skipped = goals.Goal("a skipped goal", math.nan, 3.0, "", skipped="pin is not installed")
+    done = Goal("a measured goal", 0.5, 1.0, "detail", data={"runs_s": [0.1, 0.2]})
+    busy = Goal("a busy goal", 0.6, 1.0, "", spread=Spread(0.2, 0.6, 1.1, 21, 0.4))
+    skipped = Goal("a skipped goal", math.nan, 3.0, "", skipped="pin is not installed")
     monkeypatch.setattr(goals, "measure", lambda skip_long, progress: [done, busy, skipped])
     rows = [{"n": 2, "numpy_us": 20.0, "compiled_us": 0.6, "mj_forward_us": math.nan}]
     monkeypatch.setattr(bench, "evaluation_table", lambda: rows)

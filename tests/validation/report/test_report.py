@@ -14,9 +14,9 @@ from analytic.effects import Effect
 from analytic.scene import load_scene
 from analytic.simulate import simulate
 from analytic.trajectory import Engine, RunStatus
-from validation.compare.checks import Check, Group, Series, Subject, compare
-from validation.compare.summary import check_sentence, max_abs, summary_table
-from validation.report.report import SeriesSummary, versions, write_atomic, write_report
+from validation.compare.checks import Check, Subject, compare
+from validation.compare.summary import check_sentence, summary_table
+from validation.report.report import versions, write_atomic, write_report
 from validation.runs import atomic as atomic_mod
 
 SCENES = Path(__file__).resolve().parents[3] / "analytic" / "scenes"
@@ -121,24 +121,6 @@ def test_a_failed_run_writes_what_it_has_marked_failed(scene, traj, tmp_path):
 # ----------------------------------------------------------------------------------------------
 # Numbers that do not mislead
 # ----------------------------------------------------------------------------------------------
-
-
-def test_max_of_a_signed_quantity_is_its_largest_magnitude():
-    """A series that is mostly negative: its largest value (2) is not its largest magnitude (7)."""
-    t = np.array([0.0, 0.1, 0.2, 0.3])
-    s = Series(
-        "analytic.rod_force_2",
-        "rod force",
-        "N",
-        Group.CONTROL,
-        Subject.ANALYTIC,
-        t,
-        np.array([2.0, -7.0, -3.0, -1.0]),
-    )
-    m = SeriesSummary.of(s)
-    assert m.max_abs == 7.0 and m.t_max_abs == 0.1
-    assert m.final == -1.0  # the last value keeps its sign
-    assert max_abs(np.array([[3.0, 4.0], [0.0, -4.5]])) == (5.0, 0)  # vectors: Euclidean norm
 
 
 def test_report_states_the_largest_rod_force_magnitude(scene, traj, tmp_path):

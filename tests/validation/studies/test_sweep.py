@@ -466,7 +466,7 @@ def _goal_with_made_up_walls(monkeypatch, cap_s):
     linear in the step count, so where the search stops and what it predicts do not depend on the
     machine's speed or load); the errors are the real ones."""
     import mj_bridge
-    from validation.bench import goals
+    from validation.bench import example1_goal
 
     real = mj_bridge.simulate
 
@@ -477,8 +477,8 @@ def _goal_with_made_up_walls(monkeypatch, cap_s):
     monkeypatch.setattr(mj_bridge, "simulate", costed)
     # the goal counts each run's wall times the share of a CPU the thread had during it: with the
     # walls made up, the share is planted too (a whole CPU), so the costs are exactly those walls
-    monkeypatch.setattr(goals.CpuMeter, "share", property(lambda self: 1.0))
-    return goals.goal_example1_60s(t_end=1.0, cap_s=cap_s, progress=lambda _s: None)
+    monkeypatch.setattr(example1_goal.CpuMeter, "share", property(lambda self: 1.0))
+    return example1_goal.goal_example1_60s(t_end=1.0, cap_s=cap_s, progress=lambda _s: None)
 
 
 def _dt_reaching(e_target, pts):
@@ -495,7 +495,7 @@ def test_goal_same_accuracy_search_interpolates_to_the_analytic_accuracy(monkeyp
     at the first such run; the two last runs show RK4's order (the controller inside every stage),
     and the ratio uses MuJoCo's wall at exactly the analytic accuracy. With walls exactly
     ``RK4_COST_S / dt`` that wall is known independently: ``RK4_COST_S / dt_need``."""
-    from validation.bench.goals import Goal
+    from validation.bench.goal import Goal
 
     g = _goal_with_made_up_walls(monkeypatch, cap_s=1e9)
     e_a, w_a = g.data["analytic"]
@@ -539,16 +539,18 @@ def test_pinocchio_goal_is_skipped_with_its_reason_without_pin(monkeypatch, tmp_
     skipped, neither holding nor failing, and names no issue numbers."""
     from validation.bench import command as bench
     from validation.bench import goals
+    from validation.bench.goal import Goal
+    from validation.bench.pinocchio_goal import goal_pinocchio
 
     monkeypatch.setattr(
         PinocchioPlant, "unavailable", classmethod(lambda cls: "no pin here [test]")
     )
-    g = goals.goal_pinocchio(progress=lambda _s: pytest.fail("nothing is measured"))
+    g = goal_pinocchio(progress=lambda _s: pytest.fail("nothing is measured"))
     assert g.skipped == "pin is not installed: no pin here [test]"
     assert g.verdict == "SKIPPED" and not g.holds and g.limit == 3.0
     assert g.line() == f"{g.name}: skipped (pin is not installed: no pin here [test])"
 
-    done = goals.Goal("a measured goal", 0.5, 1.0, "detail")
+    done = Goal("a measured goal", 0.5, 1.0, "detail")
     monkeypatch.setattr(goals, "measure", lambda skip_long, progress: [done, g])
     monkeypatch.setattr(bench, "evaluation_table", lambda: [])
     lines: list[str] = []
@@ -570,7 +572,7 @@ def test_pinocchio_goal_structure():
     """The goal's bookkeeping on a short horizon (speeds are not asserted): warm run first, then
     interleaved rounds alternating who goes first, ratio = the median of the rounds' ratios, and
     both plants ran the same motion."""
-    from validation.bench.goals import goal_pinocchio
+    from validation.bench.pinocchio_goal import goal_pinocchio
 
     g = goal_pinocchio(t_end=0.5, rounds=3, progress=lambda _s: None)
     d = g.data
