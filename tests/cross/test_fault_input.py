@@ -240,12 +240,12 @@ def test_a_plant_out_of_memory_says_so_in_one_line(monkeypatch):
 def test_out_of_memory_on_the_command_line_is_one_line(monkeypatch, capsys):
     """A MemoryError without a message reaching the command line -> "tumble: error: out of memory",
     exit 1, no traceback."""
-    import validation.cli as cli
+    import validation.commands.export_mjcf as cli
 
     def no_memory(args):
         raise MemoryError()
 
-    monkeypatch.setattr(cli, "cmd_export_mjcf", no_memory)
+    monkeypatch.setattr(cli, "run", no_memory)
     rc = main(["export-mjcf", "paper_example1"])
     err = capsys.readouterr().err.splitlines()
     assert rc == EXIT_FAILED and err == ["tumble: error: out of memory"]

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import pytest
 
-from validation.testing import pytest_plugin
+from validation.testing import session_runs
 
 pytestmark = pytest.mark.faults
 
@@ -58,9 +58,9 @@ def test_planted_shared_run_is_not_unpickled(tmp_path: Path) -> None:
     secret = os.urandom(32)
     for planted in (b"\0" * 32 + data, data, b""):
         store.write_bytes(planted)
-        assert pytest_plugin._load_signed(store, secret) is None
-    pytest_plugin._store_signed(store, os.urandom(32), data)  # another session's key
-    assert pytest_plugin._load_signed(store, secret) is None
+        assert session_runs._load_signed(store, secret) is None
+    session_runs._store_signed(store, os.urandom(32), data)  # another session's key
+    assert session_runs._load_signed(store, secret) is None
     assert not marker.exists()
 
 
@@ -68,9 +68,9 @@ def test_altered_shared_run_is_not_unpickled(tmp_path: Path) -> None:
     """A run stored by a worker and then altered (one byte) -> not loaded; unaltered -> loaded."""
     store = tmp_path / "run.pickle"
     secret = os.urandom(32)
-    pytest_plugin._store_signed(store, secret, pickle.dumps({"passed": True, "n": 45}))
-    assert pytest_plugin._load_signed(store, secret) == {"passed": True, "n": 45}
+    session_runs._store_signed(store, secret, pickle.dumps({"passed": True, "n": 45}))
+    assert session_runs._load_signed(store, secret) == {"passed": True, "n": 45}
     blob = bytearray(store.read_bytes())
     blob[-2] ^= 1
     store.write_bytes(bytes(blob))
-    assert pytest_plugin._load_signed(store, secret) is None
+    assert session_runs._load_signed(store, secret) is None

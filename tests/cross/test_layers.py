@@ -54,7 +54,7 @@ WINGS: tuple[tuple[str, ...], ...] = (
     ("report", "recording"),  # the evidence a run leaves
     ("validate", "external"),  # the jobs: N plants compared; another engine's file judged
     ("studies", "testing", "bench"),  # many runs; the pytest face; the speed goals
-    ("cli", "__main__"),  # parse and dispatch
+    ("cli", "commands", "__main__"),  # parse and dispatch; each command's options and handler
 )
 """The wings of ``validation``, lowest first: a module may import from its own wing, from a wing
 of its level or from a lower level, never from a higher one (``docs/architecture.md``). A wing is a
@@ -202,7 +202,7 @@ def test_the_graph_sees_every_layer(graph):
     pairs = {(e.importer, e.imported) for e in edges}
     assert ("analytic.model", "analytic.scene") in pairs
     assert ("validation.bench.goals", "analytic.fast") in pairs  # `from analytic import fast`, in a def
-    assert ("validation.cli", "validation.bench.command") in pairs
+    assert ("validation.commands.bench", "validation.bench.command") in pairs
     assert ("analytic.fast", "analytic.kernel.layout") in pairs  # a subpackage is seen too
     assert any(layer_of(e.imported) < layer_of(e.importer) for e in edges)
 

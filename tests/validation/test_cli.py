@@ -264,3 +264,24 @@ def test_validate_counts_the_checks_as_the_report_does(tmp_path, capsys):
     assert line == (
         f"PASS: {passed}/{len(applicable)} checks passed ({n_na} not applicable) for paper_example1"
     )
+
+
+def test_every_command_module_declares_its_command():
+    """Each module of ``validation.commands`` listed in ``COMMANDS`` declares a name, its two help
+    texts, whether it chooses plants, its options and its handler; the names are unique and the
+    parser's sub-commands are exactly these, in this order."""
+    import argparse
+
+    from validation.cli import COMMANDS, build_parser
+
+    for module in COMMANDS:
+        declared = (("NAME", str), ("HELP", str), ("DESCRIPTION", str), ("CHOOSES_PLANTS", bool))
+        for attr, kind in declared:
+            assert isinstance(getattr(module, attr), kind), (module.__name__, attr)
+        assert callable(module.add_arguments) and callable(module.run), module.__name__
+    names = [m.NAME for m in COMMANDS]
+    assert len(set(names)) == len(names)
+    sub = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction))
+    assert list(sub.choices) == names
+    for module in COMMANDS:
+        assert sub.choices[module.NAME].get_default("func") is module.run

@@ -6,21 +6,24 @@ a second. A first run on a machine pays the compile once. :func:`warm_up` pays i
 so, one line per kernel:
 
 1. **Is it needed?** A stamp file beside numba's cache (:data:`WARM_STAMP`) lists the
-   :func:`warm_key` of every (plant, weighting) whose kernels a warm-up finished. A run whose keys
+   :func:`warm_keys` of every (plant, weighting) whose kernels a warm-up finished. A run whose keys
    are all listed starts at once, silently, without importing numba. Any change of the sources,
    numba, llvmlite, Python, the CPU or a ``NUMBA_*`` setting changes the keys.
-2. **The kernels** (:class:`Job`), each compiled (or loaded from numba's cache) in a worker process
-   of a ``concurrent.futures.ProcessPoolExecutor``, side by side on the free CPUs: the kernel's two
-   halves (:mod:`analytic.kernel.halves`), and what calls them by address and so compiles without
-   them (:mod:`analytic.kernel.abi`): the analytic plant's compiled right-hand side, the MuJoCo
-   plant's stage and native callback, the Pinocchio stage. numba holds the GIL while it compiles,
-   so threads would not overlap; processes do, and each leaves its result in the on-disk cache.
+2. **The kernels** (:class:`validation.runs.warm_jobs.Job`), each compiled (or loaded from numba's
+   cache) in a worker process of a ``concurrent.futures.ProcessPoolExecutor``, side by side on the
+   free CPUs: the kernel's two halves (:mod:`analytic.kernel.halves`), and what calls them by
+   address and so compiles without them (:mod:`analytic.kernel.abi`): the analytic plant's
+   compiled right-hand side, the MuJoCo plant's stage and native callback, the Pinocchio stage.
+   numba holds the GIL while it compiles, so threads would not overlap; processes do, and each
+   leaves its result in the on-disk cache.
 3. **Then one output interval of each plant**, also in the pool: it finds the kernels on disk and
    compiles whatever else its default settings call.
 
-The announcement's estimate is :func:`estimate_s`: the per-job compile times in :data:`COST_S`
-(measured on the 2-core development machine) scheduled over the workers as :func:`_run_all` runs
-them (:func:`schedule`); a busy machine takes longer.
+This module decides whether a warm-up is needed (the stamp), which tasks a set of scenes and
+plants needs (:func:`tasks_for`), and runs them in the pool, in the order of
+:mod:`validation.runs.warm_plan`, whose :func:`~validation.runs.warm_plan.estimate_s` is the
+announced wall time (a busy machine takes longer); each task is
+:func:`validation.runs.warm_jobs.run_task`.
 
 A failure while warming up is never fatal: it is reported on its line, and the plant's own run
 compiles what is missing and reports its own error. Without a writable cache directory there is
@@ -32,128 +35,28 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import json
-import math
 import multiprocessing
 import os
 import platform
 import sys
 import threading
 import time
-import warnings
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Executor, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
-from enum import StrEnum
 from importlib import metadata
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from validation.runs import interrupts
 from validation.runs.atomic import write_text
 from validation.runs.lifetime import pool_initializer
+from validation.runs.warm_jobs import ENGINES, KERNELS, Job, StageTime, Task, run_task
+from validation.runs.warm_plan import estimate_s, needs, order
 from validation.runs.workers import flush_std_streams
 
 if TYPE_CHECKING:
     from analytic.scene import Scene
-
-ANALYTIC, MUJOCO, PINOCCHIO = "analytic", "mujoco", "pinocchio"
-ENGINES = (ANALYTIC, MUJOCO, PINOCCHIO)
-
-
-class Job(StrEnum):
-    """One compile job of a warm-up (each runs in a worker process)."""
-
-    SYSTEM = "system"
-    """The analytic kernel's stages 1-6 (:mod:`analytic.kernel.system`), a ``cfunc``."""
-    SOLVE = "solve"
-    """The analytic kernel's solve for the scene's weighting (Gauss, M⁻² or identity), a ``cfunc``."""
-    RHS = "rhs"
-    """The analytic plant's compiled right-hand side (:mod:`analytic.compiled_rhs`)."""
-    MUJOCO_STAGE = "mujoco-stage"
-    """The MuJoCo plant's stage (:mod:`mj_bridge.fast_stage`) and native callback
-    (:mod:`mj_bridge.native`), in that order (the callback calls the stage)."""
-    PINOCCHIO_STAGE = "pinocchio-stage"
-    """The Pinocchio plant's compiled stage (:mod:`mj_bridge.pinocchio_plant`)."""
-    PLANT = "plant"
-    """One output interval of a plant: whatever else its default settings compile."""
-
-
-KERNELS: dict[str, tuple[Job, ...]] = {
-    ANALYTIC: (Job.SYSTEM, Job.SOLVE, Job.RHS),
-    MUJOCO: (Job.SYSTEM, Job.SOLVE, Job.MUJOCO_STAGE),
-    PINOCCHIO: (Job.SYSTEM, Job.SOLVE, Job.PINOCCHIO_STAGE),
-}
-"""The kernels each plant needs (every plant embeds the analytic kernel's two halves)."""
-
-COST_S: dict[Job, float] = {
-    Job.SYSTEM: 3.1,
-    Job.SOLVE: 2.6,
-    Job.RHS: 1.7,
-    Job.MUJOCO_STAGE: 2.4,
-    Job.PINOCCHIO_STAGE: 3.7,
-    Job.PLANT: 0.2,
-}
-"""Wall time of each job on an empty cache with two of them side by side, s: ``tumble warmup``
-and a first ``tumble validate`` (fresh clone and venv) on the idle 2-core development machine
-(numba 0.68.1); used only for the announced estimate. A busy machine takes up to about 1.4x
-these."""
-
-POOL_START_S = 1.0
-"""A worker's start (numba and the kernel's modules imported), s, on the same machine."""
-
-TITLES: dict[Job, str] = {
-    Job.SYSTEM: "analytic kernel, stages 1-6 (analytic.kernel.system)",
-    Job.SOLVE: "analytic kernel, {solve} solve (analytic.kernel)",
-    Job.RHS: "analytic plant's right-hand side, {solve} (analytic.compiled_rhs)",
-    Job.MUJOCO_STAGE: "MuJoCo plant's stage and native callback, {solve} (mj_bridge.native)",
-    Job.PINOCCHIO_STAGE: "Pinocchio plant's stage, {solve} (mj_bridge.pinocchio_plant)",
-    Job.PLANT: "{engine} plant, one output interval of {scene}",
-}
-
-
-@dataclass(frozen=True)
-class Task:
-    """One job for one solve (and, for :attr:`Job.PLANT`, one plant).
-
-    Attributes:
-        job: what is compiled.
-        solver: the solve it embeds (an :class:`analytic.kernel.entry.Solver` value; ignored by
-            :attr:`Job.SYSTEM`, which is the same for every weighting).
-        scene: a scene of that solve (the kernels' machine code does not depend on which).
-        engine: the plant of a :attr:`Job.PLANT` (else "").
-    """
-
-    job: Job
-    solver: int
-    scene: Scene
-    engine: str = ""
-
-    @property
-    def key(self) -> tuple:
-        """What makes two tasks the same compile: the job, its solve and its plant."""
-        return (self.job, None if self.job is Job.SYSTEM else self.solver, self.engine)
-
-    @property
-    def title(self) -> str:
-        # deferred: analytic, mj_bridge: numpy ~45 ms, numba ~0.2 s (-X importtime); a warm start needs neither
-        from analytic.kernel.entry import Solver
-
-        solve = {int(Solver.MINV2): "M⁻²", int(Solver.IDENTITY): "identity"}.get(
-            self.solver, "Gauss"
-        )
-        return TITLES[self.job].format(solve=solve, engine=self.engine, scene=self.scene.name)
-
-
-@dataclass(frozen=True)
-class StageTime:
-    """One job done: its title, wall and CPU time in its worker (s), and its error ("" when it
-    worked)."""
-
-    title: str
-    seconds: float
-    error: str = ""
-    cpu_seconds: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -311,74 +214,6 @@ def _unique(tasks: Sequence[Task]) -> list[Task]:
     return list(seen.values())
 
 
-def run_task(task: Task) -> StageTime:
-    """Compile ``task`` in this process (or load it from numba's cache); its wall time, or the
-    first line of what went wrong."""
-    t0, c0 = time.perf_counter(), time.process_time()
-    try:
-        _COMPILE[task.job](task)
-        error = ""
-    except KeyboardInterrupt:
-        raise
-    except Exception as exc:  # the plant's own run will compile and report
-        interrupts.raise_if_interrupt(exc)  # not a failure a signal caused
-        error = f"{type(exc).__name__}: {exc}".splitlines()[0]
-    return StageTime(task.title, time.perf_counter() - t0, error, time.process_time() - c0)
-
-
-def _compile_half(task: Task) -> None:
-    from analytic.kernel import halves
-    from analytic.kernel.entry import Solver
-
-    halves.compiled(halves.KernelHalf(task.job.value), Solver(task.solver))
-
-
-def _compile_rhs(task: Task) -> None:
-    from analytic import compiled_stepping
-
-    if not compiled_stepping.prepare(task.solver):
-        raise RuntimeError(compiled_stepping.unavailable())
-
-
-def _compile_mujoco_stage(task: Task) -> None:
-    from analytic.kernel.entry import Solver
-    from mj_bridge import fast_stage, native
-
-    fast_stage.compile_for(Solver(task.solver))
-    if native.available():
-        native.compiled(Solver(task.solver))
-
-
-def _compile_pinocchio_stage(task: Task) -> None:
-    from analytic.kernel import compile_lock
-    from mj_bridge import pinocchio_plant as pp
-
-    with compile_lock.compiling(compile_lock.PINOCCHIO):  # as the plant's own run takes it
-        pp.PinocchioDynamics(task.scene, pp.PinocchioSettings().controller).compile()
-
-
-def _compile_plant(task: Task) -> None:
-    """One output interval, its warnings silenced: it runs only to compile; what the scene's
-    physics says (an unstable run's overflows, MuJoCo's warnings) the run itself reports."""
-    from mj_bridge.plants import plant
-
-    pl = plant(task.engine)
-    scene = task.scene
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        pl.simulate(scene, pl.default_settings(scene), t_end=1.0 / scene.output.rate)
-
-
-_COMPILE: dict[Job, Callable[[Task], None]] = {
-    Job.SYSTEM: _compile_half,
-    Job.SOLVE: _compile_half,
-    Job.RHS: _compile_rhs,
-    Job.MUJOCO_STAGE: _compile_mujoco_stage,
-    Job.PINOCCHIO_STAGE: _compile_pinocchio_stage,
-    Job.PLANT: _compile_plant,
-}
-
-
 # ----------------------------------------------------------------------------------------------
 # Running them
 # ----------------------------------------------------------------------------------------------
@@ -390,47 +225,6 @@ def free_cpus() -> int:
         return len(os.sched_getaffinity(0))
     except AttributeError:  # pragma: no cover - not Linux
         return os.cpu_count() or 1
-
-
-def estimate_s(tasks: Sequence[Task], workers: int) -> float:
-    """The announced wall time of a warm-up, s: :func:`schedule` of the measured :data:`COST_S`
-    on ``workers`` processes, plus a worker's start."""
-    return POOL_START_S + max((end for _t, _start, end in schedule(tasks, workers)), default=0.0)
-
-
-def schedule(tasks: Sequence[Task], workers: int) -> list[tuple[Task, float, float]]:
-    """``(task, start, end)`` in s of each task as :func:`_run_all` runs them, with the measured
-    :data:`COST_S` as durations: whenever a worker is free, it takes the ready task of highest
-    :func:`priority` (or waits for the next one to finish)."""
-    waiting = _order(tasks)
-    free = [0.0] * max(1, workers)
-    ends: dict[tuple, float] = {}
-    out = []
-    while waiting:
-        k = free.index(min(free))
-        now = free[k]
-        ready = [t for t in waiting if all(ends.get(x, math.inf) <= now for x in needs(t, tasks))]
-        if not ready:  # idle until the next task ends
-            free[k] = min(e for e in ends.values() if e > now)
-            continue
-        t = ready[0]
-        waiting.remove(t)
-        free[k] = ends[t.key] = now + COST_S[t.job]
-        out.append((t, now, free[k]))
-    return out
-
-
-def priority(task: Task, tasks: Sequence[Task]) -> float:
-    """The longest chain of measured costs from ``task``'s start to the end of what waits for it
-    (critical-path first: the kernel's halves, which the Pinocchio stage and every plant wait
-    for, go before a longer job that nothing waits for)."""
-    after = [priority(u, tasks) for u in tasks if task.key in needs(u, tasks)]
-    return COST_S[task.job] + max(after, default=0.0)
-
-
-def _order(tasks: Sequence[Task]) -> list[Task]:
-    """``tasks`` by decreasing :func:`priority` (a task always after what it needs)."""
-    return sorted(tasks, key=lambda t: -priority(t, tasks))
 
 
 def _pool(workers: int, fork: bool | None = None) -> ProcessPoolExecutor:
@@ -451,28 +245,14 @@ def _pool(workers: int, fork: bool | None = None) -> ProcessPoolExecutor:
     )
 
 
-HALVES = (Job.SYSTEM, Job.SOLVE)
-
-
-def needs(task: Task, tasks: Sequence[Task]) -> set[tuple]:
-    """The keys among ``tasks`` that must be done before ``task`` starts: a plant's interval waits
-    for its kernels (else it would compile them again); the Pinocchio stage for the kernel's
-    halves (its dynamics binds their addresses). Everything else calls the halves by address and
-    compiles without them."""
-    if task.job is Job.PLANT:
-        own = KERNELS[task.engine]
-        return {t.key for t in tasks if t.job is not Job.PLANT and t.job in own}
-    if task.job is Job.PINOCCHIO_STAGE:
-        return {t.key for t in tasks if t.job in HALVES}
-    return set()
-
-
 def _run_all(
     pool: Executor, workers: int, tasks: Sequence[Task], report: Callable[[StageTime], None]
 ) -> None:
-    """Run ``tasks`` on the ``workers`` of ``pool``: whenever one is free, the task of highest
-    :func:`priority` whose :func:`needs` are done; each reported as it finishes."""
-    waiting = _order(tasks)
+    """Run ``tasks`` (each :func:`~validation.runs.warm_jobs.run_task`) on the ``workers`` of
+    ``pool``: whenever one is free, the task of highest
+    :func:`~validation.runs.warm_plan.priority` whose :func:`~validation.runs.warm_plan.needs` are
+    done; each reported as it finishes."""
+    waiting = order(tasks)
     blockers = {t.key: needs(t, tasks) for t in tasks}
     running: dict[Any, Task] = {}
     done: set[tuple] = set()
@@ -623,16 +403,13 @@ def warm_up_command(
 
 
 __all__ = [
-    "COST_S",
-    "Job",
-    "StageTime",
-    "Task",
+    "WARM_STAMP",
     "WarmupResult",
     "builtin_scenes",
-    "estimate_s",
+    "compiled_solver",
     "is_stamped_warm",
-    "run_task",
     "stamp_warm",
+    "supported",
     "tasks_for",
     "warm_keys",
     "warm_up",

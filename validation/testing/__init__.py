@@ -1,7 +1,9 @@
 """The testing wing, as ``numpy.testing`` is to numpy: agreement as an assertion.
 
 * :mod:`.agree`: ``assert_agree``, a scene's agreement checks as one assertion;
-* :mod:`.pytest_plugin`: scene files ``test_*.toml`` as pytest items (entry point ``tumble``).
+* :mod:`.pytest_plugin`: scene files ``test_*.toml`` as pytest items (entry point ``tumble``);
+  its parts :mod:`.session_runs` (each scene run once per session, shared between xdist
+  workers) and :mod:`.plugin_bench` (what the plugin costs a pytest run, measured by hand).
 """
 
 from validation._lazy import lazy_exports

@@ -20,33 +20,31 @@ nothing until a scene is collected:
   engine's run (:class:`JudgeFile`): the judge's checks are its items, each check the file cannot
   support skipped as ``not judged: no ... columns``.
 
-This module imports pytest and the standard library only; the plants, numpy and MuJoCo are imported
-when the first scene file is collected. Loading the plugin changes nothing in the session's
-process (no environment variable, no thread pool); a scene's run has BLAS on one thread for the
-run only (:func:`validation.runs.environment.one_blas_thread`), the pools given back as they were. ``python -m validation.testing.pytest_plugin --bench`` measures
-the plugin's cost on a pytest run that collects no scene.
+This module holds the hooks, the items and the fixture; the session's runs (the cache, the
+sharing between xdist workers) are :mod:`validation.testing.session_runs`. It imports pytest and
+the standard library only; the plants, numpy and MuJoCo are imported when the first scene file is
+collected. Loading the plugin changes nothing in the session's process (no environment variable,
+no thread pool); a scene's run has BLAS on one thread for the run only
+(:func:`validation.runs.environment.one_blas_thread`), the pools given back as they were.
+``python -m validation.testing.pytest_plugin --bench`` measures the plugin's cost on a pytest run
+that collects no scene (:mod:`validation.testing.plugin_bench`).
 """
 
 from __future__ import annotations
 
-import errno
 import fnmatch
-import hashlib
-import hmac
 import itertools
 import os
 import re
 import secrets
-import stat
-import subprocess
 import sys
-import tempfile
-import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import pytest
+
+from validation.testing.session_runs import SHARE_KEY, SessionRuns, read_head
 
 MARKER = "tumble"
 RUN_ITEM = "run"
@@ -93,7 +91,7 @@ def pytest_configure(config: pytest.Config) -> None:
     )
     if not config.pluginmanager.hasplugin("xdist"):  # keep --strict-markers happy without xdist
         config.addinivalue_line("markers", "xdist_group(name): run in one pytest-xdist worker")
-    config.stash[_SESSION] = _Session(config)
+    config.stash[_SESSION] = SessionRuns(config, RUNS)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -119,18 +117,6 @@ def _matches_ini(config: pytest.Config, path: Path) -> bool:
     return False
 
 
-def _read_head(path: Path, limit: int) -> bytes:
-    """At most ``limit`` bytes of the regular file at ``path``: opened without blocking (a FIFO
-    or a device), ``OSError`` for anything that is not a regular file."""
-    fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0))
-    try:
-        if not stat.S_ISREG(os.fstat(fd).st_mode):
-            raise OSError(errno.EINVAL, "not a regular file", str(path))
-        return os.read(fd, limit)
-    finally:
-        os.close(fd)
-
-
 def pytest_collect_file(file_path: Path, parent: pytest.Collector) -> SceneFile | None:
     """A scene file (a ``[scene]`` table) or a judge file (a ``[judge]`` table: another engine's
     trajectory file judged, :class:`JudgeFile`)."""
@@ -142,7 +128,7 @@ def pytest_collect_file(file_path: Path, parent: pytest.Collector) -> SceneFile 
         return None
     if named and not listed:
         try:
-            head = _read_head(file_path, 1 << 20)
+            head = read_head(file_path, 1 << 20)
         except OSError:  # also a FIFO or device named test_*.toml: never opened to block
             return None
         if not _SCENE_TABLE.search(head):
@@ -152,47 +138,17 @@ def pytest_collect_file(file_path: Path, parent: pytest.Collector) -> SceneFile 
     return SceneFile.from_parent(parent, path=file_path)
 
 
-_SHARE_KEY = "tumble_share_key"
-"""The ``workerinput`` entry that carries the session's secret for shared runs (hex)."""
-
-
 @pytest.hookimpl(optionalhook=True)
 def pytest_configure_node(node: Any) -> None:
     """pytest-xdist, in the controller: every worker of this session gets one random secret, with
-    which the runs they share are signed (:func:`_store_signed`)."""
+    which the runs they share are signed (:mod:`validation.testing.session_runs`)."""
     key = node.config.stash.get(_SHARE_SECRET, None)
     if key is None:
         key = node.config.stash[_SHARE_SECRET] = secrets.token_hex(32)
-    node.workerinput[_SHARE_KEY] = key
+    node.workerinput[SHARE_KEY] = key
 
 
 _SHARE_SECRET = pytest.StashKey[str]()
-
-
-def _store_signed(store: Path, secret: bytes, data: bytes) -> None:
-    """``data`` at ``store`` behind its HMAC-SHA256 under ``secret`` (a temporary file, renamed)."""
-    tmp = store.with_suffix(f".{os.getpid()}.tmp")
-    tmp.write_bytes(hmac.new(secret, data, hashlib.sha256).digest() + data)
-    os.replace(tmp, store)
-
-
-def _load_signed(store: Path, secret: bytes) -> Any:
-    """The run another worker of this session stored at ``store``, or None when there is none, it
-    is not a regular file, or its signature does not match (never unpickled then: a pickle
-    planted by anyone without the session's secret is not trusted)."""
-    # deferred: ~2 ms (python -X importtime) in every pytest session; only xdist's shared runs
-    import pickle
-
-    if not secret:
-        return None
-    try:
-        blob = _read_head(store, 1 << 30)
-    except OSError:
-        return None
-    mac, data = blob[:32], blob[32:]
-    if len(mac) < 32 or not hmac.compare_digest(mac, hmac.new(secret, data, hashlib.sha256).digest()):
-        return None
-    return pickle.loads(data)
 
 
 class SceneFile(pytest.File):
@@ -244,7 +200,7 @@ class JudgeFile(SceneFile):
             from validation.external.spec_file import parse_spec
             from validation.scenes import builtin_names, resolve_scene
 
-            spec = parse_spec(_read_head(self.path, 1 << 20), self.path.parent, builtin_names())
+            spec = parse_spec(read_head(self.path, 1 << 20), self.path.parent, builtin_names())
             scene = resolve_scene(str(spec.scene))
             if spec.t_end is not None:  # the horizon judged: in the scene's, on its grid
                 from validation.external.horizon import horizon_on_grid
@@ -350,189 +306,7 @@ def expected_labels(scene: Any, plants: tuple[str, ...]) -> list[str]:
     return out
 
 
-# ----------------------------------------------------------------------------------------------
-# The session's runs
-# ----------------------------------------------------------------------------------------------
-
-
-class _Session:
-    """Runs of scene files for one pytest session, cached by scene content and plant settings."""
-
-    def __init__(self, config: pytest.Config) -> None:
-        self.config = config
-        self._plants: tuple[str, ...] | None = None
-        self._memo: dict[str, Any] = {}
-        self._dirs: dict[str, str] = {}
-        self.keep: list[Any] = []
-
-    def plants(self) -> tuple[str, ...]:
-        """The chosen plants, checked (``ValueError`` naming ``--tumble-plants``)."""
-        if self._plants is None:
-            import warnings
-
-            from mj_bridge.plants import installed_plants, parse_plants, plugin_errors
-
-            for err in plugin_errors():  # one line each in pytest's warnings summary; others run
-                warnings.warn(f"tumble: {err}", pytest.PytestWarning, stacklevel=1)
-            text = self.config.getoption("tumble_plants")
-            try:
-                chosen = parse_plants(text) if text else installed_plants()
-            except ValueError as exc:
-                raise ValueError(f"--tumble-plants: {exc}") from None
-            if len(chosen) < 2:
-                raise ValueError(
-                    f"--tumble-plants: give at least two plants to compare (got {text!r})"
-                )
-            self._plants = tuple(chosen)
-        return self._plants
-
-    def key(self, content: bytes, plants: tuple[str, ...], t_end: float | None) -> str:
-        h = hashlib.sha256(content)
-        h.update(repr((plants, t_end, self.config.getoption("tumble_out"))).encode())
-        return h.hexdigest()
-
-    def _out_dir(self, path: Path | None, key: str, label: str) -> Path:
-        if path is not None:
-            try:
-                rel = path.resolve().relative_to(Path(self.config.rootpath).resolve())
-            except ValueError:
-                rel = Path(path.name)
-            label = rel.with_suffix("").as_posix()
-        from validation.runs.outputs import slug
-
-        name = slug(label, "scene file")
-        if self._dirs.get(name, key) != key:
-            name = f"{name}-{key[:8]}"
-        self._dirs[name] = key
-        out = self.config.getoption("tumble_out")
-        if out:
-            return Path(out) / name
-        return self._basetemp() / "tumble" / name
-
-    def _basetemp(self) -> Path:
-        factory = getattr(self.config, "_tmp_path_factory", None)
-        if factory is not None:
-            return Path(factory.getbasetemp())
-
-        return Path(tempfile.mkdtemp(prefix="tumble-"))
-
-    def _shared_dir(self) -> Path | None:
-        """Under pytest-xdist: a directory every worker of this session sees."""
-        if not hasattr(self.config, "workerinput"):
-            return None
-        d = self._basetemp().parent / "tumble-runs"
-        d.mkdir(parents=True, exist_ok=True)
-        return d
-
-    def outcome(self, path: Path) -> Any:
-        """The run of the scene file ``path`` on the session's plants (ValidationResult, or the
-        one-line reason it could not run)."""
-        plants = self.plants()
-        try:
-            content = _read_head(path, 1 << 20)
-        except OSError as exc:  # not a regular file (a FIFO is never opened to block)
-            return f"ValueError: scene: cannot read {str(path)!r} ({exc.strerror or exc})"
-        return self.run(content, plants, None, path=path, scene=None)
-
-    def judged(self, path: Path, spec: Any) -> Any:
-        """The judge of the ``[judge]`` file ``path`` (its checked ``spec``): a ValidationResult,
-        or the one-line reason it could not run; once per session per file content and
-        trajectory file content."""
-        try:
-            h = hashlib.sha256(_read_head(path, 1 << 20))
-            h.update(_read_head(spec.trajectory, 1 << 30))
-        except OSError as exc:
-            return f"ValueError: judge: cannot read {str(path)!r} ({exc.strerror or exc})"
-        key = h.hexdigest()
-        if key in self._memo:
-            return self._memo[key]
-        from validation.external.judge import judge
-        from validation.runs.environment import one_blas_thread
-
-        RUNS.append(key)
-        out = self._out_dir(path, key, "judge")
-        try:
-            with one_blas_thread():  # the session's pools as they were after (module docstring)
-                res = judge(
-                    str(spec.scene),
-                    spec.trajectory,
-                    out,
-                    label=spec.label,
-                    plants=None if spec.reference is not None else (spec.plants or self.plants()),
-                    reference=spec.reference,
-                    t_end=spec.t_end,
-                    up_to_file_end=spec.up_to_file_end,
-                )
-        except (ValueError, OSError) as exc:
-            res = f"{type(exc).__name__}: {exc}".splitlines()[0]
-        self._memo[key] = res
-        return res
-
-    def run(
-        self,
-        content: bytes,
-        plants: tuple[str, ...],
-        t_end: float | None,
-        path: Path | None,
-        scene: Any,
-        label: str = "scene",
-    ) -> Any:
-        key = self.key(content, plants, t_end)
-        if key in self._memo:
-            return self._memo[key]
-        shared = self._shared_dir()
-        if shared is None:
-            res = self._run(key, plants, t_end, path, scene, label)
-        else:
-            res = self._run_shared(shared, key, plants, t_end, path, scene, label)
-        self._memo[key] = res
-        return res
-
-    def _run_shared(self, shared: Path, key: str, *args: Any) -> Any:
-        store = shared / f"{key}.pickle"
-        try:
-            import fcntl
-        except ImportError:  # pragma: no cover - not POSIX: each worker runs what it is given
-            return self._run(key, *args)
-        secret = bytes.fromhex(self.config.workerinput.get(_SHARE_KEY, ""))
-        import pickle
-
-        with open(shared / f"{key}.lock", "wb") as lock:
-            fcntl.flock(lock, fcntl.LOCK_EX)
-            try:
-                shared_res = _load_signed(store, secret)
-                if shared_res is not None:
-                    return shared_res
-                res = self._run(key, *args)
-                _store_signed(store, secret, pickle.dumps(res))
-                return res
-            finally:
-                fcntl.flock(lock, fcntl.LOCK_UN)
-
-    def _run(
-        self,
-        key: str,
-        plants: tuple[str, ...],
-        t_end: float | None,
-        path: Path | None,
-        scene: Any,
-        label: str,
-    ) -> Any:
-        from validation.runs.environment import one_blas_thread
-        from validation.validate import run_validation
-
-        RUNS.append(key)
-        out = self._out_dir(path, key, label)
-        try:
-            with one_blas_thread():  # the session's pools as they were after (module docstring)
-                return run_validation(
-                    scene if scene is not None else path, out, t_end=t_end, plants=",".join(plants)
-                )
-        except (ValueError, OSError) as exc:
-            return f"{type(exc).__name__}: {exc}".splitlines()[0]
-
-
-_SESSION = pytest.StashKey[_Session]()
+_SESSION = pytest.StashKey[SessionRuns]()
 
 
 @pytest.fixture
@@ -570,59 +344,11 @@ def tumble_validation(request: pytest.FixtureRequest):
     return get
 
 
-# ----------------------------------------------------------------------------------------------
-# The overhead benchmark: python -m validation.testing.pytest_plugin --bench
-# ----------------------------------------------------------------------------------------------
-
-
-def _bench(repeats: int = 15) -> None:  # pragma: no cover - a measurement, run by hand
-    import statistics  # deferred: ~3 ms (python -X importtime), for this measurement only
-
-    py = sys.executable
-    env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
-    subprocess.run([py, "-c", "import validation.testing.pytest_plugin"], env=env, check=True)  # .pyc
-    imp = (
-        "import time, sys; import pytest; t0 = time.perf_counter(); "
-        "import validation.testing.pytest_plugin; t1 = time.perf_counter(); "
-        "heavy = [m for m in ('numpy', 'mujoco', 'numba', 'scipy') if m in sys.modules]; "
-        "print(t1 - t0, ','.join(heavy))"
-    )
-    times, heavy = [], ""
-    for _ in range(repeats):
-        out = subprocess.run(
-            [py, "-c", imp], capture_output=True, text=True, check=True, env=env
-        ).stdout
-        t, heavy = out.split(" ", 1)
-        times.append(float(t))
-    print(
-        f"import validation.testing.pytest_plugin (after pytest): median {statistics.median(times) * 1e3:.2f} ms; "
-        f"heavy modules imported: {heavy.strip() or 'none'}"
-    )
-    with tempfile.TemporaryDirectory() as d:
-        Path(d, "test_plain.py").write_text("def test_one():\n    assert True\n")
-        Path(d, "pyproject.toml").write_text("[tool.pytest.ini_options]\n")
-        Path(d, "settings.toml").write_text("[scene]\nname = 'not a test file'\n")
-        res: dict[str, list[float]] = {"with": [], "without": []}
-        for i in range(2 * repeats):
-            which = "with" if i % 2 == 0 else "without"
-            args = [py, "-m", "pytest", "-q", "-p", "no:cacheprovider"]
-            if which == "without":
-                args += ["-p", "no:tumble"]
-            t0 = time.perf_counter()
-            subprocess.run(args, cwd=d, capture_output=True, check=True, env=env)
-            res[which].append(time.perf_counter() - t0)
-    w, wo = statistics.median(res["with"]), statistics.median(res["without"])
-    spread = statistics.stdev(res["without"])
-    print(
-        f"pytest on a directory with no scene ({repeats} runs each, median): with the plugin "
-        f"{w * 1e3:.0f} ms, without (-p no:tumble) {wo * 1e3:.0f} ms, difference "
-        f"{(w - wo) * 1e3:+.0f} ms (run-to-run spread {spread * 1e3:.0f} ms)"
-    )
-
-
 if __name__ == "__main__":  # pragma: no cover
     if "--bench" in sys.argv[1:]:
-        _bench()
+        from validation.testing.plugin_bench import bench
+
+        bench()
     else:
         print("usage: python -m validation.testing.pytest_plugin --bench")
 

@@ -21,9 +21,9 @@ import pytest
 
 from mj_bridge.plants import installed_plants
 from tests.support import tolerances as tol
-from validation.runs import warmup
+from validation.runs import warm_jobs, warm_plan, warmup
 from validation.runs.progress import Progress, StageProgress, Status
-from validation.runs.warmup import Job, Task
+from validation.runs.warm_jobs import Job, Task
 from validation.scenes import resolve_scene
 
 ROOT = Path(__file__).resolve().parents[3]
@@ -101,23 +101,23 @@ def test_the_estimate_is_the_measured_costs_scheduled_over_the_workers():
     the longest of its kernels). Two workers: between the two bounds a schedule must respect (half
     the work, the longest chain) and the work itself; each job once, after what it needs."""
     sc = resolve_scene(SCENE)
-    c = warmup.COST_S
+    c = warm_plan.COST_S
     jobs = (Job.SYSTEM, Job.SOLVE, Job.RHS, Job.MUJOCO_STAGE)
     tasks = [Task(j, 0, sc) for j in jobs] + [
         Task(Job.PLANT, 0, sc, e) for e in ("analytic", "mujoco")
     ]
     work = sum(c[j] for j in jobs) + 2 * c[Job.PLANT]
-    start = warmup.POOL_START_S
-    assert warmup.estimate_s(tasks, 1) == pytest.approx(start + work)
+    start = warm_plan.POOL_START_S
+    assert warm_plan.estimate_s(tasks, 1) == pytest.approx(start + work)
     chain = max(c[j] for j in jobs) + c[Job.PLANT]
-    assert warmup.estimate_s(tasks, len(tasks)) == pytest.approx(start + chain)
-    two = warmup.estimate_s(tasks, 2) - start
+    assert warm_plan.estimate_s(tasks, len(tasks)) == pytest.approx(start + chain)
+    two = warm_plan.estimate_s(tasks, 2) - start
     assert max(work / 2, chain) - 1e-12 <= two <= work
-    plan = warmup.schedule(tasks, 2)
+    plan = warm_plan.schedule(tasks, 2)
     assert sorted(t.key for t, _s, _e in plan) == sorted(t.key for t in tasks)
     ends = {t.key: e for t, _s, e in plan}
     for t, begin, _e in plan:
-        assert all(ends[k] <= begin + 1e-12 for k in warmup.needs(t, tasks))
+        assert all(ends[k] <= begin + 1e-12 for k in warm_plan.needs(t, tasks))
 
 
 def test_a_plant_starts_only_after_its_kernels_and_the_pinocchio_stage_after_the_halves(
@@ -130,36 +130,36 @@ def test_a_plant_starts_only_after_its_kernels_and_the_pinocchio_stage_after_the
     events: list[tuple[str, str]] = []
     lock = threading.Lock()
 
-    def fake(task: Task) -> warmup.StageTime:
+    def fake(task: Task) -> warm_jobs.StageTime:
         name = f"{task.job.value}/{task.engine}"
         with lock:
             events.append(("start", name))
-        time.sleep(0.02 * warmup.COST_S[task.job])
+        time.sleep(0.02 * warm_plan.COST_S[task.job])
         with lock:
             events.append(("end", name))
-        return warmup.StageTime(name, 0.0)
+        return warm_jobs.StageTime(name, 0.0)
 
     monkeypatch.setattr(warmup, "run_task", fake)
     kernels, plants = [], []
     for e in ("analytic", "mujoco", "pinocchio"):
-        kernels += [Task(j, 0, sc) for j in warmup.KERNELS[e]]
+        kernels += [Task(j, 0, sc) for j in warm_jobs.KERNELS[e]]
         plants.append(Task(Job.PLANT, 0, sc, e))
     kernels = warmup._unique(kernels)
-    heard: list[warmup.StageTime] = []
+    heard: list[warm_jobs.StageTime] = []
     with ThreadPoolExecutor(2) as pool:
         warmup._run_all(pool, 2, [*kernels, *plants], heard.append)
     order = {ev: k for k, ev in enumerate(events)}
     assert len(heard) == len(kernels) + len(plants) == 8  # each job once
     for e in ("analytic", "mujoco", "pinocchio"):
-        for j in warmup.KERNELS[e]:
+        for j in warm_jobs.KERNELS[e]:
             assert order["end", f"{j.value}/"] < order["start", f"plant/{e}"]
-    for j in warmup.HALVES:
+    for j in warm_plan.HALVES:
         assert order["end", f"{j.value}/"] < order["start", "pinocchio-stage/"]
     starts = [name for what, name in events if what == "start"]
     assert set(starts[:2]) == {"system/", "solve/"}  # what the most others wait for goes first
 
 
-def _crash(task: Task) -> warmup.StageTime:  # module level: a forked worker finds it by name
+def _crash(task: Task) -> warm_jobs.StageTime:  # module level: a forked worker finds it by name
     os._exit(3)
 
 
@@ -189,7 +189,7 @@ def test_tumble_warmup_lists_every_kernel_once_for_every_scene(tmp_path, monkeyp
     on the scene), jobs faked on threads."""
     monkeypatch.setattr(warmup, "_stamp_path", lambda: tmp_path / warmup.WARM_STAMP)
     monkeypatch.setattr(warmup, "_pool", lambda n, fork=None: ThreadPoolExecutor(n))
-    monkeypatch.setattr(warmup, "run_task", lambda t: warmup.StageTime(t.title, 0.01))
+    monkeypatch.setattr(warmup, "run_task", lambda t: warm_jobs.StageTime(t.title, 0.01))
     lines: list[str] = []
     assert warmup.warm_up_command(warmup.builtin_scenes(), ["analytic", "mujoco"], lines.append)
     said = [line.split(": ")[0] for line in lines if line.startswith("  ") and "ready" not in line]
@@ -313,7 +313,7 @@ def test_first_run_compiles_once_and_says_so(tmp_path):
     assert first.returncode == 0, first.stderr
     lines = first.stderr.splitlines()
     plants = list(installed_plants())  # validate's default: every installed plant
-    n_kernels = len({j for p in plants for j in warmup.KERNELS[p]})
+    n_kernels = len({j for p in plants for j in warm_jobs.KERNELS[p]})
     head = f"tumble: compiling {n_kernels} numba kernels once per machine (~"
     assert lines[0].startswith(head), lines
     assert sum("compiling" in line for line in lines) == 1, lines
@@ -345,12 +345,12 @@ import numpy as np
 from analytic import load_scene
 from analytic.fast import FastModel
 from analytic.kernel import halves
-from validation.runs import warmup
+from validation.runs import warm_jobs, warmup
 
 sc = load_scene(sys.argv[1])
 solver = warmup.compiled_solver(sc)
-for job in (warmup.Job.RHS, warmup.Job.MUJOCO_STAGE):  # the analytic and the MuJoCo callers
-    st = warmup.run_task(warmup.Task(job, solver, sc))
+for job in (warm_jobs.Job.RHS, warm_jobs.Job.MUJOCO_STAGE):  # the analytic and the MuJoCo callers
+    st = warm_jobs.run_task(warm_jobs.Task(job, solver, sc))
     assert not st.error, st.error
 before = halves._compile.cache_info().currsize  # halves made in this process so far
 fm = FastModel(sc)  # compiles the halves its scene needs, once
@@ -390,5 +390,5 @@ def test_spawned_workers_import_this_copy_not_the_working_directorys(tmp_path, m
     monkeypatch.chdir(tmp_path)
     sc = resolve_scene(SCENE)
     with warmup._pool(1, fork=False) as pool:
-        st = pool.submit(warmup.run_task, Task(Job.PLANT, 0, sc, "analytic")).result(timeout=600)
+        st = pool.submit(warm_jobs.run_task, Task(Job.PLANT, 0, sc, "analytic")).result(timeout=600)
     assert st.error == "", st.error
