@@ -355,6 +355,20 @@ class TumblingModel:
         return q[:3] + np.outer(k.p, k.Sa) + k.Sd
 
 
+MODEL_EFFECTS: frozenset[Effect] = frozenset(
+    {
+        Effect.GRAVITY,  # _q_gravity
+        Effect.EXTERNAL_TORQUE,  # _q_external_torque
+        Effect.MASS_INERTIA,  # J + Σ J_i (Remark 1)
+        Effect.CONTROL_OMEGA,  # control_constraints
+        Effect.CONTROL_MASSES,
+        *(law.effect for law in SPRING_LAWS),  # _q_spring_law, from each law's declaration
+    }
+)
+"""The effects :class:`TumblingModel` assembles: those written here, and every spring law (its
+force, energy and dissipation are its declaration's)."""
+
+
 def _element_differences(x: np.ndarray) -> np.ndarray:
     """``x_j - x_{j-1}`` for the n + 1 spring elements, with ``x_{-1} = x_n = 0``: their
     extensions from ``x = p - p_e``, their extension rates from ``ṗ`` (Eq. 38); x shape (..., n)
@@ -424,6 +438,7 @@ def dissipates(model: TumblingModel) -> bool:
 
 
 __all__ = [
+    "MODEL_EFFECTS",
     "ControlOutput",
     "TumblingModel",
     "dissipated_power",

@@ -46,6 +46,7 @@ from model_xml.rotations import (
     quat_to_mat,
     quat_z_to,
 )
+from model_xml.tendon_terms import TENDON_TERMS
 
 BODY = "BR"
 ROOT = "root"
@@ -121,25 +122,6 @@ class BodyFrame:
     @property
     def is_identity(self) -> bool:
         return bool(np.all(self.pos == 0) and np.all(self.quat == [1.0, 0.0, 0.0, 0.0]))
-
-
-@dataclass(frozen=True)
-class TendonTerm:
-    """How a spring law rides on its element's fixed tendon: the tendon attribute (a polynomial
-    in MuJoCo's ``stiffness`` or ``damping``) and the power of its term. ``by_actuator``: with
-    ``spring_model = "actuator"`` the term is the spring actuator's bias instead."""
-
-    attribute: str
-    power: int
-    by_actuator: bool
-
-
-TENDON_TERMS: Mapping[Effect, TendonTerm] = {
-    Effect.SPRINGS_LINEAR: TendonTerm("stiffness", 0, by_actuator=True),  # k^l x
-    Effect.SPRINGS_CUBIC: TendonTerm("stiffness", 2, by_actuator=True),  # k^n x³
-    Effect.SPRINGS_DAMPING: TendonTerm("damping", 0, by_actuator=False),  # c ẋ
-}
-"""Each spring law's place in the MJCF twin, by its effect: MuJoCo integrates every one itself."""
 
 
 @dataclass(frozen=True)
