@@ -77,7 +77,7 @@ def pack(model: TumblingModel) -> tuple[np.ndarray, np.ndarray]:
 
     Returns:
         ``(fp, ip)``: float64 array (the ``F_*`` head of :mod:`analytic.kernel.layout`, then the
-        tail of ``layout.tail_offsets``: ``m, p_e, k_l, k_n``, the mass-track ``l, λ, α, β``,
+        tail of ``layout.tail_offsets`` (``layout.FpTail``): ``m, p_e, k_l, k_n``, the mass-track ``l, λ, α, β``,
         ``a``, ``d``) and int64 array (the ``I_*`` head, then the per-mass tracked flag (n) and
         the tracked indices (k_p)). The head's two addresses of the compiled halves
         (``I_FN_SYSTEM``, ``I_FN_SOLVE``) are left 0: they belong to one process, and
@@ -87,8 +87,8 @@ def pack(model: TumblingModel) -> tuple[np.ndarray, np.ndarray]:
     n = model.n
     kw = len(model.omega_track.components) if model.omega_track else 0
     kp = len(model.mass_track.indices) if model.mass_track else 0
-    o_m, o_pe, o_kl, o_kn, o_l, o_lam, o_alpha, o_beta, o_a, o_d, end = L.tail_offsets(n, kp)
-    fp = np.zeros(end)
+    o = L.tail_offsets(n, kp)
+    fp = np.zeros(o.end)
     fp[L.F_MBR] = model.m_BR
     fp[L.F_MU0] = model.mu0
     fp[L.F_D1] = model.delta1
@@ -107,18 +107,18 @@ def pack(model: TumblingModel) -> tuple[np.ndarray, np.ndarray]:
         fp[L.F_GAIN : L.F_GAIN + kw * kw] = np.asarray(w.gain, float).ravel()
     fp[L.F_TAT : L.F_TAT + 48] = model.T_a.ravel()
     fp[L.F_TDT : L.F_TDT + 48] = model.T_d.ravel()
-    fp[o_m:o_pe] = model.m
-    fp[o_pe:o_kl] = model.p_e
-    fp[o_kl:o_kn] = model.k_l
-    fp[o_kn:o_l] = model.k_n
+    fp[o.m : o.m + n] = model.m
+    fp[o.p_e : o.p_e + n] = model.p_e
+    fp[o.k_l : o.k_l + n + 1] = model.k_l
+    fp[o.k_n : o.k_n + n + 1] = model.k_n
     if model.mass_track:
         mt = model.mass_track
-        fp[o_l:o_lam] = mt.l
-        fp[o_lam:o_alpha] = mt.lam
-        fp[o_alpha:o_beta] = mt.alpha
-        fp[o_beta:o_a] = mt.beta
-    fp[o_a:o_d] = model.a
-    fp[o_d:end] = model.d
+        fp[o.l : o.l + kp] = mt.l
+        fp[o.lam : o.lam + kp] = mt.lam
+        fp[o.alpha : o.alpha + kp] = mt.alpha
+        fp[o.beta : o.beta + kp] = mt.beta
+    fp[o.a : o.a + 3] = model.a
+    fp[o.d : o.d + 3] = model.d
 
     ip = np.zeros(L.ip_length(n, kp), dtype=np.int64)
     ip[L.I_N], ip[L.I_KW], ip[L.I_KP] = n, kw, kp

@@ -64,16 +64,16 @@ def rhs_body(solver, t, y, fp, ip, work, out):  # pragma: no cover - compiled
         ct = math.cos(fp[F_TFREQ] * t)
         for r in range(3):
             tau[r] = tau[r] + (fp[F_TC + r] + fp[F_TA + r] * ct)
-    o_m, _pe, _kl, _kn, _l, _lam, _al, _be, o_a, o_d, end = tail(n, kp)
+    o = tail(n, kp)
     rates(
         q,
         qd,
         tau,
         work[nq + 7 : 2 * nq],  # rod forces Q^C_p
         work[nq : nq + 3],  # force at C Q^C_R
-        fp[o_a:o_d],
-        fp[o_d:end],
-        fp[o_m : o_m + n],
+        fp[o.a : o.a + 3],
+        fp[o.d : o.d + 3],
+        fp[o.m : o.m + n],
         fp[F_MU0],
         fp[F_MBR] + fp[F_MU0],  # m_T = m_BR + μ0, as TumblingModel.m_T
         out[2 * nq :],

@@ -232,7 +232,8 @@ def _make_stage(deps: int, solver: int):
         if n > 0 and (lin or cub):
             # F^S = -∂U_s/∂p, Eq. (38): spring j (0..n) has extension x_j - x_{j-1}, x = p - p_e,
             # x_{-1} = x_n = 0, force f_j = k_l e + k_n e³; mass i gets f_{i+1} - f_i
-            _m, o_pe, o_kl, o_kn, _l, _lam, _al, _be, _a, _d, _end = tail(n, kp)
+            o = tail(n, kp)
+            o_pe, o_kl, o_kn = o.p_e, o.k_l, o.k_n
             x_prev = 0.0
             for j in range(n + 1):
                 x_j = y[7 + j] - fp[o_pe + j] if j < n else 0.0
@@ -256,16 +257,16 @@ def _make_stage(deps: int, solver: int):
         for i in range(n):
             ydot[7 + i] = y[nq + 6 + i]
         # work and impulses (analytic.aux_rates; a, d follow the mass-track arrays in fp)
-        o_m, _pe, _kl, _kn, _l, _lam, _al, _be, o_a, o_d, end = tail(n, kp)
+        o = tail(n, kp)
         rates(
             work[o_q : o_q + nq],
             work[o_qd : o_qd + nq],
             work[o_tt : o_tt + 3],
             work[o_ctl + 6 : o_ctl + 6 + n],
             work[o_ctl + 3 : o_ctl + 6],
-            fp[o_a:o_d],
-            fp[o_d:end],
-            fp[o_m : o_m + n],
+            fp[o.a : o.a + 3],
+            fp[o.d : o.d + 3],
+            fp[o.m : o.m + n],
             fp[F_MU0],
             fp[F_MBR] + fp[F_MU0],
             ydot[nq + nv :],

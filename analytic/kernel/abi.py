@@ -57,14 +57,14 @@ if HAVE_NUMBA:
     def arrays(q_p, fp_p, ip_p, out_p, len_out, w_p):
         """The arrays behind a half's pointer arguments, ``(q, fp, ip, out, w)``, with their
         lengths read from ``ip``: ``n + 7``; the end of ``fp``'s tail
-        (:func:`~analytic.kernel.layout.tail_offsets`); the head, n flags and k_p indices;
+        (:func:`~analytic.kernel.layout.tail_offsets`, ``.end``); the head, n flags and k_p indices;
         ``len_out``; ``WS_LEN``."""
         head = carray(ip_p, (I_TRACK,))
         n = head[I_N] & IX
         kp = head[I_KP] & IX
         return (
             carray(q_p, (n + 7,)),
-            carray(fp_p, (tail(n, kp)[10],)),
+            carray(fp_p, (tail(n, kp).end,)),
             carray(ip_p, (I_TRACK + n + kp,)),
             carray(out_p, (len_out,)),
             carray(w_p, (WS_LEN,)),

@@ -136,8 +136,6 @@ class _Scan:
 # ----------------------------------------------------------------------------------------------
 
 
-
-
 def _write_atomic(path: Path, data: bytes) -> None:
     """``data`` to a new temporary file beside ``path`` (fsync-ed), then renamed over it."""
     tmp = path.with_name(f".{path.name}.{os.getpid()}.{uuid.uuid4().hex[:8]}.tmp")

@@ -11,11 +11,10 @@ them at once, and every caller calls them by address (:mod:`analytic.kernel.abi`
 
 from __future__ import annotations
 
-from analytic.kernel.abi import call_halves
+from analytic.kernel.abi import call_halves, tail
 from analytic.kernel.bordered import bordered_solve
 from analytic.kernel.jit import inner, jit_entry
 from analytic.kernel.layout import (
-    F_ARR,
     I_COMP,
     I_KP,
     I_KW,
@@ -50,7 +49,7 @@ def control_outputs(q, fp, ip, n, kw, kp, out, full, w):
     With ``full`` False only the free rods' ``q̈_i`` are written.
     """
     nq = n + 7
-    om = F_ARR
+    om = tail(n, kp).m
     itr = I_TRACK
     iidx = I_TRACK + n
     s = w[WS_S]

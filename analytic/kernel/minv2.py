@@ -19,10 +19,9 @@ import math
 
 import numpy as np
 
-from analytic.kernel.abi import arrays, call_halves
+from analytic.kernel.abi import arrays, call_halves, tail
 from analytic.kernel.jit import inner, jit, jit_entry
 from analytic.kernel.layout import (
-    F_ARR,
     F_MU0,
     I_COMP,
     I_KP,
@@ -116,7 +115,7 @@ def make_solve_minv2(deps: int):
         uu = w[WS_UU]
         nq = n + 7
         k = kw + kp
-        om = F_ARR
+        om = tail(n, kp).m
         iidx = I_TRACK + n
         itr = I_TRACK
         p = q[7:]

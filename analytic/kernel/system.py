@@ -35,13 +35,13 @@ def make_build_system(deps: int):
         n = ip[I_N] & IX
         kw = ip[I_KW] & IX
         kp = ip[I_KP] & IX
-        o_m, o_pe, o_kl, o_kn, o_l, o_lam, o_alpha, o_beta, o_a, _o_d, _end = tail(n, kp)
-        kinematic_terms(q, qd, fp, o_a, w)
-        rod_pass(q, qd, fp, ip, n, o_m, o_pe, o_kl, o_kn, out, on, w)
+        o = tail(n, kp)  # the offsets of fp's tail, read by name by the stages that need them
+        kinematic_terms(q, qd, fp, o.a, w)
+        rod_pass(q, qd, fp, ip, n, o, out, on, w)
         body_block(fp, w)
         body_forces(t, q, qd, fp, ip, w)
         modeling_row(q, qd, fp, n + 7, w)
-        control_rows(t, q, qd, fp, ip, n, kw, kp, o_m, o_pe, o_l, o_lam, o_alpha, o_beta, out, w)
+        control_rows(t, q, qd, fp, ip, n, kw, kp, o, out, w)
 
     return build_system
 
