@@ -12,10 +12,14 @@ Modules, in the order an evaluation runs through them:
 * :mod:`~analytic.kernel.constraints`: ``b_m`` (Eq. 59) and ``b_c`` (Eqs. 81, 86), stages 5-6;
 * :mod:`~analytic.kernel.system`: stages 1-6 together (the first half);
 * Gauss (N = M⁻¹, Eq. 89): :mod:`~analytic.kernel.schur` (stage 7),
-  :mod:`~analytic.kernel.bordered` (stage 8), :mod:`~analytic.kernel.gauss` (stage 9, the second
-  half, and ``evaluate``);
+  :mod:`~analytic.kernel.bordered` (stage 8), :mod:`~analytic.kernel.gauss` (stage 9: the second
+  half);
+* :mod:`~analytic.kernel.norm_constrained`: what the two weightings solved through ``M_α`` share
+  (everything but their control force);
 * :mod:`~analytic.kernel.minv2`: N = M⁻² (Eq. B13), compiled only for scenes that ask for it;
 * :mod:`~analytic.kernel.identity`: N = I (Eq. B10 with W = I), likewise;
+* :mod:`~analytic.kernel.weighting`: a weighting's kernel as its callers reach it (``join``) and
+  its entry points (``evaluate``, ``qddot_into``), built in one place for every weighting;
 * :mod:`~analytic.kernel.abi`, :mod:`~analytic.kernel.halves`: the two halves as C callbacks, each
   compiled once and cached on its own, and how compiled callers call them by address;
 * :mod:`~analytic.kernel.entry`: which solve a scene needs; ``evaluate`` for any scene.
