@@ -44,7 +44,7 @@ itself accurate to no better than ~1e-6; in that case the two paths legitimately
 identity weighting's kernel declines such a state instead, :data:`analytic.kernel.layout.
 IDENTITY_RANK_TOL`, and the numpy path answers it).
 
-numba's on-disk cache: see :mod:`analytic.kernel.jit`. In short, ``NUMBA_CACHE_DIR`` if set,
+numba's on-disk cache: see :mod:`analytic.runtime.jit`. In short, ``NUMBA_CACHE_DIR`` if set,
 else ``__pycache__`` beside the source, else (a read-only install) ``tumbling-testbed/numba`` in the
 user's cache directory, said once; with none writable the kernel is compiled in memory each process.
 """
@@ -58,8 +58,8 @@ from analytic.kernel import gauss, halves, identity, minv2
 from analytic.kernel import layout as L
 from analytic.kernel.entry import Solver, solver_of
 from analytic.kernel.halves import KernelHalf
-from analytic.kernel.jit import HAVE_NUMBA
 from analytic.model import ControlOutput, TumblingModel
+from analytic.runtime.jit import HAVE_NUMBA
 from analytic.scene import Scene
 
 # bound once: FastModel.qddot runs once per right-hand side; a global + attribute lookup per name

@@ -24,8 +24,8 @@ import numpy as np
 
 from analytic import aux_rates as _aux
 from analytic.aux_rates import rates
+from analytic.kernel.calls import tail
 from analytic.kernel.entry import Solver, evaluate_as, solver_of
-from analytic.kernel.jit import HAVE_NUMBA, KERNEL_SOURCES, inline_always, jit, source_fingerprint
 from analytic.kernel.layout import (
     F_MBR,
     F_MU0,
@@ -38,7 +38,7 @@ from analytic.kernel.layout import (
     STATUS_OK,
     STATUS_UNSUPPORTED,
 )
-from analytic.kernel.system import tail
+from analytic.runtime.jit import HAVE_NUMBA, KERNEL_SOURCES, inline_always, jit, source_fingerprint
 
 STATUS_NONFINITE = 3
 
@@ -86,7 +86,7 @@ def rhs_body(solver, t, y, fp, ip, work, out):  # pragma: no cover - compiled
 
 def _make(deps: int, solver: int):
     """``rhs_into`` closing over ``deps`` (the source fingerprint of the kernel and of
-    :mod:`analytic.aux_rates`, which it embeds; see :func:`analytic.kernel.jit.jit_entry`) and the
+    :mod:`analytic.aux_rates`, which it embeds; see :func:`analytic.runtime.jit.jit_entry`) and the
     solve it embeds (``solver``, a :class:`Solver`: numba drops the other branches)."""
 
     def rhs_into(t, y, fp, ip, work, out):  # pragma: no cover - compiled

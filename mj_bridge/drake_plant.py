@@ -70,9 +70,9 @@ import numpy as np
 from analytic.assemble import N_AUX, assemble
 from analytic.error_scale import ErrorGroups
 from analytic.fast import FastModel
-from analytic.kernel import compile_lock
-from analytic.kernel.jit import jit
 from analytic.model import ControlOutput, TumblingModel
+from analytic.runtime import compile_lock
+from analytic.runtime.jit import jit
 from analytic.scene import Scene
 from analytic.stepping import NonFinite
 from analytic.trajectory import RunStatus, Trajectory
@@ -86,7 +86,7 @@ ENGINE = "drake"
 """The plant's name in its trajectories: :attr:`mj_bridge.drake_plugin.DrakePlant.engine`."""
 
 COMPILE_LOCK = "drake-stage"
-"""The :mod:`analytic.kernel.compile_lock` name held while the maps below (and the Pinocchio stage
+"""The :mod:`analytic.runtime.compile_lock` name held while the maps below (and the Pinocchio stage
 they share) are compiled or loaded from numba's cache."""
 
 

@@ -58,9 +58,8 @@ from analytic.aux_rates import rates
 from analytic.effects import Effect
 from analytic.error_scale import ErrorGroups
 from analytic.fast import FastModel
-from analytic.kernel import compile_lock
+from analytic.kernel.calls import tail
 from analytic.kernel.entry import Solver, evaluate_as, solver_of
-from analytic.kernel.jit import KERNEL_SOURCES, jit, source_fingerprint
 from analytic.kernel.kinematics import rotation
 from analytic.kernel.layout import (
     F_MBR,
@@ -77,8 +76,9 @@ from analytic.kernel.layout import (
     STATUS_OK,
     STATUS_UNSUPPORTED,
 )
-from analytic.kernel.system import tail
 from analytic.model import ControlOutput, TumblingModel
+from analytic.runtime import compile_lock
+from analytic.runtime.jit import KERNEL_SOURCES, jit, source_fingerprint
 from analytic.scene import Scene
 from analytic.stepping import NonFinite
 from analytic.trajectory import Engine, RunStatus, Trajectory
@@ -136,7 +136,7 @@ def work_layout(n: int, k: int) -> dict[str, tuple[int, int]]:
 
 def _make_stage(deps: int, solver: int):
     """The stage closing over ``deps`` (the source fingerprint of the kernel and of
-    :mod:`analytic.aux_rates`, which it calls; see :func:`analytic.kernel.jit.jit_entry`) and the
+    :mod:`analytic.aux_rates`, which it calls; see :func:`analytic.runtime.jit.jit_entry`) and the
     solve it embeds (``solver``, a :class:`Solver`; numba drops the other branches)."""
 
     def stage(t, y, fp, ip, work, ydot, mode):  # pragma: no cover - compiled

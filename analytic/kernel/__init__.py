@@ -4,7 +4,7 @@ side of :mod:`analytic.fast`.
 Modules, in the order an evaluation runs through them:
 
 * :mod:`~analytic.kernel.layout`: where every number lives (packed parameters, output, workspace);
-* :mod:`~analytic.kernel.jit`: numba plumbing (compilation with numba's documented API, disk
+* :mod:`~analytic.runtime.jit`: numba plumbing (compilation with numba's documented API, disk
   cache, source fingerprints);
 * :mod:`~analytic.kernel.kinematics`: ``S(u)``, ``H(u)``, ``L_x(u)`` (Eqs. 11-34), stage 1;
 * :mod:`~analytic.kernel.forces`: ``Q`` (Eq. 52, springs Eq. 38), stages 2 and 4;
@@ -20,7 +20,7 @@ Modules, in the order an evaluation runs through them:
 * :mod:`~analytic.kernel.identity`: N = I (Eq. B10 with W = I), likewise;
 * :mod:`~analytic.kernel.weighting`: a weighting's kernel as its callers reach it (``join``) and
   its entry points (``evaluate``, ``qddot_into``), built in one place for every weighting;
-* :mod:`~analytic.kernel.abi`, :mod:`~analytic.kernel.halves`: the two halves as C callbacks, each
+* :mod:`~analytic.runtime.abi`, :mod:`~analytic.kernel.halves`: the two halves as C callbacks, each
   compiled once and cached on its own, and how compiled callers call them by address;
 * :mod:`~analytic.kernel.entry`: which solve a scene needs; ``evaluate`` for any scene.
 
@@ -31,7 +31,7 @@ one int array ``ip``, so a call unboxes six arguments. ``evaluate(t, q, q̇, fp,
 Cost notes (one evaluation is ~1 µs at small n, so constant factors matter): the stages are
 compiled into two C callbacks, stages 1-6 and the solve (two, so that two processes compile a
 first run's kernel at once), which every caller calls through addresses held in ``ip``
-(:mod:`~analytic.kernel.abi`: a caller's compile then neither waits for nor repeats the kernel's);
+(:mod:`~analytic.runtime.abi`: a caller's compile then neither waits for nor repeats the kernel's);
 no heap allocation on the Gauss path (one stack workspace carved
 by ``layout.WS_*``; the rod rows of ``Q`` and ``b_c`` live in ``out``); closed forms for ``L_a(u)``,
 ``L̇_a u̇`` and ``H(u)ᵀx`` instead of the (3, 4, 4) tensor contractions; no square roots on the Gauss

@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import math
 
-from analytic.kernel.jit import inner
 from analytic.kernel.layout import (
     F_D1,
     F_D2,
@@ -39,6 +38,7 @@ from analytic.kernel.layout import (
     WS_T1,
     WS_UU,
 )
+from analytic.runtime.jit import inner
 
 
 @inner

@@ -14,7 +14,6 @@ from enum import IntEnum
 
 import numpy as np
 
-from analytic.kernel.jit import inline_always, jit_entry
 from analytic.kernel.layout import (
     I_KP,
     I_KW,
@@ -25,6 +24,7 @@ from analytic.kernel.layout import (
     W_MINV2,
 )
 from analytic.kernel.weighting import join
+from analytic.runtime.jit import inline_always, jit_entry
 
 
 class Solver(IntEnum):
@@ -72,7 +72,7 @@ _ANY = int(Solver.ANY)
 def evaluate_as(solver, t, q, qd, fp, ip, out):
     """The kernel a compiled caller embeds, by ``solver`` (a :class:`Solver` value). Pass a
     constant of the caller (a closure variable of its factory): inlined by numba
-    (:func:`analytic.kernel.jit.inline_always`), the other branches are dropped before compiling.
+    (:func:`analytic.runtime.jit.inline_always`), the other branches are dropped before compiling.
     A single solve is called as its two cached halves by address
     (:func:`analytic.kernel.weighting.join`), so the caller compiles without them; ``Solver.ANY``
     goes through :data:`evaluate`."""

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import math
 
-from analytic.kernel.jit import inner
 from analytic.kernel.kinematics import Ht_times
 from analytic.kernel.layout import (
     F_G,
@@ -48,6 +47,7 @@ from analytic.kernel.layout import (
     WS_SPQ,
     WS_SQ,
 )
+from analytic.runtime.jit import inner
 
 
 @inner

@@ -6,15 +6,14 @@ Stages: :func:`analytic.kernel.system.make_build_system` (1-6: M, Q, b_m, b_c), 
 :func:`analytic.kernel.bordered.bordered_solve` (8: the bordered 4x4 system on u, q̈_b), and
 :func:`control_outputs` (9: q̈ of the free rods, ``Q^C``, ``τ``, the residual). The two halves are
 compiled and cached on their own (:mod:`analytic.kernel.halves`), so two processes can compile
-them at once, and every caller calls them by address (:mod:`analytic.kernel.abi`). Entry point:
+them at once, and every caller calls them by address (:mod:`analytic.runtime.abi`). Entry point:
 :data:`evaluate` (:mod:`analytic.kernel.weighting`).
 """
 
 from __future__ import annotations
 
-from analytic.kernel.abi import tail
 from analytic.kernel.bordered import bordered_solve
-from analytic.kernel.jit import inner
+from analytic.kernel.calls import tail
 from analytic.kernel.layout import (
     I_COMP,
     I_KP,
@@ -35,6 +34,7 @@ from analytic.kernel.layout import (
 )
 from analytic.kernel.schur import schur_complement
 from analytic.kernel.weighting import make_evaluate
+from analytic.runtime.jit import inner
 
 
 @inner
@@ -102,7 +102,7 @@ def control_outputs(q, fp, ip, n, kw, kp, out, full, w):
 
 
 def make_solve_gauss(deps: int):
-    """The C callback body of stages 7-9 under Gauss weighting (:data:`analytic.kernel.abi.
+    """The C callback body of stages 7-9 under Gauss weighting (:data:`analytic.runtime.abi.
     SOLVE_SIG`), closing over the kernel's source fingerprint; :mod:`analytic.kernel.halves`
     compiles it once (a warm-up: in one process while another compiles stages 1-6,
     :mod:`validation.runs.warmup`)."""

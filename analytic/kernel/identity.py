@@ -30,8 +30,7 @@ import math
 
 import numpy as np
 
-from analytic.kernel.abi import arrays
-from analytic.kernel.jit import inner, jit
+from analytic.kernel.calls import arrays
 from analytic.kernel.layout import (
     I_KP,
     I_KW,
@@ -46,6 +45,7 @@ from analytic.kernel.layout import (
 )
 from analytic.kernel.norm_constrained import finish, ma_solve, prepare
 from analytic.kernel.weighting import make_evaluate, make_qddot_into
+from analytic.runtime.jit import inner, jit
 
 
 @jit
@@ -157,7 +157,7 @@ def control_force(q, fp, ip, w, SB, c1, c2, s, om, y, sm, acc, bc, Hw, Qc, v):
 
 
 def make_solve_identity(deps: int):
-    """The C callback body of stage 7 under the identity weighting (:data:`analytic.kernel.abi.
+    """The C callback body of stage 7 under the identity weighting (:data:`analytic.runtime.abi.
     SOLVE_SIG`; ``full`` is always 1 here), closing over the kernel's source fingerprint;
     :mod:`analytic.kernel.halves` compiles it once."""
 

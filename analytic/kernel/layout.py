@@ -104,7 +104,7 @@ class FpTail(NamedTuple):
 def tail_offsets(n: int, kp: int) -> FpTail:
     """Where each block of ``fp``'s tail starts, for n masses and k_p tracked masses.
 
-    Plain arithmetic; compiled code calls it as :data:`analytic.kernel.abi.tail` (the same
+    Plain arithmetic; compiled code calls it as :data:`analytic.kernel.calls.tail` (the same
     function, compiled inline).
     """
     o_m = F_ARR
@@ -136,7 +136,7 @@ def output_length(n: int, k: int) -> int:
 
 
 # ----------------------------------------------------------------------------------------------
-# Workspace: one float64 array on the stack per evaluation (analytic.kernel.jit.workspace), carved
+# Workspace: one float64 array on the stack per evaluation (analytic.runtime.jit.workspace), carved
 # by these offsets, instead of ~30 small np.empty/np.zeros (each a heap allocation plus reference
 # counting, ~20 ns). The stages hand each other their results through these slots.
 # ----------------------------------------------------------------------------------------------

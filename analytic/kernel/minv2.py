@@ -20,8 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from analytic.kernel.abi import arrays
-from analytic.kernel.jit import inner, jit
+from analytic.kernel.calls import arrays
 from analytic.kernel.layout import (
     I_KP,
     I_KW,
@@ -38,6 +37,7 @@ from analytic.kernel.layout import (
 )
 from analytic.kernel.norm_constrained import finish, prepare
 from analytic.kernel.weighting import make_evaluate, make_qddot_into
+from analytic.runtime.jit import inner, jit
 
 
 @inner
@@ -111,7 +111,7 @@ def control_force(q, fp, ip, w, SB, c1, c2, s, om, y, sm, acc, bc, Hw, Qc, v2):
 
 
 def make_solve_minv2(deps: int):
-    """The C callback body of stage 7 under M⁻² (:data:`analytic.kernel.abi.SOLVE_SIG`; ``full``
+    """The C callback body of stage 7 under M⁻² (:data:`analytic.runtime.abi.SOLVE_SIG`; ``full``
     is always 1 here), closing over the kernel's source fingerprint; :mod:`analytic.kernel.halves`
     compiles it once."""
 

@@ -24,8 +24,7 @@ import math
 
 import numpy as np
 
-from analytic.kernel.abi import tail
-from analytic.kernel.jit import inner, jit
+from analytic.kernel.calls import tail
 from analytic.kernel.layout import (
     F_MU0,
     I_COMP,
@@ -46,6 +45,7 @@ from analytic.kernel.layout import (
     WS_QB,
     WS_S,
 )
+from analytic.runtime.jit import inner, jit
 
 
 @jit

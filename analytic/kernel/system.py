@@ -8,7 +8,7 @@ follows is the weighting's: :mod:`analytic.kernel.gauss` or :mod:`analytic.kerne
 
 from __future__ import annotations
 
-from analytic.kernel.abi import tail
+from analytic.kernel.calls import tail
 from analytic.kernel.constraints import control_rows, modeling_row
 from analytic.kernel.forces import body_forces, rod_pass
 from analytic.kernel.kinematics import kinematic_terms
@@ -17,7 +17,7 @@ from analytic.kernel.mass_matrix import body_block
 
 
 def make_build_system(deps: int):
-    """The C callback body of stages 1-6 (:data:`analytic.kernel.abi.SYSTEM_SIG`), closing over
+    """The C callback body of stages 1-6 (:data:`analytic.runtime.abi.SYSTEM_SIG`), closing over
     the kernel's source fingerprint ``deps`` (numba hashes closure variables into its cache key, so
     an edit of any kernel file recompiles it). :mod:`analytic.kernel.halves` compiles it once."""
 
@@ -46,4 +46,4 @@ def make_build_system(deps: int):
     return build_system
 
 
-__all__ = ["make_build_system", "tail"]
+__all__ = ["make_build_system"]

@@ -1,7 +1,7 @@
 """A weighting's kernel built in one place: how a caller reaches the two compiled halves, and the
 entry points Python calls.
 
-Every weighting's kernel is the same two halves called by address (:mod:`analytic.kernel.abi`):
+Every weighting's kernel is the same two halves called by address (:mod:`analytic.runtime.abi`):
 stages 1-6, then the weighting's solve. What differs between weightings here is one constant, the
 weighting ``W_*`` of :mod:`analytic.kernel.layout`, and what follows from it:
 
@@ -20,8 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from analytic.kernel.abi import call_halves
-from analytic.kernel.jit import inline_always, jit_entry
+from analytic.kernel.calls import call_halves
 from analytic.kernel.layout import (
     I_KP,
     I_KW,
@@ -34,6 +33,7 @@ from analytic.kernel.layout import (
     W_IDENTITY,
     W_MINV2,
 )
+from analytic.runtime.jit import inline_always, jit_entry
 
 NAMES = {W_GAUSS: "gauss", W_MINV2: "minv2", W_IDENTITY: "identity"}
 """Each weighting's short name: its module's, and the name of its cached entry points (numba
@@ -44,7 +44,7 @@ names a cached function's files by it, so each weighting's are its own)."""
 def join(weight, t, q, qd, fp, ip, out):
     """The kernel of weighting ``weight`` (a ``W_*`` constant of the caller: inlined, the other
     weightings' branches drop out): the two compiled halves called by the addresses in ``ip``
-    (:mod:`analytic.kernel.abi`; ``STATUS_UNSUPPORTED`` when they are not set, i.e. ``ip`` did
+    (:mod:`analytic.kernel.calls`; ``STATUS_UNSUPPORTED`` when they are not set, i.e. ``ip`` did
     not come from a :class:`analytic.fast.FastModel`), or ``STATUS_UNSUPPORTED`` when the scene in
     ``ip`` is not this weighting's (module docstring)."""
     n = ip[I_N] & IX

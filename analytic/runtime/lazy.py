@@ -1,10 +1,11 @@
-"""Lazy re-exports for a package's public face: ``import validation.x`` stays cheap.
+"""A package's public names imported on first use (PEP 562), so that importing the package costs
+only what its eagerly bound names need: ``import validation.x`` stays cheap, the command line
+installs its signal handlers and starts its work before anything heavy (numpy, MuJoCo, numba,
+Rerun) is imported, and a process that only chooses and checks (the one that starts the plants)
+does not import the engines.
 
-A wing's ``__init__`` names its public objects and the module each lives in; the module is
-imported the first time one of its names is read (PEP 562 ``__getattr__``), as
-``validation/__init__.py`` does for the package's top-level names. This matters because the pytest
-plugin and the command line import the package before anything heavy (numpy, MuJoCo, numba,
-Rerun) is needed, and the command line installs its signal handlers first.
+A package's ``__init__`` names its public objects and the module each lives in, and binds
+``__getattr__, __dir__ = lazy_exports(__name__, table, globals())``.
 """
 
 from __future__ import annotations
@@ -20,7 +21,8 @@ def lazy_exports(
     """``(__getattr__, __dir__)`` for ``package`` whose public ``name`` lives in ``table[name]``.
 
     ``table`` maps each public name to the dotted module that defines it; a name once read is
-    cached in ``namespace`` (the package's ``globals()``), so the lookup runs once per name.
+    bound in ``namespace`` (the package's ``globals()``) like an ordinary attribute, so the lookup
+    runs once per name.
     """
 
     def __getattr__(name: str) -> Any:
@@ -34,3 +36,6 @@ def lazy_exports(
         return sorted({*namespace, *table})
 
     return __getattr__, __dir__
+
+
+__all__ = ["lazy_exports"]
