@@ -18,7 +18,7 @@ its size.
 
 The ``cfunc`` is cached on disk by numba. Its cache key has only plain values in it (module globals
 resolve at compile time; the one closure variable is the fingerprint of the sources it embeds), so a
-new process loads it instead of compiling it again (~5 s).
+new process loads it instead of compiling it again.
 """
 
 from __future__ import annotations

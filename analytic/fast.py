@@ -21,10 +21,9 @@ What runs where:
   on u bordered by ``1 + k_ω`` constraint rows finishes the solve.
 * **N = M⁻² (Eq. B13)**: the kernel, O(n), with the closed form
   ``Zᵀ M² Z = diag(4|u|² I, I) + |u|² w wᵀ`` (see :mod:`analytic.kernel.minv2`) and
-  ``M_α⁻¹ M v = v - α y (a_mᵀ v)`` in place of a product with ``M`` followed by a solve (that
-  product-then-solve cost about cond(M) in accuracy and kept this path switched off until it was
-  replaced). Against a 40-digit solve over 1728 random states the kernel's worst error was 5.9e-10
-  where the dense numpy reference's was 7.4e-8. Compiled only when a scene asks for this weighting.
+  ``M_α⁻¹ M v = v - α y (a_mᵀ v)`` in place of a product with ``M`` followed by a solve (which
+  costs about cond(M) in accuracy; its accuracy against a 40-digit solve: ``docs/performance.md``).
+  Compiled only when a scene asks for this weighting.
 * **Identity weighting (N = I)**: the kernel, ``O(n k²)``: ``Q_c = Z (ZᵀZ)⁻¹ r`` from a Householder
   QR of ``Z = K A_cᵀ`` with unit columns, never forming ``ZᵀZ`` (which squares the conditioning;
   see :mod:`analytic.kernel.identity`). Compiled only when a scene asks for this weighting.
@@ -62,8 +61,8 @@ from analytic.model import ControlOutput, TumblingModel
 from analytic.runtime.jit import HAVE_NUMBA
 from analytic.scene import Scene
 
-# bound once: FastModel.qddot runs once per right-hand side; a global + attribute lookup per name
-# costs ~20 ns of its ~1.5 µs
+# bound once: FastModel.qddot runs once per right-hand side, where a global + attribute lookup per
+# name is a visible share of the call
 _empty = np.empty
 
 

@@ -1,10 +1,10 @@
 """The integrator's whole right-hand side in one compiled call: ``ẏ`` for ``y = [q, q̇, W, I_L, I_P]``.
 
 :func:`analytic.simulate._rhs` builds ``ẏ`` in Python from :meth:`FastModel.acceleration`
-(q̈ and the control outputs) and :func:`analytic.aux_rates.aux_rates` (work and impulse rates): about
-20 µs per evaluation, of which the kernel is under 1 µs. This module does the same lines in one
-numba function (same kernel, same arithmetic, same order of operations, so the same numbers), so a
-right-hand side costs about one kernel call plus numba's dispatch.
+(q̈ and the control outputs) and :func:`analytic.aux_rates.aux_rates` (work and impulse rates), where
+the Python around the kernel costs many times the kernel (``docs/performance.md``). This module
+does the same lines in one numba function (same kernel, same arithmetic, same order of operations,
+so the same numbers), so a right-hand side costs about one kernel call plus numba's dispatch.
 
 ``rhs_into(t, y, fp, ip, work, out)`` returns a status: ``layout.STATUS_OK``; the kernel's nonzero
 status (the caller answers that evaluation with the numpy model); or :data:`STATUS_NONFINITE` when

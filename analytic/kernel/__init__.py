@@ -28,7 +28,8 @@ Everything the kernel needs is packed by :func:`analytic.fast.pack` into one flo
 one int array ``ip``, so a call unboxes six arguments. ``evaluate(t, q, q̇, fp, ip, out)`` writes
 ``[q̈ (nq), Q^C (nq), τ (3), A_c q̈ - b_c (k)]`` into ``out`` and returns a status (0 = done).
 
-Cost notes (one evaluation is ~1 µs at small n, so constant factors matter): the stages are
+Cost notes (an evaluation at small n is short, so constant factors matter; figures in
+``docs/performance.md``): the stages are
 compiled into two C callbacks, stages 1-6 and the solve (two, so that two processes compile a
 first run's kernel at once), which every caller calls through addresses held in ``ip``
 (:mod:`~analytic.runtime.abi`: a caller's compile then neither waits for nor repeats the kernel's);

@@ -6,8 +6,8 @@ With ``K`` the norm-constrained compliance of :mod:`analytic.fundamental` (``K =
 uncontrolled, norm-constrained acceleration, Eq. 60), the control force of least Euclidean norm is
 ``Q_c = Z (ZᵀZ)⁻¹ r``: the minimum-norm solution of ``Zᵀ Q_c = r``. It is computed from a thin
 Householder QR of ``Z`` with its columns scaled to unit length (``Z D = Q̂ R̃``, ``D`` diagonal):
-``Q_c = Q̂ R̃⁻ᵀ D r``. The Gram matrix ``ZᵀZ`` is never formed (it squares the conditioning: that
-is what costs the dense numpy path ~1e-7 on masses spread over six decades). Then, as for every
+``Q_c = Q̂ R̃⁻ᵀ D r``. The Gram matrix ``ZᵀZ`` is never formed (it squares the conditioning, which
+the dense numpy path pays; ``docs/performance.md``). Then, as for every
 weighting, ``q̈ = a + K Q_c`` and ``Q^C = Q_c + a_m (λ_m - yᵀQ_c/s_m)``.
 
 Rank: ``Z`` has full column rank in exact arithmetic (:mod:`analytic.fast`, "Rank of the control

@@ -75,7 +75,8 @@ matrix ``ZᵀZ``, whose eigenvalues are squares of the singular values of the sc
 IX = 0x7FFFFFFF
 """Mask for sizes and indices read from ``ip`` inside the kernel. The values are small and
 non-negative, so the mask changes nothing; it lets LLVM prove every array index non-negative and
-drop numba's negative-index wrap-around code, which otherwise tripled the cost of the O(n) loops."""
+drop numba's negative-index wrap-around code, which otherwise dominates the cost of the O(n) loops
+(``docs/performance.md``)."""
 
 STATUS_OK = 0
 STATUS_NOT_PD = 1  # a Schur complement or the bordered Gram matrix is not numerically PD
@@ -138,7 +139,7 @@ def output_length(n: int, k: int) -> int:
 # ----------------------------------------------------------------------------------------------
 # Workspace: one float64 array on the stack per evaluation (analytic.runtime.jit.workspace), carved
 # by these offsets, instead of ~30 small np.empty/np.zeros (each a heap allocation plus reference
-# counting, ~20 ns). The stages hand each other their results through these slots.
+# counting). The stages hand each other their results through these slots.
 # ----------------------------------------------------------------------------------------------
 WS_MB = 0  # 49: body block M_bb of M (Eq. 51), row-major 7x7, both triangles
 WS_S4 = 49  # 4x4 (row stride 4, lower triangle): S_4, the Schur complement on the u block

@@ -11,12 +11,11 @@ points) calls them through their addresses, which :class:`analytic.fast.FastMode
 the packed integers ``ip`` (slots ``I_FN_SYSTEM``, ``I_FN_SOLVE``).
 
 Why not an ordinary call between numba functions: numba links a callee's code into its caller's
-and optimises and emits the linked whole again, so every caller of the kernel re-did the LLVM
-work of the whole kernel (about 1 s each on the development machine, 2 s for a caller of a caller)
-and could be compiled only after both halves were. Through an address the caller's own code is
-small (the Gauss entry point: 0.2-0.3 s to compile against 0.8-1.2 s linked), it compiles before
-the halves exist, and the halves are compiled exactly once per process. The cost is one indirect
-call per half per evaluation.
+and optimises and emits the linked whole again, so every caller of the kernel would redo the LLVM
+work of the whole kernel and could be compiled only after both halves were. Through an address the
+caller's own code is small, it compiles before the halves exist, and the halves are compiled exactly
+once per process (compile times: ``docs/performance.md``). The cost is one indirect call per half
+per evaluation.
 
 The addresses belong to one process: a forked child may use them, a spawned process must build its
 own :class:`~analytic.fast.FastModel` (as every plant and sweep worker does). A caller handed an

@@ -58,8 +58,9 @@ MANIFEST_FORMAT = 1
 MAX_MANIFEST_BYTES = 4 << 20
 """A larger manifest is not read (it counts as missing)."""
 MIN_FREE_BYTES = 16 << 20
-"""Free space the cache directory must have for numba to write to it (bytes): the whole cache of
-the kernels is under 1 MB, and numba fails a compile whose cache entry cannot be saved."""
+"""Free space the cache directory must have for numba to write to it (bytes): well above the whole
+cache of the kernels (``docs/performance.md``), as numba fails a compile whose cache entry cannot be
+saved."""
 MIN_FREE_INODES = 64
 LOCK_WAIT_S = 10.0
 """How long to wait for another process's manifest lock before going on without it (s)."""

@@ -23,13 +23,13 @@ what a cached function's key covers. Only numba's documented API is used (``numb
 **Why the tie.** numba's disk cache checks only the source file of the function being cached
 (numba's caching notes: "Cache invalidation fails to recognize changes in symbols defined in another
 file"), yet a cached function contains the code of every stage it calls. Each cached function is
-therefore built by a factory that closes over :func:`source_fingerprint` of the kernel package (and
-of any other file it embeds), and refers to it (``if deps < 0: return``, never true): numba's cache
+therefore built by a factory that closes over :func:`source_fingerprint` of the kernel and runtime
+packages (:data:`KERNEL_SOURCES`, and of any other file it embeds), and refers to it (``if deps < 0: return``, never true): numba's cache
 key covers the function's closure variables, so an edit of any of those files compiles it again
 instead of loading a stale copy.
 
 **Where the cache lives.** numba writes ``__pycache__`` beside the sources, else its user-wide cache
-directory. When this package's own ``__pycache__`` cannot be written (a read-only site-packages)
+directory. When the kernel package's ``__pycache__`` cannot be written (a read-only site-packages)
 and ``NUMBA_CACHE_DIR`` is not set, this module sets ``NUMBA_CACHE_DIR`` (numba's documented
 setting) to ``$XDG_CACHE_HOME/tumbling-testbed/numba`` (``~/.cache/...`` without XDG_CACHE_HOME)
 before numba is imported, and says so once (:class:`CacheFallbackWarning`). When no directory at
