@@ -1,11 +1,12 @@
 """A package's public names imported on first use (PEP 562), so that importing the package costs
-only what its eagerly bound names need: ``import validation.x`` stays cheap, the command line
-installs its signal handlers and starts its work before anything heavy (numpy, MuJoCo, numba,
-Rerun) is imported, and a process that only chooses and checks (the one that starts the plants)
-does not import the engines.
+only what its eagerly bound names need: the command line starts its work sooner, and a process that
+only chooses and checks (the one that starts the plants) does not import the engines. Used by
+``analytic`` and ``mj_bridge``.
 
 A package's ``__init__`` names its public objects and the module each lives in, and binds
-``__getattr__, __dir__ = lazy_exports(__name__, table, globals())``.
+``__getattr__, __dir__ = lazy_exports(__name__, table, globals())``. (``validation`` has the same
+helper in ``validation/_lazy.py``: importing this module runs ``analytic/__init__.py``, which
+imports numpy, and ``import validation`` must not.)
 """
 
 from __future__ import annotations

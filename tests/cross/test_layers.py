@@ -59,7 +59,7 @@ WINGS: tuple[tuple[str, ...], ...] = (
 """The wings of ``validation``, lowest first: a module may import from its own wing, from a wing
 of its level or from a lower level, never from a higher one (``docs/architecture.md``). A wing is a
 subpackage (``validation/compare/``) or a top-level module (``validation/cli.py``); the private
-helper ``_version`` sits below every wing. The one exception is a ``__main__`` module
+helpers ``_lazy`` and ``_version`` sit below every wing. The one exception is a ``__main__`` module
 (``python -m validation.studies.sweep`` is ``tumble sweep``), which may import the command line."""
 
 RUNTIME = "analytic.runtime"
@@ -312,7 +312,7 @@ def wing_level(module: str) -> int | None:
     """The level of ``module``'s wing in :data:`WINGS`, or ``None`` outside ``validation``'s wings
     (another package, ``validation/__init__``, the private helpers)."""
     parts = module.split(".")
-    if parts[0] != "validation" or len(parts) < 2 or parts[1] == "_version":
+    if parts[0] != "validation" or len(parts) < 2 or parts[1] in ("_lazy", "_version"):
         return None
     for level, wings in enumerate(WINGS):
         if parts[1] in wings:

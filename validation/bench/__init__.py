@@ -8,7 +8,7 @@
 * :mod:`.mujoco_steps`: MuJoCo RK4's per-step cost with and without the controller.
 """
 
-from analytic.runtime.lazy import lazy_exports
+from validation._lazy import lazy_exports
 
 _PUBLIC = {
     "CpuMeter": "validation.bench.timing",

@@ -8,7 +8,7 @@ closed-form tracking laws and its balances, the named thresholds, and the refere
 * :mod:`.summary`: one-line sentences and drift figures for reports and the console.
 """
 
-from analytic.runtime.lazy import lazy_exports
+from validation._lazy import lazy_exports
 
 _PUBLIC = {
     "Check": "validation.compare.checks",

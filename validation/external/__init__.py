@@ -15,7 +15,7 @@ The format is documented for people writing such files in ``docs/trajectory-form
 
 """
 
-from analytic.runtime.lazy import lazy_exports
+from validation._lazy import lazy_exports
 
 _PUBLIC = {
     "COLUMNS": "validation.external.columns",

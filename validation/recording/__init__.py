@@ -8,7 +8,7 @@
 * :mod:`.style`: colours, application ids and viewer text.
 """
 
-from analytic.runtime.lazy import lazy_exports
+from validation._lazy import lazy_exports
 
 _PUBLIC = {
     "write_recording": "validation.recording.recording",

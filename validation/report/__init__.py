@@ -7,7 +7,7 @@
 * :mod:`.scene_reference`: ``docs/scene-format.md`` rendered from the key declarations.
 """
 
-from analytic.runtime.lazy import lazy_exports
+from validation._lazy import lazy_exports
 
 _PUBLIC = {
     "write_report": "validation.report.report",

@@ -10,7 +10,7 @@
 * :mod:`.warmup`: the one-time numba compile (``tumble warmup``).
 """
 
-from analytic.runtime.lazy import lazy_exports
+from validation._lazy import lazy_exports
 
 _PUBLIC = {
     "output_run": "validation.runs.outputs",

@@ -6,7 +6,7 @@
 * :mod:`.demo`, :mod:`.demo_notebook`: the narrated teaching demo and its notebook.
 """
 
-from analytic.runtime.lazy import lazy_exports
+from validation._lazy import lazy_exports
 
 _PUBLIC = {
     "write_demo": "validation.studies.demo",

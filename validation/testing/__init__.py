@@ -4,7 +4,7 @@
 * :mod:`.pytest_plugin`: scene files ``test_*.toml`` as pytest items (entry point ``tumble``).
 """
 
-from analytic.runtime.lazy import lazy_exports
+from validation._lazy import lazy_exports
 
 _PUBLIC = {
     "assert_agree": "validation.testing.agree",

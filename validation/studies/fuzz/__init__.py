@@ -9,7 +9,7 @@ minimal scene (:mod:`~validation.studies.fuzz.shrink`) written as a scene file
 :func:`fuzz` is the campaign (:mod:`~validation.studies.fuzz.campaign`). See ``docs/fuzzing.md``.
 """
 
-from analytic.runtime.lazy import lazy_exports
+from validation._lazy import lazy_exports
 
 _TABLE = {
     "CampaignResult": "validation.studies.fuzz.campaign",
