@@ -4,7 +4,8 @@ its stack workspace. Defined here once; the packer, the kernel stages and the co
 (:mod:`analytic.fast_rhs`, :mod:`mj_bridge.fast_stage`, :mod:`mj_bridge.native`,
 :mod:`mj_bridge.pinocchio_plant`) all read these names.
 
-Pure constants, one record type and plain functions; no numba here (``pack`` imports it without compiling).
+Pure constants, one record type and plain functions; no numba here (``pack`` imports it without
+compiling).
 
 ``fp``: a fixed head (``F_*``, ``F_ARR`` slots) then, for n masses and k_p tracked masses, the
 tail of :func:`tail_offsets` (:class:`FpTail`): ``m (n), p_e (n), k_l (n+1), k_n (n+1)``, the mass
@@ -84,10 +85,11 @@ STATUS_UNSUPPORTED = 2  # not this solve's scene, output too short, or halves no
 
 
 class FpTail(NamedTuple):
-    """Offsets in ``fp`` of the tail's blocks (lengths in brackets) and ``end``, the length of
-    ``fp``. Read by name (``tail_offsets(n, kp).k_l``), never unpacked: a block added to the tail
-    is one field here and one line in :func:`tail_offsets`, and no reader changes. numba compiles
-    the record as a tuple of ints (no per-call cost once inlined)."""
+    """Offsets in ``fp`` of the tail's blocks (each block's length in its comment) and ``end``,
+    the length of ``fp``. Read by name (``tail_offsets(n, kp).k_l``), never unpacked: a block added
+    to the tail is one field here and one line in :func:`tail_offsets` (and its length in
+    ``tests/analytic/kernel/test_layout.py``), and no reader changes. numba compiles the record as
+    a tuple of ints (no per-call cost once inlined)."""
 
     m: int  # (n) masses m_i, kg
     p_e: int  # (n) spring equilibria p_e,i, m
