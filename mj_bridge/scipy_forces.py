@@ -13,7 +13,7 @@ called only when its ``ip`` flag is set):
 
 * ``t``: time, s; ``q``, ``qd`` (n + 7 each): the paper state ``[R, u, p]``, ``[Ṙ, u̇, ṗ]``;
 * ``fp``, ``ip``: the packed scene (:func:`analytic.fast.pack`); ``off``: the offsets of its tail
-  (:func:`analytic.kernel.layout.tail_offsets`: ``m, p_e, k_l, k_n, …``);
+  (:class:`analytic.kernel.layout.FpTail`, read by name: ``off.p_e``, ``off.k_l``, …);
 * ``tt`` (3): the body-axis torque on BR, holding the control torque: add to it;
 * ``ten`` (n + 1): the tension ``f_j`` of each spring of the chain, zero on entry: add to it.
   Spring ``j`` joins mass ``j - 1`` and mass ``j`` (``x = p - p_e``, ``x_{-1} = x_n = 0``, extension
@@ -64,7 +64,7 @@ def external_torque(t, q, qd, fp, ip, off, tt, ten):  # pragma: no cover - compi
 def springs_linear(t, q, qd, fp, ip, off, tt, ten):  # pragma: no cover - compiled
     """The linear springs of Eq. (38): ``f_j += k_l,j e_j``."""
     n = ip[I_N]
-    o_pe, o_kl = off[1], off[2]
+    o_pe, o_kl = off.p_e, off.k_l
     x_prev = 0.0
     for j in range(n + 1):
         x_j = q[7 + j] - fp[o_pe + j] if j < n else 0.0
@@ -76,7 +76,7 @@ def springs_linear(t, q, qd, fp, ip, off, tt, ten):  # pragma: no cover - compil
 def springs_cubic(t, q, qd, fp, ip, off, tt, ten):  # pragma: no cover - compiled
     """The cubic springs of Eq. (38): ``f_j += k_n,j e_j³``."""
     n = ip[I_N]
-    o_pe, o_kn = off[1], off[3]
+    o_pe, o_kn = off.p_e, off.k_n
     x_prev = 0.0
     for j in range(n + 1):
         x_j = q[7 + j] - fp[o_pe + j] if j < n else 0.0

@@ -2,7 +2,7 @@
 text), the geometry-primitive description of BR (:mod:`model_xml.primitives`) and the checked-in
 MJCF files of the four paper scenes (:mod:`model_xml.regenerate`)."""
 
-from analytic.lazy import lazy_attributes
+from analytic.runtime.lazy import lazy_exports
 
 _PUBLIC = {
     "BODY": "model_xml.builder",
@@ -33,7 +33,7 @@ _PUBLIC = {
 """Public name -> its module, imported on first use: a light module of the package
 (:mod:`model_xml.tendon_terms`, read when the plants are listed) is imported without MuJoCo."""
 
-__getattr__, __dir__ = lazy_attributes(__name__, _PUBLIC)
+__getattr__, __dir__ = lazy_exports(__name__, _PUBLIC, globals())
 
 __all__ = [
     "BODY",

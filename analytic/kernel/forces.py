@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import math
 
-from analytic.kernel.jit import inner
 from analytic.kernel.kinematics import Ht_times
 from analytic.kernel.layout import (
     F_G,
@@ -48,18 +47,21 @@ from analytic.kernel.layout import (
     WS_SPQ,
     WS_SQ,
 )
+from analytic.runtime.jit import inner
 
 
 @inner
-def rod_pass(q, qd, fp, ip, n, o_m, o_pe, o_kl, o_kn, out, full, w):
+def rod_pass(q, qd, fp, ip, n, o, out, full, w):
     """Stage 2: the rod rows of Q (Eq. 52, third block row; springs ``F^S = -∂U_s/∂p`` of Eq. 38,
     docs/errata.md item 2) and, in the same pass, the moments the other stages need.
 
     ``Q_i`` goes straight into ``out``: the q̈_i slot of a free mass (the Gauss solve turns it into
     q̈_i in place), the ``Q^C_i`` slot of a tracked one (full output only; it becomes μ_i).
     Writes to ``w``: ``μ1, μ2, Σmṗ, Σmpṗ`` (all masses), ``Σ_F m p⁰ ¹ ²`` (free), ``Σ_T m, Σ_T m p``
-    (tracked), ``Σ_F Q_i, Σ_F p_i Q_i``.
+    (tracked), ``Σ_F Q_i, Σ_F p_i Q_i``. ``o``: the offsets of ``fp``'s tail
+    (:class:`analytic.kernel.layout.FpTail`).
     """
+    o_m, o_pe, o_kl, o_kn = o.m, o.p_e, o.k_l, o.k_n
     nq = n + 7
     itr = I_TRACK
     Sa0, Sa1, Sa2 = w[WS_SA], w[WS_SA + 1], w[WS_SA + 2]

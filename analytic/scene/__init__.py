@@ -28,7 +28,7 @@ Units are SI; *body* vectors in BR's principal axes at C, *inertial* ones in XYZ
 quaternions w-first; mass and axis indices 1-based in files, 0-based in the records.
 """
 
-from analytic.lazy import lazy_attributes
+from analytic.runtime.lazy import lazy_exports
 
 _PUBLIC = {
     "BUILTIN_DIR": "analytic.scene.builtin",
@@ -80,7 +80,7 @@ _PUBLIC = {
 """Public name -> the module it lives in: imported on first use, so that a module of the package
 (``analytic.scene.key``, which the effect declarations read) is imported without the loader."""
 
-__getattr__, __dir__ = lazy_attributes(__name__, _PUBLIC)
+__getattr__, __dir__ = lazy_exports(__name__, _PUBLIC, globals())
 
 __all__ = [
     "AXIS_NORMALISE_TOL",
