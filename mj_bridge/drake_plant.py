@@ -63,8 +63,8 @@ import numpy as np
 
 from analytic.assemble import N_AUX
 from analytic.error_scale import ErrorGroups
-from analytic.runtime.jit import jit
 from analytic.model import ControlOutput
+from analytic.runtime.jit import jit
 from analytic.scene import Scene
 from analytic.stepping import NonFinite
 from analytic.trajectory import Trajectory

@@ -30,8 +30,8 @@ import numpy as np
 from analytic.assemble import N_AUX, assemble
 from analytic.error_scale import ErrorGroups
 from analytic.fast import FastModel
-from analytic.runtime import compile_lock
 from analytic.model import ControlOutput, TumblingModel
+from analytic.runtime import compile_lock
 from analytic.scene import Scene
 from analytic.stepping import NonFinite
 from analytic.trajectory import RunStatus, Trajectory

@@ -32,8 +32,8 @@ import numpy as np
 
 from analytic import aux_rates as _aux
 from analytic.aux_rates import rates
+from analytic.kernel.calls import tail
 from analytic.kernel.entry import Solver, evaluate_as, solver_of
-from analytic.runtime.jit import KERNEL_SOURCES, inner, jit, source_fingerprint
 from analytic.kernel.kinematics import rotation
 from analytic.kernel.layout import (
     F_MBR,
@@ -44,7 +44,7 @@ from analytic.kernel.layout import (
     STATUS_OK,
     STATUS_UNSUPPORTED,
 )
-from analytic.kernel.calls import tail
+from analytic.runtime.jit import KERNEL_SOURCES, inner, jit, source_fingerprint
 from mj_bridge import scipy_forces
 from mj_bridge.scipy_forces import FORCES
 
