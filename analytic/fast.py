@@ -53,6 +53,7 @@ from __future__ import annotations
 import numpy as np
 
 from analytic.effects import Effect, Weighting
+from analytic.effects.registry import SPRING_LAWS
 from analytic.kernel import gauss, halves, identity, minv2
 from analytic.kernel import layout as L
 from analytic.kernel.entry import Solver, solver_of
@@ -76,7 +77,8 @@ def pack(model: TumblingModel) -> tuple[np.ndarray, np.ndarray]:
 
     Returns:
         ``(fp, ip)``: float64 array (the ``F_*`` head of :mod:`analytic.kernel.layout`, then the
-        tail of ``layout.tail_offsets`` (``layout.FpTail``): ``m, p_e, k_l, k_n``, the mass-track ``l, λ, α, β``,
+        tail of ``layout.tail_offsets`` (``layout.FpTail``): ``m, p_e``, the spring laws'
+        coefficients, the mass-track ``l, λ, α, β``,
         ``a``, ``d``) and int64 array (the ``I_*`` head, then the per-mass tracked flag (n) and
         the tracked indices (k_p)). The head's two addresses of the compiled halves
         (``I_FN_SYSTEM``, ``I_FN_SOLVE``) are left 0: they belong to one process, and
@@ -108,8 +110,10 @@ def pack(model: TumblingModel) -> tuple[np.ndarray, np.ndarray]:
     fp[L.F_TDT : L.F_TDT + 48] = model.T_d.ravel()
     fp[o.m : o.m + n] = model.m
     fp[o.p_e : o.p_e + n] = model.p_e
-    fp[o.k_l : o.k_l + n + 1] = model.spring_coefficients[Effect.SPRINGS_LINEAR]
-    fp[o.k_n : o.k_n + n + 1] = model.spring_coefficients[Effect.SPRINGS_CUBIC]
+    for law in SPRING_LAWS:  # each law's coefficients and flag (layout.LAW_INDEX)
+        j = L.LAW_INDEX[law.effect]
+        at = L.law_offset(o, n, j)
+        fp[at : at + n + 1] = model.spring_coefficients[law.effect]
     if model.mass_track:
         mt = model.mass_track
         fp[o.l : o.l + kp] = mt.l
@@ -122,8 +126,8 @@ def pack(model: TumblingModel) -> tuple[np.ndarray, np.ndarray]:
     ip = np.zeros(L.ip_length(n, kp), dtype=np.int64)
     ip[L.I_N], ip[L.I_KW], ip[L.I_KP] = n, kw, kp
     ip[L.I_GRAV] = sc.has(Effect.GRAVITY)
-    ip[L.I_SLIN] = sc.has(Effect.SPRINGS_LINEAR)
-    ip[L.I_SCUB] = sc.has(Effect.SPRINGS_CUBIC)
+    for law in SPRING_LAWS:
+        ip[L.I_LAWS + L.LAW_INDEX[law.effect]] = sc.has(law.effect)
     ip[L.I_TORQ] = sc.has(Effect.EXTERNAL_TORQUE)
     ip[L.I_WEIGHT] = {
         Weighting.M_INV: L.W_GAUSS,

@@ -80,7 +80,7 @@ def rhs_body(solver, t, y, fp, ip, work, out):  # pragma: no cover - compiled
         out[2 * nq :],
     )
     if out.shape[0] > 2 * nq + 7:  # D, with a dissipative effect on (analytic.assemble)
-        out[2 * nq + 7] = dissipated_power(qd, fp, ip)
+        out[2 * nq + 7] = dissipated_power(q, qd, fp, ip)
     for i in range(out.shape[0]):
         if not math.isfinite(out[i]):
             return STATUS_NONFINITE

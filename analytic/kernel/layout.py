@@ -8,7 +8,8 @@ Pure constants, one record type and plain functions; no numba here (``pack`` imp
 compiling).
 
 ``fp``: a fixed head (``F_*``, ``F_ARR`` slots) then, for n masses and k_p tracked masses, the
-tail of :func:`tail_offsets` (:class:`FpTail`): ``m (n), p_e (n), k_l (n+1), k_n (n+1)``, the mass
+tail of :func:`tail_offsets` (:class:`FpTail`): ``m (n), p_e (n)``, each spring law's coefficients
+(n+1 each, :data:`LAW_INDEX`), the mass
 track ``l, λ, α, β`` (k_p each, Eq. 75, 78) and the rod geometry ``a (3), d (3)`` (body axes).
 
 ``ip``: a fixed head (``I_*``, ``I_TRACK`` slots), then the per-mass tracked flag (n) at
@@ -26,6 +27,9 @@ with ``nq = n + 7``; an ``out`` of length ``nq`` asks for ``q̈`` only (Gauss we
 from __future__ import annotations
 
 from typing import NamedTuple
+
+from analytic.effects import Effect
+from analytic.effects.registry import SPRING_LAWS
 
 # ----------------------------------------------------------------------------------------------
 # fp head
@@ -47,20 +51,27 @@ F_TDT = 86  # 48: T_d, L_d(u) = T_d @ u (Eq. 34)
 F_ARR = 134  # the head's length: the start of the tail (tail_offsets)
 
 # ----------------------------------------------------------------------------------------------
+# The spring laws (analytic.effects.registry.SPRING_LAWS): one on/off flag each in ip, one block of
+# n + 1 coefficients each in fp's tail, in the laws' order; a law declared later needs no change here
+# ----------------------------------------------------------------------------------------------
+N_LAWS = len(SPRING_LAWS)
+LAW_INDEX: dict[Effect, int] = {law.effect: j for j, law in enumerate(SPRING_LAWS)}
+"""``effect -> j``: its flag is ``ip[I_LAWS + j]``, its coefficients ``fp[o.laws + j (n + 1) :]``."""
+
+# ----------------------------------------------------------------------------------------------
 # ip head
 # ----------------------------------------------------------------------------------------------
 I_N = 0  # n, number of masses
 I_KW = 1  # k_ω, tracked ω components
 I_KP = 2  # k_p, tracked masses
 I_GRAV = 3  # 1: gravity on
-I_SLIN = 4  # 1: linear springs on
-I_SCUB = 5  # 1: cubic springs on
-I_TORQ = 6  # 1: given torque on (Remark 2)
-I_WEIGHT = 7  # W_GAUSS, W_MINV2 or W_IDENTITY
-I_COMP = 8  # 3 slots: the tracked ω components (0-based)
-I_FN_SYSTEM = 11  # address of the compiled stages 1-6 in this process (analytic.kernel.halves)
-I_FN_SOLVE = 12  # address of the compiled solve of this scene's weighting, in this process
-I_TRACK = 13  # the head's length: n flags (1 for a tracked mass), then the k_p tracked indices
+I_TORQ = 4  # 1: given torque on (Remark 2)
+I_WEIGHT = 5  # W_GAUSS, W_MINV2 or W_IDENTITY
+I_COMP = 6  # 3 slots: the tracked ω components (0-based)
+I_FN_SYSTEM = 9  # address of the compiled stages 1-6 in this process (analytic.kernel.halves)
+I_FN_SOLVE = 10  # address of the compiled solve of this scene's weighting, in this process
+I_LAWS = 11  # N_LAWS slots: 1 where a spring law is on, in the order of SPRING_LAWS
+I_TRACK = I_LAWS + N_LAWS  # the head's length: n flags (1 for a tracked mass), then the k_p tracked indices
 
 W_GAUSS = 0  # N = M⁻¹, the paper's Eq. (89)
 W_MINV2 = 1  # N = M⁻² (Eq. B13)
@@ -86,15 +97,14 @@ STATUS_UNSUPPORTED = 2  # not this solve's scene, output too short, or halves no
 
 class FpTail(NamedTuple):
     """Offsets in ``fp`` of the tail's blocks (each block's length in its comment) and ``end``,
-    the length of ``fp``. Read by name (``tail_offsets(n, kp).k_l``), never unpacked: a block added
+    the length of ``fp``. Read by name (``tail_offsets(n, kp).p_e``), never unpacked: a block added
     to the tail is one field here and one line in :func:`tail_offsets` (and its length in
     ``tests/analytic/kernel/test_layout.py``), and no reader changes. numba compiles the record as
     a tuple of ints (no per-call cost once inlined)."""
 
     m: int  # (n) masses m_i, kg
     p_e: int  # (n) spring equilibria p_e,i, m
-    k_l: int  # (n + 1) linear spring constants, N/m
-    k_n: int  # (n + 1) cubic spring constants, N/m³
+    laws: int  # (N_LAWS (n + 1)) each spring law's coefficients, in the laws' order (LAW_INDEX)
     l: int  # (k_p) mass track amplitudes l (Eq. 75)
     lam: int  # (k_p) mass track frequencies λ (Eq. 75)
     alpha: int  # (k_p) mass track gains α (Eq. 78)
@@ -112,15 +122,19 @@ def tail_offsets(n: int, kp: int) -> FpTail:
     """
     o_m = F_ARR
     o_pe = o_m + n
-    o_kl = o_pe + n
-    o_kn = o_kl + n + 1
-    o_l = o_kn + n + 1
+    o_laws = o_pe + n
+    o_l = o_laws + N_LAWS * (n + 1)
     o_lam = o_l + kp
     o_alpha = o_lam + kp
     o_beta = o_alpha + kp
     o_a = o_beta + kp
     o_d = o_a + 3
-    return FpTail(o_m, o_pe, o_kl, o_kn, o_l, o_lam, o_alpha, o_beta, o_a, o_d, o_d + 3)
+    return FpTail(o_m, o_pe, o_laws, o_l, o_lam, o_alpha, o_beta, o_a, o_d, o_d + 3)
+
+
+def law_offset(o: FpTail, n: int, j: int) -> int:
+    """Where spring law ``j``'s n + 1 coefficients start in ``fp`` (``j = LAW_INDEX[effect]``)."""
+    return o.laws + j * (n + 1)
 
 
 def ip_length(n: int, kp: int) -> int:

@@ -14,6 +14,8 @@ RUNTIME_DIR = Path(__file__).resolve().parent
 KERNEL_DIR = RUNTIME_DIR.parent / "kernel"
 """The kernel package's directory (by path: this package imports nothing of the rest of
 ``analytic``); numba's ``__pycache__`` beside the kernel's sources is tried first."""
+EFFECTS_DIR = RUNTIME_DIR.parent / "effects"
+"""The effects' declarations (by path): the kernel compiles their spring laws' shapes in."""
 
 
 def writable(path: Path) -> bool:

@@ -48,7 +48,13 @@ from pathlib import Path
 from types import ModuleType
 
 from analytic.runtime import cache_check
-from analytic.runtime.cache_dir import APP_NAME, KERNEL_DIR, RUNTIME_DIR, kernel_cache_dir
+from analytic.runtime.cache_dir import (
+    APP_NAME,
+    EFFECTS_DIR,
+    KERNEL_DIR,
+    RUNTIME_DIR,
+    kernel_cache_dir,
+)
 
 
 class CacheFallbackWarning(UserWarning):
@@ -151,12 +157,15 @@ def source_fingerprint(*sources: ModuleType | str | Path) -> int:
     return int(h.hexdigest()[:15], 16)
 
 
-KERNEL_SOURCES: tuple[Path, ...] = tuple(sorted(KERNEL_DIR.glob("*.py"))) + tuple(
-    sorted(RUNTIME_DIR.glob("*.py"))
+KERNEL_SOURCES: tuple[Path, ...] = (
+    tuple(sorted(KERNEL_DIR.glob("*.py")))
+    + tuple(sorted(RUNTIME_DIR.glob("*.py")))
+    + tuple(sorted(EFFECTS_DIR.glob("*.py")))
 )
-"""Every source file of the kernel package and of this runtime package (whose intrinsics emit code
-into the kernel's callers): a cached function embeds some of them, and its cache entry is refused
-when any of them changes (one fingerprint keeps the rule simple)."""
+"""Every source file of the kernel package, of this runtime package (whose intrinsics emit code
+into the kernel's callers) and of the effects' declarations (whose spring laws' shapes the kernel
+compiles in): a cached function embeds some of them, and its cache entry is refused when any of
+them changes (one fingerprint keeps the rule simple)."""
 
 
 def jit_entry(factory, *also: ModuleType | str | Path):

@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from analytic.effects.registry import SPRING_LAWS
 from analytic.fast import pack
 from analytic.kernel import layout as L
 from analytic.model import TumblingModel
@@ -15,8 +16,7 @@ from analytic.scene.random_scenes import random_scene
 LENGTHS = {
     "m": lambda n, kp: n,
     "p_e": lambda n, kp: n,
-    "k_l": lambda n, kp: n + 1,
-    "k_n": lambda n, kp: n + 1,
+    "laws": lambda n, kp: L.N_LAWS * (n + 1),
     "l": lambda n, kp: kp,
     "lam": lambda n, kp: kp,
     "alpha": lambda n, kp: kp,
@@ -50,8 +50,7 @@ def test_the_packer_fills_every_block():
     want = {
         "m": model.m,
         "p_e": model.p_e,
-        "k_l": model.k_l,
-        "k_n": model.k_n,
+        "laws": np.concatenate([model.spring_coefficients[law.effect] for law in SPRING_LAWS]),
         "l": mt.l,
         "lam": mt.lam,
         "alpha": mt.alpha,
@@ -64,3 +63,5 @@ def test_the_packer_fills_every_block():
         block = fp[start : start + LENGTHS[name](n, kp)]
         np.testing.assert_array_equal(block, np.broadcast_to(value, block.shape), err_msg=name)
     np.testing.assert_array_equal(ip[L.I_TRACK + n :], mt.indices)
+    for law in SPRING_LAWS:  # each law's flag, in its slot
+        assert ip[L.I_LAWS + L.LAW_INDEX[law.effect]] == sc.has(law.effect), law.effect
