@@ -384,11 +384,6 @@ OWN_ERROR_ESTIMATE_REL = Threshold(
     "a different method) is off by O(1).",
 )
 
-TOLERANCES: Mapping[str, Threshold] = {
-    t.name: t for t in list(globals().values()) if isinstance(t, Threshold)
-}
-"""Every tolerance of this module by name (``tests/cross/test_tolerances.py`` checks them all)."""
-
 # =================================================================================================
 # Viscous damping of the spring elements (tests/analytic/effects/test_damping.py)
 # =================================================================================================
@@ -410,3 +405,10 @@ DISSIPATED_ENERGY_ABS = Threshold(
     "and, for a plant that does not integrate D along its motion, D over its samples at 100 Hz by "
     "the fourth-order Hermite rule (error O(h⁴ D⁽⁵⁾) ~ 1e-10 for these rates).",
 )
+
+
+TOLERANCES: Mapping[str, Threshold] = {
+    t.name: t for t in list(globals().values()) if isinstance(t, Threshold)
+}
+"""Every tolerance of this module by name (``tests/cross/test_tolerances.py`` checks them all)."""
+
