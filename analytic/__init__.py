@@ -4,7 +4,7 @@ Koganti & Udwadia, "Dynamics and Precision Control of Tumbling Multibody Systems
 Control, and Dynamics 40(3), 2017. Notation and equation numbers as in the paper.
 """
 
-from analytic.lazy import lazy_attributes
+from analytic.runtime.lazy import lazy_exports
 from analytic.simulate import simulate  # bound here: the function, not its module's name
 
 _LAZY = {
@@ -27,7 +27,7 @@ _LAZY = {
 the command line starts its work sooner)."""
 
 
-__getattr__, __dir__ = lazy_attributes(__name__, _LAZY)
+__getattr__, __dir__ = lazy_exports(__name__, _LAZY, globals())
 
 
 __all__ = [

@@ -12,13 +12,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from analytic.kernel.jit import inner, jit_entry
 from analytic.kernel.kinematics import omega, rotation
+from analytic.runtime.jit import inner, jit_entry
 
 
 def _make(deps: int):
     """:func:`aux_rates` closing over the kernel's source fingerprint (it embeds
-    :func:`analytic.kernel.kinematics.rotation`; see :func:`analytic.kernel.jit.jit_entry`)."""
+    :func:`analytic.kernel.kinematics.rotation`; see :func:`analytic.runtime.jit.jit_entry`)."""
 
     def aux_rates(q, qd, tau, rod, fC, a, d, m, mu0, m_T, out):  # pragma: no cover - compiled
         """Fill ``out[0] = Ẇ``, ``out[1:4] = İ_L``, ``out[4:7] = İ_P`` (see the module docstring).

@@ -18,7 +18,7 @@ its size.
 
 The ``cfunc`` is cached on disk by numba. Its cache key has only plain values in it (module globals
 resolve at compile time; the one closure variable is the fingerprint of the sources it embeds), so a
-new process loads it instead of compiling it again (~5 s).
+new process loads it instead of compiling it again.
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ from numba.extending import intrinsic
 
 from analytic.fast_rhs import rhs_body
 from analytic.kernel.entry import Solver
-from analytic.kernel.jit import cfunc
+from analytic.runtime.jit import cfunc
 
 A_NY, A_NFP, A_NIP, A_NWORK, A_FP, A_IP, A_WORK, A_CTX = range(8)
 N_ARGS = 8
@@ -111,7 +111,7 @@ def make(deps: int, solver: Solver = Solver.ANY):
     """The compiled ``cfunc`` (its ``address`` is what CyRK calls).
 
     Args:
-        deps: the fingerprint of the sources it embeds (:func:`analytic.kernel.jit.
+        deps: the fingerprint of the sources it embeds (:func:`analytic.runtime.jit.
             source_fingerprint`): numba's cache checks only this file, and hashes closure variables
             into its key, so editing the kernel recompiles this instead of loading a stale copy.
         solver: the solve it embeds (:func:`analytic.kernel.entry.solver_of` of the scene), so a

@@ -71,7 +71,7 @@ wraps, ``CyRK.nb.numba_solver.c_numba_cysolve_ivp`` (a ctypes function; the same
 result getters it uses, from Python: nothing of CyRK is compiled at run time. The rename does not
 touch these names; ``pyproject.toml`` pins ``cyrk <0.21``, and when the names or the version differ
 :func:`unavailable` says so and ``auto`` runs scipy's loop. The right-hand side ``cfunc`` is cached
-on disk by numba like the kernel (:func:`analytic.kernel.jit.cfunc`).
+on disk by numba like the kernel (:func:`analytic.runtime.jit.cfunc`).
 """
 
 from __future__ import annotations
@@ -87,6 +87,7 @@ from typing import Any
 
 import numpy as np
 
+from analytic.assemble import aux_count
 from analytic.effects import SolverMethod, Stepper
 from analytic.error_scale import (
     PROBE_STEPS,
@@ -160,7 +161,7 @@ class _Unavailable(RuntimeError):
 @functools.cache
 def _cyrk() -> SimpleNamespace:
     """CyRK's entry points (nothing compiled); :class:`_Unavailable` when something is missing."""
-    from analytic.kernel.jit import HAVE_NUMBA
+    from analytic.runtime.jit import HAVE_NUMBA
 
     if not HAVE_NUMBA:
         raise _Unavailable("numba is not installed")
@@ -212,9 +213,9 @@ def _runtime(solver: int = -1) -> SimpleNamespace:
     embedding the solve ``solver`` (an :class:`analytic.kernel.entry.Solver` value; the default
     ``ANY`` embeds both) (compiled, or loaded from numba's cache, on the first call)."""
     from analytic import compiled_rhs
-    from analytic.kernel import compile_lock
     from analytic.kernel.entry import Solver
-    from analytic.kernel.jit import source_fingerprint
+    from analytic.runtime import compile_lock
+    from analytic.runtime.jit import source_fingerprint
 
     with compile_lock.compiling(compile_lock.RHS):  # another process may be compiling it
         cfunc = compiled_rhs.make(source_fingerprint(*_rhs_modules()), Solver(solver))
@@ -224,7 +225,7 @@ def _runtime(solver: int = -1) -> SimpleNamespace:
 def prepare(solver: int) -> bool:
     """Compile (or load) the loop's right-hand side ``cfunc`` embedding the solve ``solver`` (a
     :class:`analytic.kernel.entry.Solver` value) without running it; False when the compiled loop
-    cannot run here. It calls the kernel's halves by address (:mod:`analytic.kernel.abi`), so it
+    cannot run here. It calls the kernel's halves by address (:mod:`analytic.runtime.abi`), so it
     compiles before they do (a warm-up, :mod:`validation.runs.warmup`)."""
     if unavailable():
         return False
@@ -448,7 +449,8 @@ def integrate(
         stepper: ``auto``, ``compiled`` or ``scipy``.
         fast: the :class:`analytic.fast.FastModel` whose packed constants ``f`` evaluates with
             :func:`analytic.fast_rhs.rhs_into` (None: the numpy model answers; scipy's loop). With
-            it, ``y0`` is ``[q, q̇, W, I_L, I_P]`` (``2 nq + 7``) and ``n_motion = 2 nq``.
+            it, ``y0`` is ``[q, q̇, W, I_L, I_P(, D)]`` (``2 nq + 7``, ``+ 1`` with a dissipative
+            effect: :func:`analytic.assemble.aux_count`) and ``n_motion = 2 nq``.
 
     Raises:
         ValueError: naming ``stepper`` (:func:`choose`), before any step.
@@ -465,9 +467,10 @@ def integrate(
     )
     if choose(stepper, method, fast) is Stepper.SCIPY:
         return step_and_sample(f, t_eval, y0, **kw)
-    if len(y0) != 2 * fast.nq + 7 or n_motion != 2 * fast.nq:
+    ny = 2 * fast.nq + aux_count(fast.model)
+    if len(y0) != ny or n_motion != 2 * fast.nq:
         raise ValueError(
-            f"y0: the compiled loop integrates [q, q̇, W, I_L, I_P] of {2 * fast.nq + 7} components "
+            f"y0: the compiled loop integrates [q, q̇, W, I_L, I_P(, D)] of {ny} components "
             f"with {2 * fast.nq} under error control (got {len(y0)} and n_motion={n_motion})"
         )
     t_eval = np.ascontiguousarray(t_eval, dtype=np.float64)

@@ -21,10 +21,9 @@ What runs where:
   on u bordered by ``1 + k_ω`` constraint rows finishes the solve.
 * **N = M⁻² (Eq. B13)**: the kernel, O(n), with the closed form
   ``Zᵀ M² Z = diag(4|u|² I, I) + |u|² w wᵀ`` (see :mod:`analytic.kernel.minv2`) and
-  ``M_α⁻¹ M v = v - α y (a_mᵀ v)`` in place of a product with ``M`` followed by a solve (that
-  product-then-solve cost about cond(M) in accuracy and kept this path switched off until it was
-  replaced). Against a 40-digit solve over 1728 random states the kernel's worst error was 5.9e-10
-  where the dense numpy reference's was 7.4e-8. Compiled only when a scene asks for this weighting.
+  ``M_α⁻¹ M v = v - α y (a_mᵀ v)`` in place of a product with ``M`` followed by a solve (which
+  costs about cond(M) in accuracy; its accuracy against a 40-digit solve: ``docs/performance.md``).
+  Compiled only when a scene asks for this weighting.
 * **Identity weighting (N = I)**: the kernel, ``O(n k²)``: ``Q_c = Z (ZᵀZ)⁻¹ r`` from a Householder
   QR of ``Z = K A_cᵀ`` with unit columns, never forming ``ZᵀZ`` (which squares the conditioning;
   see :mod:`analytic.kernel.identity`). Compiled only when a scene asks for this weighting.
@@ -44,7 +43,7 @@ itself accurate to no better than ~1e-6; in that case the two paths legitimately
 identity weighting's kernel declines such a state instead, :data:`analytic.kernel.layout.
 IDENTITY_RANK_TOL`, and the numpy path answers it).
 
-numba's on-disk cache: see :mod:`analytic.kernel.jit`. In short, ``NUMBA_CACHE_DIR`` if set,
+numba's on-disk cache: see :mod:`analytic.runtime.jit`. In short, ``NUMBA_CACHE_DIR`` if set,
 else ``__pycache__`` beside the source, else (a read-only install) ``tumbling-testbed/numba`` in the
 user's cache directory, said once; with none writable the kernel is compiled in memory each process.
 """
@@ -54,16 +53,17 @@ from __future__ import annotations
 import numpy as np
 
 from analytic.effects import Effect, Weighting
+from analytic.effects.registry import SPRING_LAWS
 from analytic.kernel import gauss, halves, identity, minv2
 from analytic.kernel import layout as L
 from analytic.kernel.entry import Solver, solver_of
 from analytic.kernel.halves import KernelHalf
-from analytic.kernel.jit import HAVE_NUMBA
 from analytic.model import ControlOutput, TumblingModel
+from analytic.runtime.jit import HAVE_NUMBA
 from analytic.scene import Scene
 
-# bound once: FastModel.qddot runs once per right-hand side; a global + attribute lookup per name
-# costs ~20 ns of its ~1.5 µs
+# bound once: FastModel.qddot runs once per right-hand side, where a global + attribute lookup per
+# name is a visible share of the call
 _empty = np.empty
 
 
@@ -77,7 +77,8 @@ def pack(model: TumblingModel) -> tuple[np.ndarray, np.ndarray]:
 
     Returns:
         ``(fp, ip)``: float64 array (the ``F_*`` head of :mod:`analytic.kernel.layout`, then the
-        tail of ``layout.tail_offsets``: ``m, p_e, k_l, k_n``, the mass-track ``l, λ, α, β``,
+        tail of ``layout.tail_offsets`` (``layout.FpTail``): ``m, p_e``, the spring laws'
+        coefficients, the mass-track ``l, λ, α, β``,
         ``a``, ``d``) and int64 array (the ``I_*`` head, then the per-mass tracked flag (n) and
         the tracked indices (k_p)). The head's two addresses of the compiled halves
         (``I_FN_SYSTEM``, ``I_FN_SOLVE``) are left 0: they belong to one process, and
@@ -87,8 +88,8 @@ def pack(model: TumblingModel) -> tuple[np.ndarray, np.ndarray]:
     n = model.n
     kw = len(model.omega_track.components) if model.omega_track else 0
     kp = len(model.mass_track.indices) if model.mass_track else 0
-    o_m, o_pe, o_kl, o_kn, o_l, o_lam, o_alpha, o_beta, o_a, o_d, end = L.tail_offsets(n, kp)
-    fp = np.zeros(end)
+    o = L.tail_offsets(n, kp)
+    fp = np.zeros(o.end)
     fp[L.F_MBR] = model.m_BR
     fp[L.F_MU0] = model.mu0
     fp[L.F_D1] = model.delta1
@@ -107,24 +108,26 @@ def pack(model: TumblingModel) -> tuple[np.ndarray, np.ndarray]:
         fp[L.F_GAIN : L.F_GAIN + kw * kw] = np.asarray(w.gain, float).ravel()
     fp[L.F_TAT : L.F_TAT + 48] = model.T_a.ravel()
     fp[L.F_TDT : L.F_TDT + 48] = model.T_d.ravel()
-    fp[o_m:o_pe] = model.m
-    fp[o_pe:o_kl] = model.p_e
-    fp[o_kl:o_kn] = model.k_l
-    fp[o_kn:o_l] = model.k_n
+    fp[o.m : o.m + n] = model.m
+    fp[o.p_e : o.p_e + n] = model.p_e
+    for law in SPRING_LAWS:  # each law's coefficients and flag (layout.LAW_INDEX)
+        j = L.LAW_INDEX[law.effect]
+        at = L.law_offset(o, n, j)
+        fp[at : at + n + 1] = model.spring_coefficients[law.effect]
     if model.mass_track:
         mt = model.mass_track
-        fp[o_l:o_lam] = mt.l
-        fp[o_lam:o_alpha] = mt.lam
-        fp[o_alpha:o_beta] = mt.alpha
-        fp[o_beta:o_a] = mt.beta
-    fp[o_a:o_d] = model.a
-    fp[o_d:end] = model.d
+        fp[o.l : o.l + kp] = mt.l
+        fp[o.lam : o.lam + kp] = mt.lam
+        fp[o.alpha : o.alpha + kp] = mt.alpha
+        fp[o.beta : o.beta + kp] = mt.beta
+    fp[o.a : o.a + 3] = model.a
+    fp[o.d : o.d + 3] = model.d
 
     ip = np.zeros(L.ip_length(n, kp), dtype=np.int64)
     ip[L.I_N], ip[L.I_KW], ip[L.I_KP] = n, kw, kp
     ip[L.I_GRAV] = sc.has(Effect.GRAVITY)
-    ip[L.I_SLIN] = sc.has(Effect.SPRINGS_LINEAR)
-    ip[L.I_SCUB] = sc.has(Effect.SPRINGS_CUBIC)
+    for law in SPRING_LAWS:
+        ip[L.I_LAWS + L.LAW_INDEX[law.effect]] = sc.has(law.effect)
     ip[L.I_TORQ] = sc.has(Effect.EXTERNAL_TORQUE)
     ip[L.I_WEIGHT] = {
         Weighting.M_INV: L.W_GAUSS,

@@ -1,10 +1,10 @@
 """The integrator's whole right-hand side in one compiled call: ``ẏ`` for ``y = [q, q̇, W, I_L, I_P]``.
 
 :func:`analytic.simulate._rhs` builds ``ẏ`` in Python from :meth:`FastModel.acceleration`
-(q̈ and the control outputs) and :func:`analytic.aux_rates.aux_rates` (work and impulse rates): about
-20 µs per evaluation, of which the kernel is under 1 µs. This module does the same lines in one
-numba function (same kernel, same arithmetic, same order of operations, so the same numbers), so a
-right-hand side costs about one kernel call plus numba's dispatch.
+(q̈ and the control outputs) and :func:`analytic.aux_rates.aux_rates` (work and impulse rates), where
+the Python around the kernel costs many times the kernel (``docs/performance.md``). This module
+does the same lines in one numba function (same kernel, same arithmetic, same order of operations,
+so the same numbers), so a right-hand side costs about one kernel call plus numba's dispatch.
 
 ``rhs_into(t, y, fp, ip, work, out)`` returns a status: ``layout.STATUS_OK``; the kernel's nonzero
 status (the caller answers that evaluation with the numpy model); or :data:`STATUS_NONFINITE` when
@@ -24,8 +24,9 @@ import numpy as np
 
 from analytic import aux_rates as _aux
 from analytic.aux_rates import rates
+from analytic.kernel.calls import tail
 from analytic.kernel.entry import Solver, evaluate_as, solver_of
-from analytic.kernel.jit import HAVE_NUMBA, KERNEL_SOURCES, inline_always, jit, source_fingerprint
+from analytic.kernel.forces import dissipated_power
 from analytic.kernel.layout import (
     F_MBR,
     F_MU0,
@@ -38,7 +39,7 @@ from analytic.kernel.layout import (
     STATUS_OK,
     STATUS_UNSUPPORTED,
 )
-from analytic.kernel.system import tail
+from analytic.runtime.jit import HAVE_NUMBA, KERNEL_SOURCES, inline_always, jit, source_fingerprint
 
 STATUS_NONFINITE = 3
 
@@ -64,20 +65,22 @@ def rhs_body(solver, t, y, fp, ip, work, out):  # pragma: no cover - compiled
         ct = math.cos(fp[F_TFREQ] * t)
         for r in range(3):
             tau[r] = tau[r] + (fp[F_TC + r] + fp[F_TA + r] * ct)
-    o_m, _pe, _kl, _kn, _l, _lam, _al, _be, o_a, o_d, end = tail(n, kp)
+    o = tail(n, kp)
     rates(
         q,
         qd,
         tau,
         work[nq + 7 : 2 * nq],  # rod forces Q^C_p
         work[nq : nq + 3],  # force at C Q^C_R
-        fp[o_a:o_d],
-        fp[o_d:end],
-        fp[o_m : o_m + n],
+        fp[o.a : o.a + 3],
+        fp[o.d : o.d + 3],
+        fp[o.m : o.m + n],
         fp[F_MU0],
         fp[F_MBR] + fp[F_MU0],  # m_T = m_BR + μ0, as TumblingModel.m_T
         out[2 * nq :],
     )
+    if out.shape[0] > 2 * nq + 7:  # D, with a dissipative effect on (analytic.assemble)
+        out[2 * nq + 7] = dissipated_power(q, qd, fp, ip)
     for i in range(out.shape[0]):
         if not math.isfinite(out[i]):
             return STATUS_NONFINITE
@@ -86,14 +89,16 @@ def rhs_body(solver, t, y, fp, ip, work, out):  # pragma: no cover - compiled
 
 def _make(deps: int, solver: int):
     """``rhs_into`` closing over ``deps`` (the source fingerprint of the kernel and of
-    :mod:`analytic.aux_rates`, which it embeds; see :func:`analytic.kernel.jit.jit_entry`) and the
+    :mod:`analytic.aux_rates`, which it embeds; see :func:`analytic.runtime.jit.jit_entry`) and the
     solve it embeds (``solver``, a :class:`Solver`: numba drops the other branches)."""
 
     def rhs_into(t, y, fp, ip, work, out):  # pragma: no cover - compiled
-        """Fill ``out`` (2 nq + 7) with ``ẏ``; ``work`` (2 nq + 3 + k) receives the kernel's output.
+        """Fill ``out`` (2 nq + 7, or 2 nq + 8 with ``D``) with ``ẏ``; ``work`` (2 nq + 3 + k)
+        receives the kernel's output.
 
         Args:
-            t: time, s. y: ``[q (nq), q̇ (nq), W, I_L (3), I_P (3)]``.
+            t: time, s. y: ``[q (nq), q̇ (nq), W, I_L (3), I_P (3)(, D)]``
+                (:func:`analytic.assemble.aux_count`).
             fp, ip: packed parameters (:func:`analytic.fast.pack`).
         """
         if deps < 0:  # never true: ties numba's cache key to the sources this embeds

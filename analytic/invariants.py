@@ -11,22 +11,19 @@ Computed from the state alone, in the paper's coordinates, for any engine's samp
 
 The paper's S(u) (Eq. 11) is used throughout, so on the unit sphere these are the physical values.
 
-The balances (one definition, used by ``tumble simulate``'s summary and ``tumble validate``'s
-checks alike): :func:`balance_residual` is each balance's residual magnitude over time (the
-Euclidean norm of a vector residual), :func:`balance_scale` the magnitude of what is balanced, and
-:func:`relative_balance` the largest residual divided by ``max(scale, floor)``.
+The balances are judged in one place, :mod:`validation.compare.balances` (their residuals, scales
+and relative figures); :class:`Balance` names them.
 """
 
 from __future__ import annotations
 
-import math
 from enum import StrEnum
 
 import numpy as np
 
 from analytic.effects import Effect
 from analytic.kinematics import T_H, S_batch
-from analytic.model import TumblingModel, spring_energy
+from analytic.model import TumblingModel, dissipated_power, dissipated_power_rate, spring_energy
 from analytic.trajectory import Invariants, Tracking
 
 
@@ -35,54 +32,7 @@ class Balance(StrEnum):
 
     LINEAR_MOMENTUM = "linear_momentum"  # P - (P(0) + m_T g t + ∫F_C dt)
     ANGULAR_MOMENTUM = "angular_momentum"  # L - L(0) - ∫S τ dt, about the system CoM
-    ENERGY = "energy"  # E - E(0) - W
-
-
-def balance_residual(inv: Invariants, balance: Balance | str) -> np.ndarray:
-    """The balance's residual magnitude at each sample, shape (N,), in the balanced quantity's
-    unit: ``‖P − P_expected‖₂`` (kg·m/s), ``‖L − L(0) − ∫Sτ dt‖₂`` (kg·m²/s), ``|E − E(0) − W|``
-    (J). Zero for exact dynamics."""
-    b = Balance(balance)
-    if b is Balance.ENERGY:
-        return np.abs(inv.energy_balance())
-    r = (
-        inv.linear_momentum_balance()
-        if b is Balance.LINEAR_MOMENTUM
-        else inv.angular_momentum_balance()
-    )
-    return np.linalg.norm(r, axis=1)
-
-
-def _max_norm(x: np.ndarray) -> float:
-    """max over samples of ‖row‖₂ (of |x| for a 1-D array); 0 for no samples."""
-    x = np.asarray(x, float)
-    if x.size == 0:
-        return 0.0
-    return float(np.max(np.linalg.norm(x, axis=1) if x.ndim == 2 else np.abs(x)))
-
-
-def balance_scale(inv: Invariants, balance: Balance | str) -> float:
-    """The magnitude of what the balance balances, in its unit (before any floor):
-    ``max ‖P‖``; ``max(max ‖L‖, max ‖∫Sτ dt‖)``; ``max(max |E|, max |W|)``."""
-    b = Balance(balance)
-    if b is Balance.LINEAR_MOMENTUM:
-        return _max_norm(inv.linear_momentum)
-    if b is Balance.ANGULAR_MOMENTUM:
-        return max(_max_norm(inv.angular_momentum), _max_norm(inv.angular_impulse))
-    return max(_max_norm(inv.energy), _max_norm(inv.work))
-
-
-def relative_balance(inv: Invariants, balance: Balance | str, floor: float) -> float:
-    """``max_t residual / max(scale, floor)`` (dimensionless): the largest residual of
-    :func:`balance_residual` relative to :func:`balance_scale`, the ``floor`` (in the quantity's
-    unit, > 0) keeping a body nearly at rest from dividing by ~0. ``inf`` when a residual is not
-    finite; NaN with no sample."""
-    r = balance_residual(inv, balance)
-    if r.size == 0:
-        return math.nan
-    if not np.all(np.isfinite(r)):
-        return math.inf
-    return float(np.max(r)) / max(balance_scale(inv, balance), float(floor))
+    ENERGY = "energy"  # E - E(0) + D - W
 
 
 def mass_kinematics(model: TumblingModel, q: np.ndarray, qdot: np.ndarray):
@@ -110,8 +60,10 @@ def compute_invariants(
     work: np.ndarray,
     angular_impulse: np.ndarray,
     linear_impulse: np.ndarray,
+    dissipated: np.ndarray | None = None,
 ) -> Invariants:
-    """Invariants for N samples. ``work`` (N,), impulses (N, 3) are integrals since t = 0."""
+    """Invariants for N samples. ``work`` (N,), impulses (N, 3) and ``dissipated`` (N,; None:
+    zeros, no dissipative effect) are integrals since t = 0."""
     m, m_BR, m_T = model.m, model.m_BR, model.m_T
     u, ud = q[:, 3:7], qdot[:, 3:7]
     R, Rd = q[:, :3], qdot[:, :3]
@@ -140,7 +92,23 @@ def compute_invariants(
         angular_impulse=angular_impulse,
         energy=T + U,
         work=work,
+        dissipated=dissipated,
     )
+
+
+def dissipated_from_samples(
+    model: TumblingModel, t: np.ndarray, p: np.ndarray, pd: np.ndarray, pdd: np.ndarray
+) -> np.ndarray:
+    """``D(t) = ∫₀ᵗ Ḋ dt`` over a run's samples, for a plant that does not integrate it along its
+    motion: per interval the two-point Hermite rule ``h/2 (Ḋ₀ + Ḋ₁) + h²/12 (D̈₀ − D̈₁)``, exact for
+    cubics (fourth order in the sample interval), with ``Ḋ`` (:func:`analytic.model.
+    dissipated_power`) and its rate ``D̈`` (:func:`analytic.model.dissipated_power_rate`) from
+    the samples' ``p, ṗ, p̈`` (each (N, n)). Shape (N,), J."""
+    rate = dissipated_power(model, p, pd)
+    accel = dissipated_power_rate(model, p, pd, pdd)
+    h = np.diff(np.asarray(t, float))
+    steps = 0.5 * h * (rate[1:] + rate[:-1]) + h * h / 12.0 * (accel[:-1] - accel[1:])
+    return np.concatenate([[0.0], np.cumsum(steps)])
 
 
 def tracking_errors(

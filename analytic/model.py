@@ -19,11 +19,14 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
 from analytic import fundamental
 from analytic.effects import Effect
+from analytic.effects.declaration import SpringLaw
+from analytic.effects.registry import SPRING_LAWS
 from analytic.kinematics import T_H, S, tensor_along
 from analytic.scene import Scene
 
@@ -102,8 +105,12 @@ class TumblingModel:
         self.T_d = tensor_along(self.d)  # L_d(u) = T_d @ u, Eq. (34)
         self.p_e = np.array(scene.masses.p_e)
         self.g = np.array(scene.gravity)
-        self.k_l = np.array(scene.springs.k_linear)
-        self.k_n = np.array(scene.springs.k_cubic)
+        self.spring_laws = tuple(
+            law for law in SPRING_LAWS if n and scene.has(law.effect)
+        )  # the spring elements' laws that are on (Eq. 38; analytic.effects)
+        self.spring_coefficients = {
+            law.effect: np.array(scene.springs.of(law)) for law in SPRING_LAWS
+        }
         self.delta1 = scene.stabilization.delta1
         self.delta2 = scene.stabilization.delta2
         self.weighting = scene.control.weighting
@@ -111,10 +118,8 @@ class TumblingModel:
         terms: list[tuple[str, Callable]] = []
         if scene.has(Effect.GRAVITY):
             terms.append((Effect.GRAVITY.value, self._q_gravity))
-        if scene.has(Effect.SPRINGS_LINEAR) and n:
-            terms.append((Effect.SPRINGS_LINEAR.value, self._q_springs_linear))
-        if scene.has(Effect.SPRINGS_CUBIC) and n:
-            terms.append((Effect.SPRINGS_CUBIC.value, self._q_springs_cubic))
+        for law in self.spring_laws:
+            terms.append((law.effect.value, partial(self._q_spring_law, law)))
         if scene.has(Effect.EXTERNAL_TORQUE):
             terms.append((Effect.EXTERNAL_TORQUE.value, self._q_external_torque))
         self._terms = tuple(f for _, f in terms)
@@ -216,21 +221,13 @@ class TumblingModel:
         if self.n:
             Q[7:] += float(k.Sa @ g) * self.m
 
-    def _spring_extension(self, p: np.ndarray) -> np.ndarray:
-        """Extensions of the n+1 springs, ``p^i - p^{i-1} - p_e^i + p_e^{i-1}`` (Eq. 38)."""
-        x = p - self.p_e
-        ext = np.empty(self.n + 1)
-        ext[0] = x[0]
-        ext[1:-1] = x[1:] - x[:-1]
-        ext[-1] = -x[-1]
-        return ext
-
-    def _q_springs_linear(self, t: float, k: _Kin, Q: np.ndarray) -> None:
-        f = self.k_l * self._spring_extension(k.p)
-        Q[7:] += f[1:] - f[:-1]  # F^S = -∂U_s/∂p (Eq. 53 corrected, docs/errata.md item 2)
-
-    def _q_springs_cubic(self, t: float, k: _Kin, Q: np.ndarray) -> None:
-        f = self.k_n * self._spring_extension(k.p) ** 3
+    def _q_spring_law(self, law: SpringLaw, t: float, k: _Kin, Q: np.ndarray) -> None:
+        """One spring law's term of Q: tensions ``f = c φ(e, ė)`` of the n + 1 elements, and
+        ``Q_i = f_{i+1} - f_i`` (F^S = -∂U_s/∂p for a conservative law; Eq. 53 corrected,
+        docs/errata.md item 2)."""
+        e = _element_differences(k.p - self.p_e)
+        ed = _element_differences(k.pd) if law.dissipation is not None else None
+        f = self.spring_coefficients[law.effect] * law.force(e, ed)
         Q[7:] += f[1:] - f[:-1]
 
     def _q_external_torque(self, t: float, k: _Kin, Q: np.ndarray) -> None:
@@ -358,19 +355,94 @@ class TumblingModel:
         return q[:3] + np.outer(k.p, k.Sa) + k.Sd
 
 
+MODEL_EFFECTS: frozenset[Effect] = frozenset(
+    {
+        Effect.GRAVITY,  # _q_gravity
+        Effect.EXTERNAL_TORQUE,  # _q_external_torque
+        Effect.MASS_INERTIA,  # J + Σ J_i (Remark 1)
+        Effect.CONTROL_OMEGA,  # control_constraints
+        Effect.CONTROL_MASSES,
+        *(law.effect for law in SPRING_LAWS),  # _q_spring_law, from each law's declaration
+    }
+)
+"""The effects :class:`TumblingModel` assembles: those written here, and every spring law (its
+force, energy and dissipation are its declaration's)."""
+
+
+def _element_differences(x: np.ndarray) -> np.ndarray:
+    """``x_j - x_{j-1}`` for the n + 1 spring elements, with ``x_{-1} = x_n = 0``: their
+    extensions from ``x = p - p_e``, their extension rates from ``ṗ`` (Eq. 38); x shape (..., n)
+    -> (..., n + 1)."""
+    x = np.asarray(x, float)
+    out = np.empty((*x.shape[:-1], x.shape[-1] + 1))
+    out[..., 0] = x[..., 0]
+    out[..., 1:-1] = x[..., 1:] - x[..., :-1]
+    out[..., -1] = -x[..., -1]
+    return out
+
+
 def spring_energy(model: TumblingModel, p: np.ndarray) -> np.ndarray:
-    """``U_s`` of Eq. (38) for the scene's spring effects; p shape (N, n) -> (N,), J."""
-    sc = model.scene
-    if model.n == 0:
-        return np.zeros(p.shape[0])
-    x = p - model.p_e
-    ext = np.diff(np.pad(x, ((0, 0), (1, 1))), axis=1)
+    """``U_s`` of Eq. (38) for the scene's conservative spring laws; p shape (N, n) -> (N,), J."""
     U = np.zeros(p.shape[0])
-    if sc.has(Effect.SPRINGS_LINEAR):
-        U += 0.5 * ext**2 @ model.k_l
-    if sc.has(Effect.SPRINGS_CUBIC):
-        U += 0.25 * ext**4 @ model.k_n
+    if model.n == 0:
+        return U
+    ext = _element_differences(p - model.p_e)
+    for law in model.spring_laws:
+        if law.potential is not None:
+            U += law.potential(ext) @ model.spring_coefficients[law.effect]
     return U
 
 
-__all__ = ["ControlOutput", "TumblingModel", "spring_energy"]
+def dissipated_power(model: TumblingModel, p: np.ndarray, pd: np.ndarray) -> np.ndarray:
+    """``Ḋ = Σ c δ(e, ė) ≥ 0``, the power the scene's dissipative spring laws take out of the
+    motion (the rate of the energy balance's ``D``); p, pd shape (..., n) -> (...), W."""
+    shape = np.shape(p)[:-1]
+    D = np.zeros(shape)
+    if model.n == 0:
+        return D
+    ext = _element_differences(np.asarray(p) - model.p_e)
+    rate = _element_differences(pd)
+    for law in model.spring_laws:
+        if law.dissipation is not None:
+            D = D + law.dissipation(ext, rate) @ model.spring_coefficients[law.effect]
+    return D
+
+
+def dissipated_power_rate(
+    model: TumblingModel, p: np.ndarray, pd: np.ndarray, pdd: np.ndarray
+) -> np.ndarray:
+    """``d Ḋ / dt``, W/s: the rate of :func:`dissipated_power` along a motion with ``p̈``, by the
+    chain rule through each dissipative law's ``δ(e, ė)`` (a central difference of ``δ`` in each
+    argument, exact for the quadratic ``δ`` of a viscous law); shapes (..., n) -> (...)."""
+    D = np.zeros(np.shape(p)[:-1])
+    if model.n == 0:
+        return D
+    e = _element_differences(np.asarray(p) - model.p_e)
+    ed = _element_differences(pd)
+    edd = _element_differences(pdd)
+    for law in model.spring_laws:
+        if law.dissipation is None:
+            continue
+        c = model.spring_coefficients[law.effect]
+        he = 1e-3 * (1.0 + np.abs(e))
+        hd = 1e-3 * (1.0 + np.abs(ed))
+        d_e = (law.dissipation(e + he, ed) - law.dissipation(e - he, ed)) / (2 * he)
+        d_ed = (law.dissipation(e, ed + hd) - law.dissipation(e, ed - hd)) / (2 * hd)
+        D = D + (d_e * ed + d_ed * edd) @ c
+    return D
+
+
+def dissipates(model: TumblingModel) -> bool:
+    """Whether a law that is on takes energy out of the motion (the run then integrates ``D``)."""
+    return any(law.dissipation is not None for law in model.spring_laws)
+
+
+__all__ = [
+    "MODEL_EFFECTS",
+    "ControlOutput",
+    "TumblingModel",
+    "dissipated_power",
+    "dissipated_power_rate",
+    "dissipates",
+    "spring_energy",
+]

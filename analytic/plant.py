@@ -28,6 +28,7 @@ from dataclasses import dataclass
 from typing import Any, ClassVar
 
 from analytic.effects import Backend, Effect, SolverMethod, Stepper
+from analytic.model import MODEL_EFFECTS
 from analytic.scene import Scene
 from analytic.trajectory import Engine, Trajectory
 
@@ -242,18 +243,8 @@ class AnalyticPlant(Plant):
 
     engine = Engine.ANALYTIC.value
     label = "analytic"
-    effects = frozenset(
-        {
-            Effect.GRAVITY,
-            Effect.SPRINGS_LINEAR,
-            Effect.SPRINGS_CUBIC,
-            Effect.MASS_INERTIA,
-            Effect.EXTERNAL_TORQUE,
-            Effect.CONTROL_OMEGA,
-            Effect.CONTROL_MASSES,
-        }
-    )
-    """Every effect the paper's model assembles (:class:`analytic.model.TumblingModel`)."""
+    effects = MODEL_EFFECTS
+    """Every effect the paper's model assembles (:data:`analytic.model.MODEL_EFFECTS`)."""
     settings_type = AnalyticSettings
 
     def default_settings(self, scene: Scene) -> AnalyticSettings:

@@ -47,11 +47,13 @@ def evaluator(model: TumblingModel, backend: Backend) -> Callable:
 
 
 def _rhs(model: TumblingModel, accel: Callable) -> Callable[[float, np.ndarray], np.ndarray]:
-    from analytic.assemble import N_AUX
+    from analytic.assemble import aux_count
     from analytic.aux_rates import aux_rates
+    from analytic.model import dissipated_power, dissipates
     from analytic.stepping import NonFinite
 
     nq = model.nq
+    dissipating = dissipates(model)
     counter = {"nfev": 0}
     has_tau_g = model.scene.has(Effect.EXTERNAL_TORQUE)
     a, d, m = model.a, model.d, model.m
@@ -67,6 +69,8 @@ def _rhs(model: TumblingModel, accel: Callable) -> Callable[[float, np.ndarray],
         out[nq : 2 * nq] = qdd
         # Work, and the external moments about the system centre of mass (analytic/aux_rates.py)
         aux_rates(q, qd, tau, c.rod_forces, c.force_at_C, a, d, m, mu0, m_T, out[2 * nq :])
+        if dissipating:  # D (analytic.assemble)
+            out[2 * nq + 7] = dissipated_power(model, q[7:], qd[7:])
         if not np.isfinite(out).all():
             raise NonFinite(f"non-finite acceleration at t = {t:.6g} s")
         return out
@@ -83,7 +87,7 @@ def _rhs(model: TumblingModel, accel: Callable) -> Callable[[float, np.ndarray],
     fp, ip = fm.fp, fm.ip
     rhs_into = rhs_for(ip)  # embeds only the solve this scene needs
     work = np.empty(2 * nq + 3 + model.k)
-    ny = 2 * nq + N_AUX
+    ny = 2 * nq + aux_count(model)
 
     def g(t: float, y: np.ndarray) -> np.ndarray:
         out = np.empty(ny)
@@ -161,7 +165,7 @@ def simulate(
     method = _solver_method(method or scene.solver.method)
     rtol = scene.solver.rtol if rtol is None else _positive(rtol, "rtol")
     atol = scene.solver.atol if atol is None else _positive(atol, "atol")
-    from analytic.assemble import N_AUX
+    from analytic.assemble import aux_count
     from analytic.compiled_stepping import integrate
     from analytic.model import TumblingModel
 
@@ -169,7 +173,7 @@ def simulate(
     accel = evaluator(model, backend)
     t_eval = out.times()
     nq = model.nq
-    y0 = np.concatenate([scene.initial.q0(), scene.initial.qdot0(), np.zeros(N_AUX)])
+    y0 = np.concatenate([scene.initial.q0(), scene.initial.qdot0(), np.zeros(aux_count(model))])
     f = _rhs(model, accel)
     run = integrate(
         f,

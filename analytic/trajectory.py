@@ -34,6 +34,17 @@ class RunStatus(StrEnum):
     INTERRUPTED = "interrupted"  # stopped by Ctrl-C / SIGTERM: the samples so far, kept
 
 
+def energy_residual(
+    energy: np.ndarray, work: np.ndarray, dissipated: np.ndarray | None
+) -> np.ndarray:
+    """The energy balance's residual ``E(t) - E(0) + D(t) - W(t)``, J, shape (N,): the energy
+    ``E``, the work ``W`` of the control and the given torque, the energy ``D`` the dissipative
+    effects took out (None: none is on). The one definition, for the record and the checks."""
+    if dissipated is None:
+        return energy - energy[0] - work
+    return energy - energy[0] + dissipated - work
+
+
 @dataclass(frozen=True)
 class Invariants:
     """Invariants and their balances per sample.
@@ -49,6 +60,9 @@ class Invariants:
         energy: kinetic + gravitational + spring energy of the scene's effects, J, shape (N,).
         work: work done by the control (``τ·ω + F·ṗ + F_C·Ṙ``) and the given torque since t = 0,
             J, shape (N,).
+        dissipated: ``D``, the energy the scene's dissipative effects took out of the motion
+            since t = 0 (``∫ Σ c ė² dt`` of the spring dampers), J, shape (N,); zeros when none is
+            on (the default).
     """
 
     quat_norm_error: np.ndarray
@@ -58,14 +72,20 @@ class Invariants:
     angular_impulse: np.ndarray
     energy: np.ndarray
     work: np.ndarray
+    dissipated: np.ndarray = None  # type: ignore[assignment]  # zeros, set below
+
+    def __post_init__(self) -> None:
+        if self.dissipated is None:
+            object.__setattr__(self, "dissipated", np.zeros(np.shape(self.work)))
 
     def angular_momentum_balance(self) -> np.ndarray:
         """``L(t) - L(0) - ∫S τ dt``, shape (N, 3): zero for exact dynamics."""
         return self.angular_momentum - self.angular_momentum[0] - self.angular_impulse
 
     def energy_balance(self) -> np.ndarray:
-        """``E(t) - E(0) - W(t)``, shape (N,): zero for exact dynamics."""
-        return self.energy - self.energy[0] - self.work
+        """``E(t) - E(0) + D(t) - W(t)``, shape (N,): zero for exact dynamics
+        (:func:`energy_residual`)."""
+        return energy_residual(self.energy, self.work, self.dissipated)
 
     def linear_momentum_balance(self) -> np.ndarray:
         return self.linear_momentum - self.linear_momentum_expected

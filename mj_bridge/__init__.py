@@ -9,7 +9,7 @@
 * :class:`Twin`: a compiled model with all of the above and the in-integrator controller.
 """
 
-from analytic.lazy import lazy_attributes
+from analytic.runtime.lazy import lazy_exports
 from mj_bridge.simulate import simulate  # bound here: the function, not its module's name (light)
 
 _LAZY = {
@@ -29,7 +29,7 @@ _LAZY = {
 """Public names imported on first use: importing this package (or :mod:`mj_bridge.plants`, to
 choose plants) costs neither MuJoCo nor numba."""
 
-__getattr__, __dir__ = lazy_attributes(__name__, _LAZY)
+__getattr__, __dir__ = lazy_exports(__name__, _LAZY, globals())
 
 __all__ = [
     "ControllerSource",

@@ -63,8 +63,8 @@ import numpy as np
 
 from analytic.assemble import N_AUX
 from analytic.error_scale import ErrorGroups
-from analytic.kernel.jit import jit
 from analytic.model import ControlOutput
+from analytic.runtime.jit import jit
 from analytic.scene import Scene
 from analytic.stepping import NonFinite
 from analytic.trajectory import Trajectory
@@ -79,7 +79,7 @@ ENGINE = "drake"
 """The plant's name in its trajectories: :attr:`mj_bridge.drake_plugin.DrakePlant.engine`."""
 
 COMPILE_LOCK = "drake-stage"
-"""The :mod:`analytic.kernel.compile_lock` name held while the maps below and the shared stage
+"""The :mod:`analytic.runtime.compile_lock` name held while the maps below and the shared stage
 (:mod:`mj_bridge.scipy_stage`) are compiled or loaded from numba's cache."""
 
 

@@ -21,9 +21,9 @@ from __future__ import annotations
 import numpy as np
 
 from analytic.kernel.entry import Solver, evaluate_as, solver_of
-from analytic.kernel.jit import HAVE_NUMBA, KERNEL_SOURCES, jit, source_fingerprint
 from analytic.kernel.kinematics import rotation
 from analytic.kernel.layout import STATUS_OK, STATUS_UNSUPPORTED
+from analytic.runtime.jit import HAVE_NUMBA, KERNEL_SOURCES, jit, source_fingerprint
 
 
 def make_stage(deps: int, solver: int):

@@ -51,9 +51,9 @@ import mujoco
 import numpy as np
 
 from analytic.kernel.entry import Solver, solver_of
-from analytic.kernel.jit import HAVE_NUMBA, KERNEL_SOURCES, inner, source_fingerprint
-from analytic.kernel.jit import cfunc as cached_cfunc
 from analytic.kernel.layout import F_TA, F_TC, F_TFREQ, STATUS_OK
+from analytic.runtime.jit import HAVE_NUMBA, KERNEL_SOURCES, inner, source_fingerprint
+from analytic.runtime.jit import cfunc as cached_cfunc
 from mj_bridge import fast_stage
 
 if HAVE_NUMBA:

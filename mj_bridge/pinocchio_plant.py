@@ -48,9 +48,9 @@ import numpy as np
 
 from analytic.assemble import N_AUX
 from analytic.error_scale import ErrorGroups
-from analytic.kernel import compile_lock
-from analytic.kernel.jit import jit
 from analytic.model import ControlOutput
+from analytic.runtime import compile_lock
+from analytic.runtime.jit import jit
 from analytic.scene import Scene
 from analytic.stepping import NonFinite
 from analytic.trajectory import Engine, Trajectory

@@ -37,6 +37,7 @@ from mj_bridge.pinocchio_settings import (
 )
 from mj_bridge.registry import NAME_PATTERN, RESERVED, entry_points, report_order
 from mj_bridge.scipy_loop_plant import ScipyLoopPlant
+from model_xml.tendon_terms import TENDON_TERMS
 
 
 class MujocoPlant(Plant):
@@ -47,16 +48,16 @@ class MujocoPlant(Plant):
     effects = frozenset(
         {
             Effect.GRAVITY,  # the model's gravity
-            Effect.SPRINGS_LINEAR,  # tendon or actuator springs (SpringModel)
-            Effect.SPRINGS_CUBIC,  # ... their cubic terms
             Effect.MASS_INERTIA,  # the masses' bodies' inertia
             Effect.EXTERNAL_TORQUE,  # applied with the control, inside every stage
             Effect.CONTROL_OMEGA,
             Effect.CONTROL_MASSES,
+            *TENDON_TERMS,  # each spring law the twin's tendons (or spring actuators) carry
         }
     )
-    """The effects the twin (:func:`model_xml.builder.build_spec`) and its callbacks
-    (:mod:`mj_bridge.stages`) implement."""
+    """The effects the twin (:func:`model_xml.builder.build_spec`, its spring laws
+    :data:`model_xml.tendon_terms.TENDON_TERMS`) and its callbacks (:mod:`mj_bridge.stages`)
+    implement."""
     settings_type = MujocoRunSettings
     value_bound = 1e10
     """MuJoCo's ``mjMAXVAL``: ``mj_checkPos``/``mj_checkVel``/``mj_checkAcc`` reset the state and

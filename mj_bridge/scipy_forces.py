@@ -13,7 +13,8 @@ called only when its ``ip`` flag is set):
 
 * ``t``: time, s; ``q``, ``qd`` (n + 7 each): the paper state ``[R, u, p]``, ``[Ṙ, u̇, ṗ]``;
 * ``fp``, ``ip``: the packed scene (:func:`analytic.fast.pack`); ``off``: the offsets of its tail
-  (:func:`analytic.kernel.layout.tail_offsets`: ``m, p_e, k_l, k_n, …``);
+  (:class:`analytic.kernel.layout.FpTail`, read by name: ``off.p_e``, ``off.laws``, …; a spring
+  law's coefficients start at ``off.laws + LAW_INDEX[effect] (n + 1)``);
 * ``tt`` (3): the body-axis torque on BR, holding the control torque: add to it;
 * ``ten`` (n + 1): the tension ``f_j`` of each spring of the chain, zero on entry: add to it.
   Spring ``j`` joins mass ``j - 1`` and mass ``j`` (``x = p - p_e``, ``x_{-1} = x_n = 0``, extension
@@ -30,7 +31,7 @@ import math
 from collections.abc import Callable
 
 from analytic.effects import Effect
-from analytic.kernel.layout import F_TA, F_TC, F_TFREQ, I_N, I_SCUB, I_SLIN, I_TORQ
+from analytic.kernel.layout import F_TA, F_TC, F_TFREQ, I_LAWS, I_N, I_TORQ, LAW_INDEX
 
 ForceFn = Callable[..., None]
 """``force(t, q, qd, fp, ip, off, tt, ten) -> None`` (module docstring)."""
@@ -60,11 +61,15 @@ def external_torque(t, q, qd, fp, ip, off, tt, ten):  # pragma: no cover - compi
         tt[r] += fp[F_TC + r] + fp[F_TA + r] * ct
 
 
-@force(Effect.SPRINGS_LINEAR, I_SLIN)
+LINEAR = LAW_INDEX[Effect.SPRINGS_LINEAR]
+CUBIC = LAW_INDEX[Effect.SPRINGS_CUBIC]
+
+
+@force(Effect.SPRINGS_LINEAR, I_LAWS + LINEAR)
 def springs_linear(t, q, qd, fp, ip, off, tt, ten):  # pragma: no cover - compiled
     """The linear springs of Eq. (38): ``f_j += k_l,j e_j``."""
     n = ip[I_N]
-    o_pe, o_kl = off[1], off[2]
+    o_pe, o_kl = off.p_e, off.laws + LINEAR * (n + 1)
     x_prev = 0.0
     for j in range(n + 1):
         x_j = q[7 + j] - fp[o_pe + j] if j < n else 0.0
@@ -72,17 +77,32 @@ def springs_linear(t, q, qd, fp, ip, off, tt, ten):  # pragma: no cover - compil
         x_prev = x_j
 
 
-@force(Effect.SPRINGS_CUBIC, I_SCUB)
+@force(Effect.SPRINGS_CUBIC, I_LAWS + CUBIC)
 def springs_cubic(t, q, qd, fp, ip, off, tt, ten):  # pragma: no cover - compiled
     """The cubic springs of Eq. (38): ``f_j += k_n,j e_j³``."""
     n = ip[I_N]
-    o_pe, o_kn = off[1], off[3]
+    o_pe, o_kn = off.p_e, off.laws + CUBIC * (n + 1)
     x_prev = 0.0
     for j in range(n + 1):
         x_j = q[7 + j] - fp[o_pe + j] if j < n else 0.0
         e = x_j - x_prev
         ten[j] += fp[o_kn + j] * e * e * e
         x_prev = x_j
+
+
+DAMPING = LAW_INDEX[Effect.SPRINGS_DAMPING]
+
+
+@force(Effect.SPRINGS_DAMPING, I_LAWS + DAMPING)
+def springs_damping(t, q, qd, fp, ip, off, tt, ten):  # pragma: no cover - compiled
+    """The springs' viscous damping: ``f_j += c_j ė_j``, ``ė_j = ṗ_j - ṗ_{j-1}``."""
+    n = ip[I_N]
+    o_c = off.laws + DAMPING * (n + 1)
+    v_prev = 0.0
+    for j in range(n + 1):
+        v_j = qd[7 + j] if j < n else 0.0
+        ten[j] += fp[o_c + j] * (v_j - v_prev)
+        v_prev = v_j
 
 
 FORCE_EFFECTS = frozenset(FORCES)

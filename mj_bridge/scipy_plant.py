@@ -30,8 +30,8 @@ import numpy as np
 from analytic.assemble import N_AUX, assemble
 from analytic.error_scale import ErrorGroups
 from analytic.fast import FastModel
-from analytic.kernel import compile_lock
 from analytic.model import ControlOutput, TumblingModel
+from analytic.runtime import compile_lock
 from analytic.scene import Scene
 from analytic.stepping import NonFinite
 from analytic.trajectory import RunStatus, Trajectory
@@ -49,7 +49,7 @@ class ScipyDynamics(abc.ABC):
         controller: ``analytic_fast`` (default) or ``analytic`` (:class:`ScipyLoopSettings`).
 
     Class attributes a subclass sets:
-        engine: the name of its trajectories. lock_name: the :mod:`analytic.kernel.compile_lock`
+        engine: the name of its trajectories. lock_name: the :mod:`analytic.runtime.compile_lock`
         name held while it is built and compiled. settings_type: its settings record.
         sample_errors: what :meth:`sample` may raise at a sample it cannot evaluate (NaN there).
 

@@ -32,8 +32,8 @@ import numpy as np
 
 from analytic import aux_rates as _aux
 from analytic.aux_rates import rates
+from analytic.kernel.calls import tail
 from analytic.kernel.entry import Solver, evaluate_as, solver_of
-from analytic.kernel.jit import KERNEL_SOURCES, inner, jit, source_fingerprint
 from analytic.kernel.kinematics import rotation
 from analytic.kernel.layout import (
     F_MBR,
@@ -44,7 +44,7 @@ from analytic.kernel.layout import (
     STATUS_OK,
     STATUS_UNSUPPORTED,
 )
-from analytic.kernel.system import tail
+from analytic.runtime.jit import KERNEL_SOURCES, inner, jit, source_fingerprint
 from mj_bridge import scipy_forces
 from mj_bridge.scipy_forces import FORCES
 
@@ -117,7 +117,7 @@ def work_layout(n: int, k: int) -> dict[str, tuple[int, int]]:
 
 def _make_stage(deps: int, solver: int):
     """The stage closing over ``deps`` (:data:`DEPS`: the sources it embeds, see
-    :func:`analytic.kernel.jit.jit_entry`) and the solve it embeds (``solver``, a
+    :func:`analytic.runtime.jit.jit_entry`) and the solve it embeds (``solver``, a
     :class:`Solver`; numba drops the other branches)."""
 
     def stage(t, y, fp, ip, work, ydot, mode):  # pragma: no cover - compiled
@@ -234,16 +234,16 @@ def _make_stage(deps: int, solver: int):
         for i in range(n):
             ydot[7 + i] = y[nq + 6 + i]
         # work and impulses (analytic.aux_rates; a, d follow the mass-track arrays in fp)
-        o_m, _pe, _kl, _kn, _l, _lam, _al, _be, o_a, o_d, end = tail(n, kp)
+        o = tail(n, kp)
         rates(
             work[o_q : o_q + nq],
             work[o_qd : o_qd + nq],
             work[o_tt : o_tt + 3],
             work[o_ctl + 6 : o_ctl + 6 + n],
             work[o_ctl + 3 : o_ctl + 6],
-            fp[o_a:o_d],
-            fp[o_d:end],
-            fp[o_m : o_m + n],
+            fp[o.a : o.a + 3],
+            fp[o.d : o.d + 3],
+            fp[o.m : o.m + n],
             fp[F_MU0],
             fp[F_MBR] + fp[F_MU0],
             ydot[nq + nv :],

@@ -27,12 +27,14 @@ stiffness, no spring effect -> no tendons; no control and no given torque -> no 
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import mujoco
 import numpy as np
 
 from analytic.effects import Effect, MjIntegrator, ShapeKind, SpringModel
+from analytic.effects.registry import SPRING_LAWS
 from analytic.scene import Scene
 from analytic.scene.twin import TRIANGLE_RTOL, twin_point_inertia
 from model_xml.coordinates import paper_to_frame_state
@@ -44,6 +46,7 @@ from model_xml.rotations import (
     quat_to_mat,
     quat_z_to,
 )
+from model_xml.tendon_terms import TENDON_TERMS
 
 BODY = "BR"
 ROOT = "root"
@@ -123,27 +126,45 @@ class BodyFrame:
 
 @dataclass(frozen=True)
 class SpringTendon:
-    """One spring as a fixed tendon: ``length = Σ coef·p``, rest length, stiffness polynomial."""
+    """One spring as a fixed tendon: ``length = Σ coef·p``, rest length, and the coefficient of
+    each spring law that is on (:data:`TENDON_TERMS`), by effect."""
 
     joints: tuple[int, ...]
     coefs: tuple[float, ...]
     rest: float
-    k_linear: float
-    k_cubic: float
+    coefficients: Mapping[Effect, float]
+
+    @property
+    def k_linear(self) -> float:
+        return self.coefficients.get(Effect.SPRINGS_LINEAR, 0.0)
+
+    @property
+    def k_cubic(self) -> float:
+        return self.coefficients.get(Effect.SPRINGS_CUBIC, 0.0)
+
+    def polynomial(self, attribute: str, as_actuators: bool) -> list[float]:
+        """The tendon's ``stiffness`` or ``damping`` polynomial (MuJoCo's three coefficients)."""
+        out = [0.0, 0.0, 0.0]
+        for effect, term in TENDON_TERMS.items():
+            if term.attribute == attribute and not (as_actuators and term.by_actuator):
+                out[term.power] = self.coefficients.get(effect, 0.0)
+        return out
 
 
 def spring_tendons(scene: Scene) -> list[SpringTendon]:
     """The n+1 springs of Eq. (38) as tendons (empty when no spring effect is on or n = 0).
 
     Spring j (0-based) has extension ``x_j - x_{j-1}`` with ``x = p - p_e`` and ``x_{-1} = x_n = 0``.
-    Its force is odd in the extension (no quadratic term), so a tendon may measure the extension
-    with either sign; the sign is flipped when the rest length would be exactly -1, MuJoCo's
-    sentinel for "length at qpos0".
+    Its force is odd in the extension and its rate (no quadratic term), so a tendon may measure
+    the extension with either sign; the sign is flipped when the rest length would be exactly -1,
+    MuJoCo's sentinel for "length at qpos0".
     """
     n = scene.n
-    lin = scene.has(Effect.SPRINGS_LINEAR)
-    cub = scene.has(Effect.SPRINGS_CUBIC)
-    if n == 0 or not (lin or cub):
+    laws = [law for law in SPRING_LAWS if scene.has(law.effect)]
+    missing = [law.effect.value for law in laws if law.effect not in TENDON_TERMS]
+    if missing:
+        raise ValueError(f"scene.effects: the MJCF twin cannot carry {', '.join(missing)}")
+    if n == 0 or not laws:
         return []
     pe = np.asarray(scene.masses.p_e, float)
     out = []
@@ -165,8 +186,7 @@ def spring_tendons(scene: Scene) -> list[SpringTendon]:
                 joints=tuple(joints),
                 coefs=tuple(coefs),
                 rest=float(rest),
-                k_linear=float(scene.springs.k_linear[j]) if lin else 0.0,
-                k_cubic=float(scene.springs.k_cubic[j]) if cub else 0.0,
+                coefficients={law.effect: float(scene.springs.of(law)[j]) for law in laws},
             )
         )
     return out
@@ -296,8 +316,12 @@ def build_spec(scene: Scene, body_frame: BodyFrame | None = None) -> mujoco.MjSp
         for jj, c in zip(sp.joints, sp.coefs, strict=True):
             t.wrap_joint(joint_name(jj), c)
         t.springlength = [sp.rest, sp.rest]
-        if not as_actuators:
-            t.stiffness = [sp.k_linear, 0.0, sp.k_cubic]
+        stiffness = sp.polynomial("stiffness", as_actuators)
+        if any(stiffness):
+            t.stiffness = stiffness
+        damping = sp.polynomial("damping", as_actuators)
+        if any(damping):
+            t.damping = damping
     if as_actuators:
         for j, sp in enumerate(tendons):
             act = spec.add_actuator(name=spring_actuator_name(j), target=tendon_name(j))

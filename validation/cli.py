@@ -226,7 +226,7 @@ def run(argv: list[str] | None = None) -> None:
 
     set_process_env()
     status = main(argv)
-    numba_cache = sys.modules.get("analytic.kernel.cache_check")
+    numba_cache = sys.modules.get("analytic.runtime.cache_check")
     if numba_cache is not None:  # what Python's teardown would do: the cache's manifest kept
         numba_cache.finish()
     for stream in (sys.stdout, sys.stderr):

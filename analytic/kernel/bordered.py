@@ -13,7 +13,6 @@ with ``1 + k_ω ≤ 4`` border rows. With ``S_4 = L D Lᵀ`` (L unit lower, unro
 
 from __future__ import annotations
 
-from analytic.kernel.jit import inner
 from analytic.kernel.layout import (
     I_COMP,
     IX,
@@ -35,6 +34,7 @@ from analytic.kernel.layout import (
     WS_XR,
     WS_Z,
 )
+from analytic.runtime.jit import inner
 
 
 @inner

@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import math
 
-from analytic.kernel.jit import inner
 from analytic.kernel.layout import (
     F_D1,
     F_D2,
@@ -39,6 +38,7 @@ from analytic.kernel.layout import (
     WS_T1,
     WS_UU,
 )
+from analytic.runtime.jit import inner
 
 
 @inner
@@ -66,10 +66,12 @@ def modeling_row(q, qd, fp, nq, w):
 
 
 @inner
-def control_rows(t, q, qd, fp, ip, n, kw, kp, o_m, o_pe, o_l, o_lam, o_alpha, o_beta, out, w):
+def control_rows(t, q, qd, fp, ip, n, kw, kp, o, out, w):
     """Stage 6: ``b_c`` (module docstring). The ω rows go to ``w[WS_BW:]`` (tracking errors to
     ``w[WS_EW:]``); a tracked mass's ``b_i`` goes to ``out[7 + i]``, its q̈_i (Gauss: ``q̈_i = b_i``).
-    Writes ``Σ_T m_i b_i`` and ``Σ_T m_i p_i b_i`` to ``w``."""
+    Writes ``Σ_T m_i b_i`` and ``Σ_T m_i p_i b_i`` to ``w``. ``o``: the offsets of ``fp``'s tail
+    (:class:`analytic.kernel.layout.FpTail`)."""
+    o_m, o_pe, o_l, o_lam, o_alpha, o_beta = o.m, o.p_e, o.l, o.lam, o.alpha, o.beta
     ob = WS_BW
     for j in range(kw):  # (cos and sin of one argument in one block: a single sincos call)
         comp = ip[I_COMP + j] & IX

@@ -14,8 +14,6 @@ from enum import IntEnum
 
 import numpy as np
 
-from analytic.kernel import gauss, identity, minv2
-from analytic.kernel.jit import inline_always, jit_entry
 from analytic.kernel.layout import (
     I_KP,
     I_KW,
@@ -25,6 +23,8 @@ from analytic.kernel.layout import (
     W_IDENTITY,
     W_MINV2,
 )
+from analytic.kernel.weighting import join
+from analytic.runtime.jit import inline_always, jit_entry
 
 
 class Solver(IntEnum):
@@ -47,39 +47,35 @@ def solver_of(ip: np.ndarray) -> Solver:
 
 def _make_evaluate(deps: int):
     def evaluate(t, q, qd, fp, ip, out):
-        """:func:`analytic.kernel.gauss.evaluate`, :func:`analytic.kernel.minv2.evaluate` or
-        :func:`analytic.kernel.identity.evaluate`, as the scene in ``ip`` needs (all three are
-        compiled with this function)."""
+        """The kernel of the weighting the scene in ``ip`` needs
+        (:func:`analytic.kernel.weighting.join`; all three are compiled with this function)."""
         if deps < 0:  # never true: ties numba's cache key to the kernel's sources
             return STATUS_UNSUPPORTED
         if ip[I_KW] + ip[I_KP] > 0:
             if ip[I_WEIGHT] == W_MINV2:
-                return minv2.evaluate(t, q, qd, fp, ip, out)
+                return join(W_MINV2, t, q, qd, fp, ip, out)
             if ip[I_WEIGHT] == W_IDENTITY:
-                return identity.evaluate(t, q, qd, fp, ip, out)
-        return gauss.evaluate(t, q, qd, fp, ip, out)
+                return join(W_IDENTITY, t, q, qd, fp, ip, out)
+        return join(W_GAUSS, t, q, qd, fp, ip, out)
 
     return evaluate
 
 
 evaluate = jit_entry(_make_evaluate)
 """The kernel for any packed scene: ``[q̈, Q^C, τ, residual]`` into ``out`` (see
-:func:`analytic.kernel.gauss.evaluate`), status returned."""
+:func:`analytic.kernel.weighting.make_evaluate`), status returned."""
 
-_GAUSS, _MINV2, _IDENTITY = int(Solver.GAUSS), int(Solver.MINV2), int(Solver.IDENTITY)
+_ANY = int(Solver.ANY)
 
 
 @inline_always
 def evaluate_as(solver, t, q, qd, fp, ip, out):
     """The kernel a compiled caller embeds, by ``solver`` (a :class:`Solver` value). Pass a
     constant of the caller (a closure variable of its factory): inlined by numba
-    (:func:`analytic.kernel.jit.inline_always`), the other branches are dropped before compiling.
-    A single solve is called as its two cached halves by address (``join``), so the caller
-    compiles without them; ``Solver.ANY`` goes through :data:`evaluate`."""
-    if solver == _GAUSS:
-        return gauss.join(t, q, qd, fp, ip, out)
-    if solver == _MINV2:
-        return minv2.join(t, q, qd, fp, ip, out)
-    if solver == _IDENTITY:
-        return identity.join(t, q, qd, fp, ip, out)
-    return evaluate(t, q, qd, fp, ip, out)
+    (:func:`analytic.runtime.jit.inline_always`), the other branches are dropped before compiling.
+    A single solve is called as its two cached halves by address
+    (:func:`analytic.kernel.weighting.join`), so the caller compiles without them; ``Solver.ANY``
+    goes through :data:`evaluate`."""
+    if solver == _ANY:
+        return evaluate(t, q, qd, fp, ip, out)
+    return join(solver, t, q, qd, fp, ip, out)

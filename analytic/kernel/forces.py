@@ -11,7 +11,10 @@ from __future__ import annotations
 
 import math
 
-from analytic.kernel.jit import inner
+from analytic.effects import Effect
+from analytic.effects.damping import damping_dissipation, damping_force
+from analytic.effects.springs import cubic_force, linear_force
+from analytic.kernel.calls import tail
 from analytic.kernel.kinematics import Ht_times
 from analytic.kernel.layout import (
     F_G,
@@ -21,10 +24,13 @@ from analytic.kernel.layout import (
     F_TC,
     F_TFREQ,
     I_GRAV,
-    I_SCUB,
-    I_SLIN,
+    I_KP,
+    I_LAWS,
+    I_N,
     I_TORQ,
     I_TRACK,
+    IX,
+    LAW_INDEX,
     WS_JW,
     WS_LA,
     WS_LAD,
@@ -48,26 +54,41 @@ from analytic.kernel.layout import (
     WS_SPQ,
     WS_SQ,
 )
+from analytic.runtime.jit import inner
+
+LINEAR = LAW_INDEX[Effect.SPRINGS_LINEAR]
+CUBIC = LAW_INDEX[Effect.SPRINGS_CUBIC]
+DAMPING = LAW_INDEX[Effect.SPRINGS_DAMPING]
+phi_linear = inner(linear_force)  # the laws' shapes, as declared (analytic.effects)
+phi_cubic = inner(cubic_force)
+phi_damping = inner(damping_force)
+delta_damping = inner(damping_dissipation)
 
 
 @inner
-def rod_pass(q, qd, fp, ip, n, o_m, o_pe, o_kl, o_kn, out, full, w):
+def rod_pass(q, qd, fp, ip, n, o, out, full, w):
     """Stage 2: the rod rows of Q (Eq. 52, third block row; springs ``F^S = -∂U_s/∂p`` of Eq. 38,
     docs/errata.md item 2) and, in the same pass, the moments the other stages need.
 
     ``Q_i`` goes straight into ``out``: the q̈_i slot of a free mass (the Gauss solve turns it into
     q̈_i in place), the ``Q^C_i`` slot of a tracked one (full output only; it becomes μ_i).
     Writes to ``w``: ``μ1, μ2, Σmṗ, Σmpṗ`` (all masses), ``Σ_F m p⁰ ¹ ²`` (free), ``Σ_T m, Σ_T m p``
-    (tracked), ``Σ_F Q_i, Σ_F p_i Q_i``.
+    (tracked), ``Σ_F Q_i, Σ_F p_i Q_i``. ``o``: the offsets of ``fp``'s tail
+    (:class:`analytic.kernel.layout.FpTail`).
     """
+    o_m, o_pe = o.m, o.p_e
     nq = n + 7
     itr = I_TRACK
     Sa0, Sa1, Sa2 = w[WS_SA], w[WS_SA + 1], w[WS_SA + 2]
     grav = ip[I_GRAV] != 0
     sg = Sa0 * fp[F_G] + Sa1 * fp[F_G + 1] + Sa2 * fp[F_G + 2]
-    lin = ip[I_SLIN] != 0
-    cub = ip[I_SCUB] != 0
-    springs = n > 0 and (lin or cub)
+    lin = ip[I_LAWS + LINEAR] != 0
+    cub = ip[I_LAWS + CUBIC] != 0
+    damp = ip[I_LAWS + DAMPING] != 0
+    springs = n > 0 and (lin or cub or damp)
+    o_kl = o.laws + LINEAR * (n + 1)
+    o_kn = o.laws + CUBIC * (n + 1)
+    o_c = o.laws + DAMPING * (n + 1)
     sLad = w[WS_SLAD]
     sLdd = w[WS_SLDD]
     mu1 = 0.0
@@ -85,13 +106,17 @@ def rod_pass(q, qd, fp, ip, n, o_m, o_pe, o_kl, o_kn, out, full, w):
     # spring j joins x_{j-1} and x_j (x = p - p_e, x_{-1} = x_n = 0) with force f_j;
     # Q_p,i += f_{i+1} - f_i
     x = 0.0
+    xd = 0.0  # ẋ = ṗ
     f_prev = 0.0
     if springs:
         x = q[7] - fp[o_pe]
+        xd = qd[7]
         if lin:
-            f_prev += fp[o_kl] * x
+            f_prev += fp[o_kl] * phi_linear(x, xd)
         if cub:
-            f_prev += fp[o_kn] * (x * x * x)
+            f_prev += fp[o_kn] * phi_cubic(x, xd)
+        if damp:
+            f_prev += fp[o_c] * phi_damping(x, xd)
     for i in range(n):
         mi = fp[o_m + i]
         pi = q[7 + i]
@@ -106,15 +131,20 @@ def rod_pass(q, qd, fp, ip, n, o_m, o_pe, o_kl, o_kn, out, full, w):
             Qi += sg * mi
         if springs:
             xn = q[8 + i] - fp[o_pe + i + 1] if i + 1 < n else 0.0
+            xdn = qd[8 + i] if i + 1 < n else 0.0
             e = xn - x
+            ed = xdn - xd
             f = 0.0
             if lin:
-                f += fp[o_kl + i + 1] * e
+                f += fp[o_kl + i + 1] * phi_linear(e, ed)
             if cub:
-                f += fp[o_kn + i + 1] * (e * e * e)
+                f += fp[o_kn + i + 1] * phi_cubic(e, ed)
+            if damp:
+                f += fp[o_c + i + 1] * phi_damping(e, ed)
             Qi += f - f_prev
             f_prev = f
             x = xn
+            xd = xdn
         if ip[itr + i] == 0:
             out[7 + i] = Qi  # q̈_i is computed from it in place
             n0 += mi
@@ -214,3 +244,24 @@ def body_forces(t, q, qd, fp, ip, w):
             + w[WS_LD + 4 + c] * xd1
             + w[WS_LD + 8 + c] * xd2
         )
+
+
+@inner
+def dissipated_power(q, qd, fp, ip):
+    """``Ḋ = Σ_j c_j δ(e_j, ė_j)``, W: the power the dissipative spring laws that are on take out
+    of the motion (:func:`analytic.model.dissipated_power`, the same sum)."""
+    n = ip[I_N] & IX
+    if n == 0 or ip[I_LAWS + DAMPING] == 0:
+        return 0.0
+    o = tail(n, ip[I_KP] & IX)
+    o_c = o.laws + DAMPING * (n + 1)
+    power = 0.0
+    x = 0.0
+    xd = 0.0
+    for j in range(n + 1):
+        xn = q[7 + j] - fp[o.p_e + j] if j < n else 0.0
+        xdn = qd[7 + j] if j < n else 0.0
+        power += fp[o_c + j] * delta_damping(xn - x, xdn - xd)
+        x = xn
+        xd = xdn
+    return power

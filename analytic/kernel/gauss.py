@@ -6,22 +6,20 @@ Stages: :func:`analytic.kernel.system.make_build_system` (1-6: M, Q, b_m, b_c), 
 :func:`analytic.kernel.bordered.bordered_solve` (8: the bordered 4x4 system on u, q̈_b), and
 :func:`control_outputs` (9: q̈ of the free rods, ``Q^C``, ``τ``, the residual). The two halves are
 compiled and cached on their own (:mod:`analytic.kernel.halves`), so two processes can compile
-them at once, and every caller calls them by address (:mod:`analytic.kernel.abi`).
+them at once, and every caller calls them by address (:mod:`analytic.runtime.abi`). Entry point:
+:data:`evaluate` (:mod:`analytic.kernel.weighting`).
 """
 
 from __future__ import annotations
 
-from analytic.kernel.abi import call_halves
 from analytic.kernel.bordered import bordered_solve
-from analytic.kernel.jit import inner, jit_entry
+from analytic.kernel.calls import tail
 from analytic.kernel.layout import (
-    F_ARR,
     I_COMP,
     I_KP,
     I_KW,
     I_N,
     I_TRACK,
-    I_WEIGHT,
     IX,
     STATUS_OK,
     STATUS_UNSUPPORTED,
@@ -35,6 +33,8 @@ from analytic.kernel.layout import (
     WS_S,
 )
 from analytic.kernel.schur import schur_complement
+from analytic.kernel.weighting import make_evaluate
+from analytic.runtime.jit import inner
 
 
 @inner
@@ -50,7 +50,7 @@ def control_outputs(q, fp, ip, n, kw, kp, out, full, w):
     With ``full`` False only the free rods' ``q̈_i`` are written.
     """
     nq = n + 7
-    om = F_ARR
+    om = tail(n, kp).m
     itr = I_TRACK
     iidx = I_TRACK + n
     s = w[WS_S]
@@ -102,7 +102,7 @@ def control_outputs(q, fp, ip, n, kw, kp, out, full, w):
 
 
 def make_solve_gauss(deps: int):
-    """The C callback body of stages 7-9 under Gauss weighting (:data:`analytic.kernel.abi.
+    """The C callback body of stages 7-9 under Gauss weighting (:data:`analytic.runtime.abi.
     SOLVE_SIG`), closing over the kernel's source fingerprint; :mod:`analytic.kernel.halves`
     compiles it once (a warm-up: in one process while another compiles stages 1-6,
     :mod:`validation.runs.warmup`)."""
@@ -133,44 +133,7 @@ def make_solve_gauss(deps: int):
     return solve_gauss
 
 
-def _make_evaluate(deps: int):
-    """:func:`evaluate` closing over the kernel's source fingerprint (see
-    :func:`analytic.kernel.jit.jit_entry`)."""
-
-    def evaluate(t, q, qd, fp, ip, out):
-        """One evaluation of the controlled dynamics under Gauss weighting (or without control).
-
-        Args:
-            t: time, s.
-            q, qd: state ``[R, u, p]`` and its rate, shape (nq,).
-            fp, ip: packed parameters (:func:`analytic.fast.pack`).
-            out: ``[q̈, Q^C, τ, A_c q̈ - b_c]`` (length ``2 nq + 3 + k``), or ``q̈`` only (length nq).
-
-        Returns:
-            status: 0 done; 1 a Schur complement or the bordered Gram matrix was not numerically
-            positive definite (the caller falls back); 2 the scene's weighting is not Gauss. With a
-            nonzero status the content of ``out`` is unspecified.
-        """
-        if deps < 0:  # never true: ties numba's cache key to the kernel's sources
-            return STATUS_UNSUPPORTED
-        return join(t, q, qd, fp, ip, out)
-
-    return evaluate
-
-
-@inner
-def join(t, q, qd, fp, ip, out):
-    """:func:`evaluate`'s body, called by compiled callers (``analytic.kernel.entry.evaluate_as``):
-    the two compiled halves called by the addresses in ``ip`` (:mod:`analytic.kernel.abi`;
-    ``STATUS_UNSUPPORTED`` when they are not set, i.e. ``ip`` did not come from a
-    :class:`analytic.fast.FastModel`)."""
-    n = ip[I_N] & IX
-    kw = ip[I_KW] & IX
-    kp = ip[I_KP] & IX
-    if kw + kp > 0 and ip[I_WEIGHT] != W_GAUSS:
-        return STATUS_UNSUPPORTED
-    full = out.shape[0] >= 2 * (n + 7) + 3 + kw + kp  # else: q̈ only
-    return call_halves(t, q, qd, fp, ip, out, full)
-
-
-evaluate = jit_entry(_make_evaluate)
+evaluate = make_evaluate(W_GAUSS)
+"""One evaluation under Gauss weighting, or without control: ``evaluate(t, q, qd, fp, ip, out)
+-> status`` (:func:`analytic.kernel.weighting.make_evaluate`); an ``out`` of length nq gets ``q̈``
+alone."""

@@ -5,13 +5,13 @@
   uncontrolled scene; :func:`analytic.kernel.minv2.make_solve_minv2`;
   :func:`analytic.kernel.identity.make_solve_identity`).
 
-Each is a ``numba.cfunc(sig, cache=True)`` with a C signature of :mod:`analytic.kernel.abi`, made
+Each is a ``numba.cfunc(sig, cache=True)`` with a C signature of :mod:`analytic.runtime.abi`, made
 the first time a process asks (:func:`callback`: compiled, or loaded from numba's disk cache);
 :func:`addresses` gives the two addresses a scene's callers read from ``ip`` (written by
 :class:`analytic.fast.FastModel`). Two processes can compile the two halves at the same time
 (:mod:`validation.runs.warmup`); the callers do not need either to compile.
 
-The stages are ordinary numba functions (:func:`analytic.kernel.jit.inner`) that numba compiles
+The stages are ordinary numba functions (:func:`analytic.runtime.jit.inner`) that numba compiles
 into each half; the halves index their C pointers directly (numba lowers a pointer index as one
 address and one load)."""
 
@@ -22,9 +22,9 @@ import threading
 from enum import StrEnum
 
 from analytic.kernel import gauss, identity, minv2, system
-from analytic.kernel.abi import SOLVE_SIG, SYSTEM_SIG
 from analytic.kernel.entry import Solver
-from analytic.kernel.jit import HAVE_NUMBA, KERNEL_SOURCES, cfunc, source_fingerprint
+from analytic.runtime.abi import SOLVE_SIG, SYSTEM_SIG
+from analytic.runtime.jit import HAVE_NUMBA, KERNEL_SOURCES, cfunc, source_fingerprint
 
 
 class KernelHalf(StrEnum):

@@ -6,8 +6,8 @@ With ``K`` the norm-constrained compliance of :mod:`analytic.fundamental` (``K =
 uncontrolled, norm-constrained acceleration, Eq. 60), the control force of least Euclidean norm is
 ``Q_c = Z (ZᵀZ)⁻¹ r``: the minimum-norm solution of ``Zᵀ Q_c = r``. It is computed from a thin
 Householder QR of ``Z`` with its columns scaled to unit length (``Z D = Q̂ R̃``, ``D`` diagonal):
-``Q_c = Q̂ R̃⁻ᵀ D r``. The Gram matrix ``ZᵀZ`` is never formed (it squares the conditioning: that
-is what costs the dense numpy path ~1e-7 on masses spread over six decades). Then, as for every
+``Q_c = Q̂ R̃⁻ᵀ D r``. The Gram matrix ``ZᵀZ`` is never formed (it squares the conditioning, which
+the dense numpy path pays; ``docs/performance.md``). Then, as for every
 weighting, ``q̈ = a + K Q_c`` and ``Q^C = Q_c + a_m (λ_m - yᵀQ_c/s_m)``.
 
 Rank: ``Z`` has full column rank in exact arithmetic (:mod:`analytic.fast`, "Rank of the control
@@ -16,9 +16,12 @@ rows"). A scaled column whose distance to the span of the others, ``|R̃_jj|``, 
 cut-off on the Gram matrix) makes the kernel decline (``STATUS_NOT_PD``): the numpy path then
 applies its own rank decision.
 
-Cost ``O(n k²)`` (k control rows; ``M_α`` solves by the Schur complement on the body block, as
-:mod:`analytic.kernel.minv2`), a few heap arrays. Stages: :func:`analytic.kernel.system.
-make_build_system` (1-6, shared with the other weightings), then :func:`make_solve_identity`.
+Cost ``O(n k²)`` (k control rows; ``M_α`` solves by the Schur complement on the body block), a
+few heap arrays. Stages: :func:`analytic.kernel.system.make_build_system` (1-6, shared with every weighting), then
+:func:`make_solve_identity`: :func:`analytic.kernel.norm_constrained.prepare` and ``finish``
+(shared with the other weighting through ``M_α``) around this weighting's own part,
+:func:`control_force`. Entry points :data:`evaluate`, :data:`qddot_into`
+(:mod:`analytic.kernel.weighting`).
 """
 
 from __future__ import annotations
@@ -27,36 +30,22 @@ import math
 
 import numpy as np
 
-from analytic.kernel.abi import arrays, call_halves
-from analytic.kernel.jit import inner, jit, jit_entry
+from analytic.kernel.calls import arrays
 from analytic.kernel.layout import (
-    F_ARR,
-    F_MU0,
-    I_COMP,
     I_KP,
     I_KW,
     I_N,
     I_TRACK,
-    I_WEIGHT,
     IDENTITY_RANK_TOL,
     IX,
     STATUS_NOT_PD,
     STATUS_OK,
     STATUS_UNSUPPORTED,
     W_IDENTITY,
-    WS_ALPHA,
-    WS_BM,
-    WS_BW,
-    WS_C1,
-    WS_C2,
-    WS_H,
-    WS_MB,
-    WS_MU1,
-    WS_MU2,
-    WS_QB,
-    WS_S,
 )
-from analytic.kernel.minv2 import chol, ma_solve
+from analytic.kernel.norm_constrained import finish, ma_solve, prepare
+from analytic.kernel.weighting import make_evaluate, make_qddot_into
+from analytic.runtime.jit import inner, jit
 
 
 @jit
@@ -121,208 +110,82 @@ def min_norm_solve(Z, nq, k, r, qc):
     return True
 
 
+@inner
+def control_force(q, fp, ip, w, SB, c1, c2, s, om, y, sm, acc, bc, Hw, Qc, v):
+    """This weighting's ``Q_c`` and ``M_α⁻¹ Q_c`` (between
+    :func:`analytic.kernel.norm_constrained.prepare`, whose results it takes, and ``finish``):
+    ``Z = K A_cᵀ`` column by column, ``r = b_c - A_c a``, ``Q_c = Z (ZᵀZ)⁻¹ r``
+    (:func:`min_norm_solve`), then ``v = M_α⁻¹ Q_c``. False when ``Z`` is numerically rank
+    deficient (module docstring)."""
+    n = ip[I_N] & IX
+    kw = ip[I_KW] & IX
+    kp = ip[I_KP] & IX
+    nq = n + 7
+    k = kw + kp
+    iidx = I_TRACK + n
+    p = q[7:]
+    # Z = K A_cᵀ column by column: x = M_α⁻¹ A_c[j]ᵀ, z_j = x - y (A_c[j] y)/s_m; r = b_c - A_c a
+    Z = np.empty((nq, k))
+    r = np.empty(k)
+    x = np.empty(nq)
+    for j in range(k):
+        for i in range(nq):
+            x[i] = 0.0
+        if j < kw:
+            ay = 0.0
+            aa = 0.0
+            for c in range(4):
+                x[3 + c] = Hw[j, c]
+                ay += Hw[j, c] * y[3 + c]
+                aa += Hw[j, c] * acc[3 + c]
+        else:
+            i_m = ip[iidx + j - kw] & IX
+            x[7 + i_m] = 1.0
+            ay = y[7 + i_m]
+            aa = acc[7 + i_m]
+        r[j] = bc[j] - aa
+        ma_solve(SB, c1, c2, s, fp, om, p, n, x)
+        f = ay / sm
+        for i in range(nq):
+            Z[i, j] = x[i] - y[i] * f
+    if not min_norm_solve(Z, nq, k, r, Qc):
+        return False
+    for i in range(nq):  # q̈ = a + K Q_c needs M_α⁻¹ Q_c
+        v[i] = Qc[i]
+    ma_solve(SB, c1, c2, s, fp, om, p, n, v)
+    return True
+
+
 def make_solve_identity(deps: int):
-    """The C callback body of stage 7 under the identity weighting (:data:`analytic.kernel.abi.
+    """The C callback body of stage 7 under the identity weighting (:data:`analytic.runtime.abi.
     SOLVE_SIG`; ``full`` is always 1 here), closing over the kernel's source fingerprint;
     :mod:`analytic.kernel.halves` compiles it once."""
 
     def solve_identity(q_p, fp_p, ip_p, out_p, len_out, w_p, full):
-        """Stage 7 (W = I): ``q̈``, ``Q^C``, ``τ`` and the residual into ``out`` (module docstring),
-        mirroring :func:`analytic.fundamental.solve`. ``w`` and the rod rows of ``out`` hold what
-        :func:`analytic.kernel.system.make_build_system` wrote.
-
-        Returns:
-            ``STATUS_NOT_PD`` when the Schur complement of ``M_α`` is not numerically positive
-            definite or ``Z`` is numerically rank deficient, else ``STATUS_OK``.
-        """
+        """Stage 7 (W = I): ``q̈``, ``Q^C``, ``τ`` and the residual into ``out``
+        (the shared :func:`analytic.kernel.norm_constrained.prepare` and ``finish`` around
+        :func:`control_force`),
+        from what :func:`analytic.kernel.system.make_build_system` wrote; its status."""
         if deps < 0:  # never true: ties numba's cache key to the kernel's sources
             return STATUS_UNSUPPORTED
         q, fp, ip, out, w = arrays(q_p, fp_p, ip_p, out_p, len_out, w_p)
-        n = ip[I_N] & IX
-        kw = ip[I_KW] & IX
-        kp = ip[I_KP] & IX
-        s = w[WS_S]
-        mu0 = fp[F_MU0]
-        mu1 = w[WS_MU1]
-        mu2 = w[WS_MU2]
-        alpha = w[WS_ALPHA]
-        b_m = w[WS_BM]
-        nq = n + 7
-        k = kw + kp
-        om = F_ARR
-        iidx = I_TRACK + n
-        itr = I_TRACK
-        p = q[7:]
-        u = q[3:7]
-        c1 = w[WS_C1 : WS_C1 + 7].copy()
-        c2 = w[WS_C2 : WS_C2 + 7].copy()
-        Qa = np.empty(nq)  # Q_α: body rows in w, rod rows in out (see forces.rod_pass)
-        for i in range(7):
-            Qa[i] = w[WS_QB + i]
-        for i in range(n):
-            Qa[7 + i] = out[nq + 7 + i] if ip[itr + i] else out[7 + i]
-        bc = np.empty(k)
-        for j in range(kw):
-            bc[j] = w[WS_BW + j]
-        for j in range(kp):
-            bc[kw + j] = out[7 + (ip[iidx + j] & IX)]
-        Hw = np.empty((kw, 4))  # the tracked rows of H(u), Eq. (85)
-        for j in range(kw):
-            for c in range(4):
-                Hw[j, c] = w[WS_H + 4 * (ip[I_COMP + j] & IX) + c]
-        qdd = out[:nq]
-        QC = out[nq : 2 * nq]
-        tau = out[2 * nq : 2 * nq + 3]
-        res = out[2 * nq + 3 : 2 * nq + 3 + k]
-
-        SB = np.empty((7, 7))  # body block of M_α, then its Schur complement over all rods
-        for i in range(7):
-            for j in range(7):
-                SB[i, j] = w[WS_MB + 7 * i + j]
-        for i in range(4):
-            for j in range(4):
-                SB[3 + i, 3 + j] += alpha * u[i] * u[j]
-        if s > 0.0:
-            for i in range(7):
-                for j in range(7):
-                    SB[i, j] -= (
-                        mu0 * c1[i] * c1[j]
-                        + mu1 * (c1[i] * c2[j] + c2[i] * c1[j])
-                        + mu2 * c2[i] * c2[j]
-                    ) / s
-        if not chol(SB, 7):
+        ok, SB, c1, c2, s, om, y, sm, lam_m, acc, bc, Hw = prepare(q, fp, ip, out, w)
+        if not ok:
             return STATUS_NOT_PD
-        a0 = Qa.copy()
-        ma_solve(SB, c1, c2, s, fp, om, p, n, a0)
-        y = np.zeros(nq)
-        for c in range(4):
-            y[3 + c] = u[c]
-        ma_solve(SB, c1, c2, s, fp, om, p, n, y)
-        sm = 0.0
-        am_a0 = 0.0
-        for c in range(4):
-            sm += u[c] * y[3 + c]
-            am_a0 += u[c] * a0[3 + c]
-        lam_m = (b_m - am_a0) / sm
-        acc = a0 + lam_m * y  # Eq. (60)
-        # Z = K A_cᵀ column by column: x = M_α⁻¹ A_c[j]ᵀ, z_j = x - y (A_c[j] y)/s_m; r = b_c - A_c a
-        Z = np.empty((nq, k))
-        r = np.empty(k)
-        x = np.empty(nq)
-        for j in range(k):
-            for i in range(nq):
-                x[i] = 0.0
-            if j < kw:
-                ay = 0.0
-                aa = 0.0
-                for c in range(4):
-                    x[3 + c] = Hw[j, c]
-                    ay += Hw[j, c] * y[3 + c]
-                    aa += Hw[j, c] * acc[3 + c]
-            else:
-                i_m = ip[iidx + j - kw] & IX
-                x[7 + i_m] = 1.0
-                ay = y[7 + i_m]
-                aa = acc[7 + i_m]
-            r[j] = bc[j] - aa
-            ma_solve(SB, c1, c2, s, fp, om, p, n, x)
-            f = ay / sm
-            for i in range(nq):
-                Z[i, j] = x[i] - y[i] * f
+        nq = (ip[I_N] & IX) + 7
         Qc = np.empty(nq)
-        if not min_norm_solve(Z, nq, k, r, Qc):
+        v = np.empty(nq)
+        if not control_force(q, fp, ip, w, SB, c1, c2, s, om, y, sm, acc, bc, Hw, Qc, v):
             return STATUS_NOT_PD
-        v = Qc.copy()  # q̈ = a + K Q_c
-        ma_solve(SB, c1, c2, s, fp, om, p, n, v)
-        am_v = 0.0
-        yQc = 0.0
-        for c in range(4):
-            am_v += u[c] * v[3 + c]
-        for i in range(nq):
-            yQc += y[i] * Qc[i]
-        for i in range(nq):
-            qdd[i] = acc[i] + v[i] - y[i] * (am_v / sm)
-        corr = lam_m - yQc / sm  # Q^C = Q_c + a_m (λ_m - yᵀQ_c/s_m)
-        for i in range(nq):
-            QC[i] = Qc[i]
-        for c in range(4):
-            QC[3 + c] += u[c] * corr
-        # torque τ = ¼ H Q^C_u of the applied control force (docs/errata.md C4), residual A_c q̈ - b_c
-        for rr in range(3):
-            vv = 0.0
-            for c in range(4):
-                vv += w[WS_H + 4 * rr + c] * Qc[3 + c]
-            tau[rr] = 0.25 * vv
-        for j in range(kw):
-            vv = 0.0
-            for c in range(4):
-                vv += Hw[j, c] * qdd[3 + c]
-            res[j] = vv - bc[j]
-        for j in range(kp):
-            res[kw + j] = qdd[7 + (ip[iidx + j] & IX)] - bc[kw + j]
+        finish(q, ip, out, w, y, sm, lam_m, acc, bc, Hw, Qc, v)
         return STATUS_OK
 
     return solve_identity
 
 
-def _make_evaluate(deps: int):
-    """:func:`evaluate` closing over the kernel's source fingerprint (see
-    :func:`analytic.kernel.jit.jit_entry`)."""
+evaluate = make_evaluate(W_IDENTITY)
+"""One evaluation under the identity weighting: ``evaluate(t, q, qd, fp, ip, out) -> status``
+(:func:`analytic.kernel.weighting.make_evaluate`; the full output only)."""
 
-    def evaluate(t, q, qd, fp, ip, out):
-        """One evaluation of the controlled dynamics under the identity weighting.
-
-        Args:
-            t: time, s. q, qd: state ``[R, u, p]`` and its rate, shape (nq,).
-            fp, ip: packed parameters (:func:`analytic.fast.pack`).
-            out: ``[q̈, Q^C, τ, A_c q̈ - b_c]``, length ``2 nq + 3 + k`` (the full output).
-
-        Returns:
-            status: 0 done; 1 not numerically positive definite, or ``Z`` numerically rank
-            deficient (the caller falls back); 2 the scene is not controlled under this weighting,
-            or ``out`` is shorter than the full output. With a nonzero status ``out`` is
-            unspecified.
-        """
-        if deps < 0:  # never true: ties numba's cache key to the kernel's sources
-            return STATUS_UNSUPPORTED
-        return join(t, q, qd, fp, ip, out)
-
-    return evaluate
-
-
-@inner
-def join(t, q, qd, fp, ip, out):
-    """:func:`evaluate`'s body, called by compiled callers (``analytic.kernel.entry.evaluate_as``):
-    the two compiled halves called by the addresses in ``ip`` (:mod:`analytic.kernel.abi`;
-    ``STATUS_UNSUPPORTED`` when they are not set)."""
-    n = ip[I_N] & IX
-    kw = ip[I_KW] & IX
-    kp = ip[I_KP] & IX
-    if kw + kp == 0 or ip[I_WEIGHT] != W_IDENTITY:
-        return STATUS_UNSUPPORTED
-    full = out.shape[0] >= 2 * (n + 7) + 3 + kw + kp
-    if not full:  # this weighting needs Q^C on the way to q̈: the whole output
-        return STATUS_UNSUPPORTED
-    return call_halves(t, q, qd, fp, ip, out, full)
-
-
-evaluate = jit_entry(_make_evaluate)
-
-
-def _make_qddot_into(deps: int):
-    def qddot_into(t, q, qd, fp, ip, qdd):
-        """:func:`evaluate` reduced to ``q̈`` (written into ``qdd``, shape (nq,)): the same numbers,
-        computed through the full output (this weighting needs ``Q^C`` on the way)."""
-        if deps < 0:  # never true: ties numba's cache key to the kernel's sources
-            return STATUS_UNSUPPORTED
-        nq = (ip[I_N] & IX) + 7
-        out = np.empty(2 * nq + 3 + (ip[I_KW] & IX) + (ip[I_KP] & IX))
-        status = evaluate(t, q, qd, fp, ip, out)
-        if status == STATUS_OK:
-            qdd[:] = out[:nq]
-        return status
-
-    return qddot_into
-
-
-qddot_into = jit_entry(_make_qddot_into)
+qddot_into = make_qddot_into(W_IDENTITY)
+"""``qddot_into(t, q, qd, fp, ip, qdd) -> status``: :data:`evaluate` reduced to ``q̈``."""

@@ -8,7 +8,6 @@ in the same order. :func:`rotation` is the one compiled ``S(u)`` of the project.
 
 from __future__ import annotations
 
-from analytic.kernel.jit import inner
 from analytic.kernel.layout import (
     F_J,
     F_TAT,
@@ -27,6 +26,7 @@ from analytic.kernel.layout import (
     WS_SLAU,
     WS_SLDD,
 )
+from analytic.runtime.jit import inner
 
 
 @inner

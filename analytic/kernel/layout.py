@@ -4,20 +4,32 @@ its stack workspace. Defined here once; the packer, the kernel stages and the co
 (:mod:`analytic.fast_rhs`, :mod:`mj_bridge.fast_stage`, :mod:`mj_bridge.native`,
 :mod:`mj_bridge.pinocchio_plant`) all read these names.
 
-Pure constants and two plain functions; no numba here (``pack`` imports it without compiling).
+Pure constants, one record type and plain functions; no numba here (``pack`` imports it without
+compiling).
 
 ``fp``: a fixed head (``F_*``, ``F_ARR`` slots) then, for n masses and k_p tracked masses, the
-tail of :func:`tail_offsets`: ``m (n), p_e (n), k_l (n+1), k_n (n+1)``, the mass track
-``l, λ, α, β`` (k_p each, Eq. 75, 78) and the rod geometry ``a (3), d (3)`` (body axes).
+tail of :func:`tail_offsets` (:class:`FpTail`): ``m (n), p_e (n)``, each spring law's coefficients
+(n+1 each, :data:`LAW_INDEX`), the mass
+track ``l, λ, α, β`` (k_p each, Eq. 75, 78) and the rod geometry ``a (3), d (3)`` (body axes).
 
-``ip``: a fixed head (``I_*``), then the per-mass tracked flag (n) at ``I_TRACK`` and the tracked
-indices (k_p, 0-based) at ``I_TRACK + n``.
+``ip``: a fixed head (``I_*``, ``I_TRACK`` slots), then the per-mass tracked flag (n) at
+``I_TRACK`` and the tracked indices (k_p, 0-based) at ``I_TRACK + n``.
+
+Adding a parameter is a change here plus the stage that reads it (and the packer that writes it):
+a tail block is a field of :class:`FpTail` and a line of :func:`tail_offsets`; a head slot or flag
+is a new ``F_*`` / ``I_*`` constant, with ``F_ARR`` / ``I_TRACK`` (the head's length) moved past it.
+Every reader names the slots it reads, so no other reader changes.
 
 The kernel's output ``out`` (:func:`output_length`): ``[q̈ (nq), Q^C (nq), τ (3), A_c q̈ - b_c (k)]``
 with ``nq = n + 7``; an ``out`` of length ``nq`` asks for ``q̈`` only (Gauss weighting).
 """
 
 from __future__ import annotations
+
+from typing import NamedTuple
+
+from analytic.effects import Effect
+from analytic.effects.registry import SPRING_LAWS
 
 # ----------------------------------------------------------------------------------------------
 # fp head
@@ -36,7 +48,15 @@ F_WS = 26  # 3: ω frequencies σ (Eq. 76), rad/s
 F_GAIN = 29  # k_ω x k_ω gain P (Eq. B6), row-major (9 slots)
 F_TAT = 38  # 48: T_a (3, 4, 4) row-major, L_a(u) = T_a @ u (Eq. 29; kinematics.kinematic_terms)
 F_TDT = 86  # 48: T_d, L_d(u) = T_d @ u (Eq. 34)
-F_ARR = 134  # start of the tail (tail_offsets)
+F_ARR = 134  # the head's length: the start of the tail (tail_offsets)
+
+# ----------------------------------------------------------------------------------------------
+# The spring laws (analytic.effects.registry.SPRING_LAWS): one on/off flag each in ip, one block of
+# n + 1 coefficients each in fp's tail, in the laws' order; a law declared later needs no change here
+# ----------------------------------------------------------------------------------------------
+N_LAWS = len(SPRING_LAWS)
+LAW_INDEX: dict[Effect, int] = {law.effect: j for j, law in enumerate(SPRING_LAWS)}
+"""``effect -> j``: its flag is ``ip[I_LAWS + j]``, its coefficients ``fp[o.laws + j (n + 1) :]``."""
 
 # ----------------------------------------------------------------------------------------------
 # ip head
@@ -45,14 +65,13 @@ I_N = 0  # n, number of masses
 I_KW = 1  # k_ω, tracked ω components
 I_KP = 2  # k_p, tracked masses
 I_GRAV = 3  # 1: gravity on
-I_SLIN = 4  # 1: linear springs on
-I_SCUB = 5  # 1: cubic springs on
-I_TORQ = 6  # 1: given torque on (Remark 2)
-I_WEIGHT = 7  # W_GAUSS, W_MINV2 or W_IDENTITY
-I_COMP = 8  # 3 slots: the tracked ω components (0-based)
-I_FN_SYSTEM = 11  # address of the compiled stages 1-6 in this process (analytic.kernel.halves)
-I_FN_SOLVE = 12  # address of the compiled solve of this scene's weighting, in this process
-I_TRACK = 13  # n: 1 for a tracked mass; then the k_p tracked indices
+I_TORQ = 4  # 1: given torque on (Remark 2)
+I_WEIGHT = 5  # W_GAUSS, W_MINV2 or W_IDENTITY
+I_COMP = 6  # 3 slots: the tracked ω components (0-based)
+I_FN_SYSTEM = 9  # address of the compiled stages 1-6 in this process (analytic.kernel.halves)
+I_FN_SOLVE = 10  # address of the compiled solve of this scene's weighting, in this process
+I_LAWS = 11  # N_LAWS slots: 1 where a spring law is on, in the order of SPRING_LAWS
+I_TRACK = I_LAWS + N_LAWS  # the head's length: n flags (1 for a tracked mass), then the k_p tracked indices
 
 W_GAUSS = 0  # N = M⁻¹, the paper's Eq. (89)
 W_MINV2 = 1  # N = M⁻² (Eq. B13)
@@ -68,35 +87,64 @@ matrix ``ZᵀZ``, whose eigenvalues are squares of the singular values of the sc
 IX = 0x7FFFFFFF
 """Mask for sizes and indices read from ``ip`` inside the kernel. The values are small and
 non-negative, so the mask changes nothing; it lets LLVM prove every array index non-negative and
-drop numba's negative-index wrap-around code, which otherwise tripled the cost of the O(n) loops."""
+drop numba's negative-index wrap-around code, which otherwise dominates the cost of the O(n) loops
+(``docs/performance.md``)."""
 
 STATUS_OK = 0
 STATUS_NOT_PD = 1  # a Schur complement or the bordered Gram matrix is not numerically PD
 STATUS_UNSUPPORTED = 2  # not this solve's scene, output too short, or halves not bound
 
 
-def tail_offsets(n: int, kp: int) -> tuple[int, int, int, int, int, int, int, int, int, int, int]:
-    """Offsets in ``fp`` of ``m, p_e, k_l, k_n, l, λ, α, β, a, d`` and the total length of ``fp``.
+class FpTail(NamedTuple):
+    """Offsets in ``fp`` of the tail's blocks (each block's length in its comment) and ``end``,
+    the length of ``fp``. Read by name (``tail_offsets(n, kp).p_e``), never unpacked: a block added
+    to the tail is one field here and one line in :func:`tail_offsets` (and its length in
+    ``tests/analytic/kernel/test_layout.py``), and no reader changes. numba compiles the record as
+    a tuple of ints (no per-call cost once inlined)."""
 
-    Plain arithmetic; compiled code calls it as :data:`analytic.kernel.system.tail` (the same
+    m: int  # (n) masses m_i, kg
+    p_e: int  # (n) spring equilibria p_e,i, m
+    laws: int  # (N_LAWS (n + 1)) each spring law's coefficients, in the laws' order (LAW_INDEX)
+    l: int  # (k_p) mass track amplitudes l (Eq. 75)
+    lam: int  # (k_p) mass track frequencies λ (Eq. 75)
+    alpha: int  # (k_p) mass track gains α (Eq. 78)
+    beta: int  # (k_p) mass track gains β (Eq. 78)
+    a: int  # (3) rod axis a, body axes
+    d: int  # (3) rod offset d, body axes, m
+    end: int  # the length of fp
+
+
+def tail_offsets(n: int, kp: int) -> FpTail:
+    """Where each block of ``fp``'s tail starts, for n masses and k_p tracked masses.
+
+    Plain arithmetic; compiled code calls it as :data:`analytic.kernel.calls.tail` (the same
     function, compiled inline).
     """
     o_m = F_ARR
     o_pe = o_m + n
-    o_kl = o_pe + n
-    o_kn = o_kl + n + 1
-    o_l = o_kn + n + 1
+    o_laws = o_pe + n
+    o_l = o_laws + N_LAWS * (n + 1)
     o_lam = o_l + kp
     o_alpha = o_lam + kp
     o_beta = o_alpha + kp
     o_a = o_beta + kp
     o_d = o_a + 3
-    return o_m, o_pe, o_kl, o_kn, o_l, o_lam, o_alpha, o_beta, o_a, o_d, o_d + 3
+    return FpTail(o_m, o_pe, o_laws, o_l, o_lam, o_alpha, o_beta, o_a, o_d, o_d + 3)
+
+
+def law_offset(o: FpTail, n: int, j: int) -> int:
+    """Where spring law ``j``'s n + 1 coefficients start in ``fp`` (``j = LAW_INDEX[effect]``)."""
+    return o.laws + j * (n + 1)
 
 
 def ip_length(n: int, kp: int) -> int:
     """Length of ``ip``: the head, the n tracked flags and the k_p tracked indices."""
     return I_TRACK + n + kp
+
+
+def fp_length(n: int, kp: int) -> int:
+    """Length of ``fp``: the head and the tail (:func:`tail_offsets`)."""
+    return tail_offsets(n, kp).end
 
 
 def output_length(n: int, k: int) -> int:
@@ -105,9 +153,9 @@ def output_length(n: int, k: int) -> int:
 
 
 # ----------------------------------------------------------------------------------------------
-# Workspace: one float64 array on the stack per evaluation (analytic.kernel.jit.workspace), carved
+# Workspace: one float64 array on the stack per evaluation (analytic.runtime.jit.workspace), carved
 # by these offsets, instead of ~30 small np.empty/np.zeros (each a heap allocation plus reference
-# counting, ~20 ns). The stages hand each other their results through these slots.
+# counting). The stages hand each other their results through these slots.
 # ----------------------------------------------------------------------------------------------
 WS_MB = 0  # 49: body block M_bb of M (Eq. 51), row-major 7x7, both triangles
 WS_S4 = 49  # 4x4 (row stride 4, lower triangle): S_4, the Schur complement on the u block

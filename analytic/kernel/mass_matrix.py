@@ -14,7 +14,6 @@ So only the 7x7 body block and the two 7-vectors are stored.
 
 from __future__ import annotations
 
-from analytic.kernel.jit import inner
 from analytic.kernel.layout import (
     F_J,
     F_MBR,
@@ -31,6 +30,7 @@ from analytic.kernel.layout import (
     WS_PM,
     WS_SA,
 )
+from analytic.runtime.jit import inner
 
 
 @inner

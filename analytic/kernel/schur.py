@@ -21,7 +21,6 @@ steps.)
 
 from __future__ import annotations
 
-from analytic.kernel.jit import inner
 from analytic.kernel.layout import (
     F_MBR,
     F_MU0,
@@ -52,6 +51,7 @@ from analytic.kernel.layout import (
     WS_T1,
     WS_XR,
 )
+from analytic.runtime.jit import inner
 
 
 @inner

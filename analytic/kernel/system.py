@@ -8,7 +8,7 @@ follows is the weighting's: :mod:`analytic.kernel.gauss` or :mod:`analytic.kerne
 
 from __future__ import annotations
 
-from analytic.kernel.abi import tail
+from analytic.kernel.calls import tail
 from analytic.kernel.constraints import control_rows, modeling_row
 from analytic.kernel.forces import body_forces, rod_pass
 from analytic.kernel.kinematics import kinematic_terms
@@ -17,7 +17,7 @@ from analytic.kernel.mass_matrix import body_block
 
 
 def make_build_system(deps: int):
-    """The C callback body of stages 1-6 (:data:`analytic.kernel.abi.SYSTEM_SIG`), closing over
+    """The C callback body of stages 1-6 (:data:`analytic.runtime.abi.SYSTEM_SIG`), closing over
     the kernel's source fingerprint ``deps`` (numba hashes closure variables into its cache key, so
     an edit of any kernel file recompiles it). :mod:`analytic.kernel.halves` compiles it once."""
 
@@ -35,15 +35,15 @@ def make_build_system(deps: int):
         n = ip[I_N] & IX
         kw = ip[I_KW] & IX
         kp = ip[I_KP] & IX
-        o_m, o_pe, o_kl, o_kn, o_l, o_lam, o_alpha, o_beta, o_a, _o_d, _end = tail(n, kp)
-        kinematic_terms(q, qd, fp, o_a, w)
-        rod_pass(q, qd, fp, ip, n, o_m, o_pe, o_kl, o_kn, out, on, w)
+        o = tail(n, kp)  # the offsets of fp's tail, read by name by the stages that need them
+        kinematic_terms(q, qd, fp, o.a, w)
+        rod_pass(q, qd, fp, ip, n, o, out, on, w)
         body_block(fp, w)
         body_forces(t, q, qd, fp, ip, w)
         modeling_row(q, qd, fp, n + 7, w)
-        control_rows(t, q, qd, fp, ip, n, kw, kp, o_m, o_pe, o_l, o_lam, o_alpha, o_beta, out, w)
+        control_rows(t, q, qd, fp, ip, n, kw, kp, o, out, w)
 
     return build_system
 
 
-__all__ = ["make_build_system", "tail"]
+__all__ = ["make_build_system"]

@@ -28,53 +28,59 @@ Units are SI; *body* vectors in BR's principal axes at C, *inertial* ones in XYZ
 quaternions w-first; mass and axis indices 1-based in files, 0-based in the records.
 """
 
-from analytic.scene.builtin import BUILTIN_DIR, builtin_scene_names, builtin_scene_path
-from analytic.scene.dump import modified_scene
-from analytic.scene.limits import (
-    AXIS_NORMALISE_TOL,
-    AXIS_REFUSE_TOL,
-    GRID_RTOL,
-    MAX_INERTIA,
-    MAX_MASS,
-    MAX_MASSES,
-    MAX_MUJOCO_STEPS,
-    MAX_OUTPUT_SAMPLES,
-    MAX_SCENE_BYTES,
-    MAX_SCENE_NESTING,
-    QUAT_NORMALISE_TOL,
-    QUAT_REFUSE_TOL,
-    ROTATION_EXACT_TOL,
-    ROTATION_REFUSE_TOL,
-)
-from analytic.scene.loading import Scene, scene_from_dict
-from analytic.scene.parsers import IDENTITY_QUATERNION
-from analytic.scene.reading import load_scene
-from analytic.scene.records import (
-    Body,
-    BodyShape,
-    Control,
-    ExternalTorque,
-    InitialState,
-    Masses,
-    MassTrack,
-    MujocoSettings,
-    OmegaTrack,
-    OutputSettings,
-    Rod,
-    SceneRecord,
-    SolverSettings,
-    Springs,
-    Stabilization,
-    output_times,
-)
-from analytic.scene.twin import (
-    MJ_MINVAL,
-    POINT_INERTIA_MIN,
-    POINT_INERTIA_REL,
-    TRIANGLE_RTOL,
-    twin_point_inertia,
-)
-from analytic.scene.values import SceneText, as_enum
+from analytic.runtime.lazy import lazy_exports
+
+_PUBLIC = {
+    "BUILTIN_DIR": "analytic.scene.builtin",
+    "builtin_scene_names": "analytic.scene.builtin",
+    "builtin_scene_path": "analytic.scene.builtin",
+    "modified_scene": "analytic.scene.dump",
+    "AXIS_NORMALISE_TOL": "analytic.scene.limits",
+    "AXIS_REFUSE_TOL": "analytic.scene.limits",
+    "GRID_RTOL": "analytic.scene.limits",
+    "MAX_INERTIA": "analytic.scene.limits",
+    "MAX_MASS": "analytic.scene.limits",
+    "MAX_MASSES": "analytic.scene.limits",
+    "MAX_MUJOCO_STEPS": "analytic.scene.limits",
+    "MAX_OUTPUT_SAMPLES": "analytic.scene.limits",
+    "MAX_SCENE_BYTES": "analytic.scene.limits",
+    "MAX_SCENE_NESTING": "analytic.scene.limits",
+    "QUAT_NORMALISE_TOL": "analytic.scene.limits",
+    "QUAT_REFUSE_TOL": "analytic.scene.limits",
+    "ROTATION_EXACT_TOL": "analytic.scene.limits",
+    "ROTATION_REFUSE_TOL": "analytic.scene.limits",
+    "Scene": "analytic.scene.loading",
+    "scene_from_dict": "analytic.scene.loading",
+    "IDENTITY_QUATERNION": "analytic.scene.parsers",
+    "load_scene": "analytic.scene.reading",
+    "Body": "analytic.scene.records",
+    "BodyShape": "analytic.scene.records",
+    "Control": "analytic.scene.records",
+    "ExternalTorque": "analytic.scene.records",
+    "InitialState": "analytic.scene.records",
+    "Masses": "analytic.scene.records",
+    "MassTrack": "analytic.scene.records",
+    "MujocoSettings": "analytic.scene.records",
+    "OmegaTrack": "analytic.scene.records",
+    "OutputSettings": "analytic.scene.records",
+    "Rod": "analytic.scene.records",
+    "SceneRecord": "analytic.scene.records",
+    "SolverSettings": "analytic.scene.records",
+    "Springs": "analytic.scene.records",
+    "Stabilization": "analytic.scene.records",
+    "output_times": "analytic.scene.records",
+    "MJ_MINVAL": "analytic.scene.twin",
+    "POINT_INERTIA_MIN": "analytic.scene.twin",
+    "POINT_INERTIA_REL": "analytic.scene.twin",
+    "TRIANGLE_RTOL": "analytic.scene.twin",
+    "twin_point_inertia": "analytic.scene.twin",
+    "SceneText": "analytic.scene.values",
+    "as_enum": "analytic.scene.values",
+}
+"""Public name -> the module it lives in: imported on first use, so that a module of the package
+(``analytic.scene.key``, which the effect declarations read) is imported without the loader."""
+
+__getattr__, __dir__ = lazy_exports(__name__, _PUBLIC, globals())
 
 __all__ = [
     "AXIS_NORMALISE_TOL",

@@ -30,6 +30,7 @@ from typing import Any
 
 import numpy as np
 
+from analytic.effects.registry import SPRING_LAWS
 from analytic.scene.limits import QUAT_NORMALISE_TOL
 from analytic.scene.loading import Scene, scene_from_dict
 from analytic.scene.schema import DEFAULT_GRAVITY
@@ -80,7 +81,7 @@ def _table_masses(scene: Scene) -> dict[str, Any] | None:
 
 def _table_springs(scene: Scene) -> dict[str, Any] | None:
     sp = scene.springs
-    out = {k: _floats(getattr(sp, k)) for k in ("k_linear", "k_cubic") if k in sp.given}
+    out = {law.key.key: _floats(sp.of(law)) for law in SPRING_LAWS if law.key.key in sp.given}
     return out or None
 
 
@@ -198,6 +199,7 @@ def modified_scene(scene: Scene, changes: Mapping[str, Any]) -> Scene:
     Raises:
         ValueError: naming the changed field that the loader refuses, and its value.
     """
+
     def merge(base: dict[str, Any], over: Mapping[str, Any]) -> dict[str, Any]:
         out = dict(base)
         for key, value in over.items():

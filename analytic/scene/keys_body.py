@@ -8,6 +8,7 @@ Part of :data:`analytic.scene.schema.KEYS`, the one table the loader, its cross-
 from __future__ import annotations
 
 from analytic.effects import Effect, ShapeKind
+from analytic.effects.registry import SPRING_LAWS
 from analytic.scene.key import DEFAULT_GRAVITY, Key, Kind, Need
 
 _R = Need.REQUIRED
@@ -296,33 +297,7 @@ BODY_KEYS: tuple[Key, ...] = (
         "The n + 1 spring elements wall – m_1 – m_2 – … – m_n – wall (Eq. 38); see *Springs* above.",
         default_text="no springs",
     ),
-    Key(
-        "springs",
-        "k_linear",
-        Kind.VECTOR_N1,
-        "N/m",
-        "Linear stiffnesses `k_i^l`; spring 1 joins the near wall and m_1, spring i joins m_(i-1) "
-        "and m_i, spring n + 1 joins m_n and the far wall.",
-        _C,
-        default_text="zeros",
-        when="required by the effect springs.linear (n > 0)",
-        bounds="≥ 0",
-        effect=Effect.SPRINGS_LINEAR,
-        effect_needs=True,
-    ),
-    Key(
-        "springs",
-        "k_cubic",
-        Kind.VECTOR_N1,
-        "N/m³",
-        "Cubic stiffnesses `k_i^n`, the same springs in parallel (force `k^n x³` at extension x).",
-        _C,
-        default_text="zeros",
-        when="required by the effect springs.cubic (n > 0)",
-        bounds="≥ 0",
-        effect=Effect.SPRINGS_CUBIC,
-        effect_needs=True,
-    ),
+    *(law.key for law in SPRING_LAWS),  # declared with their laws (analytic.effects)
     # ---- [gravity] -----------------------------------------------------------------------------
     Key(
         "",

@@ -15,8 +15,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from analytic.effects import Effect
+from analytic.effects.registry import SPRING_LAWS
 from analytic.kinematics import S, udot_of
-from analytic.scene.schema import key_spec
 from analytic.scene.values import show
 
 if TYPE_CHECKING:
@@ -42,9 +42,9 @@ def initial_fields(scene: Scene) -> dict[str, np.ndarray]:
     }
     zeros3 = np.zeros(3)
     f["gravity.vector"] = np.array(scene.gravity, float) if scene.has(Effect.GRAVITY) else zeros3
-    for spec in (key_spec("springs", "k_linear"), key_spec("springs", "k_cubic")):
-        on = scene.has(spec.effect)  # (the effect that reads the key, as declared)
-        f[spec.dotted] = np.array(getattr(scene.springs, spec.key), float) * (1.0 if on else 0.0)
+    for law in SPRING_LAWS:
+        on = scene.has(law.effect)
+        f[law.key.dotted] = np.array(scene.springs.of(law), float) * (1.0 if on else 0.0)
     ext = scene.external_torque if scene.has(Effect.EXTERNAL_TORQUE) else None
     f["external_torque.constant"] = np.array(ext.constant, float) if ext else zeros3
     f["external_torque.amplitude"] = np.array(ext.amplitude, float) if ext else zeros3
@@ -122,15 +122,27 @@ def derived_quantities(
     out["gravitational energy"] = (grav_fields, np.array([u_grav]))
     f_grav_rod = m * (a @ gb)
     torque = np.sum(m[:, None] * np.cross(rho, np.broadcast_to(gb, rho.shape)), axis=0)
-    # springs: extensions x (n + 1), energy ½k x² + ¼k^n x⁴, force along the rod on each mass
-    spring_fields = ("springs.k_linear", "springs.k_cubic", "initial.p", "masses.p_e")
-    k_l, k_n = v["springs.k_linear"], v["springs.k_cubic"]
+    # springs: extensions e and their rates (n + 1), each law's energy c ψ(e) and tension
+    # c φ(e, ė), the force along the rod on each mass
+    spring_fields = (
+        *(law.key.dotted for law in SPRING_LAWS),
+        "initial.p",
+        "masses.p_e",
+        *(("initial.pdot",) if any(law.dissipation for law in SPRING_LAWS) else ()),
+    )
     f_spring_rod = np.zeros(n)
     if n:
         x = p - v["masses.p_e"]
         ext = np.concatenate([x[:1], x[1:] - x[:-1], -x[-1:]])
-        u_spring = np.sum(0.5 * k_l * ext**2 + 0.25 * k_n * ext**4)
-        f = k_l * ext + k_n * ext**3
+        pd = v["initial.pdot"]
+        ext_rate = np.concatenate([pd[:1], pd[1:] - pd[:-1], -pd[-1:]])
+        u_spring = 0.0
+        f = np.zeros(n + 1)
+        for law in SPRING_LAWS:
+            c = v[law.key.dotted]
+            if law.potential is not None:
+                u_spring += float(np.sum(c * law.potential(ext)))
+            f = f + c * law.force(ext, ext_rate)
         f_spring_rod = f[1:] - f[:-1]
         out["spring energy"] = (spring_fields, np.array([u_spring]))
         out["spring forces"] = (spring_fields, f)

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from analytic.effects import MjIntegrator, ShapeKind, SolverMethod, SpringModel, Weighting
+from analytic.effects.registry import SPRING_LAWS
 from analytic.kinematics import axis_angle_quat, matrix_quat, quat_mul
 from analytic.scene.limits import MAX_INERTIA, MAX_MASSES, QUAT_NORMALISE_TOL, QUAT_REFUSE_TOL
 from analytic.scene.records import (
@@ -211,14 +212,16 @@ def parse_masses(t: Table | None, axis: np.ndarray) -> Masses:
 
 
 def parse_springs(t: Table | None, n: int) -> Springs:
+    """``[springs]``: each spring law's coefficients (n + 1, ≥ 0; zeros when not given)."""
+    zeros = frozen(np.zeros(n + 1))
     if t is None:
-        z = frozen(np.zeros(n + 1))
-        return Springs(k_linear=z, k_cubic=z, given=frozenset())
-    given = frozenset(k for k in ("k_linear", "k_cubic") if t.has(k))
-    kl = t.vector("k_linear", n + 1, frozen(np.zeros(n + 1)), nonneg=True)
-    kn = t.vector("k_cubic", n + 1, frozen(np.zeros(n + 1)), nonneg=True)
+        return Springs(coefficients={law.key.key: zeros for law in SPRING_LAWS})
+    given = frozenset(law.key.key for law in SPRING_LAWS if t.has(law.key.key))
+    coefficients = {
+        law.key.key: t.vector(law.key.key, n + 1, zeros, nonneg=True) for law in SPRING_LAWS
+    }
     t.finish()
-    return Springs(k_linear=kl, k_cubic=kn, given=given)
+    return Springs(coefficients=coefficients, given=given)
 
 
 def parse_initial(t: Table, n: int) -> InitialState:

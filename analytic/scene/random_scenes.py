@@ -12,7 +12,8 @@ What a draw looks like (SI units; body axes are BR's principal axes at C):
 * ``n`` masses (default a random 1…6) of ``J̄/10 · U(0.2, 3)`` kg, or ``J̄/10 · 10^e`` for given
   exponents ``e``; equilibria ``p_e`` sorted in ``U(-3, 3)`` m; each mass's own inertia a ring
   (``ring_radius ~ U(0, 0.5)`` m, Remark 1) or a random body-axis matrix (:class:`MassInertia`);
-* springs ``k_l ~ m̄ U(1, 10)`` N/m, ``k_n ~ m̄ U(0, 1)`` N/m³; gravity ``N(0, 1)`` m/s²;
+* springs: each law's coefficients ``~ m̄ U(lo, hi)`` (its declared ``random``: ``k_l ~ m̄ U(1, 10)``
+  N/m, ``k_n ~ m̄ U(0, 1)`` N/m³); gravity ``N(0, 1)`` m/s²;
 * an initial state on the manifold: ``R, Ṙ, ω ~ N(0, 1)``, ``p = p_e + N(0, 0.3²)``, ``ṗ ~ N(0, 1)``,
   a uniformly random unit quaternion (w first);
 * with ``controlled``: ω tracking of a random non-empty subset of the axes and tracking of a random
@@ -34,6 +35,7 @@ from typing import Any
 import numpy as np
 
 from analytic.effects import Effect, SpringModel
+from analytic.effects.registry import SPRING_LAWS
 from analytic.kinematics import udot_of
 from analytic.scene.loading import Scene, scene_from_dict
 
@@ -141,9 +143,10 @@ def random_scene_dict(
         "body": {"mass": body_mass, "inertia": J.tolist()},
         "rod": {"axis": a.tolist(), "offset": d.tolist()},
         "masses": masses,
-        "springs": {
-            "k_linear": (rng.uniform(1, 10, n + 1) * m_scale).tolist(),
-            "k_cubic": (rng.uniform(0, 1, n + 1) * m_scale).tolist(),
+        "springs": {  # each seeded law's c ~ m̄ U(lo, hi), in the laws' order
+            law.key.key: (rng.uniform(*law.random, n + 1) * m_scale).tolist()
+            for law in SPRING_LAWS
+            if law.seeded
         },
         "gravity": {"vector": rng.normal(size=3).tolist()},
         "initial": {
@@ -198,6 +201,9 @@ def random_scene_dict(
             "amplitude": (rng.normal(size=3) * J).tolist(),
             "frequency": float(rng.uniform(0, 3)),
         }
+    for law in SPRING_LAWS:  # a later law: after every other draw, only when it is listed
+        if n and not law.seeded and law.effect.value in data["scene"]["effects"]:
+            data["springs"][law.key.key] = (rng.uniform(*law.random, n + 1) * m_scale).tolist()
     return data
 
 
@@ -254,6 +260,9 @@ def unit_scene_dict(
             "k_linear": rng.uniform(1.0, 10.0, n + 1).tolist(),
             "k_cubic": rng.uniform(0.5, 5.0, n + 1).tolist(),
         }
+        for law in SPRING_LAWS:  # a later law: after every other draw, only when it is listed
+            if not law.seeded and law.effect.value in data["scene"]["effects"]:
+                data["springs"][law.key.key] = rng.uniform(*law.random, n + 1).tolist()
     return data
 
 

@@ -1,7 +1,7 @@
 """A scene file read: the path (or a built-in scene's name) to the TOML document, then to a
 :class:`~analytic.scene.records.Scene` through :func:`analytic.scene.loading.scene_from_dict`.
 
-The file is read by :mod:`analytic.safe_files` (a regular file only, never blocking, at most
+The file is read by :mod:`analytic.runtime.safe_files` (a regular file only, never blocking, at most
 :data:`~analytic.scene.limits.MAX_SCENE_BYTES`); its text is parsed with :mod:`tomllib` and
 nothing in it is ever evaluated.
 """
@@ -14,7 +14,7 @@ import stat
 import tomllib
 from pathlib import Path
 
-from analytic import safe_files
+from analytic.runtime import safe_files
 from analytic.scene.builtin import builtin_scene_names, builtin_scene_path
 from analytic.scene.limits import MAX_SCENE_BYTES, MAX_SCENE_NESTING
 from analytic.scene.loading import Scene, scene_from_dict

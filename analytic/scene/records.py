@@ -26,6 +26,7 @@ from analytic.effects import (
     SpringModel,
     Weighting,
 )
+from analytic.effects.declaration import SpringLaw
 from analytic.scene.limits import GRID_RTOL, MAX_OUTPUT_SAMPLES
 from analytic.scene.values import as_number, frozen
 
@@ -105,15 +106,29 @@ class Springs:
     """The n+1 spring elements of Eq. (38): spring i joins mass i-1 and mass i (0-based: spring 0
     joins O'-side end and mass 0, spring n joins mass n-1 and the far end).
 
+    One coefficient vector per spring law (:data:`analytic.effects.registry.SPRING_LAWS`), read
+    by its key's name as an attribute: ``k_linear`` (``k^l``, N/m), ``k_cubic`` (``k^n``, N/m³),
+    each shape (n+1,), zeros when not given.
+
     Attributes:
-        k_linear: ``k^l``, N/m, shape (n+1,).
-        k_cubic: ``k^n``, N/m³, shape (n+1,).
+        coefficients: ``key name -> coefficients``, every spring law's.
+        given: which of them the scene gave (an effect needs its constants given).
     """
 
-    k_linear: np.ndarray
-    k_cubic: np.ndarray
-    given: frozenset[str] = frozenset({"k_linear", "k_cubic"})
-    """Which of ``k_linear``, ``k_cubic`` the scene gave (an effect needs its constants given)."""
+    coefficients: Mapping[str, np.ndarray]
+    given: frozenset[str] = frozenset()
+
+    def __getattr__(self, name: str) -> np.ndarray:
+        if name.startswith("__") or name in ("coefficients", "given"):
+            raise AttributeError(name)
+        try:
+            return self.coefficients[name]
+        except KeyError:
+            raise AttributeError(f"Springs has no coefficients {name!r}") from None
+
+    def of(self, law: SpringLaw) -> np.ndarray:
+        """The coefficients of ``law``, N/m-like (its key's unit), shape (n+1,)."""
+        return self.coefficients[law.key.key]
 
 
 @dataclass(frozen=True)

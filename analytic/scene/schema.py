@@ -26,6 +26,7 @@ from analytic.effects import (
     SpringModel,
     Weighting,
 )
+from analytic.effects.registry import DECLARATIONS
 from analytic.scene.key import DEFAULT_GRAVITY, NO_DEFAULT, Key, Kind, Need
 from analytic.scene.keys_body import BODY_KEYS
 from analytic.scene.keys_motion import MOTION_KEYS
@@ -80,17 +81,9 @@ def generic_table(table: str, key: str) -> str:
     return spec.dotted
 
 
-EFFECT_WARNING_ORDER: tuple[Effect, ...] = (
-    Effect.GRAVITY,
-    Effect.EXTERNAL_TORQUE,
-    Effect.CONTROL_OMEGA,
-    Effect.CONTROL_MASSES,
-    Effect.SPRINGS_LINEAR,
-    Effect.SPRINGS_CUBIC,
-    Effect.MASS_INERTIA,
-)
+EFFECT_WARNING_ORDER: tuple[Effect, ...] = tuple(d.effect for d in DECLARATIONS)
 """The order in which the warning about data of unlisted effects names them (the order of
-:func:`effect_keys`)."""
+:func:`effect_keys`): the order of the declarations."""
 
 
 def effect_keys() -> tuple[Key, ...]:
@@ -101,15 +94,7 @@ def effect_keys() -> tuple[Key, ...]:
 
 
 CHOICE_MEANINGS: Mapping[StrEnum, str] = {
-    Effect.GRAVITY: "Uniform gravity on BR and every mass (Eq. 46), from `[gravity]`.",
-    Effect.SPRINGS_LINEAR: "The linear spring elements `k^l` (Eq. 38), from `springs.k_linear`.",
-    Effect.SPRINGS_CUBIC: "The cubic spring elements `k^n` (Eq. 38), from `springs.k_cubic`.",
-    Effect.MASS_INERTIA: "The masses' own rotational inertia (Remark 1, Eq. 54), from "
-    "`masses.ring_radius`, `inertia_axial` + `inertia_transverse` or `inertia_body`; without "
-    "it the masses are points.",
-    Effect.CONTROL_OMEGA: "Track the angular-velocity requirement `[control.omega]` (Eqs. 82–86).",
-    Effect.CONTROL_MASSES: "Track the mass-position requirement `[control.masses]` (Eqs. 77–81).",
-    Effect.EXTERNAL_TORQUE: "The given torque `[external_torque]` on BR (Remark 2, Eq. 61).",
+    **{d.effect: d.meaning for d in DECLARATIONS},
     ShapeKind.NONE: "No picture.",
     ShapeKind.BOX_AND_ROD: "A box (`box_*`) and the rod: Example 1's block with a corner rod.",
     ShapeKind.HOLLOW_CYLINDER_AND_ROD: "A closed hollow cylinder (`cylinder_*`) centred on C "

@@ -408,7 +408,11 @@ def test_identity_min_norm_solve_against_lstsq_and_its_rank_decision():
     e = rng.normal(size=9)
     e -= Z[:, :2] @ np.linalg.lstsq(Z[:, :2], e, rcond=None)[0]  # orthogonal to columns 0, 1
     e /= np.linalg.norm(e)
-    for dist, ok in ((0.5 * IDENTITY_RANK_TOL, False), (0.0, False), (2.0 * IDENTITY_RANK_TOL, True)):
+    for dist, ok in (
+        (0.5 * IDENTITY_RANK_TOL, False),
+        (0.0, False),
+        (2.0 * IDENTITY_RANK_TOL, True),
+    ):
         Zd = Z.copy()
         Zd[:, 2] = 0.6 * Z[:, 0] - 0.8 * Z[:, 1]
         Zd[:, 2] += dist * np.linalg.norm(Zd[:, 2]) * e  # this far from span(col 0, col 1)
@@ -439,7 +443,7 @@ def test_qddot_matches_acceleration():
 @pytest.mark.parametrize("weighting", ["M^-1", "M^-2", "identity"])
 def test_the_halves_are_called_only_through_addresses_this_process_wrote(weighting):
     """The kernel's callers call its two compiled halves by the addresses in ``ip``
-    (analytic.kernel.abi). An ``ip`` without them (straight from ``pack``, or a pickled model in
+    (analytic.runtime.abi). An ``ip`` without them (straight from ``pack``, or a pickled model in
     another process) must give ``STATUS_UNSUPPORTED``, never a call; a pickled model binds its own
     addresses again and answers as the original; a strided ``q`` (a caller's slice) answers as a
     contiguous one."""
@@ -451,7 +455,9 @@ def test_the_halves_are_called_only_through_addresses_this_process_wrote(weighti
     rng = np.random.default_rng(21)
     sc = make_scene(rng, 4, FORCE_EFFECTS, omega=True, masses=True, weighting=weighting)
     fm = fast.FastModel(sc)
-    evaluate = {"M^-2": minv2.evaluate, "identity": identity.evaluate}.get(weighting, gauss.evaluate)
+    evaluate = {"M^-2": minv2.evaluate, "identity": identity.evaluate}.get(
+        weighting, gauss.evaluate
+    )
     q, qd = random_state(rng, 4)
     want = np.empty(fm._nout)
     assert evaluate(0.2, q, qd, fm.fp, fm.ip, want) == STATUS_OK

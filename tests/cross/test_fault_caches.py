@@ -33,7 +33,7 @@ from pathlib import Path
 
 import pytest
 
-from analytic.kernel import cache_check as cc
+from analytic.runtime import cache_check as cc
 
 pytestmark = pytest.mark.faults
 
@@ -63,7 +63,7 @@ RUNNER = textwrap.dedent(
     from pathlib import Path
     src, cache, mode = Path(sys.argv[1]), Path(sys.argv[2]), sys.argv[3]
     sys.path.insert(0, str(src))
-    from analytic.kernel import cache_check as cc
+    from analytic.runtime import cache_check as cc
     lay = cc.Layout(cache / cc.MANIFEST_NAME, ((cache / cc.numba_subdir(src), src),))
     res = cc.check(lay) if mode == "check" else None
     import tiny
@@ -201,12 +201,12 @@ def test_file_written_after_the_parents_check_is_trusted_by_its_child(tmp_path):
     code = textwrap.dedent(
         """
         import os, subprocess, sys
-        from analytic.kernel import cache_check as cc
+        from analytic.runtime import cache_check as cc
         cc.ensure_checked()
         d = cc.layout().dirs[0][0]
         d.mkdir(parents=True, exist_ok=True)
         (d / "fresh.f-1.py311.nbi").write_bytes(b"written by a sibling")
-        child = "from analytic.kernel import cache_check as cc; print(cc.ensure_checked())"
+        child = "from analytic.runtime import cache_check as cc; print(cc.ensure_checked())"
         out = subprocess.run([sys.executable, "-c", child], capture_output=True, text=True)
         print(out.stdout.strip(), (d / "fresh.f-1.py311.nbi").exists(), d, flush=True)
         os._exit(0)  # killed before it recorded the manifest
@@ -219,7 +219,7 @@ def test_file_written_after_the_parents_check_is_trusted_by_its_child(tmp_path):
     assert (trusted, exists) == ("None", "True"), proc.stderr
     # the next run (not its child) checks for itself: the unrecorded file goes
     proc = subprocess.run(
-        [sys.executable, "-c", "from analytic.kernel import cache_check as cc; cc.ensure_checked()"],
+        [sys.executable, "-c", "from analytic.runtime import cache_check as cc; cc.ensure_checked()"],
         env=_env(cache),
         capture_output=True,
         text=True,
@@ -274,7 +274,7 @@ def test_fifo_among_numba_cache_files_is_never_opened(tmp_path):
 def test_fifo_or_link_at_a_compile_lock_is_not_opened(tmp_path, monkeypatch):
     """A FIFO or a symbolic link at a kernel's compile lock in the cache directory -> nothing
     blocks or is created through the link; the kernel is compiled without the lock."""
-    from analytic.kernel import compile_lock
+    from analytic.runtime import compile_lock
 
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
     fifo = tmp_path / f"tumble-compiling-{compile_lock.RHS}.lock"
@@ -313,7 +313,7 @@ FULL_DISK = textwrap.dedent(
 
     os.statvfs = full_statvfs
     if mode == "check":
-        from analytic.kernel import cache_check
+        from analytic.runtime import cache_check
         cache_check.ensure_checked()
     import tiny
     print(tiny.add(2.0, 3.0), tiny.triple_product(2.0, 3.0))

@@ -62,6 +62,13 @@ subpackage (``validation/compare/``) or a top-level module (``validation/cli.py`
 helpers ``_lazy`` and ``_version`` sit below every wing. The one exception is a ``__main__`` module
 (``python -m validation.studies.sweep`` is ``tumble sweep``), which may import the command line."""
 
+RUNTIME = "analytic.runtime"
+"""The lowest layer of all, inside ``analytic``: how code is compiled, cached, locked and read
+(numba plumbing, the disk cache and its check, compile locks, safe file reads, lazy imports), none
+of it physics. It imports nothing of the rest of ``analytic`` (nor of a higher package), and every
+module may import it; the physics (``analytic.kernel``, ``analytic.fast`` ...) does."""
+
+
 @dataclass(frozen=True)
 class Edge:
     """``importer`` imports ``imported`` at ``path:line``."""
@@ -251,6 +258,53 @@ def test_allow_lists_name_only_what_is_still_there(graph):
     assert not stale, f"no longer in the code, remove from the allow-list: {stale}"
 
 
+def in_package(module: str, package: str) -> bool:
+    return module == package or module.startswith(package + ".")
+
+
+def runtime_violations(edges: Iterable[Edge]) -> list[Edge]:
+    """Imports from :data:`RUNTIME` of any module outside it."""
+    return [
+        e for e in edges if in_package(e.importer, RUNTIME) and not in_package(e.imported, RUNTIME)
+    ]
+
+
+def test_the_runtime_is_the_lowest_layer(graph):
+    """``analytic.runtime`` imports nothing from the rest of ``analytic`` (:data:`RUNTIME`), and
+    the physics imports it (not vacuous: the kernel's halves are compiled by it)."""
+    modules, edges = graph
+    assert RUNTIME in modules and any(m.startswith(RUNTIME + ".") for m in modules)
+    bad = runtime_violations(edges)
+    assert not bad, (
+        f"{RUNTIME} is the lowest layer, yet imports:\n  "
+        + "\n  ".join(map(str, bad))
+        + f"\nmove what it needs down into {RUNTIME}, or pass it in"
+    )
+    assert any(
+        in_package(e.importer, "analytic.kernel") and in_package(e.imported, RUNTIME) for e in edges
+    )
+
+
+def test_the_runtime_checker_finds_an_import_of_physics(tmp_path):
+    """On a planted tree: the runtime importing the kernel (inside a function) is found; the
+    kernel importing the runtime, and the runtime importing itself, are not."""
+    files = {
+        "analytic/__init__.py": "",
+        "analytic/kernel/__init__.py": "",
+        "analytic/kernel/layout.py": "from analytic.runtime import jit\n",
+        "analytic/runtime/__init__.py": "",
+        "analytic/runtime/jit.py": "from analytic.runtime import cache_dir\n",
+        "analytic/runtime/cache_dir.py": "def f():\n    from analytic.kernel import layout\n",
+    }
+    for rel, text in files.items():
+        (tmp_path / rel).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / rel).write_text(text)
+    edges = import_edges(tmp_path, discover(tmp_path, ("analytic",)))
+    assert [(e.importer, e.imported) for e in runtime_violations(edges)] == [
+        ("analytic.runtime.cache_dir", "analytic.kernel.layout")
+    ]
+
+
 def wing_level(module: str) -> int | None:
     """The level of ``module``'s wing in :data:`WINGS`, or ``None`` outside ``validation``'s wings
     (another package, ``validation/__init__``, the private helpers)."""
@@ -324,7 +378,9 @@ def test_every_test_file_sits_beside_its_module():
         rel = path.relative_to(tests)
         if rel.parts[0] in ("cross", "support"):
             continue
-        assert rel.parts[0] in LAYERS, f"tests/{rel}: not under a package's mirror, cross or support"
+        assert rel.parts[0] in LAYERS, (
+            f"tests/{rel}: not under a package's mirror, cross or support"
+        )
         source = ROOT.joinpath(*rel.parts[:-1], rel.stem.removeprefix("test_"))
         if not (source.with_suffix(".py").is_file() or (source / "__init__.py").is_file()):
             orphans.append(f"tests/{rel}: no {source.relative_to(ROOT)}.py or package")

@@ -239,7 +239,8 @@ import numpy as np
 from analytic.aux_rates import aux_rates
 from analytic.fast import FastModel
 from analytic.fast_rhs import rhs_for
-from analytic.kernel import gauss, jit
+from analytic.kernel import gauss
+from analytic.runtime import jit
 from analytic.scene import load_scene
 
 sc = load_scene(sys.argv[1])

@@ -266,16 +266,27 @@ def test_a_plant_whose_check_scene_has_a_bug_stays_in_the_set_to_fail_alone(monk
     assert got == ("analytic", "buggy", "mujoco")
 
 
-def _effect_scene(controlled: bool):
+def _effect_scene(controlled: bool, claimed=frozenset()):
     """A short random scene with every effect on (two output samples; the control effects only
     when ``controlled``: tracked masses do not feel the springs), the masses off their rest
     positions."""
     import numpy as np
 
+    from analytic.effects import CONTROL_EFFECTS, Effect
+    from analytic.effects.registry import DECLARATIONS
     from analytic.scene import modified_scene
     from analytic.scene.random_scenes import random_scene
 
-    sc = random_scene(np.random.default_rng(11), 2, external_torque=True, controlled=controlled)
+    forces = [  # every claimed effect that is not the control's or the given torque's
+        d.effect.value
+        for d in DECLARATIONS
+        if d.effect in claimed
+        and d.effect not in CONTROL_EFFECTS
+        and d.effect is not Effect.EXTERNAL_TORQUE
+    ]
+    sc = random_scene(
+        np.random.default_rng(11), 2, external_torque=True, controlled=controlled, effects=forces
+    )
     stretched = [
         float(x) for x in np.asarray(sc.masses.p_e) + np.array([0.5, -0.3])
     ]  # every spring felt
@@ -297,7 +308,7 @@ def test_every_effect_a_plant_claims_changes_its_motion(name):
     if cls is None or cls.unavailable():
         pytest.skip(f"{name}: not installed")
     pl = cls()
-    scenes = {c: _effect_scene(c) for c in (False, True)}
+    scenes = {c: _effect_scene(c, cls.effects) for c in (False, True)}
     full = {c: pl.simulate(sc) for c, sc in scenes.items()}
     for effect in sorted(cls.effects):
         c = effect in CONTROL_EFFECTS

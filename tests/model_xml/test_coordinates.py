@@ -12,8 +12,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from analytic.kernel.jit import HAVE_NUMBA
 from analytic.kinematics import S, omega_of
+from analytic.runtime.jit import HAVE_NUMBA
 from mj_bridge.twin import Twin
 from model_xml import BodyFrame
 from model_xml import coordinates as co

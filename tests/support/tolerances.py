@@ -384,7 +384,31 @@ OWN_ERROR_ESTIMATE_REL = Threshold(
     "a different method) is off by O(1).",
 )
 
+# =================================================================================================
+# Viscous damping of the spring elements (tests/analytic/effects/test_damping.py)
+# =================================================================================================
+
+DAMPED_OSCILLATOR_ABS = Threshold(
+    "DAMPED_OSCILLATOR_ABS",
+    1e-9,
+    "m",
+    "One mass between two damped springs, the body not rotating, no gravity: p(t) against the "
+    "closed-form damped oscillator of the reduced mass (under-, critically and over-damped), "
+    "amplitude O(0.1 m) over 3 s at rtol 1e-12 / atol 1e-14 (DOP853): the integrator's global "
+    "error is O(1e-11), so 1e-9 leaves two decades and still fails a wrong rate or sign.",
+)
+DISSIPATED_ENERGY_ABS = Threshold(
+    "DISSIPATED_ENERGY_ABS",
+    1e-9,
+    "J",
+    "The same runs: the integrated D against E(0) - E(t) of the closed form (energies O(0.1 J)); "
+    "and, for a plant that does not integrate D along its motion, D over its samples at 100 Hz by "
+    "the fourth-order Hermite rule (error O(h⁴ D⁽⁵⁾) ~ 1e-10 for these rates).",
+)
+
+
 TOLERANCES: Mapping[str, Threshold] = {
     t.name: t for t in list(globals().values()) if isinstance(t, Threshold)
 }
 """Every tolerance of this module by name (``tests/cross/test_tolerances.py`` checks them all)."""
+

@@ -22,8 +22,8 @@ import time
 import numpy as np
 
 from analytic import fast
-from analytic.kernel import jit
 from analytic.model import TumblingModel
+from analytic.runtime import jit
 from validation.bench.timing import chain_scene, time_call
 from validation.runs import interrupts
 

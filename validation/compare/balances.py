@@ -8,14 +8,16 @@ measure it:
   ``max ‖P‖``;
 * angular momentum about the system centre of mass: ``L - L(0) - ∫Sτ dt``, residual ``‖·‖₂``
   (kg·m²/s), scale ``max(max ‖L‖, max ‖∫Sτ dt‖)``;
-* energy: ``E - E(0) - W``, residual ``|·|`` (J), scale ``max(max |E|, max |W|)``.
+* energy: ``E - E(0) + D - W`` (:func:`analytic.trajectory.energy_residual`), residual ``|·|``
+  (J), scale ``max(max |E|, max |W|, max |D|)``; ``D`` the energy the dissipative effects took
+  out of the motion (zero without one).
 
 The inputs are the terms alone (:class:`BalanceTerms`, taken from a run's
 :class:`~analytic.trajectory.Invariants` by :meth:`BalanceTerms.of`); each check is the largest
 residual over the run divided by ``max(scale, floor)`` (:func:`relative`, the floor the
-threshold's). A new term of a balance (a work dissipated along the motion, ``E - E(0) + D = W``)
-is a field of :class:`BalanceTerms` and a change to :data:`BALANCES`' residual, scale and label,
-all in this module; the plants record the term in their invariants. The formula is also quoted in
+threshold's). A new term of a balance is a field of :class:`BalanceTerms` and a change to
+:data:`BALANCES`' residual, scale and label, all in this module; the plants record the term in
+their invariants. The formula is also quoted in
 words by the thresholds' reasons (:mod:`validation.compare.thresholds`), the hard cases' measure
 catalogue (:mod:`validation.studies.hard_cases.catalogue`), the report's figure labels and
 ``docs/``.
@@ -30,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from analytic.invariants import Balance
-from analytic.trajectory import Invariants
+from analytic.trajectory import Invariants, energy_residual
 
 
 @dataclass(frozen=True)
@@ -44,6 +46,8 @@ class BalanceTerms:
         angular_impulse: ``∫Sτ dt``, the external moments' impulse about it, N·m·s.
         linear_momentum: ``P``, inertial, kg·m/s.
         linear_momentum_expected: ``P(0) + m_T g t + ∫F_C dt``, kg·m/s.
+        dissipated: ``D``, the energy the dissipative effects took out of the motion, J; None
+            when none is on.
     """
 
     energy: np.ndarray
@@ -52,6 +56,7 @@ class BalanceTerms:
     angular_impulse: np.ndarray
     linear_momentum: np.ndarray
     linear_momentum_expected: np.ndarray
+    dissipated: np.ndarray | None = None
 
     @classmethod
     def of(cls, inv: Invariants) -> BalanceTerms:
@@ -63,6 +68,7 @@ class BalanceTerms:
             angular_impulse=inv.angular_impulse,
             linear_momentum=inv.linear_momentum,
             linear_momentum_expected=inv.linear_momentum_expected,
+            dissipated=inv.dissipated,
         )
 
 
@@ -112,10 +118,14 @@ BALANCES: tuple[BalanceSpec, ...] = (
     ),
     BalanceSpec(
         Balance.ENERGY,
-        "energy balance |E − E(0) − W|",
+        "energy balance |E − E(0) + D − W|",
         "J",
-        lambda b: np.abs(b.energy - b.energy[0] - b.work),
-        lambda b: max(_max_norm(b.energy), _max_norm(b.work)),
+        lambda b: np.abs(energy_residual(b.energy, b.work, b.dissipated)),
+        lambda b: max(
+            _max_norm(b.energy),
+            _max_norm(b.work),
+            0.0 if b.dissipated is None else _max_norm(b.dissipated),
+        ),
     ),
 )
 """Every balance, in report order (that of :class:`~analytic.invariants.Balance`)."""

@@ -214,8 +214,9 @@ DEFAULTS: Mapping[str, Threshold] = {
             "energy",
             1e-8,
             "1",
-            "max |E - E(0) - W| / max(|E|, |W|): energy changes only by the work of the control; "
-            "integration error ~1e-10 relative",
+            "max |E - E(0) + D - W| / max(|E|, |W|, |D|): energy changes only by the work of the "
+            "control and the given torque, less what the dampers dissipate; integration error "
+            "~1e-10 relative",
             relative=True,
             floor=1.0,  # J
         ),

@@ -30,7 +30,7 @@ _ERRORS = {
     "linear_momentum": "max |P − P(0) − m_T g t − I_P| / max(max |P|, 1 kg·m/s)",
     "angular_momentum": "max |L − L(0) − I_L| / max(max |L|, max |I_L|, 1 kg·m²/s), about the "
     "system centre of mass, inertial",
-    "energy": "max |E − E(0) − W| / max(max |E|, max |W|, 1 J)",
+    "energy": "max |E − E(0) + D − W| / max(max |E|, max |W|, max |D|, 1 J)",
 }
 """How each check's value is computed from a trajectory file (``validation/compare/checks.py``)."""
 

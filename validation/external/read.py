@@ -1,6 +1,6 @@
 """``read_trajectory``: another engine's run of a scene, from a CSV or Parquet trajectory file.
 
-The file is opened through :func:`analytic.safe_files.open_regular` (a regular file only, as a
+The file is opened through :func:`analytic.runtime.safe_files.open_regular` (a regular file only, as a
 scene file the user names: a symbolic link is followed to the file it names, a FIFO, device or
 directory is refused without blocking) and read whole, at most :func:`size_limit` bytes (a larger
 file is refused naming its row count, its lines counted or its Parquet footer read, and the
@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from analytic.safe_files import open_regular
+from analytic.runtime.safe_files import open_regular
 from analytic.scene import Scene
 from analytic.trajectory import Engine
 from validation.external.columns import ColumnGroup, TrajectoryFormat, header, parse_header

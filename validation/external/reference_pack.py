@@ -37,7 +37,7 @@ from typing import Any
 
 from analytic.effects import SolverMethod
 from analytic.plant import AnalyticSettings
-from analytic.safe_files import read_regular
+from analytic.runtime.safe_files import read_regular
 from analytic.scene import Scene, load_scene
 from analytic.scene.dump import scene_to_dict, scene_to_toml
 from analytic.trajectory import RunStatus

@@ -19,7 +19,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from analytic.safe_files import file_digest, read_regular
+from analytic.runtime.safe_files import file_digest, read_regular
 from validation.runs.paths import is_run_id
 
 
@@ -112,7 +112,7 @@ def lstat_or_none(path: Path) -> os.stat_result | None:
 
 def size_and_digest(path: Path) -> tuple[int, str]:
     """``(bytes, SHA-256 hex)`` of the regular file ``path``, never through a link or blocking
-    (:func:`analytic.safe_files.file_digest`)."""
+    (:func:`analytic.runtime.safe_files.file_digest`)."""
     digest, size = file_digest(path)
     return size, digest
 

@@ -22,7 +22,7 @@ import stat
 from dataclasses import dataclass
 from pathlib import Path
 
-from analytic.safe_files import open_regular
+from analytic.runtime.safe_files import open_regular
 from validation.runs.atomic import OutputError
 from validation.runs.manifest import (
     CLEAR_IT,

@@ -144,7 +144,7 @@ def _compile_mujoco_stage(task: Task) -> None:
 
 
 def _compile_pinocchio_stage(task: Task) -> None:
-    from analytic.kernel import compile_lock
+    from analytic.runtime import compile_lock
     from mj_bridge import pinocchio_plant as pp
 
     with compile_lock.compiling(compile_lock.PINOCCHIO):  # as the plant's own run takes it

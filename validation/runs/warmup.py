@@ -12,7 +12,7 @@ so, one line per kernel:
 2. **The kernels** (:class:`validation.runs.warm_jobs.Job`), each compiled (or loaded from numba's
    cache) in a worker process of a ``concurrent.futures.ProcessPoolExecutor``, side by side on the
    free CPUs: the kernel's two halves (:mod:`analytic.kernel.halves`), and what calls them by
-   address and so compiles without them (:mod:`analytic.kernel.abi`): the analytic plant's
+   address and so compiles without them (:mod:`analytic.runtime.abi`): the analytic plant's
    compiled right-hand side, the MuJoCo plant's stage and native callback, the Pinocchio stage.
    numba holds the GIL while it compiles, so threads would not overlap; processes do, and each
    leaves its result in the on-disk cache.
@@ -81,7 +81,7 @@ class WarmupResult:
 # ----------------------------------------------------------------------------------------------
 
 WARM_STAMP = "tumble-kernels-warm.json"
-"""A file beside numba's cache of the kernel (:func:`analytic.kernel.cache_dir.kernel_cache_dir`)
+"""A file beside numba's cache of the kernel (:func:`analytic.runtime.cache_dir.kernel_cache_dir`)
 listing the :func:`warm_key` values whose kernels a warm-up compiled. Should the stamp outlive the
 cache (a deleted ``__pycache__``), the plants compile what is missing themselves, unannounced."""
 
@@ -136,14 +136,14 @@ def warm_keys(engines: Sequence[str], scene: Scene) -> list[str]:
 
 
 def _stamp_path() -> Path | None:
-    from analytic.kernel.cache_dir import kernel_cache_dir
+    from analytic.runtime.cache_dir import kernel_cache_dir
 
     where = kernel_cache_dir()
     return where / WARM_STAMP if where is not None else None
 
 
 def _stamped_keys() -> list[str]:
-    from analytic.safe_files import read_regular  # never blocks (a FIFO there)
+    from analytic.runtime.safe_files import read_regular  # never blocks (a FIFO there)
 
     path = _stamp_path()
     try:
@@ -161,8 +161,8 @@ def is_stamped_warm(keys: Sequence[str]) -> bool:
 
 def stamp_warm(keys: Sequence[str]) -> None:
     """Record ``keys`` as warm (atomically; a stamp that cannot be written is no error), and the
-    hashes of numba's cache files as they are now (:func:`analytic.kernel.cache_check.record`)."""
-    from analytic.kernel import cache_check
+    hashes of numba's cache files as they are now (:func:`analytic.runtime.cache_check.record`)."""
+    from analytic.runtime import cache_check
 
     path = _stamp_path()
     if path is None:
@@ -274,8 +274,8 @@ def _run_all(
 
 def cache_writable() -> bool:
     """Whether numba keeps the compiled kernels on disk here (a writable cache directory)."""
-    from analytic.kernel import cache_check
-    from analytic.kernel.cache_dir import kernel_cache_dir
+    from analytic.runtime import cache_check
+    from analytic.runtime.cache_dir import kernel_cache_dir
 
     mode = cache_check.disk_cache_mode()
     return kernel_cache_dir() is not None and mode is not cache_check.Mode.NONE
@@ -307,7 +307,7 @@ def warm_up(
     Returns:
         a :class:`WarmupResult` (no stages: nothing was needed).
     """
-    from analytic.kernel import cache_check
+    from analytic.runtime import cache_check
 
     say = progress or (lambda _line: None)
     names = {str(getattr(p, "value", p)) for p in plants}

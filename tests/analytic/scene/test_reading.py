@@ -12,8 +12,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from analytic import safe_files
 from analytic import scene as S
+from analytic.runtime import safe_files
 from analytic.scene import load_scene
 
 

@@ -24,6 +24,7 @@ READS = {
     Effect.GRAVITY: {"gravity"},
     Effect.SPRINGS_LINEAR: {"springs.k_linear"},
     Effect.SPRINGS_CUBIC: {"springs.k_cubic"},
+    Effect.SPRINGS_DAMPING: {"springs.c_damping"},
     Effect.MASS_INERTIA: {
         "masses.ring_radius",
         "masses.inertia_axial",
@@ -39,6 +40,7 @@ READS = {
 NEEDS = {
     "springs.k_linear",
     "springs.k_cubic",
+    "springs.c_damping",
     "control.omega",
     "control.masses",
     "external_torque",

@@ -6,10 +6,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from analytic.invariants import Balance, relative_balance
+from analytic.invariants import Balance
 from analytic.scene import load_scene
 from analytic.trajectory import Engine
 from tests.support import tolerances as tol
+from validation.compare.balances import BalanceTerms, relative
 from validation.compare.differences import attitude_angle
 from validation.compare.thresholds import DEFAULTS
 from validation.external import (
@@ -59,8 +60,8 @@ def test_plant_trajectory_round_trip_full_precision(controlled_run, tmp_path, fm
     assert _rel(back.invariants.angular_impulse, tr.invariants.angular_impulse) <= ROUND_TRIP
     for balance in Balance:
         th = DEFAULTS[balance.value]
-        plants = relative_balance(tr.invariants, balance, th.floor)
-        mine = relative_balance(back.invariants, balance, th.floor)
+        plants = relative(BalanceTerms.of(tr.invariants), balance, th.floor)
+        mine = relative(BalanceTerms.of(back.invariants), balance, th.floor)
         assert plants <= th.value and mine <= th.value, (balance, plants, mine)
     # what no column holds is NaN, never a value a comparison could take for a result
     assert np.isnan(back.qddot).all() and np.isnan(back.force_at_C).all()

@@ -72,7 +72,7 @@ PANEL_TITLES: Mapping[str, str] = {
     "quat_norm": "quaternion norm error |uᵀu − 1|",
     "linear_momentum": "linear momentum balance ‖P − P_expected‖₂ / max‖P‖₂",
     "angular_momentum": "angular momentum balance ‖L − L(0) − ∫Sτ dt‖₂ / max(‖L‖₂, ‖∫Sτ dt‖₂)",
-    "energy": "energy balance |E − E(0) − W| / max(|E|, |W|)",
+    "energy": "energy balance |E − E(0) + D − W| / max(|E|, |W|, |D|)",
 }
 """Panel titles: the quantity drawn, as it is checked (``a`` the pair's reference plant)."""
 

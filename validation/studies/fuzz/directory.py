@@ -18,7 +18,7 @@ same ownership rule holds all the same:
   (``campaign.md`` at the end), the previous version, which the manifest still accepts until the
   replacement is written. A file there that the manifest does not list is never replaced.
 * Every file read back on resume is opened without following a link and without blocking
-  (:func:`analytic.safe_files.read_regular`) and must still match the manifest; one that does not
+  (:func:`analytic.runtime.safe_files.read_regular`) and must still match the manifest; one that does not
   (edited, truncated, forged, replaced by a link or a FIFO) is refused in one line naming it
   (:class:`ChangedRecord`, exit 2): delete it and the resume judges that scene again.
 * One campaign at a time: the lock of :mod:`validation.runs.locks` (``.<OUT name>.lock`` beside
@@ -44,7 +44,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from analytic.safe_files import NotRegularFile, file_kind, read_regular
+from analytic.runtime.safe_files import NotRegularFile, file_kind, read_regular
 from validation.runs.atomic import OutputError, write_bytes
 from validation.runs.locks import hold_lock
 from validation.runs.manifest import (

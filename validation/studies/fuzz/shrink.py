@@ -32,6 +32,8 @@ from dataclasses import dataclass
 from typing import Any, Protocol
 
 from analytic.effects import Effect, Weighting
+from analytic.effects.registry import DECLARATIONS
+from analytic.scene.schema import KEYS
 from validation.studies.fuzz.judge import Disagreement, Outcome
 
 MIN_HORIZON_S = 0.05
@@ -69,8 +71,8 @@ def _keep_masses(d: Scene, keep: list[int]) -> Scene:
             e.pop(key, None)
         for key in ("p", "pdot"):
             e["initial"].pop(key, None)
-        drop = {Effect.SPRINGS_LINEAR, Effect.SPRINGS_CUBIC, Effect.MASS_INERTIA, Effect.CONTROL_MASSES}
-        e["scene"]["effects"] = [x for x in _effects(e) if x not in {v.value for v in drop}]
+        drop = {d.effect.value for d in DECLARATIONS if d.needs_masses}
+        e["scene"]["effects"] = [x for x in _effects(e) if x not in drop]
         e.get("control", {}).pop("masses", None)
         if "control" in e and set(e["control"]) <= {"weighting"}:
             del e["control"]
@@ -100,26 +102,25 @@ def _keep_masses(d: Scene, keep: list[int]) -> Scene:
 
 
 def _without(d: Scene, effect: Effect) -> Scene | None:
+    """``d`` without ``effect`` and every key and table declared as read by it alone
+    (:attr:`analytic.scene.key.Key.effect`); a table it leaves empty goes too, and a
+    ``[control]`` left with its weighting alone."""
     if effect.value not in _effects(d):
         return None
     e = copy.deepcopy(d)
     e["scene"]["effects"] = [x for x in _effects(e) if x != effect.value]
-    if effect is Effect.EXTERNAL_TORQUE:
-        e.pop("external_torque", None)
-    elif effect is Effect.GRAVITY:
-        e.pop("gravity", None)
-    elif effect is Effect.SPRINGS_CUBIC:
-        e.get("springs", {}).pop("k_cubic", None)
-    elif effect is Effect.SPRINGS_LINEAR:
-        e.get("springs", {}).pop("k_linear", None)
-        if not e.get("springs"):
-            e.pop("springs", None)
-    elif effect is Effect.MASS_INERTIA:
-        e.get("masses", {}).pop("ring_radius", None)
-    elif effect in (Effect.CONTROL_MASSES, Effect.CONTROL_OMEGA):
-        e["control"].pop("masses" if effect is Effect.CONTROL_MASSES else "omega", None)
-        if set(e["control"]) <= {"weighting"}:
-            del e["control"]
+    for key in KEYS:
+        if key.effect is not effect:
+            continue
+        parent: Any = e
+        for part in key.table.split(".") if key.table else ():
+            parent = parent.get(part) if isinstance(parent, dict) else None
+        if isinstance(parent, dict):
+            parent.pop(key.key, None)
+            if key.table in ("springs", "masses") and not parent:
+                e.pop(key.table, None)
+    if "control" in e and set(e["control"]) <= {"weighting"}:
+        del e["control"]
     return e
 
 
@@ -155,6 +156,21 @@ def _round_tree(v: Any) -> Any:
     if isinstance(v, list):
         return [_round_tree(x) for x in v]
     return v
+
+
+SHRINK_ORDER: tuple[Effect, ...] = (
+    Effect.EXTERNAL_TORQUE,
+    Effect.CONTROL_MASSES,
+    Effect.CONTROL_OMEGA,
+    Effect.GRAVITY,
+    Effect.SPRINGS_CUBIC,
+    Effect.SPRINGS_LINEAR,
+    Effect.MASS_INERTIA,
+)
+SHRINK_ORDER += tuple(d.effect for d in DECLARATIONS if d.effect not in SHRINK_ORDER)
+"""The order in which the shrinker tries a scene without each effect: the given torque and the
+control first, then the forces, the masses' inertia last; an effect declared later is tried after
+these (so the shrinking of a scene without it is what it was)."""
 
 
 NUMERIC_TABLES = (
@@ -207,16 +223,12 @@ def candidates(d: Scene, horizon: float) -> Iterator[tuple[str, Scene, float]]:
             yield f"first {half} masses", _keep_masses(d, list(range(half))), horizon
             yield f"last {n - half} masses", _keep_masses(d, list(range(half, n))), horizon
             for i in reversed(range(n)):
-                yield f"without mass {i + 1}", _keep_masses(d, [j for j in range(n) if j != i]), horizon
-    for eff in (
-        Effect.EXTERNAL_TORQUE,
-        Effect.CONTROL_MASSES,
-        Effect.CONTROL_OMEGA,
-        Effect.GRAVITY,
-        Effect.SPRINGS_CUBIC,
-        Effect.SPRINGS_LINEAR,
-        Effect.MASS_INERTIA,
-    ):
+                yield (
+                    f"without mass {i + 1}",
+                    _keep_masses(d, [j for j in range(n) if j != i]),
+                    horizon,
+                )
+    for eff in SHRINK_ORDER:
         e = _without(d, eff)
         if e is not None:
             yield f"without {eff.value}", e, horizon

@@ -24,6 +24,9 @@ What a draw covers (SI units; body axes are BR's principal axes at C):
 * control of ω half the time (a random non-empty subset of axes), of a random non-empty subset
   of the masses half the time (n > 0), each weighting of :class:`analytic.effects.Weighting`
   equally often; a given torque ``τ_c + τ_a sin(f t)`` of the size of ``J`` three times in ten;
+* each spring law declared after these (``springs.damping``) three times in ten (n > 0), its
+  coefficients ``m_min · 10^U(lo, hi)`` with the law's declared ``fuzz`` range (damping
+  ``10^U(-2, 1)`` N·s/m per kg: damping ratios from ~1e-3 to over 1), drawn after every other draw;
 * the horizon ``t_end`` given, output at 100 Hz, every other setting the scene's default.
 
 The parameters that drive a disagreement are read back by :func:`drivers`.
@@ -38,6 +41,7 @@ from typing import Any
 import numpy as np
 
 from analytic.effects import Effect, Weighting
+from analytic.effects.registry import SPRING_LAWS
 
 MAX_MASSES = 50
 """Most masses of a drawn scene."""
@@ -45,6 +49,8 @@ MAX_SPIN = 300.0
 """Largest initial spin rate drawn, rad/s ("spins up to a few hundred rad/s")."""
 OUTPUT_RATE = 100.0
 """Samples per second of every drawn scene's output grid, Hz."""
+LATER_LAW_PROBABILITY = 0.3
+"""How often a spring law declared after the seeded ones (the damping) is on, with masses."""
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
@@ -155,6 +161,14 @@ def draw_scene_dict(seed: int, index: int, horizon: float) -> dict[str, Any]:
             "amplitude": _list(tau_a),
             "frequency": tau_f,
         }
+    for law in SPRING_LAWS:  # a law declared later: drawn after every other draw, so the
+        if law.seeded:  # scenes of a seed without it are what they were
+            continue
+        on = rng.uniform() < LATER_LAW_PROBABILITY
+        c = m_min * 10.0 ** rng.uniform(*law.fuzz, size=max(n + 1, 1))
+        if n and on:
+            effects.append(law.effect.value)
+            data["springs"][law.key.key] = _list(c)
     return data
 
 

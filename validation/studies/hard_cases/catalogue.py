@@ -126,7 +126,7 @@ MEASURES: Mapping[tuple[Measure, Reference], MeasureInfo] = {
         "the largest of the relative drifts of the energy, angular- and linear-momentum balances "
         "(validation.compare.summary.drift_figures)",
     ),
-    (_M.ENERGY, _R.BALANCES): MeasureInfo("1", "max |E - E(0) - W| / max(|E|, |W|)"),
+    (_M.ENERGY, _R.BALANCES): MeasureInfo("1", "max |E - E(0) + D - W| / max(|E|, |W|, |D|)"),
     (_M.ANGULAR_MOMENTUM, _R.BALANCES): MeasureInfo(
         "1", "max |L - L(0) - ∫Sτ dt| / max(|L|, |∫Sτ dt|), per component"
     ),

@@ -12,7 +12,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from analytic.safe_files import read_regular
+from analytic.runtime.safe_files import read_regular
 from validation.studies.sweep.rows import BOOL_COLUMNS, COLUMNS, FLOAT_COLUMNS, INT_COLUMNS
 
 MAX_CSV_BYTES = 64 << 20
@@ -41,7 +41,7 @@ def to_csv(runs: Sequence[Mapping[str, Any]]) -> str:
 
 def read_csv(path: str | Path) -> list[dict[str, Any]]:
     """Rows of ``sweep.csv`` with their types restored (empty cells -> None); the file is read
-    as a regular file of at most :data:`MAX_CSV_BYTES` (:func:`analytic.safe_files.read_regular`:
+    as a regular file of at most :data:`MAX_CSV_BYTES` (:func:`analytic.runtime.safe_files.read_regular`:
     a FIFO or device there is an ``OSError``, never a wait)."""
     rows = []
     text = read_regular(path, MAX_CSV_BYTES).decode("utf-8")

@@ -51,7 +51,7 @@ import numpy as np
 import scipy
 
 import analytic
-from analytic import safe_files
+from analytic.runtime import safe_files
 from analytic.scene import Scene, SolverSettings
 from validation.compare import checks as compare
 from validation.compare import summary
@@ -311,7 +311,7 @@ def _encode(ref: Reference, key: str) -> bytes:
 
 def _open_regular(path: str | Path) -> int:
     """A read-only descriptor of the regular file at ``path``
-    (:func:`analytic.safe_files.open_regular`: no link followed, never blocking).
+    (:func:`analytic.runtime.safe_files.open_regular`: no link followed, never blocking).
 
     Raises:
         FileNotFoundError: nothing at ``path``.

@@ -1,7 +1,7 @@
 """Where numba caches the compiled kernel, decided without importing numba (the process that starts
 the plants asks, and only the plants import numba): ``$NUMBA_CACHE_DIR`` when set, else
 ``__pycache__`` beside the kernel's sources when writable, else the user's cache directory
-(:func:`user_cache_dir`), which :mod:`analytic.kernel.jit` then points numba at."""
+(:func:`user_cache_dir`), which :mod:`analytic.runtime.jit` then points numba at."""
 
 from __future__ import annotations
 
@@ -10,7 +10,12 @@ import tempfile
 from pathlib import Path
 
 APP_NAME = "tumbling-testbed"
-PACKAGE_DIR = Path(__file__).resolve().parent
+RUNTIME_DIR = Path(__file__).resolve().parent
+KERNEL_DIR = RUNTIME_DIR.parent / "kernel"
+"""The kernel package's directory (by path: this package imports nothing of the rest of
+``analytic``); numba's ``__pycache__`` beside the kernel's sources is tried first."""
+EFFECTS_DIR = RUNTIME_DIR.parent / "effects"
+"""The effects' declarations (by path): the kernel compiles their spring laws' shapes in."""
 
 
 def writable(path: Path) -> bool:
@@ -35,10 +40,17 @@ def kernel_cache_dir() -> Path | None:
     env = os.environ.get("NUMBA_CACHE_DIR")
     if env:
         return Path(env)
-    for path in (PACKAGE_DIR / "__pycache__", user_cache_dir()):
+    for path in (KERNEL_DIR / "__pycache__", user_cache_dir()):
         if writable(path):
             return path
     return None
 
 
-__all__ = ["APP_NAME", "PACKAGE_DIR", "kernel_cache_dir", "user_cache_dir", "writable"]
+__all__ = [
+    "APP_NAME",
+    "KERNEL_DIR",
+    "RUNTIME_DIR",
+    "kernel_cache_dir",
+    "user_cache_dir",
+    "writable",
+]

@@ -12,20 +12,20 @@ from pathlib import Path
 
 import pytest
 
-from analytic.kernel import compile_lock
+from analytic.runtime import compile_lock
 
 ROOT = Path(__file__).resolve().parents[3]
 
 WAITER = """
 import sys, time
-from analytic.kernel import compile_lock
+from analytic.runtime import compile_lock
 print("asking", flush=True)
 with compile_lock.compiling(compile_lock.RHS):
     print("got", flush=True)
 """
 
 HOLDER = """
-from analytic.kernel import compile_lock
+from analytic.runtime import compile_lock
 assert compile_lock.hold(compile_lock.RHS)
 print("held", flush=True)
 input()

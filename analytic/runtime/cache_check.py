@@ -8,7 +8,7 @@ function, or, with ``NUMBA_CACHE_DIR``, in a directory below it named after the 
 (``EOFError``, ``UnpicklingError``) and a data file of another kernel put in its place crashes the
 process. So the tool keeps its own manifest of their SHA-256 digests (:data:`MANIFEST_NAME`, beside
 the cache, written atomically under a lock) and, once per process, before the first kernel is
-defined (:func:`ensure_checked`, called by :mod:`analytic.kernel.jit` at import):
+defined (:func:`ensure_checked`, called by :mod:`analytic.runtime.jit` at import):
 
 * every ``.nbi`` / ``.nbc`` file of the project's kernels is hashed and compared with the manifest;
   a kernel whose index or data file is missing from it or differs is deleted (index and data files
@@ -47,19 +47,20 @@ from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from analytic.kernel.cache_dir import kernel_cache_dir
-from analytic.safe_files import file_digest, file_kind, read_regular
+from analytic.runtime.cache_dir import kernel_cache_dir
+from analytic.runtime.safe_files import file_digest, file_kind, read_regular
 
 MANIFEST_NAME = "tumble-numba-manifest.json"
-"""The manifest's file, in :func:`analytic.kernel.cache_dir.kernel_cache_dir`."""
+"""The manifest's file, in :func:`analytic.runtime.cache_dir.kernel_cache_dir`."""
 LOCK_NAME = "tumble-numba-manifest.lock"
 """The lock held while the manifest is read and rewritten (``fcntl.flock``)."""
 MANIFEST_FORMAT = 1
 MAX_MANIFEST_BYTES = 4 << 20
 """A larger manifest is not read (it counts as missing)."""
 MIN_FREE_BYTES = 16 << 20
-"""Free space the cache directory must have for numba to write to it (bytes): the whole cache of
-the kernels is under 1 MB, and numba fails a compile whose cache entry cannot be saved."""
+"""Free space the cache directory must have for numba to write to it (bytes): well above the whole
+cache of the kernels (``docs/performance.md``), as numba fails a compile whose cache entry cannot be
+saved."""
 MIN_FREE_INODES = 64
 LOCK_WAIT_S = 10.0
 """How long to wait for another process's manifest lock before going on without it (s)."""
@@ -134,8 +135,6 @@ class _Scan:
 # ----------------------------------------------------------------------------------------------
 # Files
 # ----------------------------------------------------------------------------------------------
-
-
 
 
 def _write_atomic(path: Path, data: bytes) -> None:

@@ -1,4 +1,7 @@
-"""The C calling convention of the kernel's two halves, and how compiled callers call them.
+"""The C calling convention of the kernel's two halves, and the calls by address that compiled
+callers make (numba intrinsics). Knows nothing of the kernel's layout: what the pointers point at is
+:mod:`analytic.kernel.layout`'s, and the kernel's own use of these calls is
+:mod:`analytic.kernel.calls`.
 
 The kernel is two compiled functions (:mod:`analytic.kernel.halves`): stages 1-6
 (:func:`analytic.kernel.system.make_build_system`) and the weighting's solve. Each is compiled once, as
@@ -8,12 +11,11 @@ points) calls them through their addresses, which :class:`analytic.fast.FastMode
 the packed integers ``ip`` (slots ``I_FN_SYSTEM``, ``I_FN_SOLVE``).
 
 Why not an ordinary call between numba functions: numba links a callee's code into its caller's
-and optimises and emits the linked whole again, so every caller of the kernel re-did the LLVM
-work of the whole kernel (about 1 s each on the development machine, 2 s for a caller of a caller)
-and could be compiled only after both halves were. Through an address the caller's own code is
-small (the Gauss entry point: 0.2-0.3 s to compile against 0.8-1.2 s linked), it compiles before
-the halves exist, and the halves are compiled exactly once per process. The cost is one indirect
-call per half per evaluation.
+and optimises and emits the linked whole again, so every caller of the kernel would redo the LLVM
+work of the whole kernel and could be compiled only after both halves were. Through an address the
+caller's own code is small, it compiles before the halves exist, and the halves are compiled exactly
+once per process (compile times: ``docs/performance.md``). The cost is one indirect call per half
+per evaluation.
 
 The addresses belong to one process: a forked child may use them, a spawned process must build its
 own :class:`~analytic.fast.FastModel` (as every plant and sweep worker does). A caller handed an
@@ -29,46 +31,12 @@ Signatures (all pointers to contiguous arrays; lengths follow from ``ip``, see t
 
 from __future__ import annotations
 
-import numpy as np
-
-from analytic.kernel.jit import HAVE_NUMBA, inner, stack_workspace
-from analytic.kernel.layout import (
-    I_FN_SOLVE,
-    I_FN_SYSTEM,
-    I_KP,
-    I_N,
-    I_TRACK,
-    IX,
-    STATUS_UNSUPPORTED,
-    WS_LEN,
-    tail_offsets,
-)
-
-tail = inner(tail_offsets)
-""":func:`analytic.kernel.layout.tail_offsets` for compiled code (the kernel, the compiled
-right-hand sides and stages): the offsets of ``fp``'s tail, computed where they are read."""
+from analytic.runtime.jit import HAVE_NUMBA
 
 if HAVE_NUMBA:
     from llvmlite import ir
-    from numba import carray, types
+    from numba import types
     from numba.extending import intrinsic
-
-    @inner
-    def arrays(q_p, fp_p, ip_p, out_p, len_out, w_p):
-        """The arrays behind a half's pointer arguments, ``(q, fp, ip, out, w)``, with their
-        lengths read from ``ip``: ``n + 7``; the end of ``fp``'s tail
-        (:func:`~analytic.kernel.layout.tail_offsets`); the head, n flags and k_p indices;
-        ``len_out``; ``WS_LEN``."""
-        head = carray(ip_p, (I_TRACK,))
-        n = head[I_N] & IX
-        kp = head[I_KP] & IX
-        return (
-            carray(q_p, (n + 7,)),
-            carray(fp_p, (tail(n, kp)[10],)),
-            carray(ip_p, (I_TRACK + n + kp,)),
-            carray(out_p, (len_out,)),
-            carray(w_p, (WS_LEN,)),
-        )
 
     _F64P = types.CPointer(types.float64)
     _I64P = types.CPointer(types.int64)
@@ -157,31 +125,11 @@ if HAVE_NUMBA:
 
         return sig, codegen
 
-    @inner
-    def call_halves(t, q, qd, fp, ip, out, full):
-        """Stages 1-6, then the solve, by the addresses in ``ip`` (one stack workspace between
-        them): the body both weightings' ``join`` share. ``STATUS_UNSUPPORTED`` without a call
-        when the addresses are not set (``ip`` straight from :func:`analytic.fast.pack`, or
-        another process's); a strided ``q`` or ``qd`` (a caller's slice) is copied first."""
-        if ip[I_FN_SYSTEM] == 0 or ip[I_FN_SOLVE] == 0:
-            return STATUS_UNSUPPORTED
-        w = carray(stack_workspace(), (WS_LEN,))
-        qc = np.ascontiguousarray(q)  # a view (no copy) unless the caller's slice is strided
-        qdc = np.ascontiguousarray(qd)
-        call_system(ip[I_FN_SYSTEM], t, qc, qdc, fp, ip, out, full, w)
-        return call_solve(ip[I_FN_SOLVE], qc, fp, ip, out, w, full)
-
 else:  # pragma: no cover - without numba nothing calls the compiled halves
     SYSTEM_SIG = SOLVE_SIG = None
-
-    def arrays(*args):
-        raise RuntimeError("the compiled kernel needs numba")
 
     def call_system(*args):
         raise RuntimeError("the compiled kernel needs numba")
 
     def call_solve(*args):
-        raise RuntimeError("the compiled kernel needs numba")
-
-    def call_halves(*args):
         raise RuntimeError("the compiled kernel needs numba")

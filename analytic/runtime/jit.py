@@ -15,7 +15,7 @@ what a cached function's key covers. Only numba's documented API is used (``numb
   the other solves before compiling, so a Gauss caller compiles no M⁻² code.
 * the kernel's two halves (:mod:`analytic.kernel.halves`) and the other C callbacks: ``numba.
   cfunc(..., cache=True)``; every compiled caller calls the halves by address
-  (:mod:`analytic.kernel.abi`).
+  (:mod:`analytic.runtime.abi`).
 * :func:`jit_entry` (``numba.njit(cache=True)``, key tied to the sources, see below): entry points
   (what Python or another package calls: ``gauss.evaluate``, ``minv2.evaluate``,
   ``fast_rhs.rhs_into`` ...); :func:`jit` for functions that call nothing from another file.
@@ -23,13 +23,13 @@ what a cached function's key covers. Only numba's documented API is used (``numb
 **Why the tie.** numba's disk cache checks only the source file of the function being cached
 (numba's caching notes: "Cache invalidation fails to recognize changes in symbols defined in another
 file"), yet a cached function contains the code of every stage it calls. Each cached function is
-therefore built by a factory that closes over :func:`source_fingerprint` of the kernel package (and
-of any other file it embeds), and refers to it (``if deps < 0: return``, never true): numba's cache
+therefore built by a factory that closes over :func:`source_fingerprint` of the kernel and runtime
+packages (:data:`KERNEL_SOURCES`, and of any other file it embeds), and refers to it (``if deps < 0: return``, never true): numba's cache
 key covers the function's closure variables, so an edit of any of those files compiles it again
 instead of loading a stale copy.
 
 **Where the cache lives.** numba writes ``__pycache__`` beside the sources, else its user-wide cache
-directory. When this package's own ``__pycache__`` cannot be written (a read-only site-packages)
+directory. When the kernel package's ``__pycache__`` cannot be written (a read-only site-packages)
 and ``NUMBA_CACHE_DIR`` is not set, this module sets ``NUMBA_CACHE_DIR`` (numba's documented
 setting) to ``$XDG_CACHE_HOME/tumbling-testbed/numba`` (``~/.cache/...`` without XDG_CACHE_HOME)
 before numba is imported, and says so once (:class:`CacheFallbackWarning`). When no directory at
@@ -47,11 +47,14 @@ import warnings
 from pathlib import Path
 from types import ModuleType
 
-import numpy as np
-
-from analytic.kernel import cache_check
-from analytic.kernel.cache_dir import APP_NAME, PACKAGE_DIR, kernel_cache_dir
-from analytic.kernel.layout import WS_LEN
+from analytic.runtime import cache_check
+from analytic.runtime.cache_dir import (
+    APP_NAME,
+    EFFECTS_DIR,
+    KERNEL_DIR,
+    RUNTIME_DIR,
+    kernel_cache_dir,
+)
 
 
 class CacheFallbackWarning(UserWarning):
@@ -62,13 +65,13 @@ def _configure_cache_dir() -> str | None:
     """Point numba at a writable cache directory when the in-tree one is not; returns the note
     for :func:`cache_dir_note` (None: numba's defaults apply)."""
     fallback = kernel_cache_dir()
-    if os.environ.get("NUMBA_CACHE_DIR") or fallback in (None, PACKAGE_DIR / "__pycache__"):
+    if os.environ.get("NUMBA_CACHE_DIR") or fallback in (None, KERNEL_DIR / "__pycache__"):
         return None  # none writable: numba's own user-wide directory is tried next (see jit())
     os.environ["NUMBA_CACHE_DIR"] = str(fallback)
     if "numba" in sys.modules:  # imported before this module: it read the environment already
         sys.modules["numba"].config.CACHE_DIR = str(fallback)
     warnings.warn(
-        f"{APP_NAME}: {PACKAGE_DIR / '__pycache__'} is not writable; numba caches the compiled "
+        f"{APP_NAME}: {KERNEL_DIR / '__pycache__'} is not writable; numba caches the compiled "
         f"kernel in {fallback}",
         CacheFallbackWarning,
         stacklevel=2,
@@ -154,9 +157,15 @@ def source_fingerprint(*sources: ModuleType | str | Path) -> int:
     return int(h.hexdigest()[:15], 16)
 
 
-KERNEL_SOURCES: tuple[Path, ...] = tuple(sorted(PACKAGE_DIR.glob("*.py")))
-"""Every source file of the kernel package: a cached function embeds some of them, and its cache
-entry is refused when any of them changes (one fingerprint keeps the rule simple)."""
+KERNEL_SOURCES: tuple[Path, ...] = (
+    tuple(sorted(KERNEL_DIR.glob("*.py")))
+    + tuple(sorted(RUNTIME_DIR.glob("*.py")))
+    + tuple(sorted(EFFECTS_DIR.glob("*.py")))
+)
+"""Every source file of the kernel package, of this runtime package (whose intrinsics emit code
+into the kernel's callers) and of the effects' declarations (whose spring laws' shapes the kernel
+compiles in): a cached function embeds some of them, and its cache entry is refused when any of
+them changes (one fingerprint keeps the rule simple)."""
 
 
 def jit_entry(factory, *also: ModuleType | str | Path):
@@ -182,31 +191,5 @@ def cache_dir_note() -> str:
     )
 
 
-if HAVE_NUMBA and not numba.config.DISABLE_JIT:
-    from llvmlite import ir
-    from numba import types
-    from numba.extending import intrinsic
-
-    @intrinsic
-    def stack_workspace(typingctx):
-        """A ``double*`` to ``WS_LEN`` uninitialised float64 slots on the calling function's stack
-        (slots: :mod:`analytic.kernel.layout` ``WS_*``); wrap it with ``numba.carray(p,
-        (WS_LEN,))``.
-
-        An intrinsic, so its code is emitted inside the caller (in its entry block): the memory
-        lives as long as the caller's frame (never return it or a view of it). Unlike
-        ``np.empty`` there is no heap allocation and no reference count.
-        """
-        sig = types.CPointer(types.float64)()
-
-        def codegen(context, builder, signature, args):
-            with builder.goto_entry_block():
-                slots = builder.alloca(ir.ArrayType(ir.DoubleType(), WS_LEN))
-            return builder.bitcast(slots, ir.DoubleType().as_pointer())
-
-        return sig, codegen
-
-else:  # pragma: no cover - plain Python (no numba, or NUMBA_DISABLE_JIT=1)
-
-    def stack_workspace():
-        return np.empty(WS_LEN)
+JIT_ENABLED = HAVE_NUMBA and not numba.config.DISABLE_JIT
+"""numba compiles (False: plain Python, without numba or with ``NUMBA_DISABLE_JIT=1``)."""

@@ -20,7 +20,7 @@ import stat
 from collections.abc import Iterator
 from typing import IO
 
-from analytic.kernel.cache_dir import kernel_cache_dir
+from analytic.runtime.cache_dir import kernel_cache_dir
 
 try:
     import fcntl

@@ -18,6 +18,8 @@ class Effect(StrEnum):
     """Linear spring elements ``k_l`` (Eq. 38, quadratic potential)."""
     SPRINGS_CUBIC = "springs.cubic"
     """Cubic spring elements ``k_n`` (Eq. 38, quartic potential)."""
+    SPRINGS_DAMPING = "springs.damping"
+    """Viscous damping ``c`` of the spring elements (:mod:`analytic.effects.damping`)."""
     MASS_INERTIA = "mass_inertia"
     """Rotational inertia of the sliding masses (Remark 1, Eq. 54)."""
     CONTROL_OMEGA = "control.omega"
