@@ -328,31 +328,6 @@ def _commit(run: OutputRun, place: Place) -> None:
     run.files = {n: run.target / n for n in names}
 
 
-def check_committed(target: Path, files: Mapping[str, Path]) -> None:
-    """Every file of ``files`` (name -> path) is in the committed directory ``target``, whole:
-    listed in its ``manifest.json`` (:func:`parse_manifest`) with the size found there (a run's
-    verdict is given only then).
-
-    Raises:
-        OutputError: the manifest is not readable, or a file is missing or not the size its
-            manifest records.
-    """
-    try:
-        listed = parse_manifest((target / MANIFEST).read_bytes())
-    except (OSError, ValueError) as exc:
-        raise OutputError(target / MANIFEST, f"not readable after the commit ({exc})") from exc
-    for name, path in files.items():
-        if name == MANIFEST:
-            continue
-        try:
-            size = path.stat().st_size
-        except OSError as exc:
-            raise OutputError(path, f"missing after the commit ({exc.strerror})") from exc
-        recorded = listed[name].bytes if name in listed else None
-        if recorded != size:
-            raise OutputError(path, f"{size} bytes after the commit, the manifest says {recorded}")
-
-
 __all__ = [
     "DEFAULT_ROOT",
     "KNOWN_OUTPUT_NAMES",
@@ -368,7 +343,6 @@ __all__ = [
     "OutputRun",
     "Owned",
     "RunState",
-    "check_committed",
     "default_out_dir",
     "default_out_file",
     "new_run_id",

@@ -23,7 +23,7 @@ recording that could not be made) still writes what it has, marked FAILED; one a
 (Ctrl-C, SIGTERM, at any stage) writes the report of how far each plant got, marked INTERRUPTED,
 without comparison, figures or recording. The verdict is PASSED only when every check passed and
 every file the report names is in the committed directory, whole
-(:func:`validation.runs.outputs.check_committed`); a file that cannot be written (a full disk, in
+(:func:`validation.runs.manifest.check_committed`); a file that cannot be written (a full disk, in
 this process or a worker) is an :class:`~validation.runs.atomic.OutputError`: no verdict, the previous contents of
 ``out_dir`` kept. A built-in stage whose worker process was killed from outside (``kill -9``) is
 done again here, and the report says so. The teaching demo is :mod:`validation.studies.demo`.
@@ -59,8 +59,8 @@ from validation.report.figures import DEFAULT_FORMATS, FigureFormat
 from validation.report.report import RunVerdict, versions, write_report
 from validation.runs.atomic import write_text
 from validation.runs.interrupts import interrupt_name, signals_held
+from validation.runs.manifest import check_committed as _check_committed  # the fault tests' name
 from validation.runs.outputs import OutputRun, output_run
-from validation.runs.outputs import check_committed as _check_committed  # the fault tests' name
 from validation.runs.plant_runs import (  # PLUGIN_TIME_LIMIT_S, plant_time_limit: re-exported
     PLUGIN_TIME_LIMIT_S,
     PlantRun,
