@@ -1,5 +1,6 @@
-"""The input boundary of a validation (``validation/validate.py``): every input is checked once per
-boundary (``tumble validate``, :func:`validation.run_validation`, :func:`validation.assert_agree`),
+"""The input boundary of a validation (``validation/validate/request.py``): every input is
+checked once per boundary (``tumble validate``, :func:`validation.run_validation`,
+:func:`validation.assert_agree`),
 into a frozen :class:`~validation.validate.ValidationRequest` the run trusts, and a scene is
 resolved by one function (:func:`validation.scenes.resolve_scene`).
 

@@ -57,9 +57,9 @@ from validation.validate import (
     Progress,
     ValidationRequest,
     ValidationResult,
-    _figure_formats,
     run_request,
 )
+from validation.validate.request import checked_formats
 
 LABEL_PATTERN = NAME_PATTERN
 """A plant label is a plant name (:data:`mj_bridge.registry.NAME_PATTERN`): a lower-case letter,
@@ -261,7 +261,7 @@ def judge_request(
     if reference is None and not chosen:
         raise ValueError(f"plants: no installed plant can run {sc.name!r} beside the file")
     check_validation_inputs(sc, mujoco=Engine.MUJOCO in chosen)
-    formats = _figure_formats(figure_formats)
+    formats = checked_formats(figure_formats)
     name = plant_label(label, trajectory_file, chosen)
     external = read_trajectory(trajectory_file, sc, engine=name, up_to_file_end=up_to_file_end)
     covered = float(external.trajectory.t[-1])

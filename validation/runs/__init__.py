@@ -4,7 +4,10 @@
   its parts :mod:`.paths` (slugs, default paths, run ids), :mod:`.manifest` (ownership),
   :mod:`.locks` (one run at a time) and :mod:`.staging` (staging and commit);
 * :mod:`.atomic`: atomic writes;
-* :mod:`.workers`: the plants in worker processes;
+* :mod:`.stages`: the executor of a job's stages (its plants, :mod:`.plant_runs`, and the helpers
+  that make its evidence), in worker processes (:mod:`.workers`, their side :mod:`.child`, their
+  :mod:`.priority`, :mod:`.time_limit`) or here;
+* :mod:`.ordered`: work submitted ahead to an executor and taken back in index order;
 * :mod:`.interrupts`: Ctrl-C and SIGTERM, kept until a safe point;
 * :mod:`.progress`: progress lines;
 * :mod:`.warmup`: the one-time numba compile (``tumble warmup``).

@@ -31,8 +31,8 @@ from __future__ import annotations
 
 import signal
 import sys
-from collections.abc import Iterator
-from contextlib import contextmanager
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager, suppress
 
 
 class Terminated(KeyboardInterrupt):
@@ -190,3 +190,40 @@ def handled() -> Iterator[None]:
             signal.signal(signal.SIGINT, previous_int)
         signal.signal(signal.SIGTERM, previous_term)
         _pending, _sigterm, _received = None, False, False
+
+
+@contextmanager
+def signals_held(on_signal: Callable[[], None] | None = None, raise_after: bool = True):
+    """SIGINT and SIGTERM do not cut the block: an import cut by Ctrl-C half way leaves a module
+    half made (matplotlib then fails on its next import), so a preparing import finishes first
+    and the interrupt (:class:`Terminated` for SIGTERM) is raised after it (unless not
+    ``raise_after``: the caller reads the list the block is given, the signals caught so far, and
+    acts on it itself).
+
+    The signal is not blocked, only noted: ``on_signal()`` runs as soon as it arrives (telling the
+    plants' workers to stop), so the job stops promptly. Main thread only; elsewhere the block
+    runs as it is."""
+    caught: list[int] = []
+
+    def held_note(signum, frame) -> None:
+        first = not caught
+        caught.append(signum)
+        if signum == signal.SIGTERM:
+            note_sigterm()
+        if first and on_signal is not None:
+            with suppress(Exception):
+                on_signal()
+
+    held = (signal.SIGINT, signal.SIGTERM)
+    try:
+        previous = {sig: signal.signal(sig, held_note) for sig in held}
+    except ValueError:  # not the main thread: no handlers to set
+        yield caught
+        return
+    try:
+        yield caught
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+    if caught and raise_after:
+        raise Terminated() if signal.SIGTERM in caught else KeyboardInterrupt()

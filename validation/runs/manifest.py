@@ -15,11 +15,12 @@ import json
 import os
 import re
 import stat
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
 from analytic.runtime.safe_files import file_digest, read_regular
+from validation.runs.atomic import OutputError
 from validation.runs.paths import is_run_id
 
 
@@ -78,8 +79,10 @@ KNOWN_OUTPUT_NAMES = frozenset(
 holding only these but no manifest (an older run) is refused all the same; the names only choose
 the message ("remove it or choose another output directory")."""
 
+
 class NotOurs(ValueError):
     """A path the run would replace, delete or write (the target, its lock) is not the tool's."""
+
 
 # ---------------------------------------------------------------------------------------------
 # Reading what is there: never through a link, never blocking
@@ -101,6 +104,7 @@ def json_object(data: bytes) -> dict:
     if not isinstance(doc, dict):
         raise ValueError("not a JSON object")
     return doc
+
 
 def lstat_or_none(path: Path) -> os.stat_result | None:
     """``os.lstat(path)`` (a link is not followed), None when nothing is there."""
@@ -263,7 +267,9 @@ def prove_owned(d: Path, ignore: Callable[[os.DirEntry], bool] | None = None) ->
         listed = _read_manifest(d / MANIFEST)
     except (OSError, ValueError) as exc:
         why = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
-        raise NotOurs(f"{d}: its {MANIFEST} was not written by tumble ({why}); {CLEAR_IT}") from None
+        raise NotOurs(
+            f"{d}: its {MANIFEST} was not written by tumble ({why}); {CLEAR_IT}"
+        ) from None
     files = []
     for name in sorted(entries):
         if name == MANIFEST:
@@ -308,6 +314,30 @@ def is_our_leftover(path: Path, run_id: str) -> bool:
         return False
 
 
+def check_committed(target: Path, files: Mapping[str, Path]) -> None:
+    """Every file of ``files`` (name -> path) is in the committed directory ``target``, whole:
+    listed in its ``manifest.json`` (:func:`parse_manifest`) with the size found there (a run's
+    verdict is given only then).
+
+    Raises:
+        OutputError: the manifest is not readable, or a file is missing or not the size its
+            manifest records.
+    """
+    try:
+        listed = parse_manifest((target / MANIFEST).read_bytes())
+    except (OSError, ValueError) as exc:
+        raise OutputError(target / MANIFEST, f"not readable after the commit ({exc})") from exc
+    for name, path in files.items():
+        if name == MANIFEST:
+            continue
+        try:
+            size = path.stat().st_size
+        except OSError as exc:
+            raise OutputError(path, f"missing after the commit ({exc.strerror})") from exc
+        recorded = listed[name].bytes if name in listed else None
+        if recorded != size:
+            raise OutputError(path, f"{size} bytes after the commit, the manifest says {recorded}")
+
 
 __all__ = [
     "CLEAR_IT",
@@ -324,6 +354,7 @@ __all__ = [
     "NotOurs",
     "Owned",
     "RunState",
+    "check_committed",
     "is_our_leftover",
     "lstat_or_none",
     "parse_manifest",

@@ -63,7 +63,7 @@ import errno
 import json
 import os
 import shutil
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -147,6 +147,15 @@ class OutputRun:
     def final(self, name: str) -> Path:
         """Where the file ``name`` of this run is once the run is committed."""
         return self.target / name
+
+    def keep_only(self, files: Mapping[str, Path]) -> None:
+        """Remove from the staging directory (this run's own, created for it) every file
+        ``files`` does not name (a figure drawn before an interrupt stopped the others, a
+        recording left out): the committed set is what the run's report names, nothing more."""
+        named = {p.name for p in files.values()}
+        for p in self.path.iterdir():
+            if not p.name.startswith(".") and p.is_file() and p.name not in named:
+                p.unlink(missing_ok=True)
 
     def _manifest(self) -> dict:
         entries = {}

@@ -24,6 +24,7 @@ import math
 import signal
 import time
 from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
 from typing import Any
 
 from analytic.scene import Scene
@@ -33,6 +34,7 @@ from validation.runs import workers
 from validation.runs.atomic import OutputError
 from validation.runs.contract import contract_problem, plant_scene
 from validation.runs.interrupts import raise_pending
+from validation.runs.time_limit import OverTime
 
 Progress = Callable[[str, float], None] | Callable[[float], None]
 """``progress(stage, t)`` (stage a plant's name) or ``progress(t)``: t is the simulated time
@@ -67,6 +69,7 @@ def check_time_limit(value: Any) -> float | None:
         raise ValueError(f"time_limit: must be a positive finite time in s (got {value!r})")
     return float(value)
 
+
 def stage_progress(progress: Any, stage: str) -> Callable[[float], None] | None:
     """Adapt either form of ``progress`` to the engines' ``progress(t)``."""
     if progress is None:
@@ -81,6 +84,7 @@ def stage_progress(progress: Any, stage: str) -> Callable[[float], None] | None:
     if two:
         return lambda t: progress(stage, t)
     return progress if stage == "analytic" else None
+
 
 def _throttled(report: Callable[[float], None], horizon: float, every_s: float = 0.1):
     """``progress(t)`` passing at most one ``t`` per ``every_s`` seconds on, and the last one;
@@ -105,25 +109,48 @@ def plant_task(pl: Any, settings: Any, sc: Scene, horizon: float, *, report) -> 
     return tr, time.perf_counter() - t0
 
 
+@dataclass(frozen=True)
+class PlantRun:
+    """One plant of a job: the plant, its settings and its run's wall-time limit, s (None: none)."""
+
+    plant: Any
+    settings: Any
+    limit_s: float | None = None
+
+
+@dataclass(frozen=True)
+class PlantResults:
+    """What :func:`run_plants` got.
+
+    Attributes:
+        trajectories: the runs kept, in the order of the plants given (a plant that failed has
+            none).
+        walls: plant -> its run's own wall time, s (the plants kept).
+        failures: one line for each plant that failed, naming it.
+        redone: one line for each plant whose worker was lost and which was run again here.
+        interrupted: a Ctrl-C or SIGTERM stopped the plants (each kept what it reached).
+    """
+
+    trajectories: tuple[Trajectory, ...] = ()
+    walls: Mapping[str, float] = field(default_factory=dict)
+    failures: tuple[str, ...] = ()
+    redone: tuple[str, ...] = ()
+    interrupted: bool = False
+
+
 def run_plants(
-    runs: Sequence[tuple[Any, Any]],
+    runs: Sequence[PlantRun],
     sc: Scene,
     horizon: float,
     progress: Progress | None,
     fork: bool,
-    walls: dict[str, float],
-    failures: list[str],
-    redone: list[str],
     on_started: Callable[[Sequence[workers.Job]], None] | None = None,
-    limits: Mapping[str, float | None] | None = None,
     task: Callable[..., tuple[Any, float]] | None = None,
-) -> tuple[list[Trajectory], bool]:
+) -> PlantResults:
     """Every plant's run, side by side in workers where ``fork`` (no more at a time than there are
-    CPUs), else one after the other here. Returns the trajectories (in ``runs``' order) and
-    whether the run was interrupted; each plant's own wall time goes into ``walls``, a plant
-    whose worker was lost is redone here (said in ``redone``). ``on_started(jobs)`` runs once,
-    here, as soon as every plant has started (``jobs``: those running in workers). ``limits``:
-    plant -> its run's wall-time limit, s (None or missing: none); ``task``: what runs one plant,
+    CPUs), else one after the other here; a plant whose worker was lost is redone here (said in
+    ``redone``). ``on_started(jobs)`` runs once, here, as soon as every plant has started
+    (``jobs``: those running in workers). ``task``: what runs one plant,
     ``task(plant, settings, scene, horizon, report=...) -> (trajectory, wall)`` (None:
     :func:`plant_task`).
 
@@ -133,23 +160,33 @@ def run_plants(
     An interrupt (Ctrl-C, SIGTERM) stops every plant at once (the workers are told,
     :func:`validation.runs.workers.wait`), starts no further one, and keeps what each reached."""
     task = task or plant_task
+    walls: dict[str, float] = {}
+    failures: list[str] = []
+    redone: list[str] = []
     slots = workers.available_cpus() if fork else 1
     queue = list(enumerate(runs))
-    running: list[tuple[int, Any, Any, workers.Job]] = []
+    running: list[tuple[int, PlantRun, workers.Job]] = []
     done: dict[int, Trajectory] = {}
     reached: dict[str, float] = {}
     interrupted = False
     try:
         while queue or running:
             while queue and len(running) < slots and not interrupted:
-                k, (pl, settings) = queue.pop(0)
-                name = pl.engine
+                k, run = queue.pop(0)
+                name = run.plant.engine
                 report = _reaching(stage_progress(progress, name), reached, name)
                 job = workers.start(
-                    name, task, pl, settings, plant_scene(sc), horizon, on_message=report,
-                    fork=fork, time_limit_s=(limits or {}).get(name),
+                    name,
+                    task,
+                    run.plant,
+                    run.settings,
+                    plant_scene(sc),
+                    horizon,
+                    on_message=report,
+                    fork=fork,
+                    time_limit_s=run.limit_s,
                 )
-                running.append((k, pl, settings, job))
+                running.append((k, run, job))
             if on_started is not None and not queue:  # every plant has started
                 on_started, then = None, on_started
                 try:
@@ -157,17 +194,18 @@ def run_plants(
                 except KeyboardInterrupt:  # the plants were told: collect what they reached
                     interrupted = True
             if interrupted:  # an interrupt stops the run, it does not start the next plant
-                failures += [f"{pl.label} plant: not run (interrupted)" for _, (pl, _) in queue]
+                failures += [f"{r.plant.label} plant: not run (interrupted)" for _, r in queue]
                 queue = []
             if all(job.forked for *_, job in running):
                 jobs = [job for *_, job in running]
                 interrupted |= workers.wait(jobs, first=not interrupted, interrupted=interrupted)
-                finished = [r for r in running if r[3].done]
+                finished = [r for r in running if r[2].done]
             else:  # a plant that runs here
-                finished = [next(r for r in running if not r[3].forked)]
-            for k, pl, settings, job in finished:
-                running.remove((k, pl, settings, job))
-                redo = _redo_plant(task, pl, settings, sc, horizon, progress)
+                finished = [next(r for r in running if not r[2].forked)]
+            for k, run, job in finished:
+                running.remove((k, run, job))
+                pl = run.plant
+                redo = _redo_plant(task, pl, run.settings, sc, horizon, progress)
                 tr = _plant_outcome(
                     pl, job, walls, failures, redo, redone, (sc, horizon, reached.get(pl.engine))
                 )
@@ -181,7 +219,9 @@ def run_plants(
     except BaseException:
         workers.stop([job for *_, job in running])
         raise
-    return [done[k] for k in sorted(done)], interrupted
+    return PlantResults(
+        tuple(done[k] for k in sorted(done)), walls, tuple(failures), tuple(redone), interrupted
+    )
 
 
 def _redo_plant(
@@ -244,13 +284,15 @@ def _plant_outcome(
                 raise KeyboardInterrupt(str(exc)) from None
             if not (exc.killed and pl.engine in BUILTIN):
                 own = "" if exc.killed else ", by its own doing"
-                failures.append(f"{pl.label} plant: {_lost_sentence(exc)}{own} (not run again here)")
+                failures.append(
+                    f"{pl.label} plant: {_lost_sentence(exc)}{own} (not run again here)"
+                )
                 return None
             redone.append(f"{pl.label} plant: {exc}; run again in the main process")
             tr, wall = redo()
     except OutputError:
         raise  # a file that could not be written: no verdict
-    except workers.OverTime as exc:
+    except OverTime as exc:
         at = f" at t = {reached:.6g} s" if reached is not None else ""
         failures.append(f"{pl.label} plant: stopped at its time limit of {exc.limit_s:g} s{at}")
         return None
@@ -290,6 +332,8 @@ def _lost_sentence(exc: workers.WorkerLost) -> str:
 
 __all__ = [
     "PLUGIN_TIME_LIMIT_S",
+    "PlantResults",
+    "PlantRun",
     "Progress",
     "check_time_limit",
     "plant_task",

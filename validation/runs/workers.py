@@ -15,8 +15,9 @@ elsewhere, and whenever forking is not safe, each runs here, in order, with the 
   outside ``kill -9``, and fails a stage whose child ended by its own doing).
 * A job may have a wall-time limit (``time_limit_s``): a child still running past it is ended
   (SIGTERM, then SIGKILL) and its job raises :class:`OverTime`, whether or not its task ever
-  reports progress. A job run here has the limit as a ``SIGALRM`` timer (main thread only): it
-  stops Python code at its next bytecode, not a C call that never returns.
+  reports progress. A job run here has the limit as a ``SIGALRM`` timer
+  (:mod:`validation.runs.time_limit`): it stops Python code at its next bytecode, not a C call that
+  never returns.
 * Every child ends with its parent, even one killed with SIGKILL (:mod:`validation.runs.lifetime`:
   ``PR_SET_PDEATHSIG`` on Linux); so does every child of the fork server (:func:`start_served`).
 * A file the child could not write (a full disk) comes back as the same
@@ -27,7 +28,8 @@ frameworks are not fork-safe), this process runs one thread (a fork copies only 
 and locks held by the others would stay locked in the child), and more than one CPU is available to
 this process. ``TUMBLE_WORKERS=0`` in the environment turns workers off (everything runs here).
 
-A child's exception comes back as :class:`WorkerError` (its type name and first line); a Ctrl-C
+What a child does, from its start to its last message, is :mod:`validation.runs.child`. A child's
+exception comes back as :class:`WorkerError` (its type name and first line); a Ctrl-C
 that reaches a child ends its task the way it would end here (a plant returns its partial run).
 A child honours the first SIGINT or SIGTERM and ignores the ones after it (a terminal's Ctrl-C and
 the parent's forwarded one arrive together; an interrupt compiled code swallows is kept and raised
@@ -50,10 +52,10 @@ from dataclasses import dataclass
 from multiprocessing.connection import wait as mp_wait
 from typing import Any
 
-from validation.runs import interrupts
 from validation.runs.atomic import OutputError
-from validation.runs.interrupts import keep_swallowed
-from validation.runs.lifetime import die_with, die_with_parent
+from validation.runs.child import LATER, PARENT_ENDS, child_main
+from validation.runs.priority import set_idle
+from validation.runs.time_limit import OverTime, time_limited
 
 ENV_SWITCH = "TUMBLE_WORKERS"
 """Set to ``0`` to run every stage in this process."""
@@ -88,20 +90,6 @@ class WorkerLost(RuntimeError):
         return self.exitcode == -signal.SIGKILL
 
 
-class OverTime(RuntimeError):
-    """A job passed its wall-time limit (``limit_s``, s) and was stopped."""
-
-    def __init__(self, name: str, limit_s: float):
-        super().__init__(f"{name}: over its time limit of {limit_s:g} s")
-        self.name = name
-        self.limit_s = limit_s
-
-
-class _Alarm(BaseException):
-    """The time limit's timer, in this process: a BaseException, so a task's ``except
-    Exception`` does not swallow it (:func:`_time_limited`)."""
-
-
 class WorkerError(RuntimeError):
     """The task raised in the worker: ``kind`` is the exception's type name."""
 
@@ -109,9 +97,6 @@ class WorkerError(RuntimeError):
         super().__init__(f"{kind}: {message}")
         self.kind = kind
         self.message = message
-
-
-_LATER = object()
 
 
 def _os_threads() -> int:
@@ -157,168 +142,8 @@ def can_serve() -> bool:
     return sys.platform.startswith("linux") and "forkserver" in mp.get_all_start_methods()
 
 
-def _one_line(exc: BaseException) -> str:
-    return str(exc).splitlines()[0] if str(exc) else ""
-
-
-def _policy() -> int | None:
-    """This process's scheduling policy (None where there are none to set)."""
-    try:
-        return os.sched_getscheduler(0)
-    except (AttributeError, OSError):
-        return None
-
-
-_START_POLICY = _policy()
-"""The policy the command started with (``SCHED_OTHER`` normally): what idle stages return to."""
-
-
-def _set_idle(idle: bool, pid: int = 0) -> None:
-    """Process ``pid`` (0: this one) to Linux ``SCHED_IDLE`` (run only on a CPU nothing else
-    wants) or back to the policy the command started with; where the switch is refused, or the
-    command started idle already, it stays as it is."""
-    if _START_POLICY is None or _START_POLICY == getattr(os, "SCHED_IDLE", None):
-        return
-    try:
-        policy = os.SCHED_IDLE if idle else _START_POLICY
-        os.sched_setscheduler(pid, policy, os.sched_param(0))
-    except (AttributeError, OSError):
-        pass
-
-
-@contextlib.contextmanager
-def idle_priority():
-    """This process at idle priority (Linux ``SCHED_IDLE``) inside the block, normal after."""
-    _set_idle(True)
-    try:
-        yield
-    finally:
-        _set_idle(False)
-
-
-def normal_priority() -> None:
-    """This process back at the policy the command started with (out of :func:`idle_priority`)."""
-    _set_idle(False)
-
-
-@contextlib.contextmanager
-def signals_held(on_signal: Callable[[], None] | None = None, raise_after: bool = True):
-    """SIGINT and SIGTERM do not cut the block: an import cut by Ctrl-C half way leaves a module
-    half made (matplotlib then fails on its next import), so a preparing import finishes first
-    and the interrupt (:class:`validation.runs.interrupts.Terminated` for SIGTERM) is raised after it
-    (unless not ``raise_after``: the caller reads the list the block is given, the signals
-    caught so far, and acts on it itself).
-
-    The signal is not blocked, only noted: ``on_signal()`` runs as soon as it arrives (telling the
-    plants' workers to stop), so the job stops promptly. Main thread only; elsewhere the block
-    runs as it is."""
-    caught: list[int] = []
-
-    def note(signum, frame) -> None:
-        first = not caught
-        caught.append(signum)
-        if signum == signal.SIGTERM:
-            interrupts.note_sigterm()
-        if first and on_signal is not None:
-            with contextlib.suppress(Exception):
-                on_signal()
-
-    held = (signal.SIGINT, signal.SIGTERM)
-    try:
-        previous = {sig: signal.signal(sig, note) for sig in held}
-    except ValueError:  # not the main thread: no handlers to set
-        yield caught
-        return
-    try:
-        yield caught
-    finally:
-        for sig, handler in previous.items():
-            signal.signal(sig, handler)
-    if caught and raise_after:
-        raise interrupts.Terminated() if signal.SIGTERM in caught else KeyboardInterrupt()
-
-
-_PARENT_ENDS: list[Any] = []
-"""The parent's ends of every worker's pipes (results in, inputs out). A child closes its copies
-first thing: else a child whose parent is gone would wait forever for inputs (a sibling holding
-the write end) or block writing its result into a pipe it holds the read end of."""
-
-
-def _close_parent_ends() -> None:  # pragma: no cover - in a child
-    for end in _PARENT_ENDS:
-        try:
-            end.close()
-        except OSError:
-            pass
-    _PARENT_ENDS.clear()
-
-
-def _first_interrupt_only(signum, frame):  # pragma: no cover - in a child
-    """A child's SIGINT/SIGTERM handler: the first one interrupts the task, the later ones are
-    ignored (the partial result is being sent)."""
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(sig, signal.SIG_IGN)
-    raise KeyboardInterrupt("interrupted")
-
-
-def _child_signals() -> None:  # pragma: no cover - in a child
-    """The child's signal handling (module docstring): the first interrupt counts, once, and one
-    that compiled code swallows is kept for the task's next progress report."""
-    keep_swallowed()
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(sig, _first_interrupt_only)
-
-
-def _send_error(conn, exc: BaseException) -> None:  # pragma: no cover - in a child
-    """Send the task's exception: an interrupt as interrupted, a file that could not be written
-    as an ``OutputError`` (path and reason), anything else by its type name and first line."""
-    if isinstance(exc, KeyboardInterrupt):
-        msg = ("err", type(exc).__name__, _one_line(exc) or "interrupted", True)
-    elif isinstance(exc, OutputError):
-        msg = ("output", str(exc.path), exc.reason, exc.errno)
-    else:
-        msg = ("err", type(exc).__name__, _one_line(exc), False)
-    try:
-        conn.send(msg)
-    except Exception:  # the parent is gone
-        pass
-
-
-def _child(
-    conn, inbox, prepare, task, args, idle: bool, parent: int | None, client: int | None = None
-) -> None:  # pragma: no cover - in a child
-    """The worker process: prepare, wait for the inputs if they come later, run, send back. It
-    ends with ``parent`` (its parent's pid, :func:`validation.runs.lifetime.die_with_parent`;
-    None: armed at the fork already, a fork server's child) and with ``client`` (the process
-    that asked the fork server for it, :func:`validation.runs.lifetime.die_with`)."""
-    if parent is not None:
-        die_with_parent(parent)
-    if client is not None:
-        die_with(client)
-    _close_parent_ends()
-    _child_signals()
-    try:
-        if idle:
-            _set_idle(True)
-        if prepare is not None:
-            prepare()
-        if args is _LATER:
-            args = inbox.recv()
-            if args is None:  # the parent gave up on this job
-                return
-        if idle:
-            _set_idle(False)
-        out = task(*args, report=lambda msg: conn.send(("msg", msg)))
-        for sig in (signal.SIGINT, signal.SIGTERM):  # a late interrupt must not lose the result
-            signal.signal(sig, signal.SIG_IGN)
-        conn.send(("ok", out))
-    except BaseException as exc:  # an interrupt before a result, or the task's error
-        _send_error(conn, exc)
-    finally:
-        try:
-            conn.close()
-        except Exception:
-            pass
+def _ignore(_msg: Any) -> None:
+    pass
 
 
 @dataclass(eq=False)
@@ -334,7 +159,7 @@ class Job:
 
     name: str
     task: Callable[..., Any]
-    args: Any = _LATER
+    args: Any = LATER
     on_message: Report | None = None
     prepare: Callable[[], None] | None = None
     process: Any = None
@@ -354,7 +179,7 @@ class Job:
         """The inputs of a job started without them."""
         self.args = args
         if self.forked:
-            _set_idle(False, self.process.pid)  # what it still prepares is now on the way
+            set_idle(False, self.process.pid)  # what it still prepares is now on the way
             try:
                 self.inbox.send(args)
             except (OSError, ValueError):  # the child is gone; result() says WorkerLost
@@ -363,7 +188,7 @@ class Job:
 
     def cancel(self) -> None:
         """Give up on a job whose inputs will never come (its child exits)."""
-        if self.forked and not self.done and self.args is _LATER:
+        if self.forked and not self.done and self.args is LATER:
             try:
                 self.inbox.send(None)
                 self.inbox.close()
@@ -407,12 +232,12 @@ class Job:
         """
         if not self.forked:
             if not self.done:
-                if self.args is _LATER:
+                if self.args is LATER:
                     raise RuntimeError(f"{self.name}: no inputs were given")
                 if self.prepare is not None:
                     self.prepare()
                 self.done = True
-                with _time_limited(self.name, self.limit_s):
+                with time_limited(self.name, self.limit_s):
                     out = self.task(*self.args, report=self.on_message or _ignore)
                 self.outcome = ("ok", out)
             return self.outcome[1]
@@ -436,48 +261,11 @@ class Job:
     def over_time(self, now: float) -> bool:
         """Whether this forked job is still running past its limit at ``now``."""
         return (
-            self.forked and not self.done and self.limit_s is not None
+            self.forked
+            and not self.done
+            and self.limit_s is not None
             and now - self.started >= self.limit_s
         )
-
-
-def _ignore(_msg: Any) -> None:
-    pass
-
-
-@contextlib.contextmanager
-def _time_limited(name: str, limit_s: float | None):
-    """The block stopped by :class:`OverTime` after ``limit_s`` s (a ``SIGALRM`` timer; main
-    thread only, where ``setitimer`` exists and no one else's timer or ``SIGALRM`` handler is in
-    place, such as a test runner's timeout, which is left alone: elsewhere the block runs as it
-    is)."""
-    usable = (
-        limit_s is not None
-        and hasattr(signal, "setitimer")
-        and threading.current_thread() is threading.main_thread()
-        and signal.getitimer(signal.ITIMER_REAL) == (0.0, 0.0)
-        and signal.getsignal(signal.SIGALRM) in (signal.SIG_DFL, None)
-    )
-    if not usable:
-        yield
-        return
-
-    armed = [True]
-
-    def over(signum, frame) -> None:
-        if armed[0]:  # a signal delivered as the block ends is not raised in its cleanup
-            raise _Alarm()
-
-    previous = signal.signal(signal.SIGALRM, over)
-    signal.setitimer(signal.ITIMER_REAL, limit_s)
-    try:
-        yield
-    except _Alarm:
-        raise OverTime(name, limit_s) from None
-    finally:
-        armed[0] = False
-        signal.setitimer(signal.ITIMER_REAL, 0)
-        signal.signal(signal.SIGALRM, previous)
 
 
 def flush_std_streams() -> None:
@@ -517,7 +305,7 @@ def start(
         time_limit_s: the task's wall-time limit, s, from now (None: none): past it the child
             is ended and :meth:`Job.result` raises :class:`OverTime` (module docstring).
     """
-    job = Job(name, task, _LATER if later else args, on_message, prepare, limit_s=time_limit_s)
+    job = Job(name, task, LATER if later else args, on_message, prepare, limit_s=time_limit_s)
     job.started = time.monotonic()
     if not (fork and can_fork()):
         return job
@@ -526,10 +314,10 @@ def start(
     conn, child_conn = ctx.Pipe(duplex=False)
     inbox_r, inbox_w = ctx.Pipe(duplex=False)
     flush_std_streams()  # a child must not print this process's buffer again
-    _PARENT_ENDS[:] = [end for end in _PARENT_ENDS if not end.closed]
-    _PARENT_ENDS.extend((conn, inbox_w))
+    PARENT_ENDS[:] = [end for end in PARENT_ENDS if not end.closed]
+    PARENT_ENDS.extend((conn, inbox_w))
     proc = ctx.Process(
-        target=_child,
+        target=child_main,
         args=(child_conn, inbox_r, prepare, task, job.args, idle_until_given, os.getpid()),
         name=f"tumble-{name}",
         daemon=True,
@@ -599,7 +387,7 @@ def start_served(
     conn, child_conn = ctx.Pipe(duplex=False)
     flush_std_streams()
     proc = ctx.Process(
-        target=_child,
+        target=child_main,
         args=(child_conn, None, None, task, args, False, None, os.getpid()),
         name=f"tumble-{name}",
         daemon=True,
@@ -713,10 +501,7 @@ __all__ = [
     "can_fork",
     "can_serve",
     "flush_std_streams",
-    "idle_priority",
     "interrupt",
-    "normal_priority",
-    "signals_held",
     "start",
     "start_served",
     "stop",

@@ -120,7 +120,10 @@ def _sweep_into(
     cache_dir: str | Path | None,
     run_id: str | None,
 ) -> SweepResult:
-    """:func:`run_sweep`'s work, writing into the staging directory ``out``."""
+    """:func:`run_sweep`'s steps, writing into the staging directory ``out``: the kernels
+    compiled here, the reference and every series over the executor (the sweep's own pool, shut
+    down as :func:`validation.studies.sweep.running.executor_for` does, or the caller's), then the
+    files."""
     t_start = time.perf_counter()
     stages: dict[str, float] = {}
 
@@ -140,10 +143,8 @@ def _sweep_into(
     running.warm_compiled(sc, skipped)
     t = stage("compile", t_start)
     own = executor is None
-    ex = executor or running.default_executor()
-    workers = running.default_workers() if own else None
     series = _series_of(cfg, skipped)
-    try:
+    with running.executor_for(executor) as (ex, width):
         # effects_cost binds MuJoCo's process-wide control callback: in the sweep's own pool it
         # is a task like any other (one task per process at a time); a user's executor may run
         # it in a thread beside a MuJoCo series, so there it runs here, after the pool
@@ -151,52 +152,74 @@ def _sweep_into(
         reference = obtain_reference(sc, cfg.t_end, ex, cache_dir, say)
         t = stage("reference", t)
         floor = FLOOR_FACTOR * reference.error_estimate
-        say(f"grid: {len(series)} series in the executor")
-        order = sorted(range(len(series)), key=lambda i: EXPENSIVE_FIRST.get(series[i][1], 9))
-        futs: dict[int, Any] = {}
-        for i in order:
-            e, m = series[i]
-            futs[i] = ex.submit(run_series, sc, e, m, cfg, reference.samples, floor)
-        stab_futs = [
-            ex.submit(stabilization_row, sc, d1, d2, rt, off, cfg.t_end)
-            for rt in cfg.delta_rtols
-            for off in (0.0, cfg.delta_norm_offset)
-            for d1, d2 in cfg.deltas
-        ]
-        runs: list[dict[str, Any]] = []
-        for i, (e, m) in enumerate(series):
-            rows = futs[i].result()
-            say(f"  {e} {m}: {sum(r['status'] == 'ok' for r in rows)}/{len(rows)} ok")
-            runs.extend(rows)
+        runs, stab_futs = _grid(ex, sc, cfg, series, reference.samples, floor, say)
         t = stage("series", t)
         stabilization = [f.result() for f in stab_futs]
         effects = effects_f.result() if effects_f is not None else None
-    except BaseException as exc:
-        if own:
-            running.shut_down(ex, exc)
-        raise
-    if own:
-        ex.shutdown(wait=True, cancel_futures=True)
     if effects is None:
         effects = effects_cost(sc, cfg.effects_repeats)
     t = stage("stabilization_and_effects", t)
     for i, r in enumerate(runs):
         r["run_id"] = i
     engines = list(dict.fromkeys(e for e, _ in series))
-    cheapest = cheapest_settings(runs, cfg.levels, floor, engines=engines)
     res = SweepResult(
         scene=sc.name,
         out_dir=out,
         config=cfg.to_dict(),
         reference=dict(reference.info),
         runs=tuple(runs),
-        cheapest=cheapest,
+        cheapest=cheapest_settings(runs, cfg.levels, floor, engines=engines),
         stabilization=tuple(stabilization),
         effects=tuple(effects),
         skipped_series=skipped,
         series=tuple((str(e), m) for e, m in series),
-        workers=workers,
+        workers=width if own else None,
     )
+    files = _write_files(res, sc, cfg, out, floor, run_id)
+    t = stage("files", t)
+    res = dataclasses.replace(
+        res, files=files, wall_time_s=time.perf_counter() - t_start, stage_wall_s=stages
+    )
+    write_text(files["json"], sweep_json(res, cfg, sc))
+    return res
+
+
+def _grid(
+    ex: Executor,
+    sc: Scene,
+    cfg: SweepConfig,
+    series: list[tuple[str, str]],
+    samples: Any,
+    floor: float,
+    say: Callable[[str], None],
+) -> tuple[list[dict[str, Any]], list[Any]]:
+    """Every series submitted to ``ex``, the most expensive first, then the stabilisation rows;
+    the series' rows once each has finished (in ``series``' order) and the rows' futures."""
+    say(f"grid: {len(series)} series in the executor")
+    order = sorted(range(len(series)), key=lambda i: EXPENSIVE_FIRST.get(series[i][1], 9))
+    futs: dict[int, Any] = {}
+    for i in order:
+        e, m = series[i]
+        futs[i] = ex.submit(run_series, sc, e, m, cfg, samples, floor)
+    stab_futs = [
+        ex.submit(stabilization_row, sc, d1, d2, rt, off, cfg.t_end)
+        for rt in cfg.delta_rtols
+        for off in (0.0, cfg.delta_norm_offset)
+        for d1, d2 in cfg.deltas
+    ]
+    runs: list[dict[str, Any]] = []
+    for i, (e, m) in enumerate(series):
+        rows = futs[i].result()
+        say(f"  {e} {m}: {sum(r['status'] == 'ok' for r in rows)}/{len(rows)} ok")
+        runs.extend(rows)
+    return runs, stab_futs
+
+
+def _write_files(
+    res: SweepResult, sc: Scene, cfg: SweepConfig, out: Path, floor: float, run_id: str | None
+) -> dict[str, Path]:
+    """``sweep.csv``, ``sweep.md``, the figure and ``sweep.rrd`` written into ``out`` (``sweep.json``,
+    which holds the wall times, is written last, by the caller); every file's path by key."""
     files = {
         "csv": out / "sweep.csv",
         "json": out / "sweep.json",
@@ -204,18 +227,13 @@ def _sweep_into(
         "png": out / FIGURE_FILE,
         "rrd": out / "sweep.rrd",
     }
-    data = figure_data(runs, floor, sc.name, cfg.t_end)
+    data = figure_data(list(res.runs), floor, sc.name, cfg.t_end)
     png = render_png(data)
-    write_text(files["csv"], to_csv(runs))
+    write_text(files["csv"], to_csv(list(res.runs)))
     write_text(files["md"], sweep_markdown(res, cfg))
     write_bytes(files["png"], png)
     write_rrd(files["rrd"], data, png, sweep_markdown(res, cfg, image=None), recording_id=run_id)
-    t = stage("files", t)
-    res = dataclasses.replace(
-        res, files=files, wall_time_s=time.perf_counter() - t_start, stage_wall_s=stages
-    )
-    write_text(files["json"], sweep_json(res, cfg, sc))
-    return res
+    return files
 
 
 __all__ = ["run_sweep"]
