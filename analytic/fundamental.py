@@ -27,7 +27,7 @@ and this is Eq. (89). Only ``W`` is ever needed, so no weighting requires invert
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -122,11 +122,10 @@ def pinv_psd_masked(xp, G, rcond: float = PINV_RCOND):
     return xp.where((rank == k)[..., None, None], full, low), rank
 
 
-@dataclass(frozen=True)
-class ArraySolution:
+class ArraySolution(NamedTuple):
     """:class:`FundamentalSolution`'s fields as arrays with leading batch dimensions (...):
     ``qddot``, ``constraint_force``, ``control_force`` (..., nq), ``lambda_m`` (...),
-    ``residual`` (..., k), ``rank`` (...) (integers; 0 when k = 0)."""
+    ``residual`` (..., k), ``rank`` (...) (integers; 0 when k = 0). A tuple: a JAX pytree."""
 
     qddot: Any
     constraint_force: Any
