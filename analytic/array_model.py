@@ -229,16 +229,22 @@ def S_of(xp, u):
 
 
 @lru_cache(maxsize=256)
-def _constant_rows(n: int, mass_indices: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
-    """``(P, E)``: ``P = [0, I₄, 0]`` (4, nq), so that the ω rows ``[0, H_c, 0] = H_c P``
-    (Eq. 86), and the mass rows ``E`` (k_p, nq) of Eq. (80), unit rows at the tracked masses."""
+def _constant_rows(
+    n: int, omega_components: tuple[int, ...], mass_indices: tuple[int, ...]
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``(P, E, c, i)``: ``P = [0, I₄, 0]`` (4, nq), so that the ω rows ``[0, H_c, 0] = H_c P``
+    (Eq. 86), the mass rows ``E`` (k_p, nq) of Eq. (80), unit rows at the tracked masses, and the
+    components and indices as index arrays."""
     nq = n + 7
     P = np.zeros((4, nq))
     P[:, 3:7] = np.eye(4)
     E = np.zeros((len(mass_indices), nq))
     E[np.arange(len(mass_indices)), 7 + np.asarray(mass_indices, int)] = 1.0
-    P.flags.writeable = E.flags.writeable = False
-    return P, E
+    c = np.asarray(omega_components, int)
+    i = np.asarray(mass_indices, int)
+    for x in (P, E, c, i):
+        x.flags.writeable = False
+    return P, E, c, i
 
 
 def element_differences(xp, x):
@@ -299,8 +305,12 @@ def kinematics(xp, structure: Structure, params: Params, q, qdot=None) -> Kinema
     return Kinematics(**kin)
 
 
-def _batch(xp, *arrays_and_shapes):
-    return xp.broadcast_shapes(*arrays_and_shapes)
+def _batch(xp, *shapes):
+    """The broadcast of the leading shapes (the common one without a call when they agree)."""
+    first = shapes[0]
+    if all(sh == first for sh in shapes[1:]):
+        return tuple(first)
+    return xp.broadcast_shapes(*shapes)
 
 
 def mass_matrix(xp, structure: Structure, params: Params, k: Kinematics):
@@ -424,7 +434,7 @@ def requirements(xp, structure: Structure, params: Params, t) -> dict[str, Any]:
         out["omega_bar"] = b * xp.cos(sigma * t)
         out["omega_bar_dot"] = -b * sigma * xp.sin(sigma * t)
     if structure.mass_indices:
-        idx = np.asarray(structure.mass_indices)
+        idx = _constant_rows(structure.n, structure.omega_components, structure.mass_indices)[3]
         l, lam = params["mass_l"], params["mass_lam"]
         cos, sin = xp.cos(lam * t), xp.sin(lam * t)
         out["p_bar"] = params["p_e"][..., idx] + l * cos
@@ -439,16 +449,14 @@ def control_constraints(xp, structure: Structure, params: Params, t, k: Kinemati
     rows ``[0, 0, E]`` (Eq. 80) with ``b = p̄̈ - α(ṗ - p̄̇) - β(p - p̄)`` (Eq. 81); subsets per
     Remark 4."""
     dtype = params["mu0"].dtype
-    P, E = _constant_rows(structure.n, structure.mass_indices)
+    P, E, c, i = _constant_rows(structure.n, structure.omega_components, structure.mass_indices)
     req = requirements(xp, structure, params, t)
     A_rows, b_rows = [], []
     if structure.omega_components:
-        c = np.asarray(structure.omega_components)
         A_rows.append(k.Hm[..., c, :] @ xp.asarray(P, dtype=dtype))  # [0, H_c, 0] = H_c P
         e = k.omega[..., c] - req["omega_bar"]
         b_rows.append(req["omega_bar_dot"] - xp.matvec(params["omega_gain"], e))
     if structure.mass_indices:
-        i = np.asarray(structure.mass_indices)
         A_rows.append(xp.asarray(E, dtype=dtype))
         b_rows.append(
             req["p_bar_ddot"]
