@@ -24,7 +24,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cached_property, lru_cache
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -76,8 +76,9 @@ class Structure:
     def has(self, effect: Effect) -> bool:
         return effect in self.effects
 
-    @property
+    @cached_property  # (in the instance's __dict__: not a field, out of eq and hash)
     def spring_laws(self) -> tuple[SpringLaw, ...]:
+        """The declarations of :attr:`laws`."""
         return tuple(spring_law(e) for e in self.laws)
 
 

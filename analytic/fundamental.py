@@ -22,6 +22,11 @@ For the cost ``J = Q_cᵀ N Q_c`` (Appendix B) with ``W = N⁻¹``, the control 
 norm-constrained system is ``Q_c = W Z (Zᵀ W Z)⁺ r`` with ``Z = K A_cᵀ`` and ``r = b_c - A_c a``
 (Eq. B10 restricted to the control rows); for ``N = M⁻¹`` (Gauss, ``W = M``) ``Zᵀ M Z = A_c K A_cᵀ``
 and this is Eq. (89). Only ``W`` is ever needed, so no weighting requires inverting M.
+
+The formulas are written once, in :func:`solve_array`, for any array namespace (numpy, jax.numpy)
+and leading batch dimensions, with the factorisation of ``M_α`` and the rank decision passed in:
+:func:`solve` (the numpy reference, one system) uses scipy's Cholesky and :func:`pinv_psd`; the
+array path's defaults are an LU solve and :func:`pinv_psd_masked` (fixed shapes, ``jax.jit``-able).
 """
 
 from __future__ import annotations
@@ -103,6 +108,10 @@ def pinv_psd_masked(xp, G, rcond: float = PINV_RCOND):
 
     Returns:
         ``(G⁺ (..., k, k), rank (...) integer array)``.
+
+    The cut-off is :data:`PINV_RCOND` whatever the dtype: in float32 the eigenvalues carry a
+    round-off of ~1e-7 of the largest, so a requirement set redundant in exact arithmetic is
+    then seen as full rank (the model's own rows never are: ``analytic.fast``'s docstring).
     """
     k = G.shape[-1]
     dg = xp.diagonal(G, axis1=-2, axis2=-1)
