@@ -106,6 +106,10 @@ class TumblingModel:
 
         self.omega_track = scene.control.omega if scene.has(Effect.CONTROL_OMEGA) else None
         self.mass_track = scene.control.masses if scene.has(Effect.CONTROL_MASSES) else None
+        if self.omega_track:  # the tracked components and masses as index arrays
+            self._w_comps = np.array(self.omega_track.components)
+        if self.mass_track:
+            self._p_idx = np.array(self.mass_track.indices)
         self.structure = array_model.structure_of(scene)
         self.params = array_model.parameters(scene, np, np.float64)
         self.k = self.structure.k
