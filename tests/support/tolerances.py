@@ -479,4 +479,3 @@ TOLERANCES: Mapping[str, Threshold] = {
     t.name: t for t in list(globals().values()) if isinstance(t, Threshold)
 }
 """Every tolerance of this module by name (``tests/cross/test_tolerances.py`` checks them all)."""
-
