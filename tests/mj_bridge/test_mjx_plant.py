@@ -72,7 +72,7 @@ def run_and_probe(scenes, settings, t_end, probes):
         qdd = mjx_plant.pointwise_on(eng, t, q, qd)
         jnp = jax.numpy
         st = am.structure_of(scene)
-        p = am.parameters(scene, jnp, jnp.float64)
+        p = am.parameters(scene, jnp, eng.dtype)
         f = jax.jit(
             jax.vmap(lambda t, q, qd, st=st, p=p, xp=jnp: am.control_forces(xp, st, p, t, q, qd))
         )
