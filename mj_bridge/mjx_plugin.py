@@ -20,13 +20,9 @@ from analytic.effects import Effect, MjIntegrator, SpringModel
 from analytic.plant import TIGHTER_STEP, Plant
 from analytic.scene import Scene
 from analytic.trajectory import Trajectory
-from mj_bridge.accelerated import run_isolated
 from mj_bridge.mjx_settings import MjxController, MjxSettings, mjx_unavailable
 from mj_bridge.plan import plan_steps
 from model_xml.tendon_terms import TENDON_TERMS
-
-INTEGRATION = "mj_bridge.mjx_plant"
-"""The module that runs the engine, in the isolated process."""
 
 
 def mjx_version() -> str:
@@ -119,6 +115,7 @@ class MjxPlant(Plant):
     def pointwise(self, scene, settings, t, q, qdot) -> np.ndarray:
         self.check_scene(scene)
         from mj_bridge import mjx_plant
+        from mj_bridge.accelerated import run_isolated
 
         return run_isolated(
             mjx_plant.pointwise,
