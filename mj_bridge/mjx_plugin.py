@@ -107,6 +107,7 @@ class MjxPlant(Plant):
             except ValueError as exc:
                 raise ValueError(f"scenes[{i}]: {exc}" if len(scenes) > 1 else str(exc)) from None
         from mj_bridge import mjx_plant
+        from mj_bridge.accelerated import run_isolated
 
         return run_isolated(
             mjx_plant.simulate_runs, list(scenes), settings, t_end, progress=progress
