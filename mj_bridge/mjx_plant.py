@@ -23,6 +23,7 @@ the time are): ``mjx.forward`` starts each stage from one template ``Data``.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import signal
 import time
@@ -157,6 +158,13 @@ class _Engine:
         """One model pytree for the batch: each leaf stacked over the scenes where they differ
         (vmapped, axis 0), else the first scene's (axis None)."""
         jax = self.jax
+        # The keyframes (the twin records each scene's initial state as one) are static numpy
+        # fields of mjx.Model, so they would make the scenes' trees differ; forward dynamics
+        # never reads them: the batch's model carries the first scene's.
+        keys = [f.name for f in dataclasses.fields(models[0]) if f.name.startswith("key_")]
+        models = [models[0]] + [
+            mx.replace(**{k: getattr(models[0], k) for k in keys}) for mx in models[1:]
+        ]
         leaves0, tree0 = jax.tree_util.tree_flatten(models[0])
         per = [leaves0]
         for i, mx in enumerate(models[1:], start=1):
