@@ -85,10 +85,13 @@ class HostController:
         moment = np.einsum("nij,nj->ni", Sm, tau)
         if np.any(fC):
             mp = np.einsum("ij,ij->i", self.m, q[:, 7:])
-            arm = -(
-                mp[:, None] * np.einsum("nij,nj->ni", Sm, self.a)
-                + self.mu0[:, None] * np.einsum("nij,nj->ni", Sm, self.d)
-            ) / self.m_T[:, None]
+            arm = (
+                -(
+                    mp[:, None] * np.einsum("nij,nj->ni", Sm, self.a)
+                    + self.mu0[:, None] * np.einsum("nij,nj->ni", Sm, self.d)
+                )
+                / self.m_T[:, None]
+            )
             moment = moment + np.cross(arm, fC)
         return np.concatenate([power[:, None], moment, fC], axis=1)
 

@@ -39,9 +39,7 @@ import numpy as np
 from analytic.effects import MjIntegrator
 from analytic.scene import Scene
 from analytic.trajectory import RunStatus, Trajectory
-
-ENGINE = "mjwarp"
-"""The plant's name in its trajectories (:attr:`mj_bridge.warp_plugin.WarpPlant.engine`)."""
+from mj_bridge.warp_settings import ENGINE
 
 STAGE_NODES: dict[MjIntegrator, tuple[float, ...]] = {
     MjIntegrator.RK4: (0.0, 0.5, 0.5, 1.0),
@@ -65,7 +63,7 @@ def import_warp(device: str = ""):
     later process."""
     import warp as wp
 
-    wp.config.quiet = True
+    wp.config.log_level = wp.LOG_WARNING  # no greeting, no line per kernel module loaded
     import mujoco_warp as mjw
 
     wp.init()
@@ -76,16 +74,8 @@ def import_warp(device: str = ""):
 def twin_for(scene: Scene, dt: float | None):
     """``(TwinModel, MjModel handed to Warp, changed)``: the C plant's twin of ``scene`` with the
     step ``dt`` (None: the scene's), the energy flag off (Warp refuses it), nothing else changed."""
-    try:
-        from mj_bridge.accelerated import accelerated_twin
-    except ImportError:  # TEMP until the shared module lands
-        import mujoco
+    from mj_bridge.accelerated import accelerated_twin
 
-        from mj_bridge.twin_model import TwinModel
-
-        tm = TwinModel.build(scene, None, dt)
-        tm.m.opt.enableflags &= ~int(mujoco.mjtEnableBit.mjENBL_ENERGY)
-        return tm, tm.m, ("opt.enableflags: energy off",)
     tw = accelerated_twin(scene, dt)
     return tw.tm, tw.model, tw.changed
 
@@ -240,9 +230,8 @@ class Worlds:
 
     def _control(self, m, d) -> None:
         """Warp's control callback: the controller at this stage's time and state, all worlds."""
-        from model_xml.coordinates import mujoco_to_paper_state
-
         from mj_bridge.stages import INV_GEAR
+        from model_xml.coordinates import mujoco_to_paper_state
 
         self.wp.synchronize()
         qpos = d.qpos.numpy()
@@ -292,7 +281,7 @@ class Worlds:
 def _group_key(scene: Scene, dt: float | None, t_end: float | None) -> tuple:
     from mj_bridge.plan import plan_steps
 
-    integ, h, times, ksteps = plan_steps(scene, None, dt, t_end)
+    integ, h, times, _ = plan_steps(scene, None, dt, t_end)
     return (integ, h, tuple(times.tolist()))
 
 
@@ -364,8 +353,16 @@ def run_worlds(
         ]
         out.append(
             assemble(
-                fast.model, ENGINE, t[keep], q[keep], qd[keep], qdd[keep], controls,
-                aux_all[keep, w], st, msg,
+                fast.model,
+                ENGINE,
+                t[keep],
+                q[keep],
+                qd[keep],
+                qdd[keep],
+                controls,
+                aux_all[keep, w],
+                st,
+                msg,
                 {
                     "integrator": integ.value,
                     "dt": h,
@@ -399,11 +396,22 @@ def run_batch(
         groups.setdefault(_group_key(s, dt, t_end), []).append(i)
     out: list[Trajectory | None] = [None] * len(scenes)
     pending = list(groups.values())
+    longest = max(t_end or s.output.t_end for s in scenes)
+    done = 0  # worlds run so far: a later group's progress starts where the last one ended
+
+    def share(ix: list[int]):
+        if progress is None or len(ix) == len(scenes):
+            return progress
+        horizon, before = t_end or scenes[ix[0]].output.t_end, done
+        return lambda t: progress(
+            longest * (before + len(ix) * min(t / horizon, 1.0)) / len(scenes)
+        )
+
     while pending:
         idx = pending.pop(0)
         try:
             trajs = _guarded(lambda ix=idx: run_worlds(
-                mjw, wp, dev, [scenes[i] for i in ix], dt, t_end, progress))  # fmt: skip
+                mjw, wp, dev, [scenes[i] for i in ix], dt, t_end, share(ix)))  # fmt: skip
         except Unbatchable:
             if len(idx) == 1:
                 raise
@@ -411,6 +419,7 @@ def run_batch(
             continue
         for i, tr in zip(idx, trajs, strict=True):
             out[i] = tr
+        done += len(idx)
     return out  # type: ignore[return-value]
 
 
