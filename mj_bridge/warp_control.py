@@ -1,99 +1,80 @@
-"""The project's controller for N worlds at once, on the host: what the MuJoCo Warp plant applies
-in every integrator stage, and the work and impulses it does there.
+"""The project's controller for N worlds at once, on the host, in float32: what the MuJoCo Warp
+plant applies in every integrator stage, and the work and impulses it does there.
 
-:class:`HostController` holds N scenes of one structure (same n, same effects). At N states in the
-paper's coordinates (``t`` (N,) s, ``q``, ``q̇`` (N, n+7)) :meth:`HostController.forces` gives the
-channels a plant applies, as the C plant's stages (:mod:`mj_bridge.stages`): the body-axis torque
-``τ + τ_g`` (N, 3) N·m (control plus the given torque), the rod forces ``F`` (N, n) N and the
-inertial force at C ``F_C`` (N, 3) N; zeros where the scene has no such effect.
-:meth:`HostController.rates` gives the quadratures' rates at those states (N, 7):
-``[power (τ+τ_g)·ω + F·ṗ + F_C·Ṙ (W), moment S(u)(τ+τ_g) + (R − c) × F_C about the system's centre
-of mass (inertial, N·m), F_C (N)]``, the terms the C plant's stages accumulate.
+:class:`HostController` holds N scenes of one structure (the same
+:class:`analytic.array_model.Structure`: n, effects, controlled components, weighting). At the
+engine's N stage states (MuJoCo ``qpos`` (N, n+7), ``qvel`` (N, n+6), float32, BR's body frame at
+C; times ``t`` (N,) s) :meth:`HostController.stage` gives what the C plant's stages write
+(:mod:`mj_bridge.stages`): the actuators' ``ctrl`` (N, nu) = ``(τ + τ_g) · INV_GEAR`` on
+``torque_x..z`` and ``F · INV_GEAR`` on ``force1..N``, the inertial force at C ``F_C`` (N, 3) N for
+BR's ``xfrc_applied``, and the quadratures' rates (N, 7) ``[Ẇ, İ_L (3), İ_P (3)]``
+(:func:`mj_bridge.accelerated_scheme.quadrature_rates`).
 
-The control law itself is the project's one: the compiled analytic controller
-(:class:`analytic.fast.FastModel`) of each world, float64, at the state the engine gives.
+The control law is the project's one array form (:mod:`analytic.array_model`, numpy), evaluated
+for all worlds in one call in **float32**, the engine's precision, from the float32 state (mapped
+by :func:`mj_bridge.accelerated_scheme.paper_state`); the quadratures' rates are computed in
+float64 from those float32 values (the plant sums them over a run in float64).
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
-from analytic.effects import Effect
+from analytic import array_model as am
 from analytic.scene import Scene
-from model_xml.coordinates import rotation_rows
+from mj_bridge.accelerated_scheme import StageConstants, paper_state, quadrature_rates
+from mj_bridge.twin_model import TwinModel
+
+DTYPE = np.float32
+"""The controller's precision: MuJoCo Warp's."""
+
+
+def _stacked_constants(consts: Sequence[StageConstants], dtype) -> dict[str, Any]:
+    """:meth:`StageConstants.arrays` of N worlds stacked, the scalars as (N, 1) to broadcast."""
+    out = {}
+    for k in ("a", "d", "m", "mu0", "m_T"):
+        v = np.stack([np.asarray(getattr(c, k), dtype=dtype) for c in consts])
+        out[k] = v[:, None] if v.ndim == 1 else v
+    out["P_tau"] = np.asarray(consts[0].P_tau, dtype=dtype)  # one twin layout: the same maps
+    out["P_rod"] = np.asarray(consts[0].P_rod, dtype=dtype)
+    return out
 
 
 class HostController:
-    """The controller of N worlds (module docstring); ``scenes`` share one structure."""
+    """The controller of N worlds (module docstring); ``scenes`` share one structure, ``tms``
+    their twins."""
 
-    def __init__(self, scenes: Sequence[Scene]):
-        from analytic.fast import FastModel
+    def __init__(self, scenes: Sequence[Scene], tms: Sequence[TwinModel]):
+        self.structure = am.structure_of(scenes[0])
+        for i, s in enumerate(scenes):
+            if am.structure_of(s) != self.structure:
+                raise ValueError(f"scenes[{i}]: its structure differs from scenes[0]'s")
+        self.N = len(scenes)
+        self.params = am.stack_parameters([am.parameters(s, np, DTYPE) for s in scenes], np)
+        consts = [StageConstants.of(s, tm) for s, tm in zip(scenes, tms, strict=True)]
+        self.c32 = _stacked_constants(consts, DTYPE)
+        self.c64 = _stacked_constants(consts, np.float64)
 
-        self.scenes = list(scenes)
-        s0 = self.scenes[0]
-        self.n = s0.n
-        self.N = len(self.scenes)
-        self.controlled = s0.controlled
-        self.has_torque = s0.has(Effect.EXTERNAL_TORQUE)
-        self.fast = [FastModel(s) for s in self.scenes] if self.controlled else []
-        models = [FastModel(s).model for s in self.scenes] if not self.fast else [
-            f.model for f in self.fast
-        ]  # fmt: skip
-        self.models = models
-        self.m = np.array([md.m for md in models]).reshape(self.N, self.n)
-        self.a = np.array([md.a for md in models])
-        self.d = np.array([md.d for md in models])
-        self.mu0 = np.array([md.mu0 for md in models])
-        self.m_T = np.array([md.m_T for md in models])
-
-    def forces(
-        self, t: np.ndarray, q: np.ndarray, qdot: np.ndarray
+    def stage(
+        self, t: np.ndarray, qpos: np.ndarray, qvel: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """``(τ + τ_g (N, 3), F (N, n), F_C (N, 3))`` at N paper states (module docstring)."""
-        N, n = self.N, self.n
-        tau = np.zeros((N, 3))
-        rod = np.zeros((N, n))
-        fC = np.zeros((N, 3))
-        if self.controlled:
-            for w, fm in enumerate(self.fast):
-                _, tq, F, f, _ = fm.qddot_and_forces(float(t[w]), q[w], qdot[w])
-                tau[w], rod[w], fC[w] = tq, F, f
-        if self.has_torque:
-            for w, md in enumerate(self.models):
-                tau[w] += md.given_torque(float(t[w]))
-        return tau, rod, fC
-
-    def rates(
-        self,
-        q: np.ndarray,
-        qdot: np.ndarray,
-        omega: np.ndarray,
-        tau: np.ndarray,
-        rod: np.ndarray,
-        fC: np.ndarray,
-    ) -> np.ndarray:
-        """The quadratures' rates (N, 7) at N paper states, ``omega`` (N, 3) body axes, under
-        ``forces``' output (module docstring)."""
-        Sm = rotation_rows(q[:, 3:7])
-        power = (
-            np.einsum("ij,ij->i", tau, omega)
-            + np.einsum("ij,ij->i", rod, qdot[:, 7:])
-            + np.einsum("ij,ij->i", fC, qdot[:, :3])
-        )
-        moment = np.einsum("nij,nj->ni", Sm, tau)
-        if np.any(fC):
-            mp = np.einsum("ij,ij->i", self.m, q[:, 7:])
-            arm = (
-                -(
-                    mp[:, None] * np.einsum("nij,nj->ni", Sm, self.a)
-                    + self.mu0[:, None] * np.einsum("nij,nj->ni", Sm, self.d)
-                )
-                / self.m_T[:, None]
-            )
-            moment = moment + np.cross(arm, fC)
-        return np.concatenate([power[:, None], moment, fC], axis=1)
+        """``(ctrl (N, nu) float32, F_C (N, 3) float32, rates (N, 7) float64)`` at the N
+        worlds' states (module docstring)."""
+        st, p = self.structure, self.params
+        t32 = np.asarray(t, dtype=DTYPE)
+        q, qdot = paper_state(np, qpos.astype(DTYPE, copy=False), qvel.astype(DTYPE, copy=False))
+        tau, rod, fC = am.control_forces(np, st, p, t32, q, qdot)
+        tau = np.broadcast_to(tau, (self.N, 3)) + am.given_torque(np, st, p, t32)
+        ctrl = tau @ self.c32["P_tau"] + rod @ self.c32["P_rod"]
+        f64 = np.float64
+        rates = quadrature_rates(
+            np, self.c64, q.astype(f64), qdot.astype(f64), qvel[:, 3:6].astype(f64),
+            tau.astype(f64), np.broadcast_to(rod, (self.N, st.n)).astype(f64), fC.astype(f64),
+        )  # fmt: skip
+        return ctrl.astype(DTYPE, copy=False), np.broadcast_to(fC, (self.N, 3)), rates
 
 
-__all__ = ["HostController"]
+__all__ = ["DTYPE", "HostController"]

@@ -196,12 +196,10 @@ class Worlds:
             self.mw = batched_model(mjw, [t[1] for t in twins])
             self.d = mjw.put_data(m0, mujoco.MjData(m0), nworld=self.nworld)
         self.device = device
-        self.ctl = HostController(self.scenes)
+        self.ctl = HostController(self.scenes, self.tms)
         self.active = bool(self.nu)  # the callback has channels to write
         self.body_id = tm0.body_id
-        self.torque_ids = tm0.torque_ids
         self.force_ids = tm0.force_ids
-        self._ctrl = np.zeros((self.nworld, self.nu), dtype=np.float32)
         self._xfrc = np.zeros((self.nworld, self.nbody, 6), dtype=np.float32)
         self.acc = np.zeros((self.nworld, 7))
         self.calls = 0
@@ -230,26 +228,16 @@ class Worlds:
 
     def _control(self, m, d) -> None:
         """Warp's control callback: the controller at this stage's time and state, all worlds."""
-        from mj_bridge.stages import INV_GEAR
-        from model_xml.coordinates import mujoco_to_paper_state
-
         self.wp.synchronize()
-        qpos = d.qpos.numpy()
-        qvel = d.qvel.numpy()
         k = self.calls % len(self.nodes)
         t = self.t0 + (self.nodes[k] * self.dt if self.stepping else 0.0)
-        q, qd = mujoco_to_paper_state(qpos.astype(float), qvel.astype(float))
-        tau, rod, fC = self.ctl.forces(t, q, qd)
-        if self.torque_ids is not None:
-            self._ctrl[:, self.torque_ids] = tau * INV_GEAR
+        ctrl, fC, rates = self.ctl.stage(t, d.qpos.numpy(), d.qvel.numpy())
+        d.ctrl.assign(ctrl)
         if self.force_ids is not None:
-            self._ctrl[:, self.force_ids] = rod * INV_GEAR
             self._xfrc[:, self.body_id, :3] = fC
             d.xfrc_applied.assign(self._xfrc)
-        d.ctrl.assign(self._ctrl)
         if self.stepping:
-            w = self.dt * self.weights[k]
-            self.acc += w * self.ctl.rates(q, qd, qvel[:, 3:6].astype(float), tau, rod, fC)
+            self.acc += (self.dt * self.weights[k]) * rates
             self.calls += 1
 
     def forward(self, t: np.ndarray | float) -> None:
@@ -279,10 +267,13 @@ class Worlds:
 
 
 def _group_key(scene: Scene, dt: float | None, t_end: float | None) -> tuple:
+    """What the worlds of one ``nworld`` run share: the integrator, the step, the output grid and
+    the controller's structure."""
+    from analytic.array_model import structure_of
     from mj_bridge.plan import plan_steps
 
     integ, h, times, _ = plan_steps(scene, None, dt, t_end)
-    return (integ, h, tuple(times.tolist()))
+    return (integ, h, tuple(times.tolist()), structure_of(scene))
 
 
 def run_worlds(
