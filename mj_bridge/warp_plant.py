@@ -174,6 +174,7 @@ class Worlds:
     def __init__(self, mjw, wp, device: str, scenes: Sequence[Scene], dt: float | None):
         import mujoco
 
+        from mj_bridge.accelerated import dropped_fields
         from mj_bridge.accumulator import STAGE_WEIGHTS
         from mj_bridge.warp_control import HostController
 
@@ -183,6 +184,7 @@ class Worlds:
         twins = [one.setdefault(id(s), twin_for(s, dt)) for s in self.scenes]
         self.tms = [t[0] for t in twins]
         self.changed = twins[0][2]
+        self.dropped = dropped_fields(twins[0][1], [f.name for f in dataclasses.fields(mjw.Model)])
         tm0 = self.tms[0]
         self.n = self.scenes[0].n
         self.nworld = len(self.scenes)
@@ -207,6 +209,22 @@ class Worlds:
         self.t0: np.ndarray = np.zeros(self.nworld)
         if self.active:
             self.mw.callback.control = self._control
+
+    def info(self) -> dict:
+        """What a trajectory's ``info`` says of the engine (keys shared with the MJX plant)."""
+        import mujoco
+        import mujoco_warp
+
+        return {
+            "precision": "float32",
+            "device": self.device,
+            "controller": "host (analytic.array_model, numpy float32, every stage)",
+            "mujoco_warp_version": mujoco_warp.__version__,
+            "warp_version": self.wp.__version__,
+            "mujoco_version": mujoco.__version__,
+            "changed_fields": list(self.changed),
+            "dropped_fields": list(self.dropped),
+        }
 
     # -- state ----------------------------------------------------------------------------------
 
@@ -280,30 +298,27 @@ def run_worlds(
     mjw, wp, device: str, scenes: Sequence[Scene], dt: float | None, t_end: float | None,
     progress: Callable[[float], None] | None,
 ) -> list[Trajectory]:  # fmt: skip
-    """One ``nworld`` run of ``scenes`` (one structure, one step and output grid)."""
-    import mujoco_warp
-
-    from analytic.assemble import assemble
-    from analytic.fast import FastModel
+    """One ``nworld`` run of ``scenes`` (one structure, one step and output grid): each world's
+    trajectory, a world whose state goes non-finite failing its own only."""
+    from mj_bridge.accelerated import accelerated_trajectory
     from mj_bridge.plan import plan_steps
 
-    scene0 = scenes[0]
-    integ, h, times, ksteps = plan_steps(scene0, None, dt, t_end)
+    integ, h, times, ksteps = plan_steps(scenes[0], None, dt, t_end)
     c0 = time.perf_counter()
     W = Worlds(mjw, wp, device, scenes, h)
-    states = [W.tms[i].to_mujoco(s.initial.q0(), s.initial.qdot0()) for i, s in enumerate(scenes)]
+    states = [
+        tm.to_mujoco(s.initial.q0(), s.initial.qdot0()) for s, tm in zip(scenes, W.tms, strict=True)
+    ]
     W.set_state(np.array([s[0] for s in states]), np.array([s[1] for s in states]))
-    rec = {k: [] for k in ("t", "qpos", "qvel", "qacc", "aux")}
+    rec: list[tuple] = []  # (t, qpos, qvel, qacc, aux) per sample, every world
     status, message = RunStatus.OK, ""
 
-    def sample(t: float) -> None:
+    def sample(t: float) -> bool:
+        """Record the sample at t; False once every world has gone non-finite."""
         W.forward(t)
         qpos, qvel, qacc = W.arrays()
-        rec["t"].append(t)
-        rec["qpos"].append(qpos)
-        rec["qvel"].append(qvel)
-        rec["qacc"].append(qacc)
-        rec["aux"].append(W.acc.copy())
+        rec.append((t, qpos, qvel, qacc, W.acc.copy()))
+        return bool(np.any(np.all(np.isfinite(qpos), 1) & np.all(np.isfinite(qvel), 1)))
 
     sample(float(times[0]))
     compile_s = time.perf_counter() - c0  # the first forward compiles (or loads) the kernels
@@ -313,64 +328,32 @@ def run_worlds(
         for i, k in enumerate(ksteps, start=1):
             W.step(float(times[i - 1]), int(k))
             nsteps += int(k)
-            sample(float(times[i]))
-            last = rec["qpos"][-1], rec["qvel"][-1]
-            if not (np.all(np.isfinite(last[0])) and np.all(np.isfinite(last[1]))):
-                status, message = RunStatus.FAILED, f"non-finite state at t = {times[i]:.6g} s"
+            if not sample(float(times[i])):
                 break
             if progress is not None:
                 progress(float(times[i]))
     except KeyboardInterrupt:
-        status, message = RunStatus.INTERRUPTED, f"interrupted at t = {rec['t'][-1]:.6g} s"
+        status, message = RunStatus.INTERRUPTED, f"interrupted at t = {rec[-1][0]:.6g} s"
     wall = time.perf_counter() - wall0
-
-    t = np.array(rec["t"])
-    qpos_all, qvel_all, qacc_all = (np.array(rec[k]) for k in ("qpos", "qvel", "qacc"))
-    aux_all = np.array(rec["aux"])
+    t = np.array([r[0] for r in rec])
+    qpos_all, qvel_all, qacc_all, aux_all = (np.stack([r[j] for r in rec], 1) for j in range(1, 5))
+    info = W.info() | {
+        "integrator": integ.value, "dt": h, "nsteps": nsteps, "nworld": W.nworld,
+        "wall_time_s": wall, "compile_s": compile_s,
+    }  # fmt: skip
     out = []
     for w, (scene, tm) in enumerate(zip(scenes, W.tms, strict=True)):
-        q, qd, qdd, omega = tm.to_paper_batch(qpos_all[:, w], qvel_all[:, w], qacc_all[:, w])
-        ok = np.all(np.isfinite(q), axis=1) & np.all(np.isfinite(qd), axis=1)
+        good = np.all(np.isfinite(qpos_all[w]), 1) & np.all(np.isfinite(qvel_all[w]), 1)
+        n_ok = len(t) if np.all(good) else int(np.argmin(good))
         st, msg = status, message
-        if st is RunStatus.FAILED and np.all(ok):
-            st, msg = RunStatus.OK, ""  # another world of the batch failed; this one did not
-        if st is RunStatus.OK and not np.all(ok):
-            st, msg = RunStatus.FAILED, f"non-finite state at t = {t[np.argmin(ok)]:.6g} s"
-        keep = np.ones(len(t), bool) if np.all(ok) else (np.arange(len(t)) < np.argmin(ok))
-        fast = FastModel(scene)
-        controls = [
-            fast.acceleration(ti, qi, qdi)[1] if scene.controlled else None
-            for ti, qi, qdi in zip(t[keep], q[keep], qd[keep], strict=True)
-        ]
+        if n_ok < len(t):
+            st, msg = RunStatus.FAILED, f"non-finite state at t = {t[n_ok]:.6g} s"
         out.append(
-            assemble(
-                fast.model,
-                ENGINE,
-                t[keep],
-                q[keep],
-                qd[keep],
-                qdd[keep],
-                controls,
-                aux_all[keep, w],
-                st,
-                msg,
-                {
-                    "integrator": integ.value,
-                    "dt": h,
-                    "nsteps": nsteps,
-                    "precision": "float32",
-                    "device": device,
-                    "nworld": len(scenes),
-                    "controller": "host (numpy, every stage, Warp's control callback)",
-                    "changed": list(W.changed),
-                    "wall_time_s": wall,
-                    "compile_s": compile_s,
-                    "mujoco_warp_version": mujoco_warp.__version__,
-                    "warp_version": wp.__version__,
-                },
-                omega=omega[keep],
+            accelerated_trajectory(
+                scene, tm, ENGINE, t[:n_ok], qpos_all[w, :n_ok], qvel_all[w, :n_ok],
+                qacc_all[w, :n_ok], aux_all[w, :n_ok], st, msg, dict(info),
             )
-        )
+        )  # fmt: skip
     return out
 
 
