@@ -67,8 +67,12 @@ def import_warp(device: str = ""):
     import mujoco_warp as mjw
 
     wp.init()
-    dev = wp.get_device(device or None)
-    return wp, mjw, str(dev)
+    names = [str(d) for d in wp.get_devices()]
+    if device == "cuda" and wp.get_cuda_device_count():
+        device = "cuda:0"
+    if device and device not in names:
+        raise ValueError(f"device: Warp sees no {device!r} here (its devices: {', '.join(names)})")
+    return wp, mjw, str(wp.get_device(device or None))
 
 
 def twin_for(scene: Scene, dt: float | None):
