@@ -308,11 +308,16 @@ def _plant_goal(
         pl.check_scene(scenes[0])
     except ValueError as exc:
         return Goal(name, math.nan, THROUGHPUT_LIMIT, skipped=f"it refuses the scene: {exc}")
+    failure = ""
+    points: list[BatchPoint] = []
     try:
         first = timed_call(pl, scenes[:1], horizon)
-        points = [BatchPoint(s, timed_call(pl, scenes[:s], horizon), loops[s]) for s in sizes]
-    except (RuntimeError, ValueError, ImportError, OSError) as exc:
-        return Goal(name, math.inf, THROUGHPUT_LIMIT, f"a run failed: {exc}")
+        for s in sizes:
+            points.append(BatchPoint(s, timed_call(pl, scenes[:s], horizon), loops[s]))
+    except Exception as exc:  # a plant's failure is its goal's, never the benchmark's
+        if not points:
+            return Goal(name, math.inf, THROUGHPUT_LIMIT, f"a run failed: {exc}")
+        failure = f"the batch of {sizes[len(points)]} failed: {exc}"
     settings = pl.describe(pl.default_settings(scenes[0]))
     where = ", ".join(sorted({d for p in points for d in p.batched.devices})) or "not reported"
     progress(
@@ -321,15 +326,18 @@ def _plant_goal(
     )
     for line in table_lines(points):
         progress(line)
+    if failure:
+        progress(f"    {failure}")
     top = points[-1]
-    value = 1.0 / top.speedup
+    value = 1.0 / top.speedup if not failure else math.inf
     return Goal(
         name,
         value,
         THROUGHPUT_LIMIT,
         f"{top.scenes_per_s:.3g} scenes/s in one call of {top.size} against "
         f"{top.loop_scenes_per_s:.3g} in the C loop (whole calls; the engines' stepping alone: "
-        f"{top.stepping_speedup:.3g}x the loop's); device {where}",
+        f"{top.stepping_speedup:.3g}x the loop's); device {where}"
+        + (f"; {failure}" if failure else ""),
         data={
             "plant": pl.engine,
             "settings": settings,
@@ -337,6 +345,7 @@ def _plant_goal(
             "horizon_s": horizon,
             "first_call_s": first.wall_s,
             "points": [p.to_dict() for p in points],
+            "failure": failure,
         },
     )
 

@@ -100,3 +100,19 @@ def test_devices_are_asked_in_a_new_process_and_a_failure_says_why(monkeypatch):
     got = bt.accelerator_devices(timeout_s=60)
     assert got == {"Fake": "cuda:0 (Planted GPU)", "Broken": "unknown (no driver)"}
     assert {"jax", "warp"} & set(sys.modules) == loaded  # nothing imported here
+
+
+def test_a_batch_size_that_fails_keeps_the_sizes_measured_before_it():
+    class SmallOnly(BatchedEchoPlant):
+        def _simulate_batch(self, scenes, settings, t_end, progress):
+            if len(scenes) > 1:
+                raise MemoryError("out of device memory")
+            return super()._simulate_batch(scenes, settings, t_end, progress)
+
+    lines: list[str] = []
+    (goal,) = bt.goal_batched_throughput(
+        [SmallOnly()], sizes=SIZES, progress=lines.append, devices={}
+    )
+    assert [p["size"] for p in goal.data["points"]] == [1]
+    assert goal.value == math.inf and goal.verdict == "FAILS"
+    assert "the batch of 3 failed: out of memory" in goal.detail
