@@ -148,16 +148,50 @@ def _merge(base, others: list, prefix: str = "") -> None:
         setattr(base, f.name, arr)
 
 
+NOT_READ = ("key_", "name_", "names", "paths", "text_", "tuple_", "numeric_", "nnames", "npaths",
+            "ntext", "ntuple", "nnumeric")  # fmt: skip
+"""``MjModel`` fields no forward evaluation reads (keyframes: a scene's initial state; names and
+custom data, and their sizes), left out of :func:`model_fingerprint` (prefixes)."""
+
+
+def model_fingerprint(m) -> bytes:
+    """A digest of the numbers of the ``MjModel`` ``m`` a forward evaluation can read (every
+    array but :data:`NOT_READ`, and ``opt``, ``stat``): twins with equal fingerprints are the
+    same model to the engine (their scenes differ in initial states, names or controller
+    targets only)."""
+    import hashlib
+
+    h = hashlib.sha256()
+    for part, obj in (("", m), ("opt.", m.opt), ("stat.", m.stat)):
+        for name in sorted(dir(obj)):
+            if name.startswith("_") or (not part and name.startswith(NOT_READ)):
+                continue
+            try:
+                v = getattr(obj, name)
+            except Exception:  # a property MuJoCo refuses here: not data
+                continue
+            if isinstance(v, np.ndarray | int | float) and not isinstance(v, bool):
+                a = np.ascontiguousarray(v)
+                h.update(f"{part}{name}{a.dtype}{a.shape}".encode())
+                h.update(a.tobytes())
+    return h.digest()
+
+
 def batched_model(mjw, models: Sequence):
     """One Warp model whose worlds are ``models`` (MjModels of one structure), in order: their
-    own values in every batched field in which they differ. Raises :class:`Unbatchable`.
+    own values in every batched field in which they differ. One ``put_model`` per distinct model
+    (:func:`model_fingerprint`). Raises :class:`Unbatchable`.
 
     ``put_model`` refusing a twin raises ``NotImplementedError``/``ValueError`` (the feature it
     names), re-raised by the caller as a ``ValueError``."""
-    base = mjw.put_model(models[0])
-    others = [m for m in models[1:] if m is not models[0]]
-    if others:
-        _merge(base, [mjw.put_model(m) for m in models[1:]])
+    prints = [model_fingerprint(m) for m in models]
+    put = {prints[0]: mjw.put_model(models[0])}
+    for fp, m in zip(prints, models, strict=True):
+        if fp not in put:
+            put[fp] = mjw.put_model(m)
+    base = put[prints[0]]
+    if len(put) > 1:
+        _merge(base, [put[fp] for fp in prints[1:]])
     return base
 
 
