@@ -184,7 +184,11 @@ def batched_model(mjw, models: Sequence):
 
     ``put_model`` refusing a twin raises ``NotImplementedError``/``ValueError`` (the feature it
     names), re-raised by the caller as a ``ValueError``."""
-    prints = [model_fingerprint(m) for m in models]
+    by_id: dict[int, bytes] = {}  # one model object given for several worlds: hashed once
+    for m in models:
+        if id(m) not in by_id:
+            by_id[id(m)] = model_fingerprint(m)
+    prints = [by_id[id(m)] for m in models]
     put = {prints[0]: mjw.put_model(models[0])}
     for fp, m in zip(prints, models, strict=True):
         if fp not in put:
