@@ -123,7 +123,6 @@ def _merge(base, others: list, prefix: str = "") -> None:
     which ``others`` differ; :class:`Unbatchable` naming the first field that differs and cannot
     be batched."""
     import warp as wp
-    from mujoco_warp._src import warp_util
 
     for f in dataclasses.fields(base):
         if f.name in IGNORED_FIELDS:
@@ -139,7 +138,7 @@ def _merge(base, others: list, prefix: str = "") -> None:
         if all(_same(a, v) for v in vs):
             continue
         spec = getattr(f.type, "shape", ())
-        if not (isinstance(val, wp.array) and warp_util.is_array_spec(f.type) and spec
+        if not (isinstance(val, wp.array) and isinstance(spec, tuple) and spec
                 and spec[0] == "*" and all(v.shape == a.shape for v in vs)):  # fmt: skip
             raise Unbatchable(name)
         stacked = np.concatenate([a, *vs], axis=0)
