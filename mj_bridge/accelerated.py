@@ -318,6 +318,8 @@ def run_isolated(
     try:
         while True:
             try:
+                if deadline is not None and time.monotonic() > deadline:
+                    raise interrupted
                 if parent_end.poll(POLL_S):
                     try:
                         message = parent_end.recv()
@@ -346,8 +348,6 @@ def run_isolated(
                         f"the isolated process ended ({_signal_name(proc.returncode)}) "
                         f"without a result"
                     )
-                if deadline is not None and time.monotonic() > deadline:
-                    raise interrupted
             except KeyboardInterrupt as exc:
                 if interrupted is not None:  # a second interrupt: stop waiting
                     raise

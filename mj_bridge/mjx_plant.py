@@ -231,7 +231,9 @@ class _Engine:
         w, t = np.asarray(widx), np.asarray(t)
         shape = np.broadcast_shapes(w.shape, t.shape)
         w, t = np.broadcast_to(w, shape).ravel(), np.broadcast_to(t, shape).ravel()
-        out = np.stack([self.fast[int(w[r])].given_torque(float(t[r])) for r in range(len(w))])
+        out = np.stack(
+            [self.fast[int(w[r])].model.given_torque(float(t[r])) for r in range(len(w))]
+        )
         return out.reshape(*shape, 3).astype(np.dtype(self.dtype))
 
     def _stage_eval(self, mx, c, p, widx, t, qpos, qvel):
@@ -373,6 +375,20 @@ def simulate_runs(
     on; a ``KeyboardInterrupt`` (SIGINT from the parent, between sample intervals) ends every
     world ``INTERRUPTED`` with the samples reached.
     """
+    return run_engine(engine(scenes, settings), t_end, progress)
+
+
+def engine(scenes: Sequence[Scene], settings: MjxSettings) -> _Engine:
+    """The engine of ``scenes`` (one structure) at ``settings``, for :func:`run_engine` and
+    :func:`pointwise_on` (one engine serves both, its stage traced once)."""
+    return _Engine(scenes, settings)
+
+
+def run_engine(
+    eng: _Engine, t_end: float | None, progress: Callable[[float], None] | None = None
+) -> list[Trajectory]:
+    """:func:`simulate_runs` on an engine already built."""
+    scenes, settings = eng.scenes, eng.settings
     _, h, times, ksteps = plan_steps(scenes[0], MjIntegrator.RK4, settings.timestep, t_end)
     for i, s in enumerate(scenes[1:], start=1):
         _, h_i, times_i, _ = plan_steps(s, MjIntegrator.RK4, settings.timestep, t_end)
@@ -385,7 +401,6 @@ def simulate_runs(
                 f"scenes[{i}]: a batch runs on one output grid and step: its [output] or "
                 f"[mujoco] timestep differs from scenes[0]'s"
             )
-    eng = _Engine(scenes, settings)
     W = len(scenes)
     q0 = np.stack([s.initial.q0() for s in scenes])
     qd0 = np.stack([s.initial.qdot0() for s in scenes])
@@ -479,7 +494,11 @@ def pointwise(
 ) -> np.ndarray:
     """MJX's ``q̈`` (N, n+7), paper coordinates, at N given paper states (``t`` (N,), ``q``,
     ``q̇`` (N, n+7)), the scene's controller and given torque applied (as a stage applies them)."""
-    eng = _Engine([scene], settings)
+    return pointwise_on(_Engine([scene], settings), t, q, qdot)
+
+
+def pointwise_on(eng: _Engine, t: np.ndarray, q: np.ndarray, qdot: np.ndarray) -> np.ndarray:
+    """:func:`pointwise` on an engine already built (its first scene)."""
     qpos, qvel = eng.tm.to_mujoco(np.atleast_2d(q), np.atleast_2d(qdot))
     mx, c, p, w = eng.world(0)
     qacc = eng.qacc_states(
@@ -488,4 +507,13 @@ def pointwise(
     return eng.tm.to_paper_acc(qpos, qvel, np.asarray(qacc, np.float64))
 
 
-__all__ = ["ENGINE", "jax_cache_dir", "mjx_field_names", "pointwise", "simulate_runs"]
+__all__ = [
+    "ENGINE",
+    "engine",
+    "jax_cache_dir",
+    "mjx_field_names",
+    "pointwise",
+    "pointwise_on",
+    "run_engine",
+    "simulate_runs",
+]

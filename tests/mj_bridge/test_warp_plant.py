@@ -34,7 +34,6 @@ from tests.support.mj_scenes import paper_scene
 
 needs_warp = pytest.mark.skipif(bool(warp_unavailable()), reason=warp_unavailable() or "ok")
 
-EPS32 = float(np.finfo(np.float32).eps)
 FEW_STEPS_T = 0.002
 """The default tests' horizon, s: 8 steps of the scenes' 2.5e-4 s."""
 

@@ -407,12 +407,81 @@ DISSIPATED_ENERGY_ABS = Threshold(
 )
 
 # =================================================================================================
+# The accelerated plants: MuJoCo's RK4 written out, MJX (tests/mj_bridge/test_accelerated_scheme.py,
+# test_mjx_plant.py)
+# =================================================================================================
+
+EPS32 = 1.1920929e-07
+"""float32's machine epsilon (2⁻²³)."""
+
+RK4_MIRROR_ROUNDOFF = Threshold(
+    "RK4_MIRROR_ROUNDOFF",
+    1e-14,
+    "SI (state units)",
+    "One RK4 step of a free body with O(1) coordinates and velocities: the scheme written out and "
+    "MuJoCo's mj_step on the same mj_forward differ only by the order of a few float64 "
+    "operations, a few ε = 2.2e-16 of O(1) values; 1e-14 is ~45 ε, while a different position "
+    "rule (the plain sum of the stage angular velocities) misses by ~1e-5 at that step.",
+)
+RK4_MIRROR_RUN = Threshold(
+    "RK4_MIRROR_RUN",
+    1e-12,
+    "1",
+    "200 steps (0.05 s) of Example 1: the scheme on the C engine against the C plant, relative to "
+    "the run's largest coordinate (and to max(1 J, |W|) for the work): round-off of ~ε per step "
+    "accumulated over 200 steps and amplified by the motion's sensitivity stays below 1e-13 "
+    "(measured 1e-16); a scheme of another order or position rule differs by > 1e-9 there.",
+)
+MJX_F64_SHORT = Threshold(
+    "MJX_F64_SHORT",
+    1e-12,
+    "m",
+    "MJX float64 against the C plant on Example 1 with linear springs, 0.05 s: the same RK4, the "
+    "same twin, the same controller, so only the two engines' forward dynamics differ by "
+    "round-off (measured 6e-17 m controlled, 2e-15 m uncontrolled on positions of O(10 m)); "
+    "1e-12 m is ~500 ε of the 16 m rod.",
+)
+MJX_F64_GOAL = Threshold(
+    "MJX_F64_GOAL",
+    1e-7,
+    "m",
+    "The goal for MJX float64 against the C plant and the analytic plant, Example 1 with linear "
+    "springs, 2 s, uncontrolled and controlled: the C plant's own RK4 error at 2.5e-4 s is "
+    "O(1e-9) m against the analytic plant, and MJX must not add more than a decade and a half.",
+)
+MJX_F32_FACTOR = Threshold(
+    "MJX_F32_FACTOR",
+    10.0,
+    "1",
+    "MJX float32 against the C plant (float64): the float32 floor is ε₃₂ = 1.19e-7 of the largest "
+    "coordinate per operation, accumulating as a random walk over the run's steps; the bound is "
+    "this factor × ε₃₂ × max|q| × √(steps) (0.05 s: 200 steps, max|q| ≈ 12 m -> 2e-4 m). Ten "
+    "covers the systematic part of the rounding (the stage sums, the time in float32).",
+)
+MJX_POINTWISE_F64 = Threshold(
+    "MJX_POINTWISE_F64",
+    1e-12,
+    "1",
+    "MJX's q̈ (float64) against the C engine's at the initial and random states, relative to "
+    "max|q̈|: the same model's forward dynamics in two implementations (measured 6e-15).",
+)
+JAX_CONTROLLER_F64 = Threshold(
+    "JAX_CONTROLLER_F64",
+    1e-12,
+    "1",
+    "The controller in JAX (analytic.array_model, float64, jit) against the numpy model's at the "
+    "same states, relative to the largest force of each output: one set of formulas on two "
+    "array libraries, differing by the order of float64 operations only.",
+)
+
+
+# =================================================================================================
 # MuJoCo Warp, float32 (tests/mj_bridge/test_warp_plant.py); eps32 = 2⁻²³ = 1.19e-7
 # =================================================================================================
 
 WARP_QDDOT_REL = Threshold(
     "WARP_QDDOT_REL",
-    64 * 1.1920929e-07,
+    64 * EPS32,
     "1",
     "max|q̈_warp - q̈_ref| / max|q̈_ref| at a state, the reference MuJoCo's C engine or the analytic "
     "model (which agree to ~1e-15): 8 nv eps32 with nv = 8 (Example 1's twin). Warp rounds the "
@@ -424,7 +493,7 @@ WARP_QDDOT_REL = Threshold(
 )
 WARP_BATCH_REL = Threshold(
     "WARP_BATCH_REL",
-    1.1920929e-07,
+    EPS32,
     "1",
     "A scene as one world of a batch against the same scene alone, 8 steps: max|Δq| / max|q| (and "
     "q̇): the same kernels on the same world's data, so equal or one float32 rounding (eps32) apart; "
@@ -432,7 +501,7 @@ WARP_BATCH_REL = Threshold(
 )
 WARP_RUN_REL_PER_STEP = Threshold(
     "WARP_RUN_REL_PER_STEP",
-    2 * 1.1920929e-07,
+    2 * EPS32,
     "1",
     "Per step, times the number of steps k: max|q_warp - q_C| / max|q_C| (and q̇; and the work "
     "against the energy scale) after a few steps of the same scene and controller in MuJoCo Warp "
@@ -443,7 +512,7 @@ WARP_RUN_REL_PER_STEP = Threshold(
 )
 WARP_DRIFT_REL_PER_SQRT_STEP = Threshold(
     "WARP_DRIFT_REL_PER_SQRT_STEP",
-    8 * 1.1920929e-07,
+    8 * EPS32,
     "1",
     "Per sqrt(step), times sqrt(k) and max|q_C| of the group (R, p; u absolute): MuJoCo Warp "
     "against the C plant over 2 s of Example 1 (k = 8000 steps of 2.5e-4 s), the float32 floor. "
@@ -458,4 +527,3 @@ TOLERANCES: Mapping[str, Threshold] = {
     t.name: t for t in list(globals().values()) if isinstance(t, Threshold)
 }
 """Every tolerance of this module by name (``tests/cross/test_tolerances.py`` checks them all)."""
-
