@@ -24,6 +24,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -32,7 +33,7 @@ from analytic import fundamental
 from analytic.effects import Effect, Weighting
 from analytic.effects.declaration import SpringLaw
 from analytic.effects.registry import SPRING_LAWS, spring_law
-from analytic.kinematics import tensor_along
+from analytic.kinematics import T_H, S, tensor_along
 
 Params = Mapping[str, Any]
 """The numbers of one scene (or a stack of scenes), :func:`parameters`'s keys."""
@@ -175,63 +176,69 @@ def stack_parameters(params: Sequence[Params], xp) -> dict[str, Any]:
 # --------------------------------------------------------------------------------------------------
 
 
-def _mv(A, v):
-    """``A v``: (..., r, c), (..., c) -> (..., r)."""
-    return (A @ v[..., None])[..., 0]
-
-
-def _vm(v, A):
-    """``Aᵀ v``: (..., r), (..., r, c) -> (..., c)."""
-    return (v[..., None, :] @ A)[..., 0, :]
-
-
-def _dot(a, b):
-    return (a * b).sum(axis=-1)
-
-
 def _outer(a, b):
     return a[..., :, None] * b[..., None, :]
 
 
 def _tr(xp, A):
-    return xp.swapaxes(A, -1, -2)
+    return A.mT
 
 
-def _linear_map(T, u):
-    """``X(u) = T u`` for a constant tensor T (..., 3, 4, 4): (..., 4) -> (..., 3, 4)."""
-    return (T @ u[..., None, :, None])[..., 0]
+def _bc(xp, x, shape):
+    """``x`` broadcast to ``shape`` (x itself when it has it: no call on the one-state path)."""
+    return x if x.shape == tuple(shape) else xp.broadcast_to(x, tuple(shape))
+
+
+def _linear_map(xp, T, u):
+    """``X(u) = T u`` for a tensor T (..., 3, 4, 4) of a map linear in u (``H``, ``L_a``, ``L_d``;
+    :mod:`analytic.kinematics`): (..., 4) -> (..., 3, 4), one matrix-vector product."""
+    X = xp.matvec(T.reshape((*T.shape[:-3], 12, 4)), u)
+    return X.reshape((*X.shape[:-1], 3, 4))
+
+
+def _S_quadratic() -> np.ndarray:
+    """``C`` (9, 16) with ``S(u) + I = C (u ⊗ u)`` (Eq. 11 is homogeneous quadratic in u but for
+    its ``-1`` on the diagonal), by polarization of :func:`analytic.kinematics.S` (exact: its
+    coefficients are small integers)."""
+    E = np.eye(4)
+    C = np.zeros((3, 3, 4, 4))
+    for k in range(4):
+        C[:, :, k, k] = S(E[k]) + np.eye(3)
+        for j in range(k):
+            mixed = (S(E[k] + E[j]) + np.eye(3)) - C[:, :, k, k] - C[:, :, j, j]
+            C[:, :, k, j] = C[:, :, j, k] = 0.5 * mixed
+    return C.reshape(9, 16)
+
+
+_C_S = _S_quadratic()
+_I9 = np.eye(3).reshape(9)
 
 
 def H_of(xp, u):
     """``H(u)``, Eq. (13), (..., 4) -> (..., 3, 4): ``ω = H(u) u̇``, ``Ḣ = H(u̇)``."""
-    u0, u1, u2, u3 = u[..., 0], u[..., 1], u[..., 2], u[..., 3]
-    rows = (
-        xp.stack([-u1, u0, u3, -u2], axis=-1),
-        xp.stack([-u2, -u3, u0, u1], axis=-1),
-        xp.stack([-u3, u2, -u1, u0], axis=-1),
-    )
-    return 2.0 * xp.stack(rows, axis=-2)
+    return _linear_map(xp, xp.asarray(T_H, dtype=u.dtype), u)
 
 
 def S_of(xp, u):
     """``S(u)``, Eq. (11), in the paper's form ``2u0² - 1 + 2ui²`` (a rotation only for unit u;
     docs/errata.md C2), body -> inertial, (..., 4) -> (..., 3, 3)."""
-    u0, u1, u2, u3 = u[..., 0], u[..., 1], u[..., 2], u[..., 3]
-    rows = (
-        xp.stack(
-            [2 * u0 * u0 - 1 + 2 * u1 * u1, 2 * u1 * u2 - 2 * u0 * u3, 2 * u1 * u3 + 2 * u0 * u2],
-            axis=-1,
-        ),
-        xp.stack(
-            [2 * u1 * u2 + 2 * u0 * u3, 2 * u0 * u0 - 1 + 2 * u2 * u2, 2 * u2 * u3 - 2 * u0 * u1],
-            axis=-1,
-        ),
-        xp.stack(
-            [2 * u1 * u3 - 2 * u0 * u2, 2 * u2 * u3 + 2 * u0 * u1, 2 * u0 * u0 - 1 + 2 * u3 * u3],
-            axis=-1,
-        ),
-    )
-    return xp.stack(rows, axis=-2)
+    uu = _outer(u, u)
+    S9 = xp.matvec(xp.asarray(_C_S, dtype=u.dtype), uu.reshape((*uu.shape[:-2], 16)))
+    S9 = S9 - xp.asarray(_I9, dtype=u.dtype)
+    return S9.reshape((*S9.shape[:-1], 3, 3))
+
+
+@lru_cache(maxsize=256)
+def _constant_rows(n: int, mass_indices: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
+    """``(P, E)``: ``P = [0, I₄, 0]`` (4, nq), so that the ω rows ``[0, H_c, 0] = H_c P``
+    (Eq. 86), and the mass rows ``E`` (k_p, nq) of Eq. (80), unit rows at the tracked masses."""
+    nq = n + 7
+    P = np.zeros((4, nq))
+    P[:, 3:7] = np.eye(4)
+    E = np.zeros((len(mass_indices), nq))
+    E[np.arange(len(mass_indices)), 7 + np.asarray(mass_indices, int)] = 1.0
+    P.flags.writeable = E.flags.writeable = False
+    return P, E
 
 
 def element_differences(xp, x):
@@ -244,7 +251,8 @@ class Kinematics(NamedTuple):
     """Quantities shared by M, Q and the constraints at one state (batched like q).
 
     ``u`` (4), ``p`` (n), ``Sa = S(u) a``, ``Sd = S(u) d`` (3, inertial), ``Hm = H(u)`` (3, 4),
-    ``La = L_a(u)``, ``Ld = L_d(u)`` (3, 4), ``mu1 = mᵀp``, ``mu2 = (p∘m)ᵀp`` (); with q̇:
+    ``La = L_a(u)``, ``Ld = L_d(u)`` (3, 4), ``mu1 = mᵀp``, ``mu2 = (p∘m)ᵀp`` (),
+    ``B = μ1 L_a + μ0 L_d`` (3, 4) (``Σ m_i J_i``'s u block: M's R-u block, Eq. 51); with q̇:
     ``ud`` (4), ``pd`` (n), ``omega = H u̇`` (3, rad/s, Eq. 12), ``Hd = H(u̇)`` (3, 4); else None.
     """
 
@@ -257,6 +265,7 @@ class Kinematics(NamedTuple):
     Ld: Any
     mu1: Any
     mu2: Any
+    B: Any
     ud: Any = None
     pd: Any = None
     omega: Any = None
@@ -269,20 +278,24 @@ def kinematics(xp, structure: Structure, params: Params, q, qdot=None) -> Kinema
     Sm = S_of(xp, u)
     Hm = H_of(xp, u)
     m = params["m"]
+    La = _linear_map(xp, params["T_a"], u)  # Eq. (29)
+    Ld = _linear_map(xp, params["T_d"], u)  # Eq. (34)
+    mu1 = xp.vecdot(m, p)
     kin = dict(
         u=u,
         p=p,
-        Sa=_mv(Sm, params["a"]),
-        Sd=_mv(Sm, params["d"]),
+        Sa=xp.matvec(Sm, params["a"]),
+        Sd=xp.matvec(Sm, params["d"]),
         Hm=Hm,
-        La=_linear_map(params["T_a"], u),  # Eq. (29)
-        Ld=_linear_map(params["T_d"], u),  # Eq. (34)
-        mu1=_dot(m, p),
-        mu2=_dot(m * p, p),
+        La=La,
+        Ld=Ld,
+        mu1=mu1,
+        mu2=xp.vecdot(m * p, p),
+        B=mu1[..., None, None] * La + params["mu0"][..., None, None] * Ld,  # {mᵀp}L_a + {mᵀ1}L_d
     )
     if qdot is not None:
         ud = qdot[..., 3:7]
-        kin.update(ud=ud, pd=qdot[..., 7:], omega=_mv(Hm, ud), Hd=H_of(xp, ud))
+        kin.update(ud=ud, pd=qdot[..., 7:], omega=xp.matvec(Hm, ud), Hd=H_of(xp, ud))
     return Kinematics(**kin)
 
 
@@ -299,7 +312,7 @@ def mass_matrix(xp, structure: Structure, params: Params, k: Kinematics):
     mu0_ = mu0[..., None, None]
     LaT, LdT = _tr(xp, La), _tr(xp, Ld)
     batch = _batch(xp, k.mu1.shape, mu0.shape)
-    B = mu1 * La + mu0_ * Ld  # {mᵀp}L_a + {mᵀ1}L_d, Eq. (51)
+    B = k.B  # {mᵀp}L_a + {mᵀ1}L_d, Eq. (51)
     LaLd = LaT @ Ld
     # HᵀJH + {(p∘m)ᵀp}L_aᵀL_a + A_d, Eq. (51)
     Muu = _tr(xp, Hm) @ J @ Hm + mu2 * (LaT @ La) + mu1 * (LaLd + _tr(xp, LaLd)) + mu0_ * (LdT @ Ld)
@@ -307,7 +320,7 @@ def mass_matrix(xp, structure: Structure, params: Params, k: Kinematics):
     MRR = params["m_T"][..., None, None] * I3
 
     def bc(x, r, c):
-        return xp.broadcast_to(x, (*batch, r, c))
+        return _bc(xp, x, (*batch, r, c))
 
     rows_R = [bc(MRR, 3, 3), bc(B, 3, 4)]
     rows_u = [bc(_tr(xp, B), 4, 3), bc(Muu, 4, 4)]
@@ -316,8 +329,10 @@ def mass_matrix(xp, structure: Structure, params: Params, k: Kinematics):
             [xp.concatenate(rows_R, axis=-1), xp.concatenate(rows_u, axis=-1)], axis=-2
         )
     MRp = _outer(Sa, m)  # (Sa)mᵀ
-    Mup = _outer(_vm(Sa, La), k.p * m) + _outer(_vm(Sa, Ld), m)  # L_aᵀSa(p∘m)ᵀ + L_dᵀSa mᵀ
-    Mpp = (_dot(Sa, Sa)[..., None] * m)[..., :, None] * xp.eye(
+    Mup = _outer(xp.vecmat(Sa, La), k.p * m) + _outer(
+        xp.vecmat(Sa, Ld), m
+    )  # L_aᵀSa(p∘m)ᵀ + L_dᵀSa mᵀ
+    Mpp = (xp.vecdot(Sa, Sa)[..., None] * m)[..., :, None] * xp.eye(
         n, dtype=mu0.dtype
     )  # {(Sa)ᵀSa}diag(m)
     rows_R.append(bc(MRp, 3, n))
@@ -344,32 +359,32 @@ def generalized_force(xp, structure: Structure, params: Params, t, k: Kinematics
     ud, pd, p = k.ud, k.pd, k.p
     mu1, mu2 = k.mu1[..., None], k.mu2[..., None]
     mu0_ = mu0[..., None]
-    Lau = _mv(k.La, ud)  # L_a u̇ = Ṡa
-    Lad_u = _mv(_linear_map(T_a, ud), ud)  # L̇_a u̇
-    Ldd_u = _mv(_linear_map(T_d, ud), ud)  # L̇_d u̇
-    mpd = _dot(m, pd)[..., None]  # mᵀṗ
-    mppd = _dot(m * p, pd)[..., None]  # (p∘m)ᵀṗ
+    Lau = xp.matvec(k.La, ud)  # L_a u̇ = Ṡa
+    Lad_u = xp.matvec(_linear_map(xp, T_a, ud), ud)  # L̇_a u̇
+    Ldd_u = xp.matvec(_linear_map(xp, T_d, ud), ud)  # L̇_d u̇
+    mpd = xp.vecdot(m, pd)[..., None]  # mᵀṗ
+    mppd = xp.vecdot(m * p, pd)[..., None]  # (p∘m)ᵀṗ
     sum_m_kappa = (2.0 * mpd) * Lau + mu1 * Lad_u + mu0_ * Ldd_u  # Σ m_i κ_i
     sum_mp_kappa = (2.0 * mppd) * Lau + mu2 * Lad_u + mu1 * Ldd_u  # Σ m_i p_i κ_i
     Q_R = -sum_m_kappa
     # -2ḢᵀJHu̇ - L_aᵀ Σ m_i p_i κ_i - L_dᵀ Σ m_i κ_i  (Eq. 52 second row with B_d)
     Q_u = (
-        -2.0 * _vm(_mv(params["J"], k.omega), k.Hd)
-        - _vm(sum_mp_kappa, k.La)
-        - _vm(sum_m_kappa, k.Ld)
+        -2.0 * xp.vecmat(xp.matvec(params["J"], k.omega), k.Hd)
+        - xp.vecmat(sum_mp_kappa, k.La)
+        - xp.vecmat(sum_m_kappa, k.Ld)
     )
     Sa = k.Sa
     # -{(Sa)ᵀL̇_a u̇}(p∘m) - 2{(Sa)ᵀL_a u̇}(m∘ṗ) - {(Sa)ᵀL̇_d u̇}m, Eq. (52) third row
     Q_p = -m * (
-        (2.0 * _dot(Sa, Lau))[..., None] * pd
-        + _dot(Sa, Lad_u)[..., None] * p
-        + _dot(Sa, Ldd_u)[..., None]
+        (2.0 * xp.vecdot(Sa, Lau))[..., None] * pd
+        + xp.vecdot(Sa, Lad_u)[..., None] * p
+        + xp.vecdot(Sa, Ldd_u)[..., None]
     )
     if structure.has(Effect.GRAVITY):
         g = params["g"]  # inertial acceleration vector (paper: -g e3)
         Q_R = Q_R + params["m_T"][..., None] * g
-        Q_u = Q_u + _vm(g, mu1[..., None] * k.La + mu0_[..., None] * k.Ld)
-        Q_p = Q_p + _dot(Sa, g)[..., None] * m
+        Q_u = Q_u + xp.vecmat(g, k.B)
+        Q_p = Q_p + xp.vecdot(Sa, g)[..., None] * m
     if structure.laws:
         # Each law's tensions f = c φ(e, ė) on the n + 1 elements, Q_i = f_{i+1} - f_i
         # (F^S = -∂U_s/∂p for a conservative law; Eq. 53 corrected, docs/errata.md item 2).
@@ -379,9 +394,9 @@ def generalized_force(xp, structure: Structure, params: Params, t, k: Kinematics
             f = params[law.key.key] * law.force(e, ed if law.dissipation is not None else None)
             Q_p = Q_p + (f[..., 1:] - f[..., :-1])
     if structure.has(Effect.EXTERNAL_TORQUE):
-        Q_u = Q_u + _vm(given_torque(xp, structure, params, t), k.Hm)  # Q_τ = Hᵀτ, Eq. (61)
+        Q_u = Q_u + xp.vecmat(given_torque(xp, structure, params, t), k.Hm)  # Q_τ = Hᵀτ, Eq. (61)
     batch = _batch(xp, Q_R.shape[:-1], Q_u.shape[:-1], Q_p.shape[:-1])
-    parts = [xp.broadcast_to(x, (*batch, x.shape[-1])) for x in (Q_R, Q_u, Q_p)]
+    parts = [_bc(xp, x, (*batch, x.shape[-1])) for x in (Q_R, Q_u, Q_p)]
     return xp.concatenate(parts if n else parts[:2], axis=-1)
 
 
@@ -392,7 +407,9 @@ def modeling_constraint(xp, structure: Structure, params: Params, q, qdot):
     z3 = xp.zeros_like(q[..., :3])
     a_m = xp.concatenate([z3, u, xp.zeros_like(q[..., 7:])], axis=-1)
     b_m = (
-        -params["delta1"] * _dot(u, ud) - 0.5 * params["delta2"] * (_dot(u, u) - 1.0) - _dot(ud, ud)
+        -params["delta1"] * xp.vecdot(u, ud)
+        - 0.5 * params["delta2"] * (xp.vecdot(u, u) - 1.0)
+        - xp.vecdot(ud, ud)
     )
     return a_m, b_m
 
@@ -421,30 +438,17 @@ def control_constraints(xp, structure: Structure, params: Params, t, k: Kinemati
     (Eq. 86) with ``b = ω̄̇ - P(ω_c - ω̄)`` (Eq. 84; gain P of Eq. B6 in place of γI), then the mass
     rows ``[0, 0, E]`` (Eq. 80) with ``b = p̄̈ - α(ṗ - p̄̇) - β(p - p̄)`` (Eq. 81); subsets per
     Remark 4."""
-    n, nq = structure.n, structure.nq
     dtype = params["mu0"].dtype
+    P, E = _constant_rows(structure.n, structure.mass_indices)
     req = requirements(xp, structure, params, t)
     A_rows, b_rows = [], []
     if structure.omega_components:
         c = np.asarray(structure.omega_components)
-        Hc = k.Hm[..., c, :]
-        kw = len(c)
-        A_rows.append(
-            xp.concatenate(
-                [
-                    xp.zeros((*Hc.shape[:-2], kw, 3), dtype=dtype),
-                    Hc,
-                    xp.zeros((*Hc.shape[:-2], kw, n), dtype=dtype),
-                ],
-                axis=-1,
-            )
-        )
+        A_rows.append(k.Hm[..., c, :] @ xp.asarray(P, dtype=dtype))  # [0, H_c, 0] = H_c P
         e = k.omega[..., c] - req["omega_bar"]
-        b_rows.append(req["omega_bar_dot"] - _mv(params["omega_gain"], e))
+        b_rows.append(req["omega_bar_dot"] - xp.matvec(params["omega_gain"], e))
     if structure.mass_indices:
         i = np.asarray(structure.mass_indices)
-        E = np.zeros((len(i), nq))
-        E[np.arange(len(i)), 7 + i] = 1.0
         A_rows.append(xp.asarray(E, dtype=dtype))
         b_rows.append(
             req["p_bar_ddot"]
@@ -452,8 +456,8 @@ def control_constraints(xp, structure: Structure, params: Params, t, k: Kinemati
             - params["mass_beta"] * (k.p[..., i] - req["p_bar"])
         )
     batch = _batch(xp, *(b.shape[:-1] for b in b_rows))
-    A = xp.concatenate([xp.broadcast_to(a, (*batch, *a.shape[-2:])) for a in A_rows], axis=-2)
-    b = xp.concatenate([xp.broadcast_to(x, (*batch, x.shape[-1])) for x in b_rows], axis=-1)
+    A = xp.concatenate([_bc(xp, a, (*batch, *a.shape[-2:])) for a in A_rows], axis=-2)
+    b = xp.concatenate([_bc(xp, x, (*batch, x.shape[-1])) for x in b_rows], axis=-1)
     return A, b
 
 
@@ -499,12 +503,13 @@ def solution(xp, structure: Structure, params: Params, t, q, qdot, factor=None, 
     return kin, sol
 
 
-def _control(xp, kin: Kinematics, sol) -> ArrayControl:
+def control_of(xp, kin: Kinematics, sol) -> ArrayControl:
+    """The :class:`ArrayControl` of a fundamental-equation solution (``solution``'s pair)."""
     Qc = sol.control_force  # Q^C up to the norm reaction along [0, u, 0] (H u = 0)
     return ArrayControl(
         qddot=sol.qddot,
         QC=sol.constraint_force,
-        torque=0.25 * _mv(kin.Hm, Qc[..., 3:7]),  # τ = ¼ H Q^C_u (docs/errata.md C4)
+        torque=0.25 * xp.matvec(kin.Hm, Qc[..., 3:7]),  # τ = ¼ H Q^C_u (docs/errata.md C4)
         rod_forces=Qc[..., 7:],
         force_at_C=Qc[..., :3],
         residual=sol.residual,
@@ -515,7 +520,7 @@ def controlled_acceleration(xp, structure: Structure, params: Params, t, q, qdot
     """The constrained, controlled ``q̈`` (Eq. 89 / B10) and the control that produces it, as
     :meth:`analytic.model.TumblingModel.acceleration` (given torque included in Q when on)."""
     kin, sol = solution(xp, structure, params, t, q, qdot)
-    return _control(xp, kin, sol)
+    return control_of(xp, kin, sol)
 
 
 def control_forces(xp, structure: Structure, params: Params, t, q, qdot):
@@ -545,6 +550,7 @@ __all__ = [
     "Structure",
     "control_constraints",
     "control_forces",
+    "control_of",
     "controlled_acceleration",
     "element_differences",
     "generalized_force",

@@ -27,7 +27,7 @@ and this is Eq. (89). Only ``W`` is ever needed, so no weighting requires invert
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -114,19 +114,18 @@ def pinv_psd_masked(xp, G, rcond: float = PINV_RCOND):
     keep = w > rcond * wmax[..., None]
     rank = xp.sum(keep, axis=-1)
     w_safe = xp.where(keep, w, 1.0)
-    full = ((V / w_safe[..., None, :]) @ xp.swapaxes(V, -1, -2)) * DD
+    full = ((V / w_safe[..., None, :]) @ V.mT) * DD
     w2, V2 = xp.linalg.eigh(G)  # ascending: the r largest are the last r
     top = xp.arange(k) >= (k - rank)[..., None]
     w2inv = xp.where(top, 1.0 / xp.where(top, w2, 1.0), 0.0)
-    low = (V2 * w2inv[..., None, :]) @ xp.swapaxes(V2, -1, -2)
+    low = (V2 * w2inv[..., None, :]) @ V2.mT
     return xp.where((rank == k)[..., None, None], full, low), rank
 
 
-@dataclass(frozen=True)
-class ArraySolution:
+class ArraySolution(NamedTuple):
     """:class:`FundamentalSolution`'s fields as arrays with leading batch dimensions (...):
     ``qddot``, ``constraint_force``, ``control_force`` (..., nq), ``lambda_m`` (...),
-    ``residual`` (..., k), ``rank`` (...) (integers; 0 when k = 0)."""
+    ``residual`` (..., k), ``rank`` (...) (integers; 0 when k = 0). A tuple: a JAX pytree."""
 
     qddot: Any
     constraint_force: Any
@@ -190,12 +189,6 @@ def solve_array(
         def pinv(G):
             return pinv_psd_masked(xp, G)
 
-    def mv(A, v):
-        return (A @ v[..., None])[..., 0]
-
-    def dot(a, b):
-        return (a * b).sum(axis=-1)
-
     nq = Q.shape[-1]
     k = A_c.shape[-2]
     # Udwadia-Phohomsiri: M_α = M + α a_m a_mᵀ, Q_α = Q + α a_m b_m (adds zero to the motion)
@@ -204,11 +197,13 @@ def solve_array(
     Qa = Q + (alpha * b_m)[..., None] * a_m
     batch = Ma.shape[:-2]
     solve_Ma = factor(Ma)
-    A_cT = xp.broadcast_to(xp.swapaxes(A_c, -1, -2), (*batch, nq, k))
+    A_cT = A_c.mT
+    if A_cT.shape != (*batch, nq, k):
+        A_cT = xp.broadcast_to(A_cT, (*batch, nq, k))
     X = solve_Ma(xp.concatenate([Qa[..., None], a_m[..., None], A_cT], axis=-1))
     a0, y, Y = X[..., 0], X[..., 1], X[..., 2:]
-    s = dot(a_m, y)
-    lambda_m = (b_m - dot(a_m, a0)) / s
+    s = xp.vecdot(a_m, y)
+    lambda_m = (b_m - xp.vecdot(a_m, a0)) / s
     acc = a0 + lambda_m[..., None] * y  # Eq. (60): the uncontrolled, norm-constrained acceleration
     if k == 0:
         zeros = xp.zeros_like(acc)
@@ -216,25 +211,25 @@ def solve_array(
             acc, lambda_m[..., None] * a_m, zeros, lambda_m, zeros[..., :0], xp.zeros(batch, int)
         )
 
-    Ay = mv(A_c, y)
+    Ay = xp.matvec(A_c, y)
     Z = Y - y[..., :, None] * (Ay / s[..., None])[..., None, :]  # K A_cᵀ, shape (..., nq, k)
-    r = b_c - mv(A_c, acc)
+    r = b_c - xp.matvec(A_c, acc)
     if weighting is Weighting.M_INV:
         G = A_c @ Z  # A_c K A_cᵀ = Zᵀ M Z
-        Ginv, rank = pinv(0.5 * (G + xp.swapaxes(G, -1, -2)))
-        mu = mv(Ginv, r)
-        qddot = acc + mv(Z, mu)
-        Q_ctl = (mu[..., None, :] @ A_c)[..., 0, :]  # A_cᵀμ; M K Q_ctl differs only along a_m
+        Ginv, rank = pinv(0.5 * (G + G.mT))
+        mu = xp.matvec(Ginv, r)
+        qddot = acc + xp.matvec(Z, mu)
+        Q_ctl = xp.vecmat(mu, A_c)  # A_cᵀμ; M K Q_ctl differs only along a_m
     else:
         WZ = M @ (M @ Z) if weighting is Weighting.M_INV2 else Z  # W = N⁻¹: M² or I
-        G = xp.swapaxes(Z, -1, -2) @ WZ
-        Ginv, rank = pinv(0.5 * (G + xp.swapaxes(G, -1, -2)))
-        Q_ctl = mv(WZ, mv(Ginv, r))
+        G = Z.mT @ WZ
+        Ginv, rank = pinv(0.5 * (G + G.mT))
+        Q_ctl = xp.matvec(WZ, xp.matvec(Ginv, r))
         v = solve_Ma(Q_ctl[..., None])[..., 0]
-        qddot = acc + v - y * (dot(a_m, v) / s)[..., None]  # q̈ = a + K Q_ctl
+        qddot = acc + v - y * (xp.vecdot(a_m, v) / s)[..., None]  # q̈ = a + K Q_ctl
     # Q^C = M q̈ - Q = a_m λ_m + (I - a_m yᵀ/s) Q_ctl, assembled without cancellation.
-    Q_C = Q_ctl + a_m * (lambda_m - dot(y, Q_ctl) / s)[..., None]
-    residual = mv(A_c, qddot) - b_c
+    Q_C = Q_ctl + a_m * (lambda_m - xp.vecdot(y, Q_ctl) / s)[..., None]
+    residual = xp.matvec(A_c, qddot) - b_c
     return ArraySolution(qddot, Q_C, Q_ctl, lambda_m, residual, rank)
 
 

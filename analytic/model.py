@@ -11,23 +11,23 @@ Every mass term derives from one identity (Appendix A): the inertial acceleratio
 ``μ0 = Σm``, ``μ1 = mᵀp``, ``μ2 = (p∘m)ᵀp`` and two weighted sums of κ, so one evaluation costs O(n)
 plus the dense solve (no Python loop over masses).
 
-The model is assembled from the scene's effects: a force term whose effect is off is not in the
-term list and is never evaluated.
+The formulas are written once, in :mod:`analytic.array_model` (an array form that numpy and
+jax.numpy both run); :class:`TumblingModel` is that form evaluated with numpy in float64 at one
+state, with scipy's Cholesky in the fundamental equation (:func:`analytic.fundamental.solve`). The
+model is assembled from the scene's effects: a force term whose effect is off is skipped by a branch
+on the scene's :class:`~analytic.array_model.Structure` and never evaluated.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
-from functools import partial
 
 import numpy as np
 
-from analytic import fundamental
+from analytic import array_model, fundamental
 from analytic.effects import Effect
-from analytic.effects.declaration import SpringLaw
 from analytic.effects.registry import SPRING_LAWS
-from analytic.kinematics import T_H, S, tensor_along
+from analytic.kinematics import tensor_along
 from analytic.scene import Scene
 
 
@@ -51,27 +51,6 @@ class ControlOutput:
     force_at_C: np.ndarray
     residual: np.ndarray
     rank: int
-
-
-class _Kin:
-    """Kinematic quantities shared by M, Q and the constraints at one state (no copies)."""
-
-    __slots__ = (
-        "Hd",
-        "Hm",
-        "La",
-        "Ld",
-        "Sa",
-        "Sd",
-        "Sm",
-        "mu1",
-        "mu2",
-        "omega",
-        "p",
-        "pd",
-        "u",
-        "ud",
-    )
 
 
 class TumblingModel:
@@ -115,129 +94,34 @@ class TumblingModel:
         self.delta2 = scene.stabilization.delta2
         self.weighting = scene.control.weighting
 
-        terms: list[tuple[str, Callable]] = []
-        if scene.has(Effect.GRAVITY):
-            terms.append((Effect.GRAVITY.value, self._q_gravity))
-        for law in self.spring_laws:
-            terms.append((law.effect.value, partial(self._q_spring_law, law)))
-        if scene.has(Effect.EXTERNAL_TORQUE):
-            terms.append((Effect.EXTERNAL_TORQUE.value, self._q_external_torque))
-        self._terms = tuple(f for _, f in terms)
-        self.force_terms = tuple(name for name, _ in terms)
+        self.force_terms = tuple(
+            name
+            for name, on in (
+                (Effect.GRAVITY.value, scene.has(Effect.GRAVITY)),
+                *((law.effect.value, True) for law in self.spring_laws),
+                (Effect.EXTERNAL_TORQUE.value, scene.has(Effect.EXTERNAL_TORQUE)),
+            )
+            if on
+        )
 
         self.omega_track = scene.control.omega if scene.has(Effect.CONTROL_OMEGA) else None
         self.mass_track = scene.control.masses if scene.has(Effect.CONTROL_MASSES) else None
-        k_w = len(self.omega_track.components) if self.omega_track else 0
-        k_p = len(self.mass_track.indices) if self.mass_track else 0
-        self.k = k_w + k_p
-        # Constant part of A_c: the mass rows [0, 0, E] (Eq. 80, Remark 4).
-        self._A_c_template = np.zeros((self.k, self.nq))
-        if self.mass_track:
-            idx = np.array(self.mass_track.indices)
-            self._A_c_template[k_w + np.arange(k_p), 7 + idx] = 1.0
-            self._p_idx = idx
-        if self.omega_track:
-            self._w_comps = np.array(self.omega_track.components)
+        self.structure = array_model.structure_of(scene)
+        self.params = array_model.parameters(scene, np, np.float64)
+        self.k = self.structure.k
 
     # ------------------------------------------------------------------------------------------
-    # Kinematics
+    # M, Q and the constraints: the array form (analytic.array_model) with numpy, one state
     # ------------------------------------------------------------------------------------------
 
-    def _kin(self, q: np.ndarray, qdot: np.ndarray | None) -> _Kin:
-        k = _Kin()
-        k.u = u = q[3:7]
-        k.p = p = q[7:]
-        k.Sm = Sm = S(u)
-        k.Sa = Sm @ self.a
-        k.Sd = Sm @ self.d
-        k.Hm = T_H @ u  # Eq. (13)
-        k.La = self.T_a @ u  # Eq. (29)
-        k.Ld = self.T_d @ u  # Eq. (34)
-        k.mu1 = float(self.m @ p)
-        k.mu2 = float((self.m * p) @ p)
-        if qdot is not None:
-            k.ud = qdot[3:7]
-            k.pd = qdot[7:]
-            k.omega = k.Hm @ k.ud  # Eq. (12)
-            k.Hd = T_H @ k.ud  # Ḣ = H(u̇)
-        return k
+    def _kin(self, q: np.ndarray, qdot: np.ndarray | None) -> array_model.Kinematics:
+        return array_model.kinematics(np, self.structure, self.params, q, qdot)
 
-    # ------------------------------------------------------------------------------------------
-    # M and Q
-    # ------------------------------------------------------------------------------------------
+    def _mass_matrix(self, k: array_model.Kinematics) -> np.ndarray:
+        return array_model.mass_matrix(np, self.structure, self.params, k)
 
-    def _mass_matrix(self, k: _Kin) -> np.ndarray:
-        n, m = self.n, self.m
-        La, Ld, Sa = k.La, k.Ld, k.Sa
-        M = np.zeros((self.nq, self.nq))
-        M[0, 0] = M[1, 1] = M[2, 2] = self.m_T
-        B = k.mu1 * La + self.mu0 * Ld  # {mᵀp}L_a + {mᵀ1}L_d, Eq. (51)
-        M[:3, 3:7] = B
-        M[3:7, :3] = B.T
-        LaLd = La.T @ Ld
-        # HᵀJH + {(p∘m)ᵀp}L_aᵀL_a + A_d, Eq. (51)
-        M[3:7, 3:7] = (
-            k.Hm.T @ self.J @ k.Hm
-            + k.mu2 * (La.T @ La)
-            + k.mu1 * (LaLd + LaLd.T)
-            + self.mu0 * (Ld.T @ Ld)
-        )
-        if n:
-            M[:3, 7:] = np.outer(Sa, m)  # (Sa)mᵀ
-            M[7:, :3] = M[:3, 7:].T
-            Mup = np.outer(La.T @ Sa, k.p * m) + np.outer(Ld.T @ Sa, m)  # L_aᵀSa(p∘m)ᵀ + L_dᵀSa mᵀ
-            M[3:7, 7:] = Mup
-            M[7:, 3:7] = Mup.T
-            M[7:, 7:] = np.diag((Sa @ Sa) * m)  # {(Sa)ᵀSa} diag(m)
-        return M
-
-    def _inertial_force(self, k: _Kin) -> np.ndarray:
-        """Velocity-dependent part of Q (Eq. 52 without gravity and springs)."""
-        m = self.m
-        ud, pd = k.ud, k.pd
-        Q = np.empty(self.nq)
-        Lau = k.La @ ud  # L_a u̇ = Ṡa
-        Lad_u = (self.T_a @ ud) @ ud  # L̇_a u̇
-        Ldd_u = (self.T_d @ ud) @ ud  # L̇_d u̇
-        mpd = float(m @ pd)  # mᵀṗ
-        mppd = float((m * k.p) @ pd)  # (p∘m)ᵀṗ
-        sum_m_kappa = (2.0 * mpd) * Lau + k.mu1 * Lad_u + self.mu0 * Ldd_u  # Σ m_i κ_i
-        sum_mp_kappa = (2.0 * mppd) * Lau + k.mu2 * Lad_u + k.mu1 * Ldd_u  # Σ m_i p_i κ_i
-        Q[:3] = -sum_m_kappa
-        # -2ḢᵀJHu̇ - L_aᵀ Σ m_i p_i κ_i - L_dᵀ Σ m_i κ_i  (= Eq. 52 second row with B_d)
-        Q[3:7] = -2.0 * (k.Hd.T @ (self.J @ k.omega)) - k.La.T @ sum_mp_kappa - k.Ld.T @ sum_m_kappa
-        if self.n:
-            Sa = k.Sa
-            # -{(Sa)ᵀL̇_a u̇}(p∘m) - 2{(Sa)ᵀL_a u̇}(m∘ṗ) - {(Sa)ᵀL̇_d u̇}m, Eq. (52) third row
-            Q[7:] = -m * (
-                (2.0 * float(Sa @ Lau)) * pd + float(Sa @ Lad_u) * k.p + float(Sa @ Ldd_u)
-            )
-        return Q
-
-    def _q_gravity(self, t: float, k: _Kin, Q: np.ndarray) -> None:
-        g = self.g  # inertial acceleration vector (paper: -g e3)
-        Q[:3] += self.m_T * g
-        Q[3:7] += (k.mu1 * k.La + self.mu0 * k.Ld).T @ g
-        if self.n:
-            Q[7:] += float(k.Sa @ g) * self.m
-
-    def _q_spring_law(self, law: SpringLaw, t: float, k: _Kin, Q: np.ndarray) -> None:
-        """One spring law's term of Q: tensions ``f = c φ(e, ė)`` of the n + 1 elements, and
-        ``Q_i = f_{i+1} - f_i`` (F^S = -∂U_s/∂p for a conservative law; Eq. 53 corrected,
-        docs/errata.md item 2)."""
-        e = _element_differences(k.p - self.p_e)
-        ed = _element_differences(k.pd) if law.dissipation is not None else None
-        f = self.spring_coefficients[law.effect] * law.force(e, ed)
-        Q[7:] += f[1:] - f[:-1]
-
-    def _q_external_torque(self, t: float, k: _Kin, Q: np.ndarray) -> None:
-        Q[3:7] += k.Hm.T @ self.scene.external_torque.at(t)  # Q_τ = Hᵀτ, Remark 2 (Eq. 61)
-
-    def _force(self, t: float, k: _Kin) -> np.ndarray:
-        Q = self._inertial_force(k)
-        for term in self._terms:
-            term(t, k, Q)
-        return Q
+    def _force(self, t: float, k: array_model.Kinematics) -> np.ndarray:
+        return array_model.generalized_force(np, self.structure, self.params, t, k)
 
     def mass_matrix(self, q: np.ndarray) -> np.ndarray:
         """``M(q)`` of Eq. (51) (with Remark 1's inertia when the effect is on), shape (nq, nq)."""
@@ -247,63 +131,28 @@ class TumblingModel:
         """``Q(q, q̇)`` of Eq. (52) for the scene's effects (Remark 2 included), shape (nq,)."""
         return self._force(t, self._kin(np.asarray(q, float), np.asarray(qdot, float)))
 
-    # ------------------------------------------------------------------------------------------
-    # Constraints
-    # ------------------------------------------------------------------------------------------
-
     def modeling_constraint(self, q: np.ndarray, qdot: np.ndarray) -> tuple[np.ndarray, float]:
         """``a_m = [0, u, 0]`` and ``b_m`` of Eq. (59): ``φ̈ + δ1 φ̇ + δ2 φ = 0`` for ``φ = uᵀu - 1``."""
-        u, ud = q[3:7], qdot[3:7]
-        a_m = np.zeros(self.nq)
-        a_m[3:7] = u
-        b_m = (
-            -self.delta1 * float(u @ ud) - 0.5 * self.delta2 * (float(u @ u) - 1.0) - float(ud @ ud)
+        a_m, b_m = array_model.modeling_constraint(
+            np, self.structure, self.params, np.asarray(q, float), np.asarray(qdot, float)
         )
-        return a_m, b_m
+        return a_m, float(b_m)
 
     def requirements(self, t: float) -> dict[str, np.ndarray]:
         """The required ``ω̄, ω̄̇`` (Eq. 76) and ``p̄, p̄̇, p̄̈`` (Eq. 75) at time t, for the tracked
         components/masses only."""
-        out: dict[str, np.ndarray] = {}
-        if self.omega_track:
-            w = self.omega_track
-            c = self._w_comps
-            out["omega_bar"] = w.b[c] * np.cos(w.sigma[c] * t)
-            out["omega_bar_dot"] = -w.b[c] * w.sigma[c] * np.sin(w.sigma[c] * t)
-        if self.mass_track:
-            mt = self.mass_track
-            cos, sin = np.cos(mt.lam * t), np.sin(mt.lam * t)
-            out["p_bar"] = self.p_e[self._p_idx] + mt.l * cos
-            out["p_bar_dot"] = -mt.l * mt.lam * sin
-            out["p_bar_ddot"] = -mt.l * mt.lam**2 * cos
-        return out
+        return array_model.requirements(np, self.structure, self.params, float(t))
 
     def control_constraints(
-        self, t: float, q: np.ndarray, qdot: np.ndarray, k: _Kin | None = None
+        self, t: float, q: np.ndarray, qdot: np.ndarray, k: array_model.Kinematics | None = None
     ) -> tuple[np.ndarray, np.ndarray]:
         """``A_c`` (k, nq) and ``b_c`` (k,) of Eqs. (80), (85) (subsets per Remark 4; gain P of
         Eq. B6 in place of γI when given)."""
+        if not self.k:
+            return np.zeros((0, self.nq)), np.zeros(0)
         if k is None:
-            k = self._kin(q, qdot)
-        A = self._A_c_template.copy()
-        b = np.empty(self.k)
-        req = self.requirements(t)
-        k_w = 0
-        if self.omega_track:
-            c = self._w_comps
-            k_w = len(c)
-            A[:k_w, 3:7] = k.Hm[c]  # [0, H, 0], Eq. (86)
-            e = k.omega[c] - req["omega_bar"]
-            b[:k_w] = req["omega_bar_dot"] - self.omega_track.gain @ e  # Eq. (84) / (B8)
-        if self.mass_track:
-            mt = self.mass_track
-            i = self._p_idx
-            b[k_w:] = (
-                req["p_bar_ddot"]
-                - mt.alpha * (k.pd[i] - req["p_bar_dot"])
-                - mt.beta * (k.p[i] - req["p_bar"])
-            )  # Eq. (81)
-        return A, b
+            k = self._kin(np.asarray(q, float), np.asarray(qdot, float))
+        return array_model.control_constraints(np, self.structure, self.params, t, k)
 
     # ------------------------------------------------------------------------------------------
     # Motion
@@ -314,6 +163,11 @@ class TumblingModel:
     ) -> tuple[np.ndarray, ControlOutput]:
         """Constrained, controlled acceleration ``q̈`` (Eq. 89) and the control that produces it.
 
+        The array form's system and fundamental equation (:func:`analytic.array_model.solution`)
+        with numpy, scipy's Cholesky of ``M_α`` (which raises when the motion is not unique) and
+        :func:`analytic.fundamental.pinv_psd` (the rank decided by a branch, one eigen-decomposition
+        at full rank).
+
         Args:
             t: time, s.
             q, qdot: state in the paper's coordinates, shape (nq,) each.
@@ -323,46 +177,44 @@ class TumblingModel:
         """
         q = np.asarray(q, float)
         qdot = np.asarray(qdot, float)
-        k = self._kin(q, qdot)
-        M = self._mass_matrix(k)
-        Q = self._force(t, k)
-        a_m, b_m = self.modeling_constraint(q, qdot)
-        if self.k:
-            A_c, b_c = self.control_constraints(t, q, qdot, k)
-        else:
-            A_c, b_c = np.zeros((0, self.nq)), np.zeros(0)
-        sol = fundamental.solve(M, Q, a_m, b_m, A_c, b_c, self.weighting)
-        Qc = sol.control_force  # = Q^C up to the norm-constraint reaction along [0, u, 0] (H u = 0)
-        ctrl = ControlOutput(
-            QC=sol.constraint_force,
-            torque=0.25 * (k.Hm @ Qc[3:7]),  # τ = ¼ H Q^C_u (docs/errata.md C4: Q^C_u = Hᵀτ + c u)
-            rod_forces=Qc[7:].copy(),
-            force_at_C=Qc[:3].copy(),
-            residual=sol.residual,
-            rank=sol.rank,
+        kin, sol = array_model.solution(
+            np,
+            self.structure,
+            self.params,
+            t,
+            q,
+            qdot,
+            factor=fundamental.cholesky_factor,
+            pinv=fundamental.pinv_psd,
         )
-        return sol.qddot, ctrl
+        c = array_model.control_of(np, kin, sol)
+        ctrl = ControlOutput(
+            QC=c.QC,
+            torque=c.torque,
+            rod_forces=c.rod_forces,
+            force_at_C=c.force_at_C,
+            residual=c.residual,
+            rank=int(sol.rank),
+        )
+        return c.qddot, ctrl
 
     def given_torque(self, t: float) -> np.ndarray:
         """The given body-axis torque of Remark 2 at time t (zeros when the effect is off), N·m."""
-        if self.scene.has(Effect.EXTERNAL_TORQUE):
-            return self.scene.external_torque.at(t)
-        return np.zeros(3)
+        return array_model.given_torque(np, self.structure, self.params, float(t))
 
     def positions(self, q: np.ndarray) -> np.ndarray:
         """Inertial positions of the masses ``r_i = R + p_i Sa + Sd`` (Eq. 21), shape (n, 3)."""
-        k = self._kin(np.asarray(q, float), None)
-        return q[:3] + np.outer(k.p, k.Sa) + k.Sd
+        return array_model.positions(np, self.structure, self.params, np.asarray(q, float))
 
 
 MODEL_EFFECTS: frozenset[Effect] = frozenset(
     {
-        Effect.GRAVITY,  # _q_gravity
-        Effect.EXTERNAL_TORQUE,  # _q_external_torque
-        Effect.MASS_INERTIA,  # J + Σ J_i (Remark 1)
-        Effect.CONTROL_OMEGA,  # control_constraints
+        Effect.GRAVITY,  # array_model.generalized_force
+        Effect.EXTERNAL_TORQUE,  # array_model.given_torque
+        Effect.MASS_INERTIA,  # J + Σ J_i (Remark 1), array_model.parameters
+        Effect.CONTROL_OMEGA,  # array_model.control_constraints
         Effect.CONTROL_MASSES,
-        *(law.effect for law in SPRING_LAWS),  # _q_spring_law, from each law's declaration
+        *(law.effect for law in SPRING_LAWS),  # each law's declaration, array_model
     }
 )
 """The effects :class:`TumblingModel` assembles: those written here, and every spring law (its

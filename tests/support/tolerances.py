@@ -108,6 +108,26 @@ FAST_VS_NUMPY_REL = Threshold(
     "solves (structured LDLᵀ against dense), so only round-off separates them; at the paper's "
     "conditioning (M entries up to ~1e8) that is ~1e-14 relative, 1e-12 leaves two decades.",
 )
+ARRAY_VS_NUMPY_REL = Threshold(
+    "ARRAY_VS_NUMPY_REL",
+    1e-12,
+    "1",
+    "The array form of the model and controller (analytic.array_model: numpy with an LU solve and "
+    "the masked rank decision; JAX eager, jit and vmap) vs TumblingModel.acceleration (the same "
+    "formulas with scipy's Cholesky and the branching pinv), float64, Euclidean norm relative to "
+    "the reference's (the residual relative to |b_c| + |A_c||q̈|): only the order of operations "
+    "and the factorisation differ, ~eps x cond(M_α) ~ 1e-14 for the generator's scenes (measured "
+    "worst ~1e-14); 1e-12 leaves two decades.",
+)
+ARRAY_FLOAT32_REL = Threshold(
+    "ARRAY_FLOAT32_REL",
+    1e-3,
+    "1",
+    "The array form in float32 vs float64 at the same (float32-representable) state, q̈ and τ "
+    "relative to float64's: float32 round-off eps32 = 1.19e-7 amplified by the solve, ~cond(M_α) "
+    "(up to ~1e3 for the generator's scenes: J over three decades, masses J/10), and by the "
+    "cancellation in Q^C = M q̈ - Q; 1e-3 is eps32 x ~1e4.",
+)
 POINTWISE_QDDOT_REL = Threshold(
     "POINTWISE_QDDOT_REL",
     1e-9,
