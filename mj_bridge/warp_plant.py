@@ -63,7 +63,10 @@ def import_warp(device: str = ""):
     later process."""
     import warp as wp
 
-    wp.config.log_level = wp.LOG_WARNING  # no greeting, no line per kernel module loaded
+    if hasattr(wp, "LOG_WARNING"):  # no greeting, no line per kernel module loaded
+        wp.config.log_level = wp.LOG_WARNING
+    else:  # Warp before its log levels
+        wp.config.quiet = True
     import mujoco_warp as mjw
 
     wp.init()
