@@ -20,9 +20,14 @@ callback also sums the control's work and impulses with the stage weights
 
 Batches: N scenes become the N worlds of one model. Per-world parameters ride on Warp's batched
 model fields (leading dimension ``*``: masses, inertias, joint axes, body positions, tendon
-stiffness and rest lengths, gravity, ...): :func:`batched_model` puts each scene's twin on the
-device and stacks every field that differs; scenes whose twins differ in a field Warp cannot batch
-(or in their step or output grid) run as separate groups of worlds, one ``nworld`` call each.
+stiffness and rest lengths, gravity, ...): :func:`batched_model` puts each distinct twin on the
+device once (:func:`model_fingerprint`: scenes differing only in initial state, name or controller
+targets share one) and stacks every field that differs; scenes whose twins differ in a field Warp
+cannot batch (or in their step, output grid or controller structure) run as separate groups of
+worlds, one ``nworld`` call each.
+
+Euler and the implicit integrators call the controller once per step (their one forward
+evaluation), as MuJoCo's C engine does; RK4 four times.
 
 Shapes: ``qpos`` (N, n+7), ``qvel``/``qacc`` (N, n+6) per world; the paper's coordinates
 (Eq. 44) by :mod:`model_xml.coordinates` (BR's body frame at C); times in s, SI units.
