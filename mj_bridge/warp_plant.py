@@ -258,6 +258,13 @@ class Worlds:
         self.t0: np.ndarray = np.zeros(self.nworld)
         if self.active:
             self.mw.callback.control = self._control
+        # MuJoCo's user bias (the spring actuators' cubic term): the C plant computes it in
+        # mjcb_act_bias (mj_bridge.callbacks.spring_user_bias); here Warp's act_bias callback
+        user = np.flatnonzero(m0.actuator_biastype == int(mujoco.mjtBias.mjBIAS_USER))
+        self._user_ids = user
+        self._biasprm = np.stack([t[1].actuator_biasprm[user] for t in twins]).astype(np.float32)
+        if len(user):
+            self.mw.callback.act_bias = self._act_bias
 
     def info(self) -> dict:
         """What a trajectory's ``info`` says of the engine (keys shared with the MJX plant)."""
@@ -306,6 +313,19 @@ class Worlds:
         if self.stepping:
             self.acc += (self.dt * self.weights[k]) * rates
             self.calls += 1
+
+    def _act_bias(self, m, d) -> None:
+        """Warp's act_bias callback: ``b0 + b1 L + b2 L̇ + b3 (L − b4)³`` (``b`` the actuator's
+        ``biasprm`` in its world) added to each user-bias actuator's force, as the C plant's
+        ``spring_user_bias``, in float32."""
+        self.wp.synchronize()
+        ids, b = self._user_ids, self._biasprm
+        force = d.actuator_force.numpy().copy()
+        L = d.actuator_length.numpy()[:, ids]
+        V = d.actuator_velocity.numpy()[:, ids]
+        x = L - b[..., 4]
+        force[:, ids] += b[..., 0] + b[..., 1] * L + b[..., 2] * V + b[..., 3] * (x * x * x)
+        d.actuator_force.assign(force)
 
     def forward(self, t: np.ndarray | float) -> None:
         """Forward dynamics of every world at its current state, the controller at time(s) t."""

@@ -20,7 +20,7 @@ import math
 
 import numpy as np
 
-from analytic.effects import Effect, Precision, SpringModel
+from analytic.effects import Effect, Precision
 from analytic.plant import TIGHTER_STEP, Plant
 from analytic.scene import Scene
 from analytic.trajectory import Trajectory
@@ -32,25 +32,6 @@ from mj_bridge.warp_settings import (
     warp_version,
 )
 from model_xml.tendon_terms import TENDON_TERMS
-
-
-def refusal(scene: Scene) -> str:
-    """Why MuJoCo Warp cannot run ``scene``'s twin, known without Warp ("" when it can), naming
-    the field. Spring actuators with a cubic term carry MuJoCo's user bias (the C plant computes it
-    in ``mjcb_act_bias``); MuJoCo Warp accepts the model and leaves a user bias at zero unless a
-    callback of its own computes it, so these springs would exert no force at all."""
-    if (
-        SpringModel(scene.mujoco.spring_model) is SpringModel.ACTUATOR
-        and scene.has(Effect.SPRINGS_CUBIC)
-        and np.any(np.asarray(scene.springs.k_cubic) != 0.0)
-    ):
-        return (
-            "mujoco.spring_model: the mjwarp plant cannot run 'actuator' springs with a cubic "
-            "term: they are MuJoCo's user bias (mjcb_act_bias in the C plant), which MuJoCo Warp "
-            "leaves at zero, dropping the springs (got 'actuator' with springs.cubic on); "
-            "use 'tendon'"
-        )
-    return ""
 
 
 class WarpPlant(Plant):
@@ -71,8 +52,9 @@ class WarpPlant(Plant):
             *TENDON_TERMS,
         }
     )
-    """The C plant's effects: the same twin (its spring laws :data:`TENDON_TERMS`) and the same
-    control channels, applied by Warp's control callback."""
+    """The C plant's effects: the same twin (its spring laws :data:`TENDON_TERMS`, as tendons or
+    as spring actuators, whose cubic term Warp's ``act_bias`` callback computes as the C plant's
+    ``mjcb_act_bias`` does) and the same control channels, applied by Warp's control callback."""
     settings_type = WarpSettings
     precision = Precision.FLOAT32
 
@@ -92,12 +74,6 @@ class WarpPlant(Plant):
         dt = scene.mujoco.timestep if settings.timestep is None else settings.timestep
         return dataclasses.replace(settings, timestep=float(dt) / TIGHTER_STEP)
 
-    def check_scene(self, scene: Scene) -> None:
-        super().check_scene(scene)
-        why = refusal(scene)
-        if why:
-            raise ValueError(why)
-
     def _simulate(self, scene, settings, t_end, progress) -> Trajectory:
         return self._simulate_batch([scene], settings, t_end, progress)[0]
 
@@ -114,7 +90,7 @@ class WarpPlant(Plant):
         from mj_bridge.accelerated import run_isolated
         from mj_bridge.warp_plant import pointwise_qddot
 
-        self.check_scene(scene)
+        self.check_scene(scene)  # the effects
         settings = self.default_settings(scene) if settings is None else settings
         t = np.atleast_1d(np.asarray(t, dtype=float))
         q, qdot = np.atleast_2d(np.asarray(q, float)), np.atleast_2d(np.asarray(qdot, float))
@@ -126,4 +102,4 @@ class WarpPlant(Plant):
         return run_isolated(pointwise_qddot, scene, settings.timestep, settings.device, t, q, qdot)
 
 
-__all__ = ["DEVICE_AUTO", "ENGINE", "WarpPlant", "WarpSettings", "refusal", "warp_unavailable"]
+__all__ = ["DEVICE_AUTO", "ENGINE", "WarpPlant", "WarpSettings", "warp_unavailable"]
