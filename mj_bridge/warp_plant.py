@@ -463,6 +463,8 @@ def run_batch(
         for i, tr in zip(idx, trajs, strict=True):
             out[i] = tr
         done += len(idx)
+        if pending and any(tr.status is RunStatus.INTERRUPTED for tr in trajs):
+            raise KeyboardInterrupt  # groups not started: nothing reached to return for them
     return out  # type: ignore[return-value]
 
 
