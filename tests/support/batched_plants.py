@@ -61,6 +61,18 @@ class SleepyBatchPlant(BatchedEchoPlant):
         return super()._simulate_batch(scenes, settings, t_end, progress)
 
 
+class UnstackablePlant(BatchedEchoPlant):
+    """Its engine refuses every batch of more than one scene (a ``ValueError`` naming a field, as
+    an engine that cannot stack a field of the scenes' twins); its single runs are right."""
+
+    engine = "unstackable"
+
+    def _simulate_batch(self, scenes, settings, t_end, progress):
+        if len(scenes) > 1:
+            raise ValueError("scenes[1]: key_qvel differs from scenes[0]'s (cannot be stacked)")
+        return super()._simulate_batch(scenes, settings, t_end, progress)
+
+
 __all__ = [
     "BatchedEchoPlant",
     "BrokenFirstPlant",
@@ -68,4 +80,5 @@ __all__ = [
     "RaisingBatchPlant",
     "ShortBatchPlant",
     "SleepyBatchPlant",
+    "UnstackablePlant",
 ]

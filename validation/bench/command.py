@@ -151,6 +151,39 @@ def measure_and_print(skip_long: bool = False, out=print) -> tuple[bool, dict[st
     return holds, bench_document(rows, measured, provenance(FileKind.BENCH), machine)
 
 
+def measure_batched(
+    sizes: tuple[int, ...] | None = None, horizon: float | None = None, out=print
+) -> tuple[bool, dict[str, Any]]:
+    """``--batched``: only the batched plants' throughput (:mod:`validation.bench.batch_throughput`,
+    its default sizes and horizon unless given), printed as it goes; returns (every goal measured
+    holds, the ``bench.json`` document, with no evaluation table)."""
+    from validation.bench import batch_throughput as bt
+    from validation.report.provenance import FileKind, provenance
+
+    load_before = load_average()
+    out(
+        f"batched throughput, wall clock of whole calls; load average {load_before:.2f} on "
+        f"{os.cpu_count()} CPUs"
+    )
+    measured = list(
+        bt.goal_batched_throughput(
+            sizes=sizes or bt.BATCH_SIZES,
+            horizon=bt.HORIZON_S if horizon is None else horizon,
+            progress=out,
+        )
+    )
+    load_after = load_average()
+    out("\nsummary")
+    for g in measured:
+        out("  " + summary_line(g))
+    machine = {
+        "cpus": os.cpu_count(),
+        "load_average_1min": {"before": load_before, "after": load_after},
+    }
+    holds = all(g.holds for g in measured if not g.skipped)
+    return holds, bench_document([], measured, provenance(FileKind.BENCH), machine)
+
+
 def load_average() -> float:
     """The machine's 1-minute load average (NaN where the platform has none)."""
     try:
@@ -199,15 +232,21 @@ def bench_document(
     }
 
 
-def write_bench(out_dir: str | Path, skip_long: bool = False, out=print) -> Path:
+def write_bench(
+    out_dir: str | Path, skip_long: bool = False, out=print, batched: dict[str, Any] | None = None
+) -> Path:
     """Measure, print, and write ``out_dir/bench.json`` as one output run (with
-    ``manifest.json``); returns the final path of ``bench.json``."""
+    ``manifest.json``); returns the final path of ``bench.json``. ``batched``: the keyword
+    arguments of :func:`measure_batched`, which then measures instead (``--batched``)."""
     from validation.report.provenance import dumps
     from validation.runs.atomic import write_text
     from validation.runs.outputs import output_run
 
     with output_run(Path(out_dir), "bench") as orun:
-        _, doc = measure_and_print(skip_long, out)
+        if batched is None:
+            _, doc = measure_and_print(skip_long, out)
+        else:
+            _, doc = measure_batched(out=out, **batched)
         write_text(orun.path / "bench.json", dumps(doc))
     final = orun.final("bench.json")
     out(f"written: {final}")
@@ -220,6 +259,62 @@ def add_arguments(ap: argparse.ArgumentParser) -> None:
         "--out", metavar="DIR", help="also write DIR/bench.json (with DIR/manifest.json)"
     )
     ap.add_argument("--skip-long", action="store_true", help="skip the 60 s Example 1 goal")
+    ap.add_argument(
+        "--batched",
+        action="store_true",
+        help="only the batched plants' throughput: scenes per second against batch size, as a "
+        "multiple of the MuJoCo C plant's loop, on the device JAX or Warp finds",
+    )
+    ap.add_argument(
+        "--batch-sizes",
+        metavar="N,N,...",
+        type=batch_sizes,
+        default=None,
+        help="with --batched: the batch sizes (default 1,16,256)",
+    )
+    ap.add_argument(
+        "--batch-horizon",
+        metavar="SECONDS",
+        type=positive_seconds,
+        default=None,
+        help="with --batched: each scene's horizon, s (default 0.01: 40 steps at 2.5e-4 s)",
+    )
+
+
+def batch_sizes(text: str) -> tuple[int, ...]:
+    """``--batch-sizes``: whole numbers ≥ 1, comma-separated (argparse's type)."""
+    try:
+        sizes = tuple(int(x) for x in text.split(",") if x.strip())
+    except ValueError:
+        sizes = ()
+    if not sizes or min(sizes) < 1:
+        raise argparse.ArgumentTypeError(
+            f"must be whole numbers ≥ 1, comma-separated (got {text!r})"
+        )
+    return sizes
+
+
+def positive_seconds(text: str) -> float:
+    """``--batch-horizon``: a positive finite number of seconds (argparse's type)."""
+    try:
+        v = float(text)
+    except ValueError:
+        v = math.nan
+    if not (v > 0 and math.isfinite(v)):
+        raise argparse.ArgumentTypeError(f"must be a positive number of seconds (got {text!r})")
+    return v
+
+
+def batched_options(args: argparse.Namespace) -> dict[str, Any] | None:
+    """The keyword arguments of :func:`measure_batched` from ``--batched`` and its options (None
+    without ``--batched``); ``--batch-sizes`` or ``--batch-horizon`` alone: an ``ArgumentTypeError``
+    naming the option."""
+    if not getattr(args, "batched", False):
+        for flag in ("batch_sizes", "batch_horizon"):
+            if getattr(args, flag, None) is not None:
+                raise argparse.ArgumentTypeError(f"--{flag.replace('_', '-')}: needs --batched")
+        return None
+    return {"sizes": args.batch_sizes, "horizon": args.batch_horizon}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -237,6 +332,18 @@ def main(argv: list[str] | None = None) -> int:
 
     if args.json and args.out:
         ap.error("--json is the deprecated form of --out: give one of them")
+    try:
+        batched = batched_options(args)
+    except argparse.ArgumentTypeError as exc:
+        ap.error(str(exc))
+    if batched is not None:
+        if args.json:
+            ap.error("--batched: write its numbers with --out DIR")
+        if args.out:
+            write_bench(args.out, out=say, batched=batched)
+        else:
+            measure_batched(out=say, **batched)
+        return 0
     if args.json:
         print(
             "python -m validation.bench.command: warning: --json FILE is deprecated; use --out DIR "

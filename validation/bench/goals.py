@@ -13,7 +13,10 @@ measures and its limit:
 6. the compiled loop vs the evaluations it makes: :mod:`validation.bench.compiled_stepping_goal`;
 7. ``tumble validate`` warm vs the plants' compute, and cold vs warm:
    :mod:`validation.bench.whole_command_goal` (long);
-8. the Drake plant vs the analytic plant: :mod:`validation.bench.drake_goal` (long).
+8. the Drake plant vs the analytic plant: :mod:`validation.bench.drake_goal` (long);
+9. each batched plant's time per scene in one call of 256 vs the C plant's loop, with its scenes
+   per second against batch size: :mod:`validation.bench.batch_throughput` (long; ``tumble bench
+   --batched`` alone).
 
 A new goal is a module returning a :class:`validation.bench.goal.Goal` and one entry of
 :data:`GOALS`.
@@ -73,6 +76,14 @@ def _drake(progress: Progress) -> Goal:
     return goal_drake(progress=progress)
 
 
+def _batched(progress: Progress) -> tuple[Goal, ...]:
+    """Every batched plant's throughput goal; skipped, with the reason, where none is installed."""
+    # deferred: it lists the plants (their plugins' modules) only when its goal runs
+    from validation.bench.batch_throughput import goal_batched_throughput
+
+    return goal_batched_throughput(progress=progress)
+
+
 GOALS: tuple[GoalEntry, ...] = (
     GoalEntry(lambda progress: goal_evaluation(2)),
     GoalEntry(lambda progress: goal_evaluation(5)),
@@ -84,6 +95,7 @@ GOALS: tuple[GoalEntry, ...] = (
     GoalEntry(lambda progress: goal_example1_60s(progress=progress), long=True),
     GoalEntry(lambda progress: goal_whole_command(progress=progress), long=True),
     GoalEntry(_drake, long=True),
+    GoalEntry(_batched, long=True),
 )
 """Every goal, in the order ``tumble bench`` measures and prints them."""
 

@@ -12,8 +12,10 @@ DESCRIPTION = (
     "Time one controlled-dynamics evaluation (numpy path, compiled path, mj_forward) and print "
     "each speed goal of the fast engine as a ratio with whether it holds: evaluation vs "
     "mj_forward (n = 2, 5), the controller inside MuJoCo's RK4 vs the bare step, n = 1000 vs "
-    "n = 10, and the 60 s controlled Example 1 vs MuJoCo RK4 at the same accuracy. Numbers only: "
-    "exits 0 whether or not a goal holds."
+    "n = 10, and the 60 s controlled Example 1 vs MuJoCo RK4 at the same accuracy. With "
+    "--batched, only the batched plants' (mjx, mjwarp) scenes per second against batch size, as "
+    "a multiple of the MuJoCo C plant's loop, on the device JAX or Warp finds (a GPU when they "
+    "see one). Numbers only: exits 0 whether or not a goal holds."
 )
 CHOOSES_PLANTS = False
 
@@ -31,6 +33,18 @@ def run(args: argparse.Namespace) -> int:
     def say(s: str) -> None:
         print(s, flush=True)
 
+    from validation.bench.command import batched_options, measure_batched
+
+    try:
+        batched = batched_options(args)
+    except argparse.ArgumentTypeError as exc:
+        raise ValueError(str(exc)) from None
+    if batched is not None:
+        if args.out:
+            write_bench(args.out, out=say, batched=batched)
+        else:
+            measure_batched(out=say, **batched)
+        return 0
     if args.out:
         write_bench(args.out, args.skip_long, out=say)
     else:

@@ -3,6 +3,7 @@ against its schema is in tests/validation/report/test_provenance.py)."""
 
 from __future__ import annotations
 
+import json
 import math
 
 import pytest
@@ -60,3 +61,41 @@ def test_no_too_busy_line_when_every_goal_has_a_verdict(monkeypatch):
     lines: list[str] = []
     assert command.measure_and_print(True, lines.append)[0]
     assert not any("too busy" in x for x in lines)
+
+
+def _planted_batched(monkeypatch, seen):
+    from validation.bench import batch_throughput
+
+    def fake(plants=None, sizes=(), horizon=0.0, progress=print, **_kw):
+        seen.append((tuple(sizes), horizon))
+        progress("  devices: JAX cpu:0 (planted)")
+        return (Goal("fake batched", 0.5, 1.0),)
+
+    monkeypatch.setattr(batch_throughput, "goal_batched_throughput", fake)
+    monkeypatch.setattr(command, "evaluation_table", lambda: pytest.fail("not with --batched"))
+
+
+def test_batched_measures_the_batched_plants_only_with_its_sizes(monkeypatch, capsys, tmp_path):
+    seen: list = []
+    _planted_batched(monkeypatch, seen)
+    assert command.main(["--batched", "--batch-sizes", "1,4", "--batch-horizon", "0.02"]) == 0
+    assert command.main(["--batched", "--out", str(tmp_path / "b")]) == 0
+    out = capsys.readouterr().out
+    assert seen == [((1, 4), 0.02), ((1, 16, 256), 0.01)]  # given; then the defaults
+    assert "devices: JAX cpu:0 (planted)" in out and "HOLDS  fake batched: 0.5 (≤ 1)" in out
+    doc = json.loads((tmp_path / "b" / "bench.json").read_text())
+    assert doc["evaluation_us"] == [] and [g["name"] for g in doc["goals"]] == ["fake batched"]
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["--batch-sizes", "1,2"], "--batch-sizes: needs --batched"),
+        (["--batched", "--batch-sizes", "0,2"], "--batch-sizes: must be whole numbers"),
+        (["--batched", "--batch-horizon", "-1"], "--batch-horizon: must be a positive number"),
+    ],
+)
+def test_batched_options_are_checked(argv, message, capsys):
+    with pytest.raises(SystemExit) as exc:
+        command.main(argv)
+    assert exc.value.code == 2 and message in capsys.readouterr().err

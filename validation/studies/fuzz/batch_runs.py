@@ -13,10 +13,14 @@ applied per scene:
 * what the batch returned for each scene is checked against the plant contract for that scene
   (:func:`validation.studies.fuzz.judge.returned_run`): a broken trajectory fails that plant's run of
   that scene only;
-* a batch that raises, passes its limit, loses its worker, or returns anything but a list of one
-  trajectory per scene fails **that plant's runs of every scene of the batch** (each the same
-  :class:`~validation.studies.fuzz.judge.PlantRun` a single run failing so would give); the other
-  plants' runs of those scenes are not touched.
+* a batch of several scenes that the plant refuses with a ``ValueError`` (its engine cannot batch
+  these scenes together, though they share ``n`` and effects: a field of their twins it cannot
+  stack) is run again scene by scene, each run as a single one
+  (:func:`validation.studies.fuzz.judge.run_one`), so a refusal is the scene's, not its batch's;
+* a batch that raises anything else, passes its limit, loses its worker, or returns anything but
+  a list of one trajectory per scene fails **that plant's runs of every scene of the batch** (each
+  the same :class:`~validation.studies.fuzz.judge.PlantRun` a single run failing so would give);
+  the other plants' runs of those scenes are not touched.
 
 Each run's ``wall`` is the batch's wall time divided by its number of scenes (its share).
 """
@@ -47,6 +51,7 @@ from validation.studies.fuzz.judge import (
     prepare,
     resolve_plant,
     returned_run,
+    run_one,
 )
 from validation.studies.fuzz.space import draw_scene_dict
 
@@ -141,6 +146,8 @@ def batch_runs(
         share = (time.perf_counter() - t0) / count
         return [PlantRun(name, None, share, exc.limit_s, "", str(exc), exc.reached_s)] * count
     except _Raised as exc:
+        if exc.kind == "ValueError" and count > 1:  # the engine cannot batch these: one by one
+            return [run_one(name, pl, s, horizon, budget_s) for s in scenes]
         share = (time.perf_counter() - t0) / count
         return [PlantRun(name, None, share, None, exc.kind, str(exc))] * count
     share = (time.perf_counter() - t0) / count

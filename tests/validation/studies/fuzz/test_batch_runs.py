@@ -17,6 +17,7 @@ from tests.support.batched_plants import (
     RaisingBatchPlant,
     ShortBatchPlant,
     SleepyBatchPlant,
+    UnstackablePlant,
 )
 from tests.support.fuzz_plants import SLEEP_S
 from validation.studies.fuzz.batch_runs import batch_plant_task, batch_runs, structure_key
@@ -89,3 +90,9 @@ def test_a_refused_scene_refuses_the_batch_task():
 
 def test_an_empty_batch_runs_nothing():
     assert batch_runs("batched_echo", BatchedEchoPlant(), [], HORIZON_S, RUN_BUDGET_S) == []
+
+
+def test_a_batch_the_engine_cannot_stack_is_run_scene_by_scene():
+    runs = batch_runs("unstackable", UnstackablePlant(), _scenes(), HORIZON_S, RUN_BUDGET_S)
+    assert all(r.traj is not None and not r.raised for r in runs)
+    assert [r.traj.info["batch_size"] for r in runs] == [1, 1]  # each its own single run
