@@ -6,6 +6,8 @@ dataclass, the class attributes the registry checks, ``default_settings``, ``des
 
 * :class:`DroppedTermPlant` (``dropterm``): the analytic model with :data:`DROPPED` switched off,
   as an engine that ignores one field of the model would be;
+* :class:`HalfTermPlant` (``halfterm``): the analytic model with :data:`DROPPED` at half its
+  strength (the mean of the two models' ``q̈``: uncontrolled, ``q̈`` is linear in the forces);
 * :class:`ExactPlant` (``exact``): the analytic model as it is, no finding;
 * :class:`RefusingPlant` (``refusing``): ``pointwise`` refuses every scene with a ``ValueError``
   naming a field, as an engine that rejects a field of the model does.
@@ -92,6 +94,17 @@ class DroppedTermPlant(_AnalyticRun):
         return without_dropped(scene)
 
 
+class HalfTermPlant(_AnalyticRun):
+    """The analytic model with :data:`DROPPED` at half strength (its ``pointwise`` only)."""
+
+    engine = "halfterm"
+    label = "Half term"
+
+    def pointwise(self, scene, settings, t, q, qdot):
+        full = analytic_qddot(scene, t, q, qdot)
+        return 0.5 * (full + analytic_qddot(without_dropped(scene), t, q, qdot))
+
+
 class ExactPlant(_AnalyticRun):
     """The analytic model as it is."""
 
@@ -109,5 +122,7 @@ class RefusingPlant(_AnalyticRun):
         raise ValueError(REFUSAL)
 
 
-POINTWISE_PLANTS = {p.engine: p for p in (DroppedTermPlant, ExactPlant, RefusingPlant)}
+POINTWISE_PLANTS = {
+    p.engine: p for p in (DroppedTermPlant, HalfTermPlant, ExactPlant, RefusingPlant)
+}
 """The plants of this module by name, as the registry holds plugins."""

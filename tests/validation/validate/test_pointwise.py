@@ -69,6 +69,13 @@ def test_a_dropped_term_is_found_and_named_before_any_run(fakes):
     assert [p.plant for p in out.check.plants] == ["dropterm"]
 
 
+def test_a_term_at_another_strength_is_found_by_switching_it_off_in_the_plant(fakes):
+    out, said = _check(load_scene("paper_example2"), ["halfterm"])
+    [found] = out.check.findings
+    assert found.cause == DROPPED.value
+    assert f"the difference is in {DROPPED.value} (halfterm applies 0.5 of" in said[0]
+
+
 def test_a_controlled_scene_is_checked_controlled_and_not(fakes):
     sc = load_scene("paper_example2_controlled")
     out, said = _check(sc, ["dropterm"])
