@@ -160,6 +160,32 @@ def outcome(page: Page) -> list[str]:
     return lines
 
 
+def _outliers_explained(verdicts: Sequence[Verdict], meta: Mapping[str, Any]) -> list[str]:
+    """For each outlier the pointwise check found differing before the run, one sentence tying
+    the two together: its trajectories differ because its model does (and where, when found)."""
+    found: dict[str, Mapping[str, Any]] = {}
+    for f in (meta.get("pointwise") or {}).get("findings", []):
+        if f.get("vs_mujoco", 0.0) > f.get("bound", 0.0):  # a departure from MuJoCo C itself
+            found.setdefault(f["plant"], f)
+    counts: dict[str, int] = {}
+    for v in verdicts:
+        for o in v.outliers:
+            counts[o.plant] = counts.get(o.plant, 0) + 1
+    out = []
+    for plant, k in counts.items():
+        f = found.get(plant)
+        if f is None:
+            continue
+        where = f"; the difference is in {f['cause']}" if f.get("cause") else ""
+        out.append(
+            f"why {plant} is the outlier ({k} quantit{'y' if k == 1 else 'ies'}): its q̈ "
+            f"already differed from MuJoCo C's by {f['vs_mujoco']:.1e} relative at "
+            f"{f['state']} before the run (the pointwise check): the models differ, not the "
+            f"integration{where}"
+        )
+    return out
+
+
 def referee_lines(verdicts: Sequence[Verdict], meta: Mapping[str, Any]) -> list[str]:
     """The referee's section: one sentence per quantity, then the pairwise table."""
     if not verdicts:
@@ -172,6 +198,7 @@ def referee_lines(verdicts: Sequence[Verdict], meta: Mapping[str, Any]) -> list[
     if meta.get("referee_note"):  # a plant of the run's set left out (it refused the scene)
         lines += [f"Note: {md_literal(meta['referee_note'])}.", ""]
     lines += [f"- {md_literal(t)}" for t in summary_lines(verdicts)]
+    lines += [f"- {md_literal(t)}" for t in _outliers_explained(verdicts, meta)]
     pairs = list(dict.fromkeys(p for v in verdicts for p in v.values))
     lines += [
         "",

@@ -50,3 +50,26 @@ def test_the_pointwise_check_comes_first_with_its_findings():
     assert "| mjx | float64 | uncontrolled | 3.000e-02 |" in md and "**differs**" in md
     run = md[md.index("## Run") :]
     assert "pointwise" not in run  # stated once, in its section
+
+
+def test_an_outlier_the_pointwise_check_found_is_explained_by_it():
+    from types import SimpleNamespace
+
+    from validation.report.markdown import _outliers_explained
+
+    finding = {
+        "plant": "mjx",
+        "state": "the initial state",
+        "vs_mujoco": 0.1,
+        "bound": 2e-12,
+        "cause": "springs.cubic",
+    }
+    meta = {"pointwise": {"findings": [finding]}}
+    out = SimpleNamespace(outliers=[SimpleNamespace(plant="mjx")])
+    other = SimpleNamespace(outliers=[SimpleNamespace(plant="pinocchio")])
+    [line] = _outliers_explained([out, out, other], meta)
+    assert line.startswith("why mjx is the outlier (2 quantities): its q̈ already differed")
+    assert line.endswith(
+        "the models differ, not the integration; the difference is in springs.cubic"
+    )
+    assert _outliers_explained([out], {}) == []
