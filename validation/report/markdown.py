@@ -161,28 +161,46 @@ def outcome(page: Page) -> list[str]:
 
 
 def _outliers_explained(verdicts: Sequence[Verdict], meta: Mapping[str, Any]) -> list[str]:
-    """For each outlier the pointwise check found differing before the run, one sentence tying
-    the two together: its trajectories differ because its model does (and where, when found)."""
+    """For each outlier that the pointwise check compared before the run, one sentence tying the
+    two together: its model differed (and where, when found), or its model agreed and the
+    difference grew in the integration (in its precision's arithmetic when that is not float64)."""
+    pw = meta.get("pointwise") or {}
     found: dict[str, Mapping[str, Any]] = {}
-    for f in (meta.get("pointwise") or {}).get("findings", []):
+    for f in pw.get("findings", []):
         if f.get("vs_mujoco", 0.0) > f.get("bound", 0.0):  # a departure from MuJoCo C itself
             found.setdefault(f["plant"], f)
+    checked = {p["plant"]: p for p in pw.get("plants", [])}
     counts: dict[str, int] = {}
     for v in verdicts:
         for o in v.outliers:
             counts[o.plant] = counts.get(o.plant, 0) + 1
     out = []
     for plant, k in counts.items():
+        head = f"why {plant} is the outlier ({k} quantit{'y' if k == 1 else 'ies'}): its q̈ "
         f = found.get(plant)
-        if f is None:
-            continue
-        where = f"; the difference is in {f['cause']}" if f.get("cause") else ""
-        out.append(
-            f"why {plant} is the outlier ({k} quantit{'y' if k == 1 else 'ies'}): its q̈ "
-            f"already differed from MuJoCo C's by {f['vs_mujoco']:.1e} relative at "
-            f"{f['state']} before the run (the pointwise check): the models differ, not the "
-            f"integration{where}"
-        )
+        if f is not None:
+            where = f"; the difference is in {f['cause']}" if f.get("cause") else ""
+            out.append(
+                f"{head}already differed from MuJoCo C's by {f['vs_mujoco']:.1e} relative at "
+                f"{f['state']} before the run (the pointwise check): the models differ, not "
+                f"the integration{where}"
+            )
+        elif plant in checked and not any(x["plant"] == plant for x in pw.get("findings", [])):
+            p = checked[plant]
+            worst = max(
+                (max(c["vs_mujoco"]) for c in p.get("cases", []) if c.get("vs_mujoco")),
+                default=0.0,
+            )
+            how = (
+                "its step and scheme"
+                if p["precision"] == "float64"
+                else f"its {p['precision']} arithmetic, its step and scheme"
+            )
+            out.append(
+                f"{head}agreed with MuJoCo C's to {worst:.1e} relative at every state before the "
+                f"run (the pointwise check, bound {p['threshold']:.1e} in {p['precision']}): the "
+                f"models agree; the difference grew in the integration ({how})"
+            )
     return out
 
 

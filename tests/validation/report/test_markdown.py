@@ -73,3 +73,12 @@ def test_an_outlier_the_pointwise_check_found_is_explained_by_it():
         "the models differ, not the integration; the difference is in springs.cubic"
     )
     assert _outliers_explained([out], {}) == []
+    case = {"vs_mujoco": [3e-7, 5e-7]}
+    agreed = {
+        "plants": [{"plant": "mjx", "precision": "float32", "threshold": 1e-3, "cases": [case]}]
+    }
+    [line] = _outliers_explained([out], {"pointwise": agreed})
+    assert "agreed with MuJoCo C's to 5.0e-07 relative at every state" in line
+    assert line.endswith(
+        "the difference grew in the integration (its float32 arithmetic, its step and scheme)"
+    )
