@@ -156,6 +156,14 @@ class References:
 
     def __init__(self) -> None:
         self._models_of: dict[int, tuple[Scene, Twin, TumblingModel]] = {}
+        self._plain: dict[int, tuple[Scene, Scene | None]] = {}
+
+    def uncontrolled(self, scene: Scene) -> Scene | None:
+        """:func:`uncontrolled` of ``scene``, made once."""
+        got = self._plain.get(id(scene))
+        if got is None or got[0] is not scene:
+            got = self._plain[id(scene)] = (scene, uncontrolled(scene))
+        return got[1]
 
     def _models(self, scene: Scene) -> tuple[Twin, TumblingModel]:
         got = self._models_of.get(id(scene))
@@ -261,7 +269,7 @@ def _check_plant(
     ``ValueError`` of a refusal and :class:`_NotChecked`."""
     names, t, q, qdot = states
     precision = precision_of(settings)
-    plain = uncontrolled(scene)
+    plain = refs.uncontrolled(scene)
     cases = [(Case.CONTROLLED, scene)] if scene.controlled else []
     if plain is not None:
         cases.insert(0, (Case.UNCONTROLLED, plain))  # first: its cause explains the other
@@ -326,6 +334,8 @@ def check_pointwise(
     refused: list[tuple[str, str]] = []
     for e in engines:
         pl = plant(e)
+        if getattr(type(pl), "pointwise", None) is Plant.pointwise:
+            continue  # the contract's default: not offered
         try:
             settings = settings_of(e)
         except Exception:  # said when the plant is prepared: it fails alone there
