@@ -231,3 +231,38 @@ def test_a_validation_reports_the_findings(fakes, tmp_path):
     doc = json.loads(res.files["report.json"].read_text(encoding="utf-8"))
     validator("report").validate(doc)
     assert doc["pointwise"]["findings"][0]["cause"] == DROPPED.value
+
+
+@pytest.mark.slow
+def test_mjx_drops_the_cubic_tendon_stiffness_and_this_process_never_imports_jax(tmp_path):
+    """MJX 3.17 reads tendon_stiffness, never tendon_stiffnesspoly (mjx/_src/passive.py): the
+    check finds it at the initial state and names springs.cubic, and finds nothing in a scene of
+    linear springs only. The check runs in a fresh interpreter that must not import jax or warp
+    (the plant evaluates in a spawned process of its own)."""
+    import subprocess
+    import sys
+
+    if "mjx" not in plants_mod.registered() or plants_mod.registered()["mjx"].unavailable():
+        pytest.skip("the mjx plant is not installed")
+    code = """
+import json, sys, warnings
+warnings.simplefilter("ignore")
+from analytic.scene import load_scene
+from mj_bridge.plants import plant
+from validation.validate.pointwise import check_pointwise
+out = {}
+for name in ("paper_example1", "spacecraft_slosh"):
+    sc = load_scene(name)
+    got = check_pointwise(sc, ["mjx"], lambda e: plant(e).default_settings(sc), count=1)
+    out[name] = [f.to_dict() for f in got.check.findings]
+out["imported"] = sorted(m for m in ("jax", "warp", "mujoco_warp") if m in sys.modules)
+print(json.dumps(out))
+"""
+    run = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=600, check=True
+    )
+    out = json.loads(run.stdout.splitlines()[-1])
+    assert out["imported"] == []
+    [found] = out["paper_example1"]
+    assert found["state"] == "the initial state" and found["cause"] == Effect.SPRINGS_CUBIC.value
+    assert out["spacecraft_slosh"] == []
