@@ -88,6 +88,15 @@ class MjIntegrator(StrEnum):
     IMPLICITFAST = "implicitfast"
 
 
+class Precision(StrEnum):
+    """The floating-point format an accelerated engine (MJX, MuJoCo Warp) computes in."""
+
+    FLOAT32 = "float32"
+    """IEEE single precision (ε = 1.19e-7): what GPUs run fast, the accelerated engines' usual case."""
+    FLOAT64 = "float64"
+    """IEEE double precision (ε = 2.2e-16), as MuJoCo's C engine and the analytic plant."""
+
+
 class SpringModel(StrEnum):
     """How the MuJoCo twin represents the rod springs."""
 
