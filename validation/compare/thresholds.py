@@ -248,7 +248,7 @@ a state's size makes round-off matter, the round-off part scales it."""
 
 REFEREE_ROUNDOFF_FORCE = 1e5
 """The round-off part of the noise floor of the control torque and rod forces, in float64 epsilons
-(2.2e-16) of the largest control force of the run across the plants (``|τ|`` in N·m and ``|F_i|``
+(2.2e-16) of the largest control force of the run, of the median plant (``|τ|`` in N·m and ``|F_i|``
 in N as one SI vector, as the controller's solve computes them together, analytic/fundamental.py).
 A force zero in exact arithmetic comes out of that solve as a cancellation residue of the large
 ones: with the rod through C and only the masses controlled (identity weighting) the torque is zero,
