@@ -31,6 +31,7 @@ its initial position moved by its initial velocity. ``u̇`` is tangent (``u̇ = 
 
 from __future__ import annotations
 
+import dataclasses
 import time
 import warnings
 from collections.abc import Callable, Sequence
@@ -290,12 +291,10 @@ def _check_plant(
             continue
         if case is Case.UNCONTROLLED and found.vs_mujoco > found.bound and found.references_agree:
             cause = _cause(pl, settings, precision, sc, (t, q, qdot), got, mujoco, refs)
-            found = PointwiseFinding(
-                **{**found.__dict__, "cause": cause[0], "cause_text": cause[1]}
-            )
+            found = dataclasses.replace(found, cause=cause[0], cause_text=cause[1])
         elif case is Case.CONTROLLED and cause[0]:
-            found = PointwiseFinding(
-                **{**found.__dict__, "cause": cause[0], "cause_text": f"uncontrolled, {cause[1]}"}
+            found = dataclasses.replace(
+                found, cause=cause[0], cause_text=f"uncontrolled, {cause[1]}"
             )
         findings.append(found)
     threshold = pointwise_threshold(precision).value
