@@ -6,7 +6,8 @@ otherwise be found only after the analytic plant has run (or after both have): a
 integrator MuJoCo does not have, a run too long to hold. :func:`plant_choice` refuses a
 choice of plants that leaves nothing to compare (one plant, or one plant named twice), and leaves
 out of a default set or of ``--plants all`` the plants that refuse the scene, each with one
-warning (:func:`accepting_plants`; the report's referee note names them). Both are
+warning (:func:`accepting_plants`; the report's referee note names them), and so does
+:func:`without_refusals` with the plants whose pointwise check refuses the scene. All are
 steps of :func:`validation.validate.validation_request`, the one function that checks a
 validation's whole input, once per boundary.
 """
@@ -67,6 +68,9 @@ class PlantChoice:
 
     plants: tuple[str, ...]
     left_out: tuple[LeftOut, ...] = ()
+    named: bool = False
+    """The plants were named (not a default set nor ``--plants all``): one that refuses the scene
+    refuses the run."""
 
 
 def accepting_plants(scene: Scene, candidates: Sequence[str]) -> PlantChoice:
@@ -114,7 +118,9 @@ def plant_choice(
                 f"({', '.join(choice.plants) or 'none'}); nothing to compare"
             )
         return choice
-    text = plants if isinstance(plants, str) else ",".join(str(getattr(p, "value", p)) for p in plants)
+    text = (
+        plants if isinstance(plants, str) else ",".join(str(getattr(p, "value", p)) for p in plants)
+    )
     named = [plant(n.strip()).engine for n in text.split(",") if n.strip() not in ("", ALL)]
     twice = sorted({e for e in named if named.count(e) > 1})
     if twice:
@@ -133,7 +139,37 @@ def plant_choice(
             f"plants: a validation compares at least two plants (got {text!r}; "
             "e.g. analytic,mujoco)"
         )
-    return PlantChoice(chosen)
+    return PlantChoice(chosen, named=True)
+
+
+def without_refusals(
+    choice: PlantChoice, refused: Sequence[tuple[str, str]], scene: Scene
+) -> PlantChoice:
+    """``choice`` less the plants that refused ``scene`` after ``check_scene`` accepted it (their
+    ``pointwise`` raised the ``ValueError`` of a refusal: ``(engine, one-line reason)`` each). Of a
+    default set or ``--plants all`` each is left out with one warning, as :func:`accepting_plants`
+    does; a named plant's refusal refuses the run.
+
+    Raises:
+        ValueError: the first named plant's refusal (``<plant>: <reason>``), or fewer than two
+            plants left.
+    """
+    if not refused:
+        return choice
+    if choice.named:
+        engine, why = refused[0]
+        raise ValueError(f"{engine}: {why}")
+    gone = [LeftOut(str(e), why) for e, why in refused]
+    for x in gone:
+        warnings.warn(str(x), stacklevel=2)
+    names = {x.engine for x in gone}
+    plants = tuple(e for e in choice.plants if e not in names)
+    if len(plants) < 2:
+        raise ValueError(
+            f"plants: fewer than two of the plants can run {scene.name!r} "
+            f"({', '.join(plants) or 'none'}); nothing to compare"
+        )
+    return PlantChoice(plants, (*choice.left_out, *gone))
 
 
 def validation_plants(
@@ -150,4 +186,5 @@ __all__ = [
     "check_validation_inputs",
     "plant_choice",
     "validation_plants",
+    "without_refusals",
 ]

@@ -6,9 +6,10 @@ nothing; the threshold's absolute part, its ``value``, not the effective bound `
 scale`` of a state's check: a thousandth of the relative part would be an integrator's own
 error, which is what the referee attributes) and the quantity's **round-off**,
 ``ε_round × ε × scale`` with ``ε`` the float64 machine epsilon: for a state (position of C, rod
-positions, velocities, angular velocity, attitude) its largest magnitude over the run across the
-plants with ``ε_round = REFEREE_ROUNDOFF_STATE``; for the control torque and rod forces the
-largest control force across the plants (torque in N·m and rod forces in N, one vector in SI as
+positions, velocities, angular velocity, attitude) its largest magnitude over the run, of the
+median plant (:func:`typical`: an outlier running away does not raise the others' floor), with
+``ε_round = REFEREE_ROUNDOFF_STATE``; for the control torque and rod forces the largest control
+force, of the median plant too (torque in N·m and rod forces in N, one vector in SI as
 the controller's solve handles them) with ``ε_round = REFEREE_ROUNDOFF_FORCE``, divided by the
 relative check's scale (:func:`roundoff_scales`). A quantity zero in exact arithmetic (the torque
 of a rod through C with only the masses controlled) thus keeps its round-off residue below the
@@ -65,7 +66,8 @@ class RoundoffScale:
     """The magnitude whose round-off a quantity carries.
 
     Attributes:
-        value: the largest magnitude over the run across the plants, in ``unit`` (0: unknown).
+        value: the largest magnitude over the run of the median plant (:func:`typical`), in
+            ``unit`` (0: unknown).
         unit: its unit (``m``; ``N·m, N`` for the control forces).
         what: what it is, for people (``largest |R|``).
         multiplier: ``ε_round`` (``REFEREE_ROUNDOFF_STATE`` or ``REFEREE_ROUNDOFF_FORCE``).
@@ -154,9 +156,9 @@ def floor_rule_text() -> str:
         f"The noise floor is the larger of {REFEREE_NOISE_FRACTION:g} × the threshold (its "
         "absolute part) and the "
         f"quantity's round-off, {sci(REFEREE_ROUNDOFF_STATE)} ε × its largest magnitude over the run "
-        f"across the plants for a state, {sci(REFEREE_ROUNDOFF_FORCE)} ε × the largest control force "
-        "(relative to the check's scale) for the torque and rod forces, ε = 2.2e-16 (column "
-        "*floor set by*). "
+        f"for a state, {sci(REFEREE_ROUNDOFF_FORCE)} ε × the largest control force "
+        "(relative to the check's scale) for the torque and rod forces, of the median plant (a "
+        "plant that runs away does not raise it), ε = 2.2e-16 (column *floor set by*). "
     )
 
 
@@ -171,27 +173,42 @@ _STATE_SCALES: Mapping[str, tuple[str, str, Any]] = {
 }
 
 
-def roundoff_scales(cmp: Comparison, trajectories: Sequence[Any] = ()) -> dict[str, RoundoffScale]:
-    """Quantity -> the magnitude whose round-off it carries, over the run and across the plants.
+def typical(values: Sequence[float]) -> float:
+    """The lower median of the plants' magnitudes: the magnitude of a plant of the majority, so
+    that one plant running away (an outlier whose state or force grows by decades before it
+    stops) does not raise the round-off floor the others are judged by; with two plants, the
+    smaller."""
+    ordered = sorted(values)
+    return ordered[(len(ordered) - 1) // 2]
 
-    The control torque and rod forces: the largest control force, ``max(|τ|, |F_i|)`` over every
-    plant's control series in ``cmp`` (N·m and N as one SI vector, as the controller's solve
-    computes them together). The states: their largest magnitude over ``trajectories`` (none
-    given: no round-off part for them). Non-finite samples are left out."""
+
+def roundoff_scales(cmp: Comparison, trajectories: Sequence[Any] = ()) -> dict[str, RoundoffScale]:
+    """Quantity -> the magnitude whose round-off it carries, over the run, of a typical plant
+    (:func:`typical`: the lower median over the plants of each plant's largest magnitude).
+
+    The control torque and rod forces: each plant's largest control force, ``max(|τ|, |F_i|)``
+    over its control series in ``cmp`` (N·m and N as one SI vector, as the controller's solve
+    computes them together). The states: each trajectory's largest magnitude (none given: no
+    round-off part for them). Non-finite samples are left out."""
     out: dict[str, RoundoffScale] = {}
-    forces = [
-        largest(s.values, False)
-        for s in cmp.series
-        if s.group is Group.CONTROL and not s.subject.is_pair
-    ]
-    if forces:
-        f = RoundoffScale(max(forces), "N·m, N", "largest control force", REFEREE_ROUNDOFF_FORCE)
+    per_plant: dict[str, float] = {}
+    for s in cmp.series:
+        if s.group is Group.CONTROL and not s.subject.is_pair:
+            key = str(s.subject.value)
+            per_plant[key] = max(per_plant.get(key, 0.0), largest(s.values, False))
+    if per_plant:
+        f = RoundoffScale(
+            typical(list(per_plant.values())),
+            "N·m, N",
+            "largest control force",
+            REFEREE_ROUNDOFF_FORCE,
+        )
         for q in FORCE_QUANTITIES:
             out[q] = f
     if trajectories:
         for q, (what, unit, of) in _STATE_SCALES.items():
             out[q] = RoundoffScale(
-                max(of(tr) for tr in trajectories), unit, what, REFEREE_ROUNDOFF_STATE
+                typical([of(tr) for tr in trajectories]), unit, what, REFEREE_ROUNDOFF_STATE
             )
     return out
 
@@ -207,4 +224,5 @@ __all__ = [
     "noise_floor",
     "roundoff_scales",
     "sci",
+    "typical",
 ]

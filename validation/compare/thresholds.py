@@ -44,6 +44,8 @@ from collections.abc import Mapping
 from dataclasses import replace
 from typing import Any
 
+import numpy as np
+
 from analytic.threshold import Threshold, ThresholdSource
 
 _RK4_DOP = (
@@ -246,7 +248,7 @@ a state's size makes round-off matter, the round-off part scales it."""
 
 REFEREE_ROUNDOFF_FORCE = 1e5
 """The round-off part of the noise floor of the control torque and rod forces, in float64 epsilons
-(2.2e-16) of the largest control force of the run across the plants (``|τ|`` in N·m and ``|F_i|``
+(2.2e-16) of the largest control force of the run, of the median plant (``|τ|`` in N·m and ``|F_i|``
 in N as one SI vector, as the controller's solve computes them together, analytic/fundamental.py).
 A force zero in exact arithmetic comes out of that solve as a cancellation residue of the large
 ones: with the rod through C and only the masses controlled (identity weighting) the torque is zero,
@@ -265,6 +267,73 @@ integrator rounds the state at ε/2 of its magnitude; over the 1e4-1e6 steps of 
 roundings add up like a random walk to about sqrt(1e6) = 1e3 of them. It decides only for large
 magnitudes (|R| over 4.5 km against the default 1e-6 m threshold's floor of 1e-9 m): no built-in
 scene reaches it."""
+
+
+POINTWISE_ROUNDOFF = 1e4
+"""The least bound of the pointwise check (:mod:`validation.compare.pointwise`), in epsilons of the
+checked plant's precision (``numpy.finfo(precision).eps``: 2.2e-16 for float64, 1.19e-7 for
+float32), as a fraction of ``max |q̈|`` at the state. One ``q̈`` is one forward-dynamics evaluation:
+a few hundred operations and a solve with the mass matrix, whose rounding is a few ε times the
+solve's amplification. MuJoCo C and the analytic model, two float64 implementations by different
+algorithms, agree to 3-50 ε on the built-in scenes at their initial and random states
+(``docs/accelerated-engines.md``); 1e4 ε leaves two decades above that and, at float32 (1.2e-3),
+still sits a decade below the smallest modelling term of a built-in scene's ``q̈`` (the cubic
+springs, 1.1e-2 of it in ``paper_example2``). A state whose own rounding is larger raises the
+bound (:data:`POINTWISE_MARGIN`)."""
+
+POINTWISE_MARGIN = 10.0
+"""How far above a state's measured float64 rounding the pointwise bound sits, scaled to the
+checked precision: the bound at a state is ``ε_P · max(POINTWISE_ROUNDOFF, POINTWISE_MARGIN ·
+d/ε64)``, ``d`` the relative difference of MuJoCo C's and the analytic model's ``q̈`` there (two
+float64 implementations of the same body differ by their rounding, which the cancellations of an
+ill-conditioned state amplify: 4e5 ε in ``hard/heavy_masses``). A decade: rounding of one size in
+two codes stays within a factor of a few of each other, a difference of model does not. A
+precision P rounds ``ε_P/ε64`` times coarser, so its bound is that many times the float64 one;
+where it reaches 1 the state cannot be judged at P."""
+
+POINTWISE_AGREEMENT = 1e-8
+"""Above this relative difference MuJoCo C and the analytic model disagree on the model at a state
+(an off-manifold quaternion the analytic model stabilises and MuJoCo normalises), so their
+difference measures no rounding and does not raise the pointwise bound
+(:data:`POINTWISE_MARGIN`): 4.5e7 float64 ε, two decades above the largest rounding measured
+between them (9e-11, ``hard/heavy_masses``)."""
+
+POINTWISE_FLOOR = 1e-9
+"""The smallest ``max |q̈|`` a pointwise difference is divided by (m/s² and 1/s²: the
+accelerations of ``q = [R, u, p]``), so a state at rest without forces gives no division by zero;
+far below any built-in scene's ``max |q̈|`` (1e-2 to 1e3)."""
+
+
+def pointwise_threshold(precision: Any) -> Threshold:
+    """The pointwise check's least bound (:data:`POINTWISE_ROUNDOFF` ε) for a plant computing in
+    ``precision`` (``"float32"``, ``"float64"``, a :class:`numpy.dtype` or an enum of those
+    names), named ``pointwise_<precision>``, relative to ``max |q̈|``.
+
+    Raises:
+        ValueError: naming ``settings.precision`` for anything but a floating-point type.
+    """
+    name = str(getattr(precision, "value", precision))
+    try:
+        dtype = np.dtype(name)
+    except TypeError:
+        dtype = None
+    if dtype is None or dtype.kind != "f":
+        raise ValueError(
+            f"settings.precision: not a floating-point precision (got {precision!r}; "
+            "e.g. float32, float64)"
+        )
+    eps = float(np.finfo(dtype).eps)
+    return Threshold(
+        f"pointwise_{dtype.name}",
+        POINTWISE_ROUNDOFF * eps,
+        "1",
+        f"max |q̈_plant - q̈_ref| / max |q̈_ref| at a state, the plant computing in {dtype.name} "
+        f"(ε = {eps:.3g}): {POINTWISE_ROUNDOFF:g} ε, two decades above the rounding of one "
+        "forward-dynamics evaluation (MuJoCo C and the analytic model agree to 3-50 ε64), raised "
+        f"to {POINTWISE_MARGIN:g} × a state's own measured rounding scaled to {dtype.name}",
+        relative=True,
+        floor=POINTWISE_FLOOR,
+    )
 
 
 # Keys of a scene's [thresholds] table that belong to the hard-case suite, not to the comparison.
@@ -353,6 +422,10 @@ def _override(base: Threshold, spec: Any) -> Threshold:
 
 __all__ = [
     "DEFAULTS",
+    "POINTWISE_AGREEMENT",
+    "POINTWISE_FLOOR",
+    "POINTWISE_MARGIN",
+    "POINTWISE_ROUNDOFF",
     "REFEREE_NOISE_FRACTION",
     "REFEREE_ROUNDOFF_FORCE",
     "REFEREE_ROUNDOFF_STATE",
@@ -361,5 +434,6 @@ __all__ = [
     "STATE_RTOL",
     "Threshold",
     "ThresholdSource",
+    "pointwise_threshold",
     "thresholds_for",
 ]

@@ -48,6 +48,8 @@ def report_document(
     passed = verdict is RunVerdict.PASSED
     comparison = cmp.to_dict() if cmp is not None else {"checks": [], "notes": []}
     comparison["summaries"] = summaries(cmp)  # largest magnitudes (max_abs), not signed maxima
+    pointwise = meta.get("pointwise")  # the check before the run: a field of its own
+    run = {k: v for k, v in meta.items() if k != "pointwise"}
     return {
         "verdict": verdict.value,
         **comparison,
@@ -80,7 +82,8 @@ def report_document(
         "pairwise": _pairwise(cmp),
         "figures": [name for f in figures for name in f.files],
         "captions": {f.name: f.caption for f in figures},
-        "run": meta,
+        "run": run,
+        **({"pointwise": pointwise} if pointwise else {}),
     }
 
 

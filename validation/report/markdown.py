@@ -1,7 +1,8 @@
 """The text of ``report.md``: one function per section, in the order of :data:`SECTIONS`.
 
 The verdict comes first (after the scene's name), with the reason of a failure or an interruption;
-then, when there is a comparison, the count of checks that pass, the referee, the checks, the
+then the pointwise check made before the run, when a plant offered one; then, when there is a
+comparison, the count of checks that pass, the referee, the checks, the
 summaries over time; then the figures with their captions (a figure that was not drawn is named
 with the reason), the thresholds and the run's metadata. Every string a scene or an error message
 brings is escaped to literal text on one line (:func:`validation.report.md_text.md_literal`).
@@ -78,6 +79,55 @@ def heading(page: Page) -> list[str]:
     return lines
 
 
+def pointwise(page: Page) -> list[str]:
+    """The pointwise check made before the run (``meta["pointwise"]``, when a plant offered one):
+    each finding's sentence, the plants not checked, then each plant's largest differences per
+    case against their bounds."""
+    pw = page.meta.get("pointwise")
+    if not pw:
+        return []
+    lines = ["## Pointwise check before the run", ""]
+    findings = pw.get("findings", [])
+    lines.append(
+        f"q̈ of each plant that offers it, at the initial state and {pw.get('states', 1) - 1} "
+        f"random states (seed {pw.get('seed', 0)}), against MuJoCo C's and the analytic "
+        "model's (float64), the bound that of the plant's precision: "
+        + (f"{len(findings)} finding(s)." if findings else "no finding.")
+    )
+    lines.append("")
+    lines += [f"- **{md_literal(f['plant'])}:** {md_literal(f['text'])}" for f in findings]
+    lines += [f"- {md_literal(x)}" for x in pw.get("not_checked", [])]
+    if findings or pw.get("not_checked"):
+        lines.append("")
+    rows = [(p, c) for p in pw.get("plants", []) for c in p.get("cases", []) if c.get("bounds")]
+    if rows:
+        lines += [
+            "| plant | precision | case | max vs MuJoCo C | max vs analytic | "
+            "MuJoCo C vs analytic | least bound | verdict |",
+            "|---|---|---|---|---|---|---|---|",
+        ]
+        for p, c in rows:
+            over = any(
+                max(m, a) > b
+                for m, a, b in zip(c["vs_mujoco"], c["vs_analytic"], c["bounds"], strict=True)
+            )
+            lines.append(
+                f"| {md_cell(p['plant'])} | {md_cell(p['precision'])} | {md_cell(c['case'])} | "
+                f"{fmt_number(max(c['vs_mujoco']))} | {fmt_number(max(c['vs_analytic']))} | "
+                f"{fmt_number(max(c['mujoco_vs_analytic']))} | {fmt_number(min(c['bounds']))} | "
+                f"{'**differs**' if over else 'agrees'} |"
+            )
+        lines += [
+            "",
+            "Relative differences: max |q̈_a − q̈_b| / max |q̈_b| at a state, over its "
+            "coordinates [R, u, p]. A state's bound is its precision's least bound, raised "
+            "where MuJoCo C and the analytic model differ by more than that at float64 "
+            "(POINTWISE_MARGIN); no integration has happened, so a difference is one of model.",
+            "",
+        ]
+    return lines
+
+
 def outcome(page: Page) -> list[str]:
     """How many checks pass (and why the others do not apply), every failed check, the notes."""
     cmp = page.cmp
@@ -110,6 +160,50 @@ def outcome(page: Page) -> list[str]:
     return lines
 
 
+def _outliers_explained(verdicts: Sequence[Verdict], meta: Mapping[str, Any]) -> list[str]:
+    """For each outlier that the pointwise check compared before the run, one sentence tying the
+    two together: its model differed (and where, when found), or its model agreed and the
+    difference grew in the integration (in its precision's arithmetic when that is not float64)."""
+    pw = meta.get("pointwise") or {}
+    found: dict[str, Mapping[str, Any]] = {}
+    for f in pw.get("findings", []):
+        if f.get("vs_mujoco", 0.0) > f.get("bound", 0.0):  # a departure from MuJoCo C itself
+            found.setdefault(f["plant"], f)
+    checked = {p["plant"]: p for p in pw.get("plants", [])}
+    counts: dict[str, int] = {}
+    for v in verdicts:
+        for o in v.outliers:
+            counts[o.plant] = counts.get(o.plant, 0) + 1
+    out = []
+    for plant, k in counts.items():
+        head = f"why {plant} is the outlier ({k} quantit{'y' if k == 1 else 'ies'}): its q̈ "
+        f = found.get(plant)
+        if f is not None:
+            where = f"; the difference is in {f['cause']}" if f.get("cause") else ""
+            out.append(
+                f"{head}already differed from MuJoCo C's by {f['vs_mujoco']:.1e} relative at "
+                f"{f['state']} before the run (the pointwise check): the models differ, not "
+                f"the integration{where}"
+            )
+        elif plant in checked and not any(x["plant"] == plant for x in pw.get("findings", [])):
+            p = checked[plant]
+            worst = max(
+                (max(c["vs_mujoco"]) for c in p.get("cases", []) if c.get("vs_mujoco")),
+                default=0.0,
+            )
+            how = (
+                "its step and scheme"
+                if p["precision"] == "float64"
+                else f"its {p['precision']} arithmetic, its step and scheme"
+            )
+            out.append(
+                f"{head}agreed with MuJoCo C's to {worst:.1e} relative at every state before the "
+                f"run (the pointwise check, bound {p['threshold']:.1e} in {p['precision']}): the "
+                f"models agree; the difference grew in the integration ({how})"
+            )
+    return out
+
+
 def referee_lines(verdicts: Sequence[Verdict], meta: Mapping[str, Any]) -> list[str]:
     """The referee's section: one sentence per quantity, then the pairwise table."""
     if not verdicts:
@@ -122,6 +216,7 @@ def referee_lines(verdicts: Sequence[Verdict], meta: Mapping[str, Any]) -> list[
     if meta.get("referee_note"):  # a plant of the run's set left out (it refused the scene)
         lines += [f"Note: {md_literal(meta['referee_note'])}.", ""]
     lines += [f"- {md_literal(t)}" for t in summary_lines(verdicts)]
+    lines += [f"- {md_literal(t)}" for t in _outliers_explained(verdicts, meta)]
     pairs = list(dict.fromkeys(p for v in verdicts for p in v.values))
     lines += [
         "",
@@ -259,12 +354,14 @@ def run(page: Page) -> list[str]:
     lines = ["## Run", ""]
     if page.code:
         lines += [md_literal(page.code), ""]
-    lines += ["```json", fenced_json(page.meta), "```", ""]
+    meta = {k: v for k, v in page.meta.items() if k != "pointwise"}  # its own section
+    lines += ["```json", fenced_json(meta), "```", ""]
     return lines
 
 
 SECTIONS: tuple[Callable[[Page], list[str]], ...] = (
     heading,
+    pointwise,
     outcome,
     referee,
     checks,

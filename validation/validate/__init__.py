@@ -3,7 +3,9 @@
 The job, :func:`run_validation`, is its steps:
 
 1. **request**: every input checked once into a frozen :class:`ValidationRequest`
-   (:mod:`validation.validate.request`), which the rest trusts; ``tumble validate`` calls
+   (:mod:`validation.validate.request`), which the rest trusts, with the pointwise check of the
+   plants that offer one (:mod:`validation.validate.pointwise`: their ``q̈`` against MuJoCo C's
+   and the analytic model's at a few states, each finding warned); ``tumble validate`` calls
    :func:`validation_request` and :func:`run_request` apart (it names its output directory after
    the scene in between);
 2. **plants**: the analytic plant (scipy, the scene's solver settings), the MuJoCo twin (the
@@ -53,6 +55,7 @@ from analytic.scene.dump import scene_to_toml
 from analytic.trajectory import Engine, Trajectory
 from mj_bridge.plants import PinocchioPlant
 from validation.compare.checks import Comparison, compare_plants
+from validation.compare.pointwise import PointwiseCheck
 from validation.compare.referee import Verdict, referee
 from validation.preflight import LeftOut
 from validation.report.figures import DEFAULT_FORMATS, FigureFormat
@@ -232,7 +235,9 @@ def _validate_into(
                 )
         except KeyboardInterrupt:
             interrupted = True
-        meta = _meta(run, sc, runs, names, horizon, verdicts, joined, request.left_out)
+        meta = _meta(
+            run, sc, runs, names, horizon, verdicts, joined, request.left_out, request.pointwise
+        )
         # the scene as it ran, in the scene file's conventions: `tumble validate OUT/scene.toml`
         # reruns it
         files: dict[str, Path] = {
@@ -374,9 +379,11 @@ def _meta(
     verdicts: Sequence[Verdict],
     joined: JoinedRuns = NO_JOINED,
     left_out: Sequence[LeftOut] = (),
+    pointwise: PointwiseCheck | None = None,
 ) -> dict[str, Any]:
     """The run's metadata for the report (the wall times are added when they are known); the
-    ``joined`` runs are plants too, named as ``joined.names`` says, with ``joined.meta``."""
+    ``joined`` runs are plants too, named as ``joined.names`` says, with ``joined.meta``; the
+    ``pointwise`` check made before the run, under ``pointwise`` when a plant offered one."""
     mj = next((r.settings for r in runs if r.plant.engine == Engine.MUJOCO), None)
     referee_note = "" if len(runs) + len(joined.trajectories) >= 3 else _referee_note(sc)
     # the plants of the default set or of `--plants all` that refused the scene, each once
@@ -409,6 +416,8 @@ def _meta(
         "referee_note": referee_note,
         "versions": versions(),
     }
+    if pointwise is not None and not pointwise.empty:
+        meta["pointwise"] = pointwise.to_dict()
     meta["plants"] += [
         {"engine": str(tr.engine), "settings": names.get(str(tr.engine), str(tr.engine))}
         for tr in joined.trajectories

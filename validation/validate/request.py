@@ -2,8 +2,10 @@
 request's plants made ready to run.
 
 :func:`validation_request` checks everything (scene, thresholds, plants, overrides, figure
-formats, time limit) into a :class:`ValidationRequest`, which the job trusts; it builds and runs
-nothing. :func:`prepared_plants` gives each plant of a request its settings and its one-line
+formats, time limit) into a :class:`ValidationRequest`, which the job trusts; it runs no plant,
+only the pointwise check of the plants that offer one (:mod:`validation.validate.pointwise`: their
+``q̈`` at a few states against MuJoCo C's and the analytic model's, in seconds, before any run).
+:func:`prepared_plants` gives each plant of a request its settings and its one-line
 description; a plant whose ``check_scene`` (with anything but the ``ValueError`` of a refusal),
 ``default_settings`` or ``describe`` raises fails alone, in one line naming it.
 """
@@ -19,12 +21,14 @@ from analytic.scene import Scene
 from analytic.threshold import Threshold
 from analytic.trajectory import Engine
 from mj_bridge.plants import MujocoRunSettings, plant
+from validation.compare.pointwise import PointwiseCheck
 from validation.compare.thresholds import thresholds_for
-from validation.preflight import LeftOut, check_validation_inputs, plant_choice
+from validation.preflight import LeftOut, check_validation_inputs, plant_choice, without_refusals
 from validation.report.figures import DEFAULT_FORMATS, FigureFormat, parse_formats
 from validation.runs.contract import plant_scene
 from validation.runs.plant_runs import PlantRun, check_time_limit, plant_time_limit
 from validation.scenes import resolve_scene, with_threshold_overrides
+from validation.validate.pointwise import check_pointwise
 
 
 @dataclass(frozen=True)
@@ -46,6 +50,8 @@ class ValidationRequest:
             defaults).
         unusable: plant -> why it cannot be run (its ``check_scene`` raised something other than
             the ``ValueError`` of a refusal): that plant fails alone, the others run.
+        pointwise: the pointwise check of the plants that offer one
+            (:func:`validation.validate.pointwise.check_pointwise`), made before any run.
     """
 
     scene: Scene
@@ -59,6 +65,7 @@ class ValidationRequest:
     left_out: tuple[LeftOut, ...] = ()
     time_limit: float | None = None
     unusable: Mapping[str, str] = field(default_factory=dict)
+    pointwise: PointwiseCheck = field(default_factory=PointwiseCheck)
 
     def limit_of(self, engine: str) -> float | None:
         """Plant ``engine``'s wall-time limit, s (:func:`plant_time_limit`)."""
@@ -93,7 +100,11 @@ def validation_request(
     (:func:`validation_plants`); the overrides (:func:`check_validation_inputs`); the figure
     formats; the time limit (:func:`check_time_limit`); and that every plant accepts the scene
     (its ``check_scene``; one that raises anything but ``ValueError`` is noted ``unusable``, to
-    fail alone). Builds nothing and runs nothing.
+    fail alone). Runs no plant; then the plants that offer ``pointwise`` (the accelerated
+    engines) are compared with MuJoCo C and the analytic model at a few states
+    (:func:`validation.validate.pointwise.check_pointwise`, seconds; each finding one warning),
+    and one whose ``pointwise`` refuses the scene is treated as a ``check_scene`` refusal
+    (:func:`validation.preflight.without_refusals`).
 
     Raises:
         ValueError: naming the field and the value (scene, thresholds, plants, integrator, dt,
@@ -120,6 +131,15 @@ def validation_request(
             raise  # the plant refuses the scene: bad input
         except Exception as exc:  # a plant's own bug: that plant fails alone
             unusable[e] = f"check_scene raised {one_line(exc)}"
+    horizon = float(t_end) if t_end is not None else sc.output.t_end
+    pointwise = check_pointwise(
+        plant_scene(sc),
+        [e for e in chosen if e not in unusable],
+        lambda e: _plant_settings(e, plant_scene(sc), integrator, dt),
+        horizon,
+    )
+    choice = without_refusals(choice, pointwise.refused, sc)
+    chosen = choice.plants
     return ValidationRequest(
         scene=sc,
         thresholds=checked_thresholds,
@@ -127,11 +147,12 @@ def validation_request(
         integrator=integrator,
         dt=dt,
         t_end=t_end,
-        horizon=float(t_end) if t_end is not None else sc.output.t_end,
+        horizon=horizon,
         figure_formats=formats,
         left_out=choice.left_out,
         time_limit=limit,
         unusable=unusable,
+        pointwise=pointwise.check,
     )
 
 

@@ -4,11 +4,19 @@ round-off, and a round-off residue on a signal zero in exact arithmetic names no
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
 from validation.compare.checks import Check, Comparison, Group, Series, Subject
-from validation.compare.noise_floor import FloorPart, NoiseFloor, floor_rule_text, roundoff_scales
+from validation.compare.noise_floor import (
+    FloorPart,
+    NoiseFloor,
+    floor_rule_text,
+    roundoff_scales,
+    typical,
+)
 from validation.compare.referee import Clause, VerdictKind, referee, rule, rule_text
 from validation.compare.thresholds import (
     DEFAULTS,
@@ -130,3 +138,17 @@ def test_the_referee_of_a_comparison_takes_the_absolute_part():
     (v,) = referee(cmp)
     assert v.quantity == "velocity_C" and v.noise.threshold_part == pytest.approx(1e-8)
     assert v.kind is VerdictKind.OUTLIER and v.outlier == "mujoco"
+
+
+def test_a_plant_that_runs_away_does_not_raise_the_others_floor():
+    """One plant's control forces grow a million times (it diverges): the round-off scale is a
+    plant of the majority's largest force, not the runaway's, so the floor the two others are
+    judged by stays theirs (the lower median of the plants' largest forces)."""
+    cmp = _zero_torque_comparison(2.5e5)
+    runaway = tuple(
+        dataclasses.replace(s, values=s.values * 1e6) if s.subject.value == "analytic" else s
+        for s in cmp.series
+    )
+    scale = roundoff_scales(dataclasses.replace(cmp, series=runaway))["control_torque"]
+    assert scale.value == pytest.approx(roundoff_scales(cmp)["control_torque"].value, rel=1e-15)
+    assert typical([3.0, 1.0, 2.0, 1e9]) == 2.0 and typical([5.0, 1e9]) == 5.0
