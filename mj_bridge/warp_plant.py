@@ -150,9 +150,9 @@ def _merge(base, others: list, prefix: str = "") -> None:
                 and spec[0] == "*" and all(v.shape == a.shape for v in vs)):  # fmt: skip
             raise Unbatchable(name)
         stacked = np.concatenate([a, *vs], axis=0)
-        arr = wp.array(stacked, dtype=val.dtype, device=val.device)
-        arr._is_batched = True
-        setattr(base, f.name, arr)
+        # a batched field is one whose leading dimension is the world's: Warp's kernels read
+        # row ``worldid % shape[0]`` of it
+        setattr(base, f.name, wp.array(stacked, dtype=val.dtype, device=val.device))
 
 
 NOT_READ = ("key_", "name_", "names", "paths", "text_", "tuple_", "numeric_", "nnames", "npaths",
