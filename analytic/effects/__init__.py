@@ -88,6 +88,13 @@ class MjIntegrator(StrEnum):
     IMPLICITFAST = "implicitfast"
 
 
+class Precision(StrEnum):
+    """The floating-point precision an engine integrates in (an accelerated plant's setting)."""
+
+    FLOAT32 = "float32"
+    FLOAT64 = "float64"
+
+
 class SpringModel(StrEnum):
     """How the MuJoCo twin represents the rod springs."""
 
