@@ -16,6 +16,11 @@ Every plant returns its trajectory in the paper's coordinates ``q = [R (3), u (4
 (Eq. 44) on the scene's output grid, so every comparison is engine-agnostic. ``mj_bridge.plants``
 holds the registry: the three built-ins and the plants installed as plugins (entry-point group
 ``tumbling_testbed.plants``, ``docs/plugins.md``); this layer does not import the engines.
+
+Two optional entries (``docs/plugins.md``, Batched runs and the pointwise check):
+:meth:`Plant.simulate_batch` runs many scenes of one structure in one call (native where
+:attr:`Plant.batched`, else the loop of ``_simulate``), and :meth:`Plant.pointwise` gives the
+engine's ``q̈`` at given states (None where the engine does not offer it).
 """
 
 from __future__ import annotations
@@ -23,14 +28,17 @@ from __future__ import annotations
 import abc
 import dataclasses
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 from analytic.effects import Backend, Effect, SolverMethod, Stepper
 from analytic.model import MODEL_EFFECTS
 from analytic.scene import Scene
 from analytic.trajectory import Engine, Trajectory
+
+if TYPE_CHECKING:
+    import numpy as np
 
 Progress = Callable[[float], None]
 """``progress(t)``: the simulated time reached, s."""
@@ -121,6 +129,10 @@ class Plant(abc.ABC):
             instability guard at ``mjMAXVAL`` = 1e10). Infinite (the default) for an engine with
             no such bound. The fuzzer reads it to tell a motion that left an engine's range
             from a failure (``docs/fuzzing.md``).
+        batched: True when :meth:`_simulate_batch` runs many scenes in one native call (many
+            worlds at once); False (the default) when it is the loop of :meth:`_simulate`. A
+            caller with many scenes of one structure submits them as one batch to a plant that
+            says True, and scene by scene to the others.
     """
 
     engine: ClassVar[str]
@@ -129,6 +141,7 @@ class Plant(abc.ABC):
     settings_type: ClassVar[type]
     default: ClassVar[bool] = True
     value_bound: ClassVar[float] = math.inf
+    batched: ClassVar[bool] = False
 
     @classmethod
     def unavailable(cls) -> str:
@@ -192,13 +205,7 @@ class Plant(abc.ABC):
             raise ImportError(why)
         self.check_scene(scene)
         t = check_horizon(t_end)
-        if settings is None:
-            settings = self.default_settings(scene)
-        elif not isinstance(settings, self.settings_type):
-            raise ValueError(
-                f"settings: the {self.engine} plant takes {self.settings_type.__name__} "
-                f"(got {type(settings).__name__})"
-            )
+        settings = self._checked_settings(settings, scene)
         try:
             return self._simulate(scene, settings, t, progress)
         except MemoryError as exc:  # numpy's and C++'s (bad_alloc) often carry no message
@@ -206,6 +213,129 @@ class Plant(abc.ABC):
             raise MemoryError(
                 f"out of memory ({self.label} with {scene.n:,} masses{detail})"
             ) from None
+
+    def _checked_settings(self, settings: Any, scene: Scene) -> Any:
+        """``settings`` (None: the scene's defaults), or ``ValueError`` naming ``settings``."""
+        if settings is None:
+            return self.default_settings(scene)
+        if not isinstance(settings, self.settings_type):
+            raise ValueError(
+                f"settings: the {self.engine} plant takes {self.settings_type.__name__} "
+                f"(got {type(settings).__name__})"
+            )
+        return settings
+
+    def simulate_batch(
+        self,
+        scenes: Sequence[Scene],
+        settings: Any = None,
+        t_end: float | None = None,
+        progress: Progress | None = None,
+    ) -> list[Trajectory]:
+        """Run many scenes of one structure on this plant: one trajectory per scene, in order.
+
+        Never overridden: it checks what :meth:`simulate` checks, for every scene, and that the
+        scenes share one structure (the same number of masses ``n`` and the same effects; their
+        parameters and initial states may differ), then calls :meth:`_simulate_batch`, native
+        when :attr:`batched`, else the loop of :meth:`_simulate`.
+
+        Args:
+            scenes: validated scenes of one structure (an empty sequence returns ``[]``).
+            settings: one instance of :attr:`settings_type` for every scene (default
+                :meth:`default_settings` of ``scenes[0]``).
+            t_end: horizon, s, of every scene (default each scene's ``[output] t_end``).
+            progress: called with the simulated time reached by the batch, s.
+
+        Raises:
+            ValueError: ``"scenes[i]: ..."`` for a scene this plant refuses or one whose
+                structure differs from ``scenes[0]``'s; bad settings or ``t_end``; before
+                anything runs.
+            ImportError: the engine is not installed (:meth:`unavailable` says why).
+        """
+        why = self.unavailable()
+        if why:
+            raise ImportError(why)
+        scenes = list(scenes)
+        t = check_horizon(t_end)
+        if not scenes:
+            return []
+        first = scenes[0]
+        for i, scene in enumerate(scenes):
+            try:
+                self.check_scene(scene)
+            except ValueError as exc:
+                raise ValueError(f"scenes[{i}]: {exc}") from None
+            if scene.n != first.n:
+                raise ValueError(
+                    f"scenes[{i}]: a batch holds scenes of one structure: n = {scene.n} masses, "
+                    f"scenes[0] has {first.n}"
+                )
+            if scene.effects != first.effects:
+                extra = sorted(e.value for e in scene.effects - first.effects)
+                lacking = sorted(e.value for e in first.effects - scene.effects)
+                parts = [f"has {', '.join(extra)}"] if extra else []
+                parts += [f"lacks {', '.join(lacking)}"] if lacking else []
+                raise ValueError(
+                    f"scenes[{i}]: a batch holds scenes of one structure: its effects differ "
+                    f"from scenes[0]'s (it {' and '.join(parts)})"
+                )
+        settings = self._checked_settings(settings, first)
+        try:
+            return list(self._simulate_batch(scenes, settings, t, progress))
+        except MemoryError as exc:
+            detail = f": {exc}" if str(exc) else ""
+            raise MemoryError(
+                f"out of memory ({self.label}, a batch of {len(scenes):,} scenes with "
+                f"{first.n:,} masses{detail})"
+            ) from None
+
+    def _simulate_batch(
+        self,
+        scenes: list[Scene],
+        settings: Any,
+        t_end: float | None,
+        progress: Progress | None,
+    ) -> list[Trajectory]:
+        """Run the scenes (already checked, one structure); one trajectory per scene, in order.
+
+        The default is the loop of :meth:`_simulate`. ``progress`` then gets the batch's share of
+        work done as a time on the longest horizon ``T``: ``T (i + t_i / T_i) / N`` while scene
+        ``i`` of ``N`` is at ``t_i`` of its horizon ``T_i`` (monotonic, ``T`` at the end). A
+        native batch (:attr:`batched`) steps every world together and reports their common time.
+        """
+        horizons = [t_end if t_end is not None else s.output.t_end for s in scenes]
+        longest, count = max(horizons), len(scenes)
+        out = []
+        for i, (scene, horizon) in enumerate(zip(scenes, horizons, strict=True)):
+            inner = None
+            if progress is not None:
+
+                def inner(t, i=i, horizon=horizon):
+                    progress(longest * (i + min(t / horizon, 1.0)) / count)
+
+            out.append(self._simulate(scene, settings, t_end, inner))
+        return out
+
+    def pointwise(
+        self, scene: Scene, settings: Any, t: np.ndarray, q: np.ndarray, qdot: np.ndarray
+    ) -> np.ndarray | None:
+        """This engine's ``q̈`` at ``N`` given states, or None when it does not offer it (default).
+
+        Args:
+            scene: a validated scene this plant accepts (:meth:`check_scene`).
+            settings: an instance of :attr:`settings_type`.
+            t: shape (N,), s.
+            q, qdot: shape (N, n+7), the paper's coordinates (Eq. 44; ``u`` w first).
+
+        Returns:
+            shape (N, n+7): ``q̈`` in the paper's coordinates, with the scene's controller (and its
+            given torque) applied when on, evaluated by the engine's own forward dynamics, so a
+            caller compares engines before any run; or None (not offered).
+
+        Raises:
+            ValueError: naming a field, when the engine refuses the scene (as :meth:`check_scene`).
+        """
+        return None
 
 
 @dataclass(frozen=True)

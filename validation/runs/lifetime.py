@@ -2,7 +2,8 @@
 
 A parent killed with SIGKILL (``subprocess.run(timeout=...)``, a CI runner's hard kill, the OOM
 killer) runs none of its clean-up: without this a plant worker it had forked ran on, re-parented
-to init, at 100 % CPU. :func:`die_with_parent` is called in each child, first thing:
+to init, at 100 % CPU. :func:`die_with_parent` (:mod:`analytic.runtime.lifetime`) is called in
+each child, first thing:
 
 * on Linux it asks the kernel to send the child SIGKILL when its parent dies
   (``prctl(PR_SET_PDEATHSIG, SIGKILL)``, through ``ctypes`` and libc), then checks
@@ -27,84 +28,17 @@ its nanny's process does (Dask's own parent pipe).
 from __future__ import annotations
 
 import contextlib
-import ctypes
 import os
-import select
-import signal
-import sys
-import threading
-import time
 
-PR_SET_PDEATHSIG = 1
-"""``<linux/prctl.h>``: the signal a process gets when its parent dies."""
-
-WATCH_S = 0.5
-"""How often the parent-watch thread (not Linux) looks at the parent, s."""
-
-ORPHANED_EXIT = 1
-"""The exit status of a child that finds its parent gone (nobody is left to read it)."""
-
-
-def _pdeathsig() -> bool:
-    """``prctl(PR_SET_PDEATHSIG, SIGKILL)`` for this process; whether the kernel took it."""
-    if not sys.platform.startswith("linux"):
-        return False
-    try:
-        libc = ctypes.CDLL(None, use_errno=True)
-        return libc.prctl(PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0) == 0
-    except (OSError, AttributeError):
-        return False
-
-
-def _watch(parent: int) -> None:
-    def watch() -> None:
-        while os.getppid() == parent:
-            time.sleep(WATCH_S)
-        os._exit(ORPHANED_EXIT)
-
-    threading.Thread(target=watch, name="tumble-parent-watch", daemon=True).start()
-
-
-def die_with_parent(parent: int) -> None:
-    """This process (a child of ``parent``, by pid) ends when ``parent`` does: at once if it
-    has already (module docstring). Call it in the child, as early as possible after the fork."""
-    if not _pdeathsig():
-        _watch(parent)
-    if os.getppid() != parent:
-        os._exit(ORPHANED_EXIT)
-
-
-def die_with(pid: int) -> None:
-    """This process ends when process ``pid`` does, ``pid`` not its parent: a fork server's child
-    (whose parent is the server) ends with the process that asked the server for it. A daemon
-    thread waits for ``pid``'s end (a Linux pidfd; elsewhere ``os.kill(pid, 0)`` every
-    :data:`WATCH_S` s); a ``pid`` already gone ends this process at once.
-
-    The fork server cannot end first: every child it forks holds the pipe end whose closing
-    tells the server that its clients are gone (``multiprocessing``'s design), so the server
-    lives as long as its children do, and a child tied to the server alone outlived a killed
-    client with it."""
-    try:
-        fd = os.pidfd_open(pid)
-    except ProcessLookupError:
-        os._exit(ORPHANED_EXIT)
-    except (AttributeError, OSError):  # not Linux 5.3+: polled
-        fd = None
-
-    def watch() -> None:
-        if fd is not None:
-            select.select([fd], [], [])
-            os._exit(ORPHANED_EXIT)
-        while True:
-            try:
-                os.kill(pid, 0)
-            except ProcessLookupError:
-                os._exit(ORPHANED_EXIT)
-            except OSError:  # another user's process by now: not ours
-                os._exit(ORPHANED_EXIT)
-            time.sleep(WATCH_S)
-
-    threading.Thread(target=watch, name="tumble-client-watch", daemon=True).start()
+# The mechanism itself (the prctl, the parent watch, die_with) lives in the lowest layer, so that
+# the engine plants below this package use it too; re-exported here for the tool's callers.
+from analytic.runtime.lifetime import (
+    ORPHANED_EXIT,
+    PR_SET_PDEATHSIG,
+    WATCH_S,
+    die_with,
+    die_with_parent,
+)
 
 
 def forks_die_with_parent() -> None:
@@ -139,4 +73,12 @@ def pool_initializer(parent: int) -> None:
     limit_blas_threads()
 
 
-__all__ = ["die_with", "die_with_parent", "forks_die_with_parent", "pool_initializer"]
+__all__ = [
+    "ORPHANED_EXIT",
+    "PR_SET_PDEATHSIG",
+    "WATCH_S",
+    "die_with",
+    "die_with_parent",
+    "forks_die_with_parent",
+    "pool_initializer",
+]

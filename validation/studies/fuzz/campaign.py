@@ -11,7 +11,8 @@
 2. **plants**: scene ``i`` of the seed (:func:`validation.studies.fuzz.space.draw_scene_dict`) goes
    to the executor as one task per plant (:func:`submit_scene`, :func:`scene_plant_task`), at
    most :data:`SCENE_WINDOW` per worker ahead, until the budget (scenes) or the time (minutes) is
-   spent, and the scenes are taken back **in index order** whatever order they finish in
+   spent (a plant that runs batches natively gets a block's scenes of one structure as one task
+   instead: :mod:`validation.studies.fuzz.campaign_batches`), and the scenes are taken back **in index order** whatever order they finish in
    (:func:`validation.runs.ordered.in_index_order`; where the executor comes from and how it is
    shut down: :func:`validation.studies.sweep.running.executor_for`);
 3. **comparison**: each scene's runs judged (:meth:`Pending.outcome`) and written at once to
@@ -42,6 +43,7 @@ from mj_bridge.plants import installed_plants, plant
 from validation.report.provenance import dumps
 from validation.runs.ordered import SerialExecutor, in_index_order
 from validation.studies.dask_options import check_dask_options
+from validation.studies.fuzz.campaign_batches import CampaignBatches, batched_plants
 from validation.studies.fuzz.campaign_records import json_bytes, load_scene_record, scene_rel
 from validation.studies.fuzz.directory import CONFIG_FILE, CampaignDir, open_campaign
 from validation.studies.fuzz.findings import Findings
@@ -219,17 +221,24 @@ def fuzz(
                 shrink_evaluations,
                 say,
             )
-            scenes = in_index_order(
-                lambda i: _start_scene(cd, cfg, chosen, ex, i),
-                more,
-                SCENE_WINDOW * max(1, workers),
-                _cancel,
-            )
-            with scenes as taken:
-                for index, got in taken:  # the plants' runs, in index order
-                    findings.take(
-                        got if isinstance(got, SceneRecord) else _judged(cd, cfg, index, got)
-                    )
+            batched = batched_plants(chosen)  # their scenes of one structure: one call each
+            batches = CampaignBatches(cd, cfg, chosen, ex, budget, batched) if batched else None
+
+            def start(i: int) -> Pending | SceneRecord:
+                if batches is None:
+                    return _start_scene(cd, cfg, chosen, ex, i)
+                return batches.start(i, Pending, scene_plant_task)
+
+            scenes = in_index_order(start, more, SCENE_WINDOW * max(1, workers), _cancel)
+            try:
+                with scenes as taken:
+                    for index, got in taken:  # the plants' runs, in index order
+                        findings.take(
+                            got if isinstance(got, SceneRecord) else _judged(cd, cfg, index, got)
+                        )
+            finally:
+                if batches is not None:
+                    batches.close()
         result = CampaignResult(
             cfg,
             cd.root,

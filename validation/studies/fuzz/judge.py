@@ -448,7 +448,18 @@ def run_one(name: str, pl: Plant, scene: Scene, horizon: float, budget_s: float)
                         exc.reached_s)
     except _Raised as exc:  # a plant failing is a finding, whatever it raises
         return PlantRun(name, None, time.perf_counter() - t0, None, exc.kind, str(exc))
-    wall = time.perf_counter() - t0
+    return returned_run(name, tr, scene, horizon, time.perf_counter() - t0)
+
+
+def returned_run(name: str, tr: Any, scene: Scene, horizon: float, wall: float) -> PlantRun:
+    """The :class:`PlantRun` of what plant ``name`` returned for ``scene`` over ``horizon`` s in
+    ``wall`` s: checked against the plant contract first
+    (:func:`validation.runs.contract.contract_problem`; a broken one is the plant raising
+    ``ContractError``), then a run cut short by the plant's own guard says where it stopped.
+
+    Raises:
+        KeyboardInterrupt: the run says it was interrupted.
+    """
     why = contract_problem(tr, name, scene, horizon)  # what it returned, checked before it is compared
     if why:
         return PlantRun(name, None, wall, None, ContractError.__name__, f"broke the plant contract: {why}")
@@ -542,6 +553,7 @@ __all__ = [
     "plant_task",
     "prepare",
     "resolve_plant",
+    "returned_run",
     "run_limited",
     "run_one",
 ]
