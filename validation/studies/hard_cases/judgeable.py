@@ -73,6 +73,15 @@ class NotJudgeable:
         }
 
 
+@dataclass(frozen=True)
+class _Samples:
+    """The part of a run a magnitude is taken over: ``t`` (N,), ``R`` (N, 3), ``p`` (N, n)."""
+
+    t: np.ndarray
+    R: np.ndarray
+    p: np.ndarray
+
+
 def _largest(a: np.ndarray) -> float:
     a = np.asarray(a, float)
     return float(np.max(np.abs(a))) if a.size else 0.0
@@ -108,8 +117,13 @@ UNIT_SCALES = {"1": 1.0, "rad": 1.0}
 
 def magnitude(spec: CheckSpec, tr: Trajectory, t_end: float) -> float:
     """S of :mod:`this module <validation.studies.hard_cases.judgeable>` for ``spec`` on the
-    plant's run ``tr`` over ``t_end`` s, in the measure's unit."""
+    plant's run ``tr`` over ``t_end`` s, in the measure's unit; a check with ``until`` takes the
+    samples up to then only (the magnitude of what it compares)."""
     unit = MEASURES[(spec.what, spec.against)].unit
+    if spec.until is not None:
+        t_end = min(float(t_end), spec.until)
+        k = int(np.searchsorted(np.asarray(tr.t, float), spec.until, side="right"))
+        tr = _Samples(np.asarray(tr.t)[:k], np.asarray(tr.R)[:k], np.asarray(tr.p)[:k])
     if unit == "m":
         return _LENGTHS.get((spec.what, spec.against), _length_scale)(tr)
     if unit == "s":

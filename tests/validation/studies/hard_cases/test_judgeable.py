@@ -45,6 +45,11 @@ def test_the_magnitude_of_each_kind_of_measure(what, against, scale):
     assert judgeable.magnitude(_spec(what, against), _traj(), 2.0) == pytest.approx(scale)
 
 
+def test_a_check_until_a_time_takes_the_magnitude_up_to_then():
+    spec = dataclasses.replace(_spec("position_C", "analytic"), until=1.0)
+    assert judgeable.magnitude(spec, _traj(), 2.0) == pytest.approx(50.0)  # |R| at t = 1 s
+
+
 def test_a_check_below_float32_round_off_is_not_judgeable_and_an_indicator_always_is():
     tr, f32 = _traj(), Precision.FLOAT32
     spec = _spec("position_C", "analytic")
