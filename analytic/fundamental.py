@@ -27,6 +27,7 @@ and this is Eq. (89). Only ``W`` is ever needed, so no weighting requires invert
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -72,6 +73,9 @@ def pinv_psd(G: np.ndarray, rcond: float = PINV_RCOND) -> tuple[np.ndarray, int]
     (``D = diag(G)^-1/2``, unit diagonal), which is invariant to the rows' units. At full rank the
     inverse is computed from the scaled matrix too (``G⁻¹ = D (D G D)⁻¹ D``, better conditioned);
     at rank r < k it is the Moore-Penrose inverse of G from its r largest eigenpairs.
+
+    One matrix (k, k), numpy, the rank decided by a Python branch; :func:`pinv_psd_masked` is the
+    same inverse for any array namespace and leading batch dimensions.
     """
     dg = np.diag(G).copy()
     dg[dg <= 0] = 1.0
@@ -88,6 +92,152 @@ def pinv_psd(G: np.ndarray, rcond: float = PINV_RCOND) -> tuple[np.ndarray, int]
     return (V[:, top] / w[top]) @ V[:, top].T, rank
 
 
+def pinv_psd_masked(xp, G, rcond: float = PINV_RCOND):
+    """:func:`pinv_psd` with the rank decision made by masking (fixed shapes, no branch on
+    values: ``jax.jit``-able): both inverses are computed, the Jacobi-scaled one (full rank) and
+    the Moore-Penrose one of the unscaled G from its r largest eigenpairs, and the rank selects.
+
+    Args:
+        xp: the array namespace (numpy or jax.numpy).
+        G: symmetric PSD, shape (..., k, k), k >= 1.
+
+    Returns:
+        ``(G⁺ (..., k, k), rank (...) integer array)``.
+    """
+    k = G.shape[-1]
+    dg = xp.diagonal(G, axis1=-2, axis2=-1)
+    dg = xp.where(dg <= 0, 1.0, dg)
+    D = 1.0 / xp.sqrt(dg)
+    DD = D[..., :, None] * D[..., None, :]
+    w, V = xp.linalg.eigh(G * DD)
+    wmax = xp.max(xp.abs(w), axis=-1)
+    keep = w > rcond * wmax[..., None]
+    rank = xp.sum(keep, axis=-1)
+    w_safe = xp.where(keep, w, 1.0)
+    full = ((V / w_safe[..., None, :]) @ xp.swapaxes(V, -1, -2)) * DD
+    w2, V2 = xp.linalg.eigh(G)  # ascending: the r largest are the last r
+    top = xp.arange(k) >= (k - rank)[..., None]
+    w2inv = xp.where(top, 1.0 / xp.where(top, w2, 1.0), 0.0)
+    low = (V2 * w2inv[..., None, :]) @ xp.swapaxes(V2, -1, -2)
+    return xp.where((rank == k)[..., None, None], full, low), rank
+
+
+@dataclass(frozen=True)
+class ArraySolution:
+    """:class:`FundamentalSolution`'s fields as arrays with leading batch dimensions (...):
+    ``qddot``, ``constraint_force``, ``control_force`` (..., nq), ``lambda_m`` (...),
+    ``residual`` (..., k), ``rank`` (...) (integers; 0 when k = 0)."""
+
+    qddot: Any
+    constraint_force: Any
+    control_force: Any
+    lambda_m: Any
+    residual: Any
+    rank: Any
+
+
+def lu_factor(xp):
+    """The array path's factorisation of ``M_α``: a closure solving ``M_α X = B`` by
+    ``xp.linalg.solve`` (LU with partial pivoting, batched), ``B`` of shape (..., nq, m)."""
+
+    def factor(Ma):
+        return lambda B: xp.linalg.solve(Ma, B)
+
+    return factor
+
+
+def cholesky_factor(Ma: np.ndarray):
+    """The numpy reference's factorisation of one ``M_α`` (nq, nq): scipy's Cholesky, which raises
+    ``numpy.linalg.LinAlgError`` when ``M_α`` is not positive definite (the motion not unique)."""
+    from scipy.linalg import cho_factor, cho_solve  # here: 0.4 s of import, off the start-up
+
+    c = cho_factor(Ma, lower=False, check_finite=False)
+    return lambda B: cho_solve(c, B, check_finite=False)
+
+
+def solve_array(
+    xp,
+    M,
+    Q,
+    a_m,
+    b_m,
+    A_c,
+    b_c,
+    weighting: Weighting = Weighting.M_INV,
+    *,
+    factor=None,
+    pinv=None,
+) -> ArraySolution:
+    """The fundamental equation for any array namespace and leading batch dimensions: the one
+    form of the formulas (:func:`solve` is this with numpy, scipy's Cholesky and
+    :func:`pinv_psd`).
+
+    Args:
+        xp: numpy or jax.numpy.
+        M: (..., nq, nq); Q, a_m: (..., nq); b_m: (...); A_c: (..., k, nq); b_c: (..., k).
+        weighting: the cost matrix N of Appendix B (a Python branch: static).
+        factor: ``factor(M_α)`` returns a function solving ``M_α X = B`` for B (..., nq, m);
+            default :func:`lu_factor` (jit-able).
+        pinv: ``pinv(G)`` returns ``(G⁺, rank)``; default :func:`pinv_psd_masked` (jit-able).
+
+    Returns:
+        :class:`ArraySolution`.
+    """
+    if factor is None:
+        factor = lu_factor(xp)
+    if pinv is None:
+
+        def pinv(G):
+            return pinv_psd_masked(xp, G)
+
+    def mv(A, v):
+        return (A @ v[..., None])[..., 0]
+
+    def dot(a, b):
+        return (a * b).sum(axis=-1)
+
+    nq = Q.shape[-1]
+    k = A_c.shape[-2]
+    # Udwadia-Phohomsiri: M_α = M + α a_m a_mᵀ, Q_α = Q + α a_m b_m (adds zero to the motion)
+    alpha = xp.diagonal(M, axis1=-2, axis2=-1).sum(axis=-1) / nq
+    Ma = M + alpha[..., None, None] * (a_m[..., :, None] * a_m[..., None, :])
+    Qa = Q + (alpha * b_m)[..., None] * a_m
+    batch = Ma.shape[:-2]
+    solve_Ma = factor(Ma)
+    A_cT = xp.broadcast_to(xp.swapaxes(A_c, -1, -2), (*batch, nq, k))
+    X = solve_Ma(xp.concatenate([Qa[..., None], a_m[..., None], A_cT], axis=-1))
+    a0, y, Y = X[..., 0], X[..., 1], X[..., 2:]
+    s = dot(a_m, y)
+    lambda_m = (b_m - dot(a_m, a0)) / s
+    acc = a0 + lambda_m[..., None] * y  # Eq. (60): the uncontrolled, norm-constrained acceleration
+    if k == 0:
+        zeros = xp.zeros_like(acc)
+        return ArraySolution(
+            acc, lambda_m[..., None] * a_m, zeros, lambda_m, zeros[..., :0], xp.zeros(batch, int)
+        )
+
+    Ay = mv(A_c, y)
+    Z = Y - y[..., :, None] * (Ay / s[..., None])[..., None, :]  # K A_cᵀ, shape (..., nq, k)
+    r = b_c - mv(A_c, acc)
+    if weighting is Weighting.M_INV:
+        G = A_c @ Z  # A_c K A_cᵀ = Zᵀ M Z
+        Ginv, rank = pinv(0.5 * (G + xp.swapaxes(G, -1, -2)))
+        mu = mv(Ginv, r)
+        qddot = acc + mv(Z, mu)
+        Q_ctl = (mu[..., None, :] @ A_c)[..., 0, :]  # A_cᵀμ; M K Q_ctl differs only along a_m
+    else:
+        WZ = M @ (M @ Z) if weighting is Weighting.M_INV2 else Z  # W = N⁻¹: M² or I
+        G = xp.swapaxes(Z, -1, -2) @ WZ
+        Ginv, rank = pinv(0.5 * (G + xp.swapaxes(G, -1, -2)))
+        Q_ctl = mv(WZ, mv(Ginv, r))
+        v = solve_Ma(Q_ctl[..., None])[..., 0]
+        qddot = acc + v - y * (dot(a_m, v) / s)[..., None]  # q̈ = a + K Q_ctl
+    # Q^C = M q̈ - Q = a_m λ_m + (I - a_m yᵀ/s) Q_ctl, assembled without cancellation.
+    Q_C = Q_ctl + a_m * (lambda_m - dot(y, Q_ctl) / s)[..., None]
+    residual = mv(A_c, qddot) - b_c
+    return ArraySolution(qddot, Q_C, Q_ctl, lambda_m, residual, rank)
+
+
 def solve(
     M: np.ndarray,
     Q: np.ndarray,
@@ -97,7 +247,8 @@ def solve(
     b_c: np.ndarray,
     weighting: Weighting = Weighting.M_INV,
 ) -> FundamentalSolution:
-    """Constrained acceleration for ``M q̈ = Q`` under ``a_mᵀ q̈ = b_m`` and ``A_c q̈ = b_c``.
+    """Constrained acceleration for ``M q̈ = Q`` under ``a_mᵀ q̈ = b_m`` and ``A_c q̈ = b_c``: the
+    numpy reference, :func:`solve_array` with scipy's Cholesky of ``M_α`` and :func:`pinv_psd`.
 
     Args:
         M: mass matrix, shape (nq, nq), symmetric PSD with ``[M; a_mᵀ]`` of full column rank.
@@ -111,39 +262,23 @@ def solve(
     Raises:
         numpy.linalg.LinAlgError: when ``[M; a_mᵀ]`` is rank deficient (the motion is not unique).
     """
-    from scipy.linalg import cho_factor, cho_solve  # here: 0.4 s of import, off the start-up
-
-    nq = Q.shape[0]
-    alpha = np.trace(M) / nq
-    Ma = M + alpha * np.outer(a_m, a_m)
-    Qa = Q + (alpha * b_m) * a_m
-    c = cho_factor(Ma, lower=False, check_finite=False)
-    k = A_c.shape[0]
-    X = cho_solve(c, np.column_stack([Qa, a_m, A_c.T]), check_finite=False)
-    a0, y, Y = X[:, 0], X[:, 1], X[:, 2:]
-    s = float(a_m @ y)
-    lambda_m = (b_m - float(a_m @ a0)) / s
-    acc = a0 + lambda_m * y  # Eq. (60): the uncontrolled, norm-constrained acceleration
-    if k == 0:
-        return FundamentalSolution(acc, lambda_m * a_m, np.zeros(nq), lambda_m, np.zeros(0), 0)
-
-    Ay = A_c @ y
-    Z = Y - np.outer(y, Ay / s)  # K A_cᵀ, shape (nq, k)
-    r = b_c - A_c @ acc
-    if weighting is Weighting.M_INV:
-        G = A_c @ Z  # A_c K A_cᵀ = Zᵀ M Z
-        Ginv, rank = pinv_psd(0.5 * (G + G.T))
-        mu = Ginv @ r
-        qddot = acc + Z @ mu
-        Q_ctl = A_c.T @ mu  # applied control force; M K Q_ctl differs from it only along a_m
-    else:
-        WZ = M @ (M @ Z) if weighting is Weighting.M_INV2 else Z  # W = N⁻¹: M² or I
-        G = Z.T @ WZ
-        Ginv, rank = pinv_psd(0.5 * (G + G.T))
-        Q_ctl = WZ @ (Ginv @ r)
-        v = cho_solve(c, Q_ctl, check_finite=False)
-        qddot = acc + v - y * (float(a_m @ v) / s)  # q̈ = a + K Q_ctl
-    # Q^C = M q̈ - Q = a_m λ_m + (I - a_m yᵀ/s) Q_ctl, assembled without cancellation.
-    Q_C = Q_ctl + a_m * (lambda_m - float(y @ Q_ctl) / s)
-    residual = A_c @ qddot - b_c
-    return FundamentalSolution(qddot, Q_C, Q_ctl, lambda_m, residual, rank)
+    sol = solve_array(
+        np,
+        M,
+        Q,
+        a_m,
+        np.float64(b_m),
+        A_c,
+        b_c,
+        weighting,
+        factor=cholesky_factor,
+        pinv=pinv_psd,
+    )
+    return FundamentalSolution(
+        sol.qddot,
+        sol.constraint_force,
+        sol.control_force,
+        float(sol.lambda_m),
+        sol.residual,
+        int(sol.rank),
+    )

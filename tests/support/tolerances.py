@@ -438,6 +438,53 @@ FLOAT32_FLOOR_FRACTION = Threshold(
     "float32.",
 )
 
+# =================================================================================================
+# MuJoCo Warp, float32 (tests/mj_bridge/test_warp_plant.py); eps32 = 2⁻²³ = 1.19e-7
+# =================================================================================================
+
+WARP_QDDOT_REL = Threshold(
+    "WARP_QDDOT_REL",
+    64 * 1.1920929e-07,
+    "1",
+    "max|q̈_warp - q̈_ref| / max|q̈_ref| at a state, the reference MuJoCo's C engine or the analytic "
+    "model (which agree to ~1e-15): 8 nv eps32 with nv = 8 (Example 1's twin). Warp rounds the "
+    "state to float32 and solves M q̈ = f by a float32 LDLᵀ: each component is an nv-term back "
+    "substitution whose terms carry ~eps32 each, and a factor 8 covers the rounded state feeding "
+    "M and the bias forces. Measured ≤ 9 eps32 on the four paper scenes and the controlled slosh "
+    "scene at the initial and random states; a model difference (a spring term or a channel left "
+    "out) is ≥ 1e-3.",
+)
+WARP_BATCH_REL = Threshold(
+    "WARP_BATCH_REL",
+    1.1920929e-07,
+    "1",
+    "A scene as one world of a batch against the same scene alone, 8 steps: max|Δq| / max|q| (and "
+    "q̇): the same kernels on the same world's data, so equal or one float32 rounding (eps32) apart; "
+    "a world reading another's parameters is off by O(1).",
+)
+WARP_RUN_REL_PER_STEP = Threshold(
+    "WARP_RUN_REL_PER_STEP",
+    2 * 1.1920929e-07,
+    "1",
+    "Per step, times the number of steps k: max|q_warp - q_C| / max|q_C| (and q̇; and the work "
+    "against the energy scale) after a few steps of the same scene and controller in MuJoCo Warp "
+    "(float32) and the C plant (float64). Each step rounds every updated coordinate and velocity "
+    "to float32 (≤ eps32/2 of its magnitude) and moves it by h q̈ with q̈ off by ≤ WARP_QDDOT_REL, "
+    "h² q̈ far below the coordinate itself: ≤ 2 eps32 of the scale per step, added at most linearly "
+    "over a few steps (too few for the dynamics to grow a perturbation).",
+)
+WARP_DRIFT_REL_PER_SQRT_STEP = Threshold(
+    "WARP_DRIFT_REL_PER_SQRT_STEP",
+    8 * 1.1920929e-07,
+    "1",
+    "Per sqrt(step), times sqrt(k) and max|q_C| of the group (R, p; u absolute): MuJoCo Warp "
+    "against the C plant over 2 s of Example 1 (k = 8000 steps of 2.5e-4 s), the float32 floor. "
+    "The roundings of k steps, ≤ eps32/2 each and independent, add up as a random walk (sqrt(k)); "
+    "a factor 16 on eps32/2 covers the tumbling motion's growth of those perturbations over 2 s. "
+    "Measured 7.1e-5 m on R uncontrolled (docs/performance.md); the C engine's own RK4 error "
+    "there is ~1e-11 m, so the whole difference is Warp's float32.",
+)
+
 
 TOLERANCES: Mapping[str, Threshold] = {
     t.name: t for t in list(globals().values()) if isinstance(t, Threshold)
