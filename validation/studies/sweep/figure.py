@@ -288,7 +288,7 @@ def render_png(data: FigureData) -> bytes:
                 ax.plot(p.wall, p.error, marker="o", ms=16, mfc="none", mec=c, mew=1.6, zorder=4)
                 ax.annotate(
                     f"{ln.engine} {ln.method} floor: dt {p.setting:.2g} s", (p.wall, p.error),
-                    xytext=(9, 6), textcoords="offset points", fontsize=7, color=c,
+                    xytext=(10, -14), textcoords="offset points", fontsize=7, color=c,
                     fontweight="bold",
                 )  # fmt: skip
         single = [p for p in ln.points if p.n < 2]
