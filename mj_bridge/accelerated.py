@@ -15,6 +15,7 @@ the process they run it in, and what they silently leave out of it.
   ``KeyboardInterrupt`` here (Ctrl-C, or raised by ``progress``) is passed to the child as
   SIGINT: a child that returns what it reached (a plant's interrupted trajectory) has that
   returned, else the child is killed and the interrupt raised here.
+* :func:`accelerated_trajectory`: the record of a run from MuJoCo's state at the samples.
 * :func:`dropped_fields`: the fields of an ``MjModel`` with a value other than MuJoCo's default
   that an engine's model type has no field for (MJX 3.17's ``mjx.Model`` lacks
   ``tendon_stiffnesspoly``, MuJoCo 4's cubic tendon stiffness), i.e. what that engine drops
@@ -40,6 +41,7 @@ import numpy as np
 
 from analytic.runtime.lifetime import die_with_parent
 from analytic.scene import Scene
+from analytic.trajectory import RunStatus, Trajectory
 from mj_bridge.twin_model import TwinModel
 
 # ----------------------------------------------------------------------------------------------
@@ -115,6 +117,60 @@ def dropped_fields(
         if name not in have or (read is not None and name not in read):
             out.append(name)
     return tuple(sorted(out))
+
+
+# ----------------------------------------------------------------------------------------------
+# The record of a run
+# ----------------------------------------------------------------------------------------------
+
+
+def accelerated_trajectory(
+    scene: Scene,
+    tm: TwinModel,
+    engine: str,
+    t: np.ndarray,
+    qpos: np.ndarray,
+    qvel: np.ndarray,
+    qacc: np.ndarray,
+    aux: np.ndarray,
+    status: RunStatus,
+    message: str,
+    info: dict[str, Any],
+    fast: Any = None,
+) -> Trajectory:
+    """The :class:`Trajectory` of an accelerated plant's N samples (MuJoCo's state of the twin
+    ``tm``: ``qpos (N, n+7)``, ``qvel``, ``qacc (N, n+6)``, any float dtype; ``aux`` (N, 7) the
+    quadratures ``[W, I_L, I_P]`` of :func:`mj_bridge.accelerated_scheme.rk4_step`), in the
+    paper's coordinates (:meth:`TwinModel.to_paper_batch`), float64. The controller's output at
+    each sample is the compiled controller's at the sample's paper state (``fast``, an
+    ``analytic.fast.FastModel`` of the scene, built when None), as the C plant records it; ``D``
+    of a dissipative effect is integrated over the samples by :func:`analytic.assemble.assemble`."""
+    from analytic.assemble import assemble
+    from analytic.fast import FastModel
+
+    f64 = np.float64
+    q, qd, qdd, omega = tm.to_paper_batch(
+        np.asarray(qpos, f64), np.asarray(qvel, f64), np.asarray(qacc, f64)
+    )
+    fast = FastModel(scene) if fast is None else fast
+    controls = [
+        fast.acceleration(float(t[i]), q[i], qd[i])[1] if scene.controlled else None
+        for i in range(len(t))
+    ]
+    return assemble(
+        fast.model,
+        engine,
+        np.asarray(t, f64),
+        q,
+        qd,
+        qdd,
+        controls,
+        np.asarray(aux, f64).reshape(len(t), -1),
+        status,
+        message,
+        info,
+        omega=omega,
+    )
 
 
 # ----------------------------------------------------------------------------------------------
@@ -312,6 +368,7 @@ __all__ = [
     "GRACE_S",
     "AcceleratedTwin",
     "IsolatedError",
+    "accelerated_trajectory",
     "accelerated_twin",
     "dropped_fields",
     "run_isolated",

@@ -180,7 +180,7 @@ def scene_to_dict(scene: Scene) -> dict[str, Any]:
         "timestep": float(mj.timestep),
         "spring_model": mj.spring_model,
     }
-    for table in ("hard_case", "thresholds"):
+    for table in ("hard_case", "mjx", "thresholds"):
         if table in scene.extra:
             out[table] = _verbatim(scene.extra[table])
     return out

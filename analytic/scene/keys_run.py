@@ -156,6 +156,18 @@ RUN_KEYS: tuple[Key, ...] = (
         "validates it (format: `docs/hard_cases.md`).",
         default_text="none (not a hard case)",
     ),
+    # ---- [mjx] ---------------------------------------------------------------------------------
+    Key(
+        "",
+        "mjx",
+        Kind.TABLE,
+        "",
+        "How the `mjx` plant (MuJoCo's MJX on JAX, an optional plugin) runs this scene: "
+        '`precision` ("float32" or "float64"), `device` (a JAX platform such as "cpu" or '
+        '"cuda:0", "" for JAX\'s default), `timestep` (s) and `controller` ("jax" or "host"). '
+        "The loader keeps the table verbatim; the plant validates it (`mj_bridge/mjx_settings.py`).",
+        default_text="float64 on JAX's default device at the [mujoco] timestep, the JAX controller",
+    ),
     # ---- [thresholds] --------------------------------------------------------------------------
     Key(
         "",

@@ -131,6 +131,10 @@ def scene_from_dict(data: Mapping[str, Any], source: str = "") -> Scene:
     hc = top.table("hard_case")
     if hc is not None:
         extra["hard_case"] = dict(hc.data)
+    # [mjx]: the MJX plant's settings (mj_bridge/mjx_settings.py validates them), kept verbatim.
+    mx = top.table("mjx")
+    if mx is not None:
+        extra["mjx"] = dict(mx.data)
     top.finish()
 
     scene = Scene(
