@@ -5,7 +5,10 @@ A series of an accelerated plant is one plant and one precision (``method`` = ``
 ``float32``) over time steps, large to small. Its **precision floor** is the smallest step beyond
 which a smaller step stopped lowering the error (by less than
 :data:`~validation.studies.sweep.config.PRECISION_FLOOR_GAIN` for a quartered step:
-:func:`validation.studies.sweep.series.precision_floor` marks it ``at_precision_floor``); a
+:func:`validation.studies.sweep.series.precision_floor` marks it ``at_precision_floor``). A
+float64 control of the same twin, step and horizon (the plant's float64 series, else MuJoCo's C
+RK4) tells what the floor is: round-off when the control goes lower there, the model when it
+stops too (MJX without the cubic stiffness it drops), unconfirmed without a control; a
 series that never showed one has none within its grid (its error was still falling, or it ended
 at the reference's floor first). :func:`floors` reads them off the rows; the text, the JSON and
 the figure all use it.
@@ -15,6 +18,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from enum import StrEnum
 from typing import Any
 
 from validation.studies.sweep.config import (
@@ -39,6 +43,7 @@ class Floor:
         best_error: the smallest error of the series' ``ok`` runs (None: none ran ok).
         run_id: the floor run's id (None with ``dt``).
         words: one sentence saying what was found.
+        kind: what the floor is (:class:`FloorKind`; None without a floor).
     """
 
     engine: str
@@ -49,6 +54,7 @@ class Floor:
     best_error: float | None
     run_id: int | None
     words: str
+    kind: FloorKind | None = None
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -60,7 +66,60 @@ class Floor:
             "best_error": self.best_error,
             "run_id": self.run_id,
             "words": self.words,
+            "kind": None if self.kind is None else self.kind.value,
         }
+
+
+class FloorKind(StrEnum):
+    """What a series' floor is, told by a float64 control series of the same twin and horizon
+    (the same plant's float64 series, else MuJoCo's C RK4 series)."""
+
+    ROUND_OFF = "round-off"
+    """The control goes lower at the smaller step: the precision's round-off."""
+    MODEL = "model"
+    """The control stops there too: the model (or the reference) differs, not the round-off."""
+    UNCONFIRMED = "unconfirmed"
+    """No float64 control on the same horizon and step."""
+
+
+def _control(
+    runs: Sequence[Mapping[str, Any]], engine: str, precision: str, dt: float, horizon: float
+) -> Mapping[str, Any] | None:
+    """The float64 control run at step ``dt`` and the same horizon: the plant's own float64
+    series, else MuJoCo's C RK4 (None when neither ran ok there)."""
+    for e, m in ((engine, "float64"), ("mujoco", "RK4")):
+        if e == engine and m == precision:
+            continue
+        for r in runs:
+            if (
+                str(r["engine"]) == e
+                and str(r["method"]) == m
+                and r["status"] == Outcome.OK
+                and r["error"] is not None
+                and abs(float(r["setting"]) - dt) <= 1e-12 * dt
+                and abs(float(r["horizon_s"] or 0.0) - horizon) <= 1e-9
+            ):
+                return r
+    return None
+
+
+def _kind(runs, engine, precision, after: Mapping[str, Any], horizon: float):
+    ctrl = _control(runs, engine, precision, float(after["setting"]), horizon)
+    if ctrl is None:
+        return FloorKind.UNCONFIRMED, (
+            "no float64 run of the same twin at that step and horizon tells round-off from a "
+            "model difference"
+        )
+    who = f"{ctrl['engine']} {ctrl['method']}"
+    if float(ctrl["error"]) * PRECISION_FLOOR_GAIN <= float(after["error"]):
+        return FloorKind.ROUND_OFF, (
+            f"{who} reaches {float(ctrl['error']):.2g} at dt {float(after['setting']):.3g} s: "
+            f"the {precision} round-off"
+        )
+    return FloorKind.MODEL, (
+        f"{who} stops at {float(ctrl['error']):.2g} there too: the model (or the reference) "
+        f"differs, not the round-off"
+    )
 
 
 def floors(runs: Sequence[Mapping[str, Any]]) -> list[Floor]:
@@ -76,22 +135,15 @@ def floors(runs: Sequence[Mapping[str, Any]]) -> list[Floor]:
         at = next((r for r in rows if r.get("at_precision_floor")), None)
         horizon = float(rows[0]["horizon_s"] or 0.0)
         if at is not None:
+            i = rows.index(at)
+            after = next((r for r in rows[i + 1 :] if r["status"] == Outcome.OK), at)
+            kind, why = _kind(runs, engine, precision, after, horizon)
             words = (
                 f"{engine} {precision}: floor at dt {at['setting']:.3g} s, error "
-                f"{at['error']:.2g} (a smaller step did not lower it)"
+                f"{at['error']:.2g} (a smaller step did not lower it); {why}"
             )
-            out.append(
-                Floor(
-                    engine,
-                    precision,
-                    horizon,
-                    float(at["setting"]),
-                    float(at["error"]),
-                    best,
-                    int(at["run_id"]),
-                    words,
-                )
-            )
+            dt, err, rid = float(at["setting"]), float(at["error"]), int(at["run_id"])
+            out.append(Floor(engine, precision, horizon, dt, err, best, rid, words, kind))
             continue
         if not ok:
             words = f"{engine} {precision}: no run ended ok, no floor measured"
@@ -155,4 +207,4 @@ def floors_markdown(runs: Sequence[Mapping[str, Any]], cfg: SweepConfig) -> list
     return lines
 
 
-__all__ = ["Floor", "floors", "floors_markdown", "grid_words"]
+__all__ = ["Floor", "FloorKind", "floors", "floors_markdown", "grid_words"]

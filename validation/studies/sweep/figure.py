@@ -16,12 +16,14 @@ the first, and the legend says they coincide. The reference's floor is a grey li
 
 from __future__ import annotations
 
+import dataclasses
 import io
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from validation.studies.sweep.accelerated import floors
 from validation.studies.sweep.config import (
     ACCELERATED,
     ANALYTIC,
@@ -74,6 +76,7 @@ class Line:
     method: str
     points: tuple[Point, ...]
     same_as: tuple[str, ...] = ()  # methods of the same plant drawing the same errors
+    floor_kind: str = ""  # an accelerated series' floor: round-off, model or unconfirmed
 
 
 def coincident(a: Line, b: Line) -> bool:
@@ -90,7 +93,7 @@ def _with_coincidences(lines: list[Line]) -> list[Line]:
     out = []
     for ln in lines:
         same = tuple(o.method for o in lines if o is not ln and coincident(ln, o))
-        out.append(Line(ln.engine, ln.method, ln.points, same) if same else ln)
+        out.append(dataclasses.replace(ln, same_as=same) if same else ln)
     return out
 
 
@@ -142,6 +145,7 @@ def figure_data(
     lines: list[Line] = []
     marks: list[Mark] = []
     horizons: list[str] = []
+    kinds = {(f.engine, f.precision): f.kind for f in floors(runs)}
     for (engine, method), rows in series.items():
         pts = []
         horizon = float(rows[0].get("horizon_s") or t_end)
@@ -171,7 +175,8 @@ def figure_data(
             elif r["status"] == Outcome.OK or r["status"] in MARK_OUTCOMES:
                 marks.append(_mark(r, pts, rows))
         if pts:
-            lines.append(Line(engine, method, tuple(pts)))
+            kind = kinds.get((engine, method))
+            lines.append(Line(engine, method, tuple(pts), floor_kind=kind.value if kind else ""))
     lines = _with_coincidences(lines)
     return FigureData(
         f"work-precision: {scene}, horizon {t_end:g} s",
@@ -287,7 +292,8 @@ def render_png(data: FigureData) -> bytes:
             if p.at_precision_floor:  # ringed and labelled: the smallest step that helped
                 ax.plot(p.wall, p.error, marker="o", ms=16, mfc="none", mec=c, mew=1.6, zorder=4)
                 ax.annotate(
-                    f"{ln.engine} {ln.method} floor: dt {p.setting:.2g} s", (p.wall, p.error),
+                    f"{ln.engine} {ln.method} floor ({ln.floor_kind}): dt {p.setting:.2g} s",
+                    (p.wall, p.error),
                     xytext=(10, -14), textcoords="offset points", fontsize=7, color=c,
                     fontweight="bold",
                 )  # fmt: skip

@@ -231,7 +231,8 @@ def figure_caption(res: SweepResult, cfg: SweepConfig) -> str:
         )
         + "".join(
             f"Ringed: the {f.precision} floor of {f.engine} (dt {f.dt:.3g} s), the smallest step "
-            "beyond which a smaller one stopped lowering the error. "
+            f"beyond which a smaller one stopped lowering the error ({f.kind.value if f.kind else ''}: "
+            "told by a float64 series of the same twin at the next step). "
             for f in floors(res.runs)
             if f.dt is not None
         )

@@ -93,7 +93,7 @@ def precision_floor(previous: dict[str, Any], row: dict[str, Any]) -> str:
     if gain >= PRECISION_FLOOR_GAIN:
         return ""
     return (
-        f"{row['precision']} floor: a {previous['setting'] / row['setting']:.3g}x smaller step "
+        f"error floor: a {previous['setting'] / row['setting']:.3g}x smaller step "
         f"changed the error {e0:.2g} -> {e1:.2g} ({gain:.2g}x, < {PRECISION_FLOOR_GAIN:g}x); "
         f"the smallest step that helped is dt {previous['setting']:.3g} s"
     )
@@ -183,12 +183,10 @@ def run_series(
                 seen = precision_floor(last_ok, row)
                 if seen:
                     last_ok["at_precision_floor"] = True
-                    last_ok["note"] = (
-                        f"{row['precision']} floor: the smallest step that lowered the error"
-                    )
+                    last_ok["note"] = "error floor: the smallest step that lowered the error"
                     row["note"] = seen
                     stop = (
-                        f"series stopped past its {row['precision']} floor (dt "
+                        f"series stopped past its {row['precision']} error floor (dt "
                         f"{last_ok['setting']:.3g} s): a smaller step does not lower the error"
                     )
             if row["status"] == Outcome.OK:

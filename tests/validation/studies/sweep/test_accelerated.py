@@ -84,3 +84,20 @@ def test_an_accelerated_plant_that_cannot_run_is_skipped_in_one_line(monkeypatch
 def test_an_unregistered_plant_is_unavailable_with_its_reason(monkeypatch):
     monkeypatch.setattr(study.running, "registered", lambda: {})
     assert "not a registered plant" in study.running.accelerated_unavailable(MJX)
+
+
+@pytest.mark.parametrize(
+    "control_error, kind",
+    [(1e-9, accelerated.FloorKind.ROUND_OFF), (3e-6, accelerated.FloorKind.MODEL), (None, "none")],
+)
+def test_a_float64_control_tells_round_off_from_a_model_difference(control_error, kind):
+    """MJX float32 stops at 3e-6: round-off when MJX float64 goes on to 1e-9 at the same step,
+    the model when it stops there too (MJX without the cubic stiffness), unconfirmed without it."""
+    runs = _runs()
+    if control_error is not None:
+        d = SweepConfig().accelerated_dts
+        runs.append(_row(MJX, "float64", d[2], control_error, len(runs)))
+    (f32,) = [f for f in accelerated.floors(runs) if f.precision == "float32" and f.engine == MJX]
+    expected = accelerated.FloorKind.UNCONFIRMED if kind == "none" else kind
+    assert f32.kind is expected and expected.value in f32.to_dict()["kind"]
+    assert f32.words.startswith("mjx float32: floor at dt 0.0025 s")

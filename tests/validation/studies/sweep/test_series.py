@@ -49,10 +49,10 @@ def test_a_float32_series_marks_its_floor_and_stops_past_it(monkeypatch):
     assert [r["status"] for r in out] == [Outcome.OK, Outcome.OK, Outcome.OK, Outcome.SKIPPED]
     assert [r["at_precision_floor"] for r in out] == [False, True, False, False]
     assert (
-        "float32 floor" in out[2]["note"]
+        "error floor" in out[2]["note"]
         and "smallest step that helped is dt 0.0025 s" in out[2]["note"]
     )
-    assert "past its float32 floor" in out[3]["note"]
+    assert "past its float32 error floor" in out[3]["note"]
     assert all(r["precision"] == "float32" for r in out)
 
 
@@ -79,8 +79,8 @@ def test_the_floor_rule_is_a_factor_per_smaller_step():
     }
     rising = {"setting": 2.5e-3, "error": 2e-4, "precision": "float32"}
     assert series.precision_floor(prev, ok) == ""
-    assert "float32 floor" in series.precision_floor(prev, flat)
-    assert "float32 floor" in series.precision_floor(prev, rising)
+    assert "error floor" in series.precision_floor(prev, flat)
+    assert "error floor" in series.precision_floor(prev, rising)
     assert series.precision_floor(prev, {**rising, "error": math.nan}) == ""
 
 
