@@ -101,3 +101,31 @@ def test_a_float64_control_tells_round_off_from_a_model_difference(control_error
     expected = accelerated.FloorKind.UNCONFIRMED if kind == "none" else kind
     assert f32.kind is expected and expected.value in f32.to_dict()["kind"]
     assert f32.words.startswith("mjx float32: floor at dt 0.0025 s")
+
+
+@pytest.mark.slow
+def test_a_sweep_with_the_accelerated_plants_installed(tmp_path):
+    """End to end on the real plants (slow: a process and a compilation per run): MJX float32 and
+    MuJoCo Warp over two steps and 0.1 s, beside MuJoCo's RK4; every run ends ok with a finite
+    error below the sweep's divergence limit, and the files carry the precision and the floors."""
+    import json
+
+    from analytic.effects import Precision
+    from validation.studies.sweep import run_sweep
+    from validation.studies.sweep.running import accelerated_unavailable
+
+    wanted = [(e, Precision.FLOAT32) for e in (MJX, MJWARP) if not accelerated_unavailable(e)]
+    if not wanted:
+        pytest.skip("neither mjx nor mjwarp can run here")
+    cfg = SweepConfig(
+        t_end=0.1, solvers=(), integrators=("RK4",), dts=(1e-2, 2.5e-3), deltas=(),
+        effects_repeats=1, accelerated=tuple(wanted), accelerated_dts=(1e-2, 2.5e-3),
+        warp_dts=(1e-2, 2.5e-3), warp_t_end=0.05,
+    )  # fmt: skip
+    res = run_sweep("paper_example1_controlled", tmp_path / "out", config=cfg)
+    acc = [r for r in res.runs if r["engine"] in (MJX, MJWARP)]
+    assert acc and all(r["status"] in (Outcome.OK, Outcome.SKIPPED) for r in acc)
+    assert all(0 < r["error"] < cfg.diverge_error for r in acc if r["status"] == Outcome.OK)
+    doc = json.loads((res.out_dir / "sweep.json").read_text())
+    assert {f["engine"] for f in doc["precision_floors"]} == {e for e, _ in wanted}
+    assert "## Precision" in (res.out_dir / "sweep.md").read_text()
