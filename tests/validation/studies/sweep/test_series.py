@@ -123,3 +123,21 @@ def test_rows_of_the_accelerated_series_say_their_precision_and_horizon():
     assert (r["precision"], r["horizon_s"], r["setting_name"]) == ("float32", 0.25, "dt")
     assert rows.blank_row("mujoco", "RK4", 1e-2, cfg)["precision"] == "float64"
     assert SweepConfig.quick().accelerated == ()
+
+
+def test_an_accelerated_runs_budget_starts_at_its_first_sample(monkeypatch):
+    """Compilation before the first sample is not the setting's cost; after it, the budget holds."""
+    from validation.studies.sweep import running
+
+    clock = iter([100.0, 100.0, 100.5, 200.0])  # the first sample comes after 100 s of compiling
+    monkeypatch.setattr(running.time, "perf_counter", lambda: next(clock))
+
+    def plant_run(progress):
+        progress(0.01)  # first sample at 100 s: the clock starts here
+        progress(0.02)  # 0.5 s later: within 1 s
+        progress(0.03)  # 100 s later: over
+        raise AssertionError("not stopped")
+
+    with pytest.raises(running.BudgetExceeded) as exc:
+        running.within_budget(plant_run, 1.0, from_first_sample=True)
+    assert exc.value.t_reached == 0.03
