@@ -59,8 +59,9 @@ def within_budget(
 ):
     """``run(progress)`` (a plant's run), stopped by :class:`BudgetExceeded` when it takes more
     than ``budget`` s of wall time (checked at each output sample). ``from_first_sample``: the
-    clock starts at the first sample reported (an accelerated plant: its process start and
-    compilation are not the cost of the setting, and a loaded machine stretches them most).
+    clock starts at the first sample after t = 0 (an accelerated plant: its process start and
+    its compilation, done before that sample, are not the cost of the setting, and a loaded
+    machine stretches them most).
 
     A run interrupted by the user (Ctrl-C, SIGTERM) comes back interrupted from the plant and is
     re-raised as ``KeyboardInterrupt``, so the sweep stops.
@@ -72,6 +73,8 @@ def within_budget(
         def progress(t: float) -> None:
             nonlocal start
             if start is None:
+                if t <= 0:  # the initial sample, reported before any compilation
+                    return
                 start = time.perf_counter()
             elapsed = time.perf_counter() - start
             if elapsed > budget:

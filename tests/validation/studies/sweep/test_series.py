@@ -133,6 +133,7 @@ def test_an_accelerated_runs_budget_starts_at_its_first_sample(monkeypatch):
     monkeypatch.setattr(running.time, "perf_counter", lambda: next(clock))
 
     def plant_run(progress):
+        progress(0.0)  # the initial sample, before compiling: not counted
         progress(0.01)  # first sample at 100 s: the clock starts here
         progress(0.02)  # 0.5 s later: within 1 s
         progress(0.03)  # 100 s later: over
