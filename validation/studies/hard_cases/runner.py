@@ -280,7 +280,9 @@ def run_case(name: str, plants: Iterable[str] | None = None) -> HardCaseRow:
     applicable = tuple(e for e in chosen if e not in not_applicable)
     wall0 = time.perf_counter()
     error = ""
+    precisions: dict[str, Precision] = {}
     try:
+        precisions = {e: plant_precision(e, case.scene) for e in applicable}
         ev = evaluate(case, applicable)
         verdict = Verdict.PASS if all(c.passed for c in ev.checks) else Verdict.FAIL
     except KeyboardInterrupt:
@@ -304,7 +306,7 @@ def run_case(name: str, plants: Iterable[str] | None = None) -> HardCaseRow:
         error=error,
         reported=ev.reported,
         not_judgeable=ev.not_judgeable,
-        precisions={e: plant_precision(e, case.scene) for e in applicable},
+        precisions=precisions,
     )
 
 
