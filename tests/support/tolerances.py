@@ -431,9 +431,8 @@ DISSIPATED_ENERGY_ABS = Threshold(
 # The accelerated plants: MuJoCo's RK4 written out, MJX (tests/mj_bridge/test_accelerated_scheme.py,
 # test_mjx_plant.py)
 # =================================================================================================
-
-EPS32 = 1.1920929e-07
-"""float32's machine epsilon (2⁻²³)."""
+EPS32 = 2.0**-23
+"""float32's machine epsilon, 1.19e-7: the relative spacing of float32 numbers at 1."""
 
 RK4_MIRROR_ROUNDOFF = Threshold(
     "RK4_MIRROR_ROUNDOFF",
@@ -495,6 +494,35 @@ JAX_CONTROLLER_F64 = Threshold(
     "array libraries, differing by the order of float64 operations only.",
 )
 
+# =================================================================================================
+# float32 drift of the accelerated plants (tests/cross/test_accelerated_drift.py)
+# =================================================================================================
+
+
+FLOAT32_DRIFT_FACTOR = Threshold(
+    "FLOAT32_DRIFT_FACTOR",
+    2.0,
+    "1",
+    "A float32 plant's largest difference from a float64 run of the same scene (the C plant, the "
+    "analytic plant) after N steps is at most FACTOR x sqrt(N) x eps32 x S: each step rounds every "
+    "state component once to eps32/2 of its magnitude, unbiased, so the roundings add as a random "
+    "walk of sqrt(N) steps; S is the reach of the compared quantity, its magnitude plus what a "
+    "velocity error integrates to over the run (C: max |R| + max |Ṙ| T, the rods: max |p| + "
+    "max |ṗ| T, the attitude: 1 rad + max |ω| T). 2 = 4 x eps32/2 per step: RK4's four stages each "
+    "round once, and a maximum over the run is about twice an rms. A larger difference is not "
+    "round-off: the model or the integration differs (MJX's dropped cubic stiffness is 4 decades "
+    "above it).",
+)
+FLOAT32_FLOOR_FRACTION = Threshold(
+    "FLOAT32_FLOOR_FRACTION",
+    0.1,
+    "1",
+    "A float32 plant's largest difference in the position of C from a float64 run is at least "
+    "this fraction of eps32 x max |R|: storing R in float32 alone rounds it by up to eps32/2 x |R| "
+    "at each of the ~200 samples compared, so the largest rounding over them is above eps32/4 x "
+    "max |R| but for a vanishing chance; a smaller difference means the plant did not run in "
+    "float32.",
+)
 
 # =================================================================================================
 # MuJoCo Warp, float32 (tests/mj_bridge/test_warp_plant.py); eps32 = 2⁻²³ = 1.19e-7

@@ -670,7 +670,7 @@ def test_sweep_json_has_numbers_not_nan_strings(result):
 def _row(engine, method, setting, status, error=None, walls=(), note="", rid=0, predicted=None):
     row = rows.blank_row(engine, method, setting, sweep.SweepConfig.quick())
     row.update(run_id=rid, status=status, error=error, note=note, wall_time_predicted_s=predicted)
-    row.update(timing.summary(list(walls)), at_reference_floor=False)
+    row.update(timing.summary(list(walls)), at_reference_floor=False, horizon_s=20.0)
     return row
 
 
@@ -689,18 +689,20 @@ def test_failed_and_cut_series_are_marks_in_the_figure(tmp_path):
     data = figure.figure_data(runs, 1e-12, "a scene", 20.0)
     assert [(ln.engine, ln.method) for ln in data.lines] == [("analytic", "DOP853")]
     (line,) = data.lines
-    assert [p.wall for p in line.points] == [0.02, 0.05]  # the medians
-    assert (line.points[0].wall_min, line.points[0].wall_max, line.points[0].n) == (0.01, 0.03, 3)
+    per_s = 1 / 20.0  # wall times per simulated second: the runs' over their 20 s horizon
+    assert [p.wall for p in line.points] == pytest.approx([0.02 * per_s, 0.05 * per_s])
+    first = line.points[0]
+    assert (first.wall_min, first.wall_max, first.n) == pytest.approx((0.01 * per_s, 0.03 * per_s, 3))
     by_run = {m.run_id: m for m in data.marks}
     assert set(by_run) == {2, 4, 5}  # every run that is not ok and was attempted
     cut = by_run[2]
-    assert cut.outcome == "too_slow" and (cut.wall, cut.error) == (9.0, 1e-5)
+    assert cut.outcome == "too_slow" and (cut.wall, cut.error) == pytest.approx((9.0 * per_s, 1e-5))
     assert "too slow" in cut.label and "1 skipped" in cut.label
     for rid in (4, 5):
         m = by_run[rid]
         assert (m.engine, m.method, m.outcome) == ("mujoco", "implicit", "failed")
         assert "mujoco implicit" in m.label and "failed" in m.label and m.error is None
-    assert by_run[4].wall is None and by_run[5].wall == 0.2
+    assert by_run[4].wall is None and by_run[5].wall == pytest.approx(0.2 * per_s)
     assert "horizon 20 s" in data.title and "attitude angle" in data.error_measure
     assert figure.render_png(data)[:8] == b"\x89PNG\r\n\x1a\n"
 

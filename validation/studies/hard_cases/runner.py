@@ -21,6 +21,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from analytic.effects import Precision
 from analytic.scene import Scene, load_scene
 from analytic.trajectory import RunStatus
 from mj_bridge import plants as _plants
@@ -30,6 +31,7 @@ from validation.runs.outputs import output_run
 from validation.scenes import HARD_DIR
 from validation.studies.hard_cases.catalogue import MEASURES, Applies, Measure, Reference
 from validation.studies.hard_cases.criterion import CheckSpec, Criterion, parse_criterion
+from validation.studies.hard_cases.judgeable import NotJudgeable, assess
 from validation.studies.hard_cases.measures import ANALYTIC, CaseRuns, finite, label, measure
 from validation.studies.hard_cases.references.pinv_law import ENGINE_LAW_PLANTS
 from validation.studies.hard_cases.references.solvers import SCIPY_PLANTS
@@ -40,6 +42,7 @@ from validation.studies.hard_cases.table import (
     Verdict,
     write_table,
 )
+from validation.studies.roundoff import precision_of
 
 
 @dataclass(frozen=True)
@@ -78,7 +81,9 @@ def suite_plants(plants: Iterable[str] | None = None) -> tuple[tuple[str, ...], 
     those named (report order); ``ValueError`` naming ``plants`` for an unknown or missing one or
     one without the analytic plant (the reference of every case)."""
     not_installed = {
-        e: why for e, cls in _plants.registered().items() if cls.default and (why := cls.unavailable())
+        e: why
+        for e, cls in _plants.registered().items()
+        if cls.default and (why := cls.unavailable())
     }
     if plants is None:
         chosen = _plants.installed_plants()
@@ -132,13 +137,30 @@ def _run_checks(runs: CaseRuns, plant: str) -> list[Check]:
     return out
 
 
-def _spec_checks(runs: CaseRuns, spec: CheckSpec, plant: str) -> list[Check]:
+def plant_precision(plant: str, scene: Scene) -> Precision:
+    """The precision ``plant`` runs ``scene`` in: its default settings' (the settings a case
+    runs it with, :func:`validation.studies.roundoff.precision_of`)."""
+    return precision_of(_plants.plant(plant).default_settings(scene))
+
+
+def _spec_checks(
+    runs: CaseRuns, spec: CheckSpec, plant: str, unjudged: list[NotJudgeable]
+) -> list[Check]:
     bound_name, bound = runs.criterion.bound_for(spec, plant)
     info = spec.info
+    precision = plant_precision(plant, runs.scene)
     out = []
     for qualifier, value in measure(runs, spec, plant):
         name = spec.name + (f" ({qualifier})" if qualifier else "")
         c = judge(name, _subject(spec, plant), value, bound, info.unit, spec.why, bound=bound_name)
+        if precision is not Precision.FLOAT64:
+            tr, t_end = runs.run(plant), runs.scene.output.t_end
+            nj = assess(spec, plant, c.label, precision, bound_name, bound, value, tr, t_end)
+            if nj is not None:  # below the round-off: neither a PASS nor a FAIL
+                c = dataclasses.replace(c, passed=True, applicable=False, reason=nj.reason)
+                unjudged.append(nj)
+                out.append(c)
+                continue
         if not c.passed and spec.note_if_failed:
             runs.notes.append(
                 f"{plant}: {name} = {value:.2e} {info.unit} > {bound:g}: {spec.note_if_failed}"
@@ -195,18 +217,20 @@ class Evaluation:
     reported: tuple[Reported, ...]
     figures: Mapping[str, dict[str, Any]]
     notes: tuple[str, ...]
+    not_judgeable: tuple[NotJudgeable, ...] = ()
 
 
 def evaluate(case: HardCase, plants: tuple[str, ...]) -> Evaluation:
     """Every check and report of ``case`` on ``plants`` (each where it applies)."""
     runs = CaseRuns(case.name, case.path, case.scene, case.criterion, plants)
     found = {}
+    unjudged: list[NotJudgeable] = []
     for plant in plants:
         checks = [
             c
             for s in case.criterion.checks
             if _applies(s, plant)
-            for c in _spec_checks(runs, s, plant)
+            for c in _spec_checks(runs, s, plant, unjudged)
         ]
         reported = [
             r
@@ -221,6 +245,7 @@ def evaluate(case: HardCase, plants: tuple[str, ...]) -> Evaluation:
         reported=tuple(r for p in plants for r in found[p][1]),
         figures={p: _plant_figures(runs, p, *found[p]) for p in plants},
         notes=tuple(runs.notes + ([cost] if cost else [])),
+        not_judgeable=tuple(unjudged),
     )
 
 
@@ -255,7 +280,9 @@ def run_case(name: str, plants: Iterable[str] | None = None) -> HardCaseRow:
     applicable = tuple(e for e in chosen if e not in not_applicable)
     wall0 = time.perf_counter()
     error = ""
+    precisions: dict[str, Precision] = {}
     try:
+        precisions = {e: plant_precision(e, case.scene) for e in applicable}
         ev = evaluate(case, applicable)
         verdict = Verdict.PASS if all(c.passed for c in ev.checks) else Verdict.FAIL
     except KeyboardInterrupt:
@@ -278,6 +305,8 @@ def run_case(name: str, plants: Iterable[str] | None = None) -> HardCaseRow:
         notes=ev.notes,
         error=error,
         reported=ev.reported,
+        not_judgeable=ev.not_judgeable,
+        precisions=precisions,
     )
 
 
@@ -359,6 +388,7 @@ __all__ = [
     "cases",
     "evaluate",
     "load_case",
+    "plant_precision",
     "run_case",
     "run_hard_cases",
     "suite_plants",

@@ -18,11 +18,14 @@ from typing import Any
 
 import numpy as np
 
+from analytic.effects import Precision
 from analytic.trajectory import Engine
 from validation.compare.checks import Check
 from validation.report.provenance import FileKind, dumps, provenance
 from validation.runs.atomic import write_text
+from validation.studies.hard_cases.judgeable import NotJudgeable
 from validation.studies.hard_cases.measures import ANALYTIC, label
+from validation.studies.roundoff import EPS
 
 JSON_NAME = "hard_cases.json"
 MARKDOWN_NAME = "hard_cases.md"
@@ -38,6 +41,9 @@ class Verdict(StrEnum):
     """The case raised (or judged nothing on a plant it ran on)."""
     NA = "N/A"
     """The case does not apply to the plant (said why)."""
+    NOT_JUDGEABLE = "not judgeable"
+    """Every bound of the case on the plant is below its precision's round-off
+    (:mod:`validation.studies.roundoff`): neither a PASS nor a FAIL."""
 
 
 def owner(check: Check) -> str:
@@ -84,6 +90,9 @@ class HardCaseRow:
         not_applicable: plant -> why the case does not apply to it.
         error: the exception of an ERROR row.
         reported: figures reported, not judged.
+        not_judgeable: the checks below a plant's precision's round-off (made with
+            ``applicable = False``: they pass nothing and fail nothing).
+        precisions: plant -> the precision it ran in (float64 unless its settings say).
     """
 
     case: str
@@ -97,10 +106,16 @@ class HardCaseRow:
     not_applicable: Mapping[str, str] = field(default_factory=dict)
     error: str = ""
     reported: tuple[Reported, ...] = ()
+    not_judgeable: tuple[NotJudgeable, ...] = ()
+    precisions: Mapping[str, Precision] = field(default_factory=dict)
 
     @property
     def passed(self) -> bool:
         return self.verdict is Verdict.PASS
+
+    def unjudged(self, plant: str) -> list[NotJudgeable]:
+        """The checks of ``plant`` its precision cannot judge."""
+        return [x for x in self.not_judgeable if x.plant == plant]
 
     def plant_verdict(self, plant: str) -> Verdict:
         """PASS / FAIL from ``plant``'s checks, N/A where the case does not apply, ERROR when the
@@ -112,7 +127,13 @@ class HardCaseRow:
         own = [c for c in self.checks if owner(c) == plant]
         if not own:
             return Verdict.ERROR  # a plant the case ran on without judging it: a bug of the case
-        return Verdict.PASS if all(c.passed for c in own) else Verdict.FAIL
+        if not all(c.passed for c in own):
+            return Verdict.FAIL
+        unjudged = {x.check for x in self.unjudged(plant)}
+        bounded = [c for c in own if c.bound]
+        if unjudged and all(c.label in unjudged for c in bounded):
+            return Verdict.NOT_JUDGEABLE  # nothing beyond completed / finite could be judged
+        return Verdict.PASS
 
     def failed_checks(self, plant: str | None = None) -> list[Check]:
         return [c for c in self.checks if not c.passed and (plant is None or owner(c) == plant)]
@@ -124,17 +145,36 @@ class HardCaseRow:
             if e in self.not_applicable:
                 entry["not applicable"] = self.not_applicable[e]
             else:
+                if e in self.precisions:
+                    entry["precision"] = Precision(self.precisions[e]).value
                 entry["figures"] = dict(self.figures.get(e, {}))
                 failed = [c.label for c in self.failed_checks(e)]
                 if failed:
                     entry["failed"] = failed
+                unjudged = self.unjudged(e)
+                if unjudged:
+                    entry["not judgeable"] = [x.check for x in unjudged]
             per_plant[e] = entry
+        verdicts = {x.check: x.to_dict()["verdict"] for x in self.not_judgeable}
         return {
             "case": self.case,
             "criterion": self.criterion,
             "verdict": self.verdict.value,
             "plants": per_plant,
-            "checks": [{"label": c.label, "plant": owner(c), **c.to_dict()} for c in self.checks],
+            "checks": [
+                {
+                    "label": c.label,
+                    "plant": owner(c),
+                    **c.to_dict(),
+                    **(
+                        {"verdict": verdicts[c.label], "judgeable": False}
+                        if c.label in verdicts
+                        else {"judgeable": True}
+                    ),
+                }
+                for c in self.checks
+            ],
+            "not_judgeable": [x.to_dict() for x in self.not_judgeable],
             "reported": [r.to_dict() for r in self.reported],
             "wall_time_s": self.wall_time_s,
             "notes": list(self.notes),
@@ -196,6 +236,15 @@ class HardCaseTable:
                 for e, why in self.not_installed.items()
             ),
             "",
+        ]
+        if any(r.not_judgeable for r in self.rows):
+            lines += [
+                "A check whose bound is below the plant's floating-point round-off for the "
+                "quantity (bound < eps x its magnitude: eps 1.19e-7 in float32) is **not "
+                "judgeable** at that precision: neither a PASS nor a FAIL (docs/hard_cases.md).",
+                "",
+            ]
+        lines += [
             "| case | criterion | "
             + " | ".join(label(e) for e in self.plants)
             + " | verdict | wall s |",
@@ -210,7 +259,7 @@ class HardCaseTable:
                 elif r.verdict is Verdict.ERROR:
                     cells.append(f"**{v.value}**")
                 else:
-                    cells.append(f"**{v.value}**<br>{_figs(r.figures.get(e, {}))}")
+                    cells.append(f"**{_cell_verdict(r, e, v)}**<br>{_figs(r.figures.get(e, {}))}")
             err = f"<br>{_md(r.error)}" if r.error else ""
             lines.append(
                 f"| {r.case} | {_md(r.criterion)} | {' | '.join(cells)} "
@@ -224,11 +273,21 @@ class HardCaseTable:
                 lines.append(f"- error: {_md(r.error)}")
             for e, why in r.not_applicable.items():
                 lines.append(f"- {label(e)}: not applicable: {_md(why)}")
+            unjudged = {x.check: x for x in r.not_judgeable}
             for c in r.checks:
                 mark = "ok" if c.passed else "FAIL"
                 bound = f"bound {c.bound} = {c.threshold:.1e}" if c.bound else "must be 0"
                 if c.name.startswith("completed"):
                     bound = f"horizon {c.threshold:g} s"
+                if c.label in unjudged:
+                    x = unjudged[c.label]
+                    u = "" if c.unit == "1" else f" {c.unit}"
+                    lines.append(
+                        f"- not judgeable at {x.precision.value}: {c.label} = {c.value:.3e}{u} "
+                        f"({bound}; {x.precision.value} round-off {x.round_off:.1e}{u} = eps "
+                        f"{EPS[x.precision]:.3g} x {x.scale:.3g}{u})"
+                    )
+                    continue
                 lines.append(f"- {mark}: {c.label} = {c.value:.3e} {c.unit} ({bound})")
             for x in r.reported:
                 lines.append(
@@ -238,6 +297,19 @@ class HardCaseTable:
                 lines.append(f"- note: {_md(n)}")
             lines.append("")
         return "\n".join(lines)
+
+
+def _cell_verdict(r: HardCaseRow, plant: str, v: Verdict) -> str:
+    """A plant's verdict in the table: with its precision when a check of it was below round-off
+    (``not judgeable at float32``; ``PASS (2 checks not judgeable at float32)``)."""
+    unjudged = r.unjudged(plant)
+    if not unjudged:
+        return v.value
+    p = unjudged[0].precision.value
+    if v is Verdict.NOT_JUDGEABLE:
+        return f"not judgeable at {p}"
+    n = len(unjudged)
+    return f"{v.value} ({n} check{'s' if n > 1 else ''} not judgeable at {p})"
 
 
 def _md(s: str) -> str:

@@ -8,10 +8,12 @@
    version and cached.
 2. **Grid** (:mod:`~validation.studies.sweep.series`): the analytic engine over scipy solvers x rtol,
    MuJoCo over integrators x timestep, and, when Pinocchio (``pin``) is installed, the Pinocchio
-   plant over the same solvers x rtol; one series per plant and solver / integrator, cheap to
-   expensive, each a task of the executor. A series is cut when a run is too slow (measured or
+   plant over the same solvers x rtol, and, when installed, MuJoCo's accelerated plants (MJX in
+   float64 and float32, MuJoCo Warp in float32) over time steps, one series per precision
+   (:mod:`~validation.studies.sweep.accelerated`: each series' precision floor); one series per
+   plant and solver / integrator / precision, cheap to expensive, each a task of the executor. A series is cut when a run is too slow (measured or
    predicted against the per-run budget), fails or diverges after an earlier setting worked, or
-   reaches the reference's floor.
+   reaches the reference's floor, or (an accelerated series) shows its precision's floor.
 3. **Per run**: the errors (:mod:`~validation.studies.sweep.metrics`), invariant drifts, final tracking
    errors, and the cost (:mod:`~validation.studies.sweep.timing`): the median and spread of a few timings
    of the integration, right-hand-side evaluations and steps.

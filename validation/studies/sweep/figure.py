@@ -1,7 +1,11 @@
 """The work-precision figure: what is drawn (:func:`figure_data`) and the PNG (:func:`render_png`).
 
-One line per plant and solver / integrator through its settings, loose to tight. A point is one
-setting: x its median wall time with the spread of its timings as a bar (min to max), y its error.
+One line per plant and solver / integrator (an accelerated plant: per precision) through its
+settings, loose to tight. A point is one setting: x its median wall time per simulated second (the
+run's wall time over its horizon, so that a series with a shorter horizon, MuJoCo Warp's on a CPU,
+is drawn on the same scale) with the spread of its timings as a bar (min to max), y its error.
+The precision floor of an accelerated series (the smallest step beyond which a smaller one stopped
+lowering the error) is ringed and labelled.
 A run that is not ``ok`` is never dropped: a too-slow run is a ``▷`` mark where its series was cut
 (at its measured or predicted wall time, at the last error the series reached), a failed or
 diverged one an ``✕`` mark on the figure's top edge, a degraded one a ``+`` where it is; each mark
@@ -12,13 +16,23 @@ the first, and the legend says they coincide. The reference's floor is a grey li
 
 from __future__ import annotations
 
+import dataclasses
 import io
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from validation.studies.sweep.config import ANALYTIC, MUJOCO, PINOCCHIO, Outcome
+from validation.studies.sweep.accelerated import floors
+from validation.studies.sweep.config import (
+    ACCELERATED,
+    ANALYTIC,
+    MJWARP,
+    MJX,
+    MUJOCO,
+    PINOCCHIO,
+    Outcome,
+)
 from validation.studies.sweep.metrics import ERROR_MEASURE
 
 MARK_OUTCOMES = (Outcome.TOO_SLOW, Outcome.FAILED, Outcome.DIVERGED, Outcome.DEGRADED)
@@ -28,8 +42,15 @@ SAME_ERROR_RTOL = 1e-12
 """Two series of one plant whose errors agree to this (relative) at every shared setting are
 coincident: drawn so that both stay visible, and said so in the legend."""
 
-STYLES = {ANALYTIC: ("-", "o"), MUJOCO: ("--", "s"), PINOCCHIO: (":", "^")}
-"""Line style and marker per plant; colour is per solver / integrator."""
+STYLES = {
+    ANALYTIC: ("-", "o"),
+    MUJOCO: ("--", "s"),
+    PINOCCHIO: (":", "^"),
+    MJX: ("-.", "D"),
+    MJWARP: ((0, (5, 1, 1, 1)), "v"),
+}
+"""Line style and marker per plant; colour is per solver / integrator (an accelerated plant's:
+per plant and precision)."""
 
 
 @dataclass(frozen=True)
@@ -44,6 +65,7 @@ class Point:
     n: int
     error: float
     at_floor: bool
+    at_precision_floor: bool = False
 
 
 @dataclass(frozen=True)
@@ -54,6 +76,7 @@ class Line:
     method: str
     points: tuple[Point, ...]
     same_as: tuple[str, ...] = ()  # methods of the same plant drawing the same errors
+    floor_kind: str = ""  # an accelerated series' floor: round-off, model or unconfirmed
 
 
 def coincident(a: Line, b: Line) -> bool:
@@ -70,7 +93,7 @@ def _with_coincidences(lines: list[Line]) -> list[Line]:
     out = []
     for ln in lines:
         same = tuple(o.method for o in lines if o is not ln and coincident(ln, o))
-        out.append(Line(ln.engine, ln.method, ln.points, same) if same else ln)
+        out.append(dataclasses.replace(ln, same_as=same) if same else ln)
     return out
 
 
@@ -101,6 +124,7 @@ class FigureData:
     marks: tuple[Mark, ...]
     floor: float
     error_measure: str = ERROR_MEASURE
+    horizons: tuple[str, ...] = ()  # series whose horizon is not t_end, in words
 
 
 def _finite_positive(v: Any) -> bool:
@@ -112,16 +136,23 @@ def figure_data(
 ) -> FigureData:
     """The lines and marks of ``runs`` (rows of :data:`validation.studies.sweep.rows.COLUMNS`).
 
-    ``floor``: the error the reference resolves (drawn as a line).
+    ``floor``: the error the reference resolves (drawn as a line). Wall times are per simulated
+    second: a row's over its ``horizon_s`` (``t_end`` when it has none).
     """
     series: dict[tuple[str, str], list[Mapping[str, Any]]] = {}
     for r in runs:
         series.setdefault((str(r["engine"]), r["method"]), []).append(r)
     lines: list[Line] = []
     marks: list[Mark] = []
+    horizons: list[str] = []
+    kinds = {(f.engine, f.precision): f.kind for f in floors(runs)}
     for (engine, method), rows in series.items():
         pts = []
+        horizon = float(rows[0].get("horizon_s") or t_end)
+        if abs(horizon - t_end) > 1e-12:
+            horizons.append(f"{engine} {method}: horizon {horizon:g} s")
         for r in rows:
+            r = _per_second(r, horizon)
             ok = (
                 r["status"] == Outcome.OK
                 and _finite_positive(r["wall_time_s"])
@@ -138,16 +169,40 @@ def figure_data(
                         int(r["wall_time_repeats"] or 1),
                         r["error"],
                         bool(r["at_reference_floor"]),
+                        bool(r.get("at_precision_floor")),
                     )
                 )
             elif r["status"] == Outcome.OK or r["status"] in MARK_OUTCOMES:
                 marks.append(_mark(r, pts, rows))
         if pts:
-            lines.append(Line(engine, method, tuple(pts)))
+            kind = kinds.get((engine, method))
+            lines.append(Line(engine, method, tuple(pts), floor_kind=kind.value if kind else ""))
     lines = _with_coincidences(lines)
     return FigureData(
-        f"work-precision: {scene}, horizon {t_end:g} s", t_end, tuple(lines), tuple(marks), floor
+        f"work-precision: {scene}, horizon {t_end:g} s",
+        t_end,
+        tuple(lines),
+        tuple(marks),
+        floor,
+        horizons=tuple(horizons),
     )
+
+
+_WALL_KEYS = ("wall_time_s", "wall_time_min_s", "wall_time_max_s", "wall_time_predicted_s")
+
+
+def _per_second(r: Mapping[str, Any], horizon: float) -> Mapping[str, Any]:
+    """``r`` with its wall times per simulated second (over ``horizon`` s)."""
+    out = dict(r)
+    for k in _WALL_KEYS:
+        if isinstance(out.get(k), int | float):
+            out[k] = out[k] / horizon
+    return out
+
+
+def _series_colour_key(engine: str, method: str) -> str:
+    """Colour is per solver / integrator, an accelerated plant's per plant and precision."""
+    return f"{engine} {method}" if engine in ACCELERATED else method
 
 
 def _mark(r: Mapping[str, Any], pts: list[Point], rows: Sequence[Mapping[str, Any]]) -> Mark:
@@ -203,7 +258,12 @@ def render_png(data: FigureData) -> bytes:
     ax = fig.add_subplot()
     ax.set_xscale("log")
     ax.set_yscale("log")
-    methods = list(dict.fromkeys([ln.method for ln in data.lines] + [m.method for m in data.marks]))
+    methods = list(
+        dict.fromkeys(
+            [_series_colour_key(ln.engine, ln.method) for ln in data.lines]
+            + [_series_colour_key(m.engine, m.method) for m in data.marks]
+        )
+    )
     colours = [
         "#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f",
     ]  # fmt: skip
@@ -211,7 +271,7 @@ def render_png(data: FigureData) -> bytes:
     drawn: list[Line] = []
     for ln in data.lines:
         ls, marker = STYLES.get(ln.engine, ("-.", "x"))
-        c = colour[ln.method]
+        c = colour[_series_colour_key(ln.engine, ln.method)]
         x = [p.wall for p in ln.points]
         y = [p.error for p in ln.points]
         xerr = [[p.wall - p.wall_min for p in ln.points], [p.wall_max - p.wall for p in ln.points]]
@@ -228,6 +288,15 @@ def render_png(data: FigureData) -> bytes:
                 mfc="none" if under else c,
                 markevery=[i for i, p in enumerate(ln.points) if p.n >= 2 or under])  # fmt: skip
         drawn.append(ln)
+        for p in ln.points:
+            if p.at_precision_floor:  # ringed and labelled: the smallest step that helped
+                ax.plot(p.wall, p.error, marker="o", ms=16, mfc="none", mec=c, mew=1.6, zorder=4)
+                ax.annotate(
+                    f"{ln.engine} {ln.method} floor ({ln.floor_kind}): dt {p.setting:.2g} s",
+                    (p.wall, p.error),
+                    xytext=(10, -14), textcoords="offset points", fontsize=7, color=c,
+                    fontweight="bold",
+                )  # fmt: skip
         single = [p for p in ln.points if p.n < 2]
         if single:  # one timing: no spread to show, drawn hollow
             ax.plot([p.wall for p in single], [p.error for p in single], ls="none", marker=marker,
@@ -244,7 +313,7 @@ def render_png(data: FigureData) -> bytes:
     trans_top = ax.get_xaxis_transform()  # x in data, y in axes fractions
     seen_kinds = set()
     for i, m in enumerate(data.marks):
-        c = colour.get(m.method, "k")
+        c = colour.get(_series_colour_key(m.engine, m.method), "k")
         symbol, kind_words = MARK_SYMBOLS[m.outcome]
         kind_label = None
         if kind_words not in seen_kinds:
@@ -263,13 +332,16 @@ def render_png(data: FigureData) -> bytes:
             fontsize=6.5, color=c,
         )  # fmt: skip
     ax.set_xlabel(
-        "wall time per run, s (integration only): median of the timings, bar min–max, "
-        "hollow: one timing",
+        "wall time per simulated second, s/s (integration only): median of the timings, bar "
+        "min–max, hollow: one timing; ringed: a precision's floor",
         fontsize=8.5,
     )
     ax.set_ylabel("error (max over the horizon; see below)", fontsize=9)
     ax.set_title(data.title, fontsize=11)
-    fig.text(0.01, 0.005, f"error: {data.error_measure}", fontsize=7, color="0.25")
+    foot = f"error: {data.error_measure}"
+    if data.horizons:
+        foot += f". Other horizons: {'; '.join(data.horizons)}"
+    fig.text(0.01, 0.005, foot, fontsize=7, color="0.25")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
     fig.tight_layout(rect=(0, 0.025, 1, 1))

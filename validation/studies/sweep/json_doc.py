@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from validation.report.provenance import FileKind, dumps, provenance
+from validation.studies.sweep.accelerated import floors
 from validation.studies.sweep.config import SweepConfig
 from validation.studies.sweep.markdown import skipped_note
 from validation.studies.sweep.result import SweepResult
@@ -57,6 +58,7 @@ def sweep_json(res: SweepResult, cfg: SweepConfig, scene: Any = None) -> str:
             for e, why in res.skipped_series.items()
         ],
         "runs": list(res.runs),
+        "precision_floors": [f.to_dict() for f in floors(res.runs)],
         "stabilization": list(res.stabilization),
         "effects": list(res.effects),
         "workers": res.workers,

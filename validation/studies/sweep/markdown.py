@@ -12,10 +12,13 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from validation.studies.effects_cost import effects_markdown
+from validation.studies.sweep.accelerated import floors, floors_markdown, grid_words
 from validation.studies.sweep.config import (
     ANALYTIC,
     ENGINES,
     FLOOR_FACTOR,
+    MJWARP,
+    MJX,
     MUJOCO,
     PINOCCHIO,
     REFERENCE_ATOL,
@@ -64,6 +67,8 @@ def _mujoco_grid(cfg: SweepConfig) -> str:
 
 def _settings_words(cfg: SweepConfig) -> dict[str, str]:
     return {
+        MJX: grid_words(cfg, MJX),
+        MJWARP: grid_words(cfg, MJWARP),
         ANALYTIC: f"the paper's model, {_scipy_grid(cfg)}",
         MUJOCO: f"the MJCF twin, {_mujoco_grid(cfg)}",
         PINOCCHIO: "the same body in Pinocchio (`pin.aba`), the same scipy solvers and rtol grid "
@@ -205,7 +210,8 @@ def figure_caption(res: SweepResult, cfg: SweepConfig) -> str:
     scipy_plants = " and the Pinocchio plant" if PINOCCHIO in ran else ""
     return (
         f"**Figure: work-precision of {', '.join(ran)} on {res.scene}, horizon 0–{cfg.t_end:g} s.** "
-        "Each point is one setting: x is its wall time per run (s, log axis; the integration only, "
+        "Each point is one setting: x is its wall time per simulated second (the run's wall time "
+        "over its horizon, s/s, log axis; the integration only, "
         + (
             f"median of up to {cfg.repeats} timings, bar from the fastest to the slowest timing, "
             "hollow: a single timing"
@@ -214,10 +220,23 @@ def figure_caption(res: SweepResult, cfg: SweepConfig) -> str:
         )
         + f"), y its error (log axis): the {ERROR_MEASURE}. "
         "Lines join the settings of one plant (line style and marker: analytic solid ○, MuJoCo "
-        "dashed □, Pinocchio dotted △) and one solver or integrator (colour), loose to tight. "
+        "dashed □, Pinocchio dotted △, MJX dash-dotted ◇, MuJoCo Warp dashed ▽) and one solver, "
+        "integrator or precision (colour), loose to tight. "
         f"Settings: analytic engine{scipy_plants}: {_scipy_grid(cfg)}; "
         f"MuJoCo: {_mujoco_grid(cfg)}. "
-        f"▷ marks where a series was cut as too slow (a run over the {cfg.max_run_wall_s:g} s "
+        + "".join(
+            f"{'MJX' if e == MJX else 'MuJoCo Warp'}: {grid_words(cfg, e)}. "
+            for e in (MJX, MJWARP)
+            if e in ran
+        )
+        + "".join(
+            f"Ringed: the {f.precision} floor of {f.engine} (dt {f.dt:.3g} s), the smallest step "
+            f"beyond which a smaller one stopped lowering the error ({f.kind.value if f.kind else ''}: "
+            "told by a float64 series of the same twin at the next step). "
+            for f in floors(res.runs)
+            if f.dt is not None
+        )
+        + f"▷ marks where a series was cut as too slow (a run over the {cfg.max_run_wall_s:g} s "
         "budget, at its measured or predicted wall time); ✕ a failed or diverged run (error above "
         f"{cfg.diverge_error:g} or not finite), on the top edge; ✚ a degraded run (MuJoCo "
         "dropped a control for a step), where it is; each mark is labelled. Two series of one "
@@ -301,6 +320,7 @@ def sweep_markdown(res: SweepResult, cfg: SweepConfig, *, image: str | None = FI
             else:
                 cells.append(_cheapest_cell(runs, rid, lv))
         L.append(f"| {lv:.0e} | " + " | ".join(cells) + " |")
+    L += floors_markdown(runs, cfg)
     L += _pinocchio_vs_analytic(runs)
     L += [
         "",

@@ -65,6 +65,16 @@ def ref_samples(tr) -> RefSamples:
     )
 
 
+def ref_until(ref: RefSamples, t_end: float) -> RefSamples:
+    """The reference up to ``t_end`` s, its scales those of that part: the error measure of a
+    series with a shorter horizon (MuJoCo Warp's) is the same definition over its own horizon."""
+    if t_end >= ref.t[-1] - SAMPLE_TIME_ATOL:
+        return ref
+    k = int(np.searchsorted(ref.t, t_end + SAMPLE_TIME_ATOL, side="right"))
+    part = RefSamples(ref.t[:k], ref.R[:k], ref.u[:k], ref.p[:k], 1.0, 1.0)
+    return ref_samples(part)
+
+
 def errors_against(tr, ref: RefSamples) -> dict[str, float]:
     """Final and max-over-trajectory errors of ``tr`` against the reference (same sample times).
 
@@ -113,4 +123,12 @@ def tracking(tr) -> dict[str, float | None]:
     return {"tracking_omega_final": w, "tracking_p_final": p}
 
 
-__all__ = ["ERROR_MEASURE", "RefSamples", "drifts", "errors_against", "ref_samples", "tracking"]
+__all__ = [
+    "ERROR_MEASURE",
+    "RefSamples",
+    "drifts",
+    "errors_against",
+    "ref_samples",
+    "ref_until",
+    "tracking",
+]

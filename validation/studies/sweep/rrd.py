@@ -1,7 +1,7 @@
 """``sweep.rrd``: the work-precision plot as a 2D view of the recording, the figure, the text.
 
 Rerun has no log axes and no x-y plot view besides the 2D spatial one, so the plot is drawn in
-log coordinates in a ``Spatial2DView``: x = :data:`X_PER_DECADE` x log10(wall time / s), y =
+log coordinates in a ``Spatial2DView``: x = :data:`X_PER_DECADE` x log10(wall time per simulated second), y =
 -log10(error) (the number of correct digits: the 2D view's y axis points down, so accuracy grows
 downwards as in the PNG). Decade grid lines carry their values as labels. Entities, all static::
 
@@ -153,7 +153,7 @@ def write_rrd(
                     labels=[
                         viewer_text(
                             f"{ln.engine} {ln.method} #{p.run_id}: error {p.error:.2g}, "
-                            f"{p.wall * 1e3:.3g} ms (n = {p.n})"
+                            f"{p.wall * 1e3:.3g} ms per simulated s (n = {p.n})"
                         )
                         for p in ln.points
                     ],

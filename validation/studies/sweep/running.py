@@ -11,6 +11,7 @@ can never be taken for each other.
 
 from __future__ import annotations
 
+import dataclasses
 import multiprocessing
 import os
 import time
@@ -22,10 +23,12 @@ from typing import Any
 
 import analytic
 import mj_bridge
+from analytic.effects import Precision
 from analytic.scene import Scene
-from mj_bridge.plants import PinocchioPlant, PinocchioSettings, plant
+from mj_bridge.plants import PinocchioPlant, PinocchioSettings, plant, registered
 from validation.studies.dask_options import check_dask_options
-from validation.studies.sweep.config import PINOCCHIO, RTOL_ENGINES, SweepConfig
+from validation.studies.roundoff import precision_of
+from validation.studies.sweep.config import ACCELERATED, PINOCCHIO, RTOL_ENGINES, SweepConfig
 
 MAX_WORKERS = 4
 """Most processes of the default pool (each run is single-threaded; BLAS is pinned to one thread)."""
@@ -49,18 +52,30 @@ class BudgetExceeded(Exception):
         self.t_reached = t_reached
 
 
-def within_budget(run: Callable[[Callable[[float], None] | None], Any], budget: float | None):
+def within_budget(
+    run: Callable[[Callable[[float], None] | None], Any],
+    budget: float | None,
+    from_first_sample: bool = False,
+):
     """``run(progress)`` (a plant's run), stopped by :class:`BudgetExceeded` when it takes more
-    than ``budget`` s of wall time (checked at each output sample).
+    than ``budget`` s of wall time (checked at each output sample). ``from_first_sample``: the
+    clock starts at the first sample after t = 0 (an accelerated plant: its process start and
+    its compilation, done before that sample, are not the cost of the setting, and a loaded
+    machine stretches them most).
 
     A run interrupted by the user (Ctrl-C, SIGTERM) comes back interrupted from the plant and is
     re-raised as ``KeyboardInterrupt``, so the sweep stops.
     """
     progress = None
     if budget is not None:
-        start = time.perf_counter()
+        start = None if from_first_sample else time.perf_counter()
 
         def progress(t: float) -> None:
+            nonlocal start
+            if start is None:
+                if t <= 0:  # the initial sample, reported before any compilation
+                    return
+                start = time.perf_counter()
             elapsed = time.perf_counter() - start
             if elapsed > budget:
                 raise BudgetExceeded(budget, elapsed, t)
@@ -103,6 +118,46 @@ def mujoco_run(scene: Scene, integrator: str, dt: float, t_end: float, budget=No
     )
 
 
+def accelerated_settings(scene: Scene, engine: str, precision: str, dt: float) -> Any:
+    """The settings of an accelerated plant's run: the scene's (``default_settings``) with the
+    time step ``dt`` and, for a plant that has the field, ``precision``; ``ValueError`` naming
+    ``precision`` for a plant that cannot run in it (MuJoCo Warp: float32 only)."""
+    pl = plant(engine)
+    settings = pl.default_settings(scene)
+    changes: dict[str, Any] = {"timestep": float(dt)}
+    if "precision" in {f.name for f in dataclasses.fields(settings)}:
+        changes["precision"] = Precision(precision)
+    elif precision_of(settings) != Precision(precision):
+        raise ValueError(
+            f"precision: {engine} runs in {precision_of(settings).value} only (got {precision!r})"
+        )
+    return dataclasses.replace(settings, **changes)
+
+
+def accelerated_run(
+    scene: Scene, engine: str, precision: str, dt: float, t_end: float, budget=None
+):
+    """One run of an accelerated plant (``mjx``, ``mjwarp``) through the plant protocol at
+    ``dt`` in ``precision``; ``budget`` as for :func:`analytic_run`, counted from the first
+    output sample (its process start and compilation are not counted; its own ``wall_time_s``
+    is what it reports as the integration)."""
+    settings = accelerated_settings(scene, engine, precision, dt)
+    return within_budget(
+        lambda progress: plant(engine).simulate(scene, settings, t_end=t_end, progress=progress),
+        budget,
+        from_first_sample=True,
+    )
+
+
+def accelerated_unavailable(engine: str) -> str:
+    """Why an accelerated plant's series cannot run here ("" when it can): not registered (its
+    plugin did not load), or its ``unavailable()`` reason."""
+    cls = registered().get(str(engine))
+    if cls is None:
+        return f"{engine} is not a registered plant here (its plugin did not load)"
+    return cls.unavailable()
+
+
 def run_setting(
     scene: Scene,
     engine: str,
@@ -113,8 +168,11 @@ def run_setting(
     budget: float | None = None,
 ):
     """One run of ``engine`` / ``method`` at ``setting`` (rtol, atol = rtol x ``cfg.atol_ratio``;
-    or MuJoCo's dt) over ``t_end`` (default ``cfg.t_end``)."""
-    t_end = cfg.t_end if t_end is None else t_end
+    or MuJoCo's dt; an accelerated plant's dt, ``method`` its precision) over ``t_end``
+    (default the engine's horizon, :meth:`SweepConfig.horizon`)."""
+    t_end = cfg.horizon(engine) if t_end is None else t_end
+    if engine in ACCELERATED:
+        return accelerated_run(scene, engine, method, setting, t_end, budget=budget)
     if engine in RTOL_ENGINES:
         run = pinocchio_run if engine == PINOCCHIO else analytic_run
         return run(scene, method, setting, setting * cfg.atol_ratio, t_end, budget=budget)
@@ -247,6 +305,9 @@ def executor_for(
 __all__ = [
     "MAX_WORKERS",
     "BudgetExceeded",
+    "accelerated_run",
+    "accelerated_settings",
+    "accelerated_unavailable",
     "analytic_run",
     "default_executor",
     "default_workers",

@@ -8,7 +8,13 @@ A series stops, and its remaining settings are reported ``skipped`` with the rea
   (:func:`predicted_wall`) and then not started;
 * fails or diverges after an earlier setting worked;
 * is at the reference's floor (error within ``FLOOR_FACTOR`` of its estimated error): a tighter
-  setting's error could not be resolved.
+  setting's error could not be resolved;
+* (an accelerated plant's series) shows its precision's floor: a step a quarter of the last
+  lowered the error by less than ``PRECISION_FLOOR_GAIN``. The last step is marked
+  ``at_precision_floor`` (the smallest step that helped) and the run that showed it is kept.
+
+An accelerated plant's series (MJX, MuJoCo Warp) runs over its own horizon
+(:meth:`~validation.studies.sweep.config.SweepConfig.horizon`) against the reference up to it.
 
 A MuJoCo run in which a sampled control reached ``MJ_MAXVAL`` ran without that control for a step
 (MuJoCo drops it as unstable): it is ``degraded``, not ``ok`` (measured and timed, never picked as
@@ -25,8 +31,10 @@ import numpy as np
 from analytic.scene import Scene
 from validation.studies.sweep import metrics, running, timing
 from validation.studies.sweep.config import (
+    ACCELERATED,
+    ACCELERATED_STAGES,
     MJ_MAXVAL,
-    MUJOCO,
+    PRECISION_FLOOR_GAIN,
     RTOL_ENGINES,
     STAGES,
     Outcome,
@@ -44,6 +52,8 @@ def fill_row(row: dict[str, Any], tr, ref: RefSamples) -> None:
     row["nsteps"] = int(tr.info.get("nsteps", 0))
     if row["engine"] in RTOL_ENGINES:
         row["nfev"] = int(tr.info["nfev"])
+    elif row["engine"] in ACCELERATED:
+        row["nfev"] = row["nsteps"] * ACCELERATED_STAGES
     else:
         row["nfev"] = row["nsteps"] * STAGES.get(row["method"], 1)
         big = max(
@@ -59,17 +69,34 @@ def fill_row(row: dict[str, Any], tr, ref: RefSamples) -> None:
 
 def predicted_wall(engine: str, done: list[tuple[float, float]], setting: float) -> float | None:
     """The predicted wall time (s) of the next setting from the series' finished runs ``done``
-    ([(setting, wall)], in order), from the last two: MuJoCo's cost is ``a + b/dt`` (a per run
+    ([(setting, wall)], in order), from the last two: a time-step plant's (MuJoCo, MJX, Warp)
+    cost is ``a + b/dt`` (a per run
     and per output sample, b per step: both fitted, neither negative); a scipy plant's grows from
     one rtol to the next by the last ratio (at least 1x). None with fewer than two runs."""
     if len(done) < 2:
         return None
     (s0, w0), (s1, w1) = done[-2], done[-1]
-    if engine == MUJOCO:
+    if engine not in RTOL_ENGINES:  # a time-step series: MuJoCo, MJX, MuJoCo Warp
         b = max((w1 - w0) / (1.0 / s1 - 1.0 / s0), 0.0) if s1 != s0 else 0.0
         a = max(w1 - b / s1, 0.0)
         return max(a + b / setting, w1)
     return w1 * max(w1 / w0, 1.0) if w0 > 0 else None
+
+
+def precision_floor(previous: dict[str, Any], row: dict[str, Any]) -> str:
+    """The note of a run that shows its precision's floor ("" when it does not): its step is
+    smaller than ``previous``'s and its error fell by less than ``PRECISION_FLOOR_GAIN``."""
+    e0, e1 = previous["error"], row["error"]
+    if not (row["setting"] < previous["setting"] and e0 > 0 and math.isfinite(e1)):
+        return ""
+    gain = e0 / e1 if e1 > 0 else math.inf
+    if gain >= PRECISION_FLOOR_GAIN:
+        return ""
+    return (
+        f"error floor: a {previous['setting'] / row['setting']:.3g}x smaller step "
+        f"changed the error {e0:.2g} -> {e1:.2g} ({gain:.2g}x, < {PRECISION_FLOOR_GAIN:g}x); "
+        f"the smallest step that helped is dt {previous['setting']:.3g} s"
+    )
 
 
 def run_series(
@@ -90,7 +117,9 @@ def run_series(
     if not settings:
         return rows
     name = "rtol" if engine in RTOL_ENGINES else "dt"
-    budget = cfg.max_run_wall_s
+    budget = cfg.budget(engine)
+    ref = metrics.ref_until(ref, cfg.horizon(engine))
+    last_ok: dict[str, Any] | None = None
     stop = ""
     any_ok = False
     done: list[tuple[float, float]] = []  # (setting, median wall) of the runs that ended ok
@@ -106,7 +135,7 @@ def run_series(
             continue
         predicted = predicted_wall(engine, done, s)
         if predicted is not None and predicted > budget:
-            basis = "cost a + b/dt" if engine == MUJOCO else "cost growth"
+            basis = "cost growth" if engine in RTOL_ENGINES else "cost a + b/dt"
             basis += " from the last two runs"
             row.update(
                 status=Outcome.TOO_SLOW,
@@ -150,6 +179,18 @@ def run_series(
                     f"series stopped at the reference's floor ({name} {s:.3g} reached error "
                     f"{row['error']:.2g} ≤ {floor:.2g}): a tighter setting is not resolved"
                 )
+            elif engine in ACCELERATED and last_ok is not None:
+                seen = precision_floor(last_ok, row)
+                if seen:
+                    last_ok["at_precision_floor"] = True
+                    last_ok["note"] = "error floor: the smallest step that lowered the error"
+                    row["note"] = seen
+                    stop = (
+                        f"series stopped past its {row['precision']} error floor (dt "
+                        f"{last_ok['setting']:.3g} s): a smaller step does not lower the error"
+                    )
+            if row["status"] == Outcome.OK:
+                last_ok = row
             continue
         row.update(timing.summary([first]), wall_time_repeats=0)
         row["at_reference_floor"] = False
@@ -161,4 +202,4 @@ def run_series(
     return rows
 
 
-__all__ = ["fill_row", "predicted_wall", "run_series"]
+__all__ = ["fill_row", "precision_floor", "predicted_wall", "run_series"]

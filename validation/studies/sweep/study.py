@@ -27,6 +27,7 @@ from validation.scenes import resolve_scene
 from validation.studies.effects_cost import effects_cost
 from validation.studies.sweep import running
 from validation.studies.sweep.config import (
+    ACCELERATED,
     ANALYTIC,
     FLOOR_FACTOR,
     MUJOCO,
@@ -48,6 +49,12 @@ EXPENSIVE_FIRST = {"Radau": 0, "implicit": 1, "RK45": 2, "Euler": 3, "implicitfa
 """Submission order of the series (lower first; others last): the implicit solver and the
 integrators with the most steps are the longest tasks, started first so that the workers finish
 together."""
+
+
+def _expense_rank(engine: str, method: str) -> int:
+    """Submission rank of a series (lower first): the accelerated plants' (a process and a
+    compilation per run) before :data:`EXPENSIVE_FIRST`'s."""
+    return -1 if engine in ACCELERATED else EXPENSIVE_FIRST.get(method, 9)
 
 
 def resolve(scene: Scene | str | None) -> Scene:
@@ -107,7 +114,22 @@ def _series_of(cfg: SweepConfig, skipped: dict[str, str]) -> list[tuple[str, str
     series = [(ANALYTIC, m) for m in cfg.solvers] + [(MUJOCO, i) for i in cfg.integrators]
     if PINOCCHIO not in skipped:
         series += [(PINOCCHIO, m) for m in cfg.solvers]
+    series += [(e, str(p)) for e, p in cfg.accelerated if e not in skipped]
     return series
+
+
+def _skip_unavailable(cfg: SweepConfig, skipped: dict[str, str], say) -> None:
+    """Pinocchio and every accelerated plant of ``cfg`` that cannot run here, into ``skipped``
+    with the reason, each said in one line."""
+    why = running.pinocchio_unavailable()
+    if why:
+        skipped[PINOCCHIO] = why
+        say(f"  {skipped_note(PINOCCHIO, why)}")
+    for engine in dict.fromkeys(e for e, _ in cfg.accelerated):
+        why = running.accelerated_unavailable(engine)
+        if why:
+            skipped[str(engine)] = why
+            say(f"  {skipped_note(engine, why)}")
 
 
 def _sweep_into(
@@ -134,10 +156,7 @@ def _sweep_into(
 
     say = progress or (lambda _msg: None)
     skipped: dict[str, str] = {}
-    why = running.pinocchio_unavailable()
-    if why:
-        skipped[PINOCCHIO] = why
-        say(f"  {skipped_note(PINOCCHIO, why)}")
+    _skip_unavailable(cfg, skipped, say)
     # Compile once, here, before any run that is timed or has a wall-time budget (numba's cache).
     say("compiling the kernels (once per machine; later runs load them from numba's cache)")
     running.warm_compiled(sc, skipped)
@@ -196,7 +215,7 @@ def _grid(
     """Every series submitted to ``ex``, the most expensive first, then the stabilisation rows;
     the series' rows once each has finished (in ``series``' order) and the rows' futures."""
     say(f"grid: {len(series)} series in the executor")
-    order = sorted(range(len(series)), key=lambda i: EXPENSIVE_FIRST.get(series[i][1], 9))
+    order = sorted(range(len(series)), key=lambda i: _expense_rank(*series[i]))
     futs: dict[int, Any] = {}
     for i in order:
         e, m = series[i]

@@ -33,9 +33,10 @@ def timings(
     scene: Scene, engine: str, method: str, setting: float, cfg: SweepConfig, first: float
 ) -> list[float]:
     """Every timing of a setting, s: ``first`` (its accuracy run's) and repeats of the same run
-    while fewer than ``cfg.repeats`` and adding up to less than ``cfg.repeat_budget_s``."""
+    while fewer than ``cfg.repeats`` (an accelerated plant's: ``cfg.accelerated_repeats``) and
+    adding up to less than ``cfg.repeat_budget_s``."""
     samples = [first]
-    while len(samples) < cfg.repeats and sum(samples) < cfg.repeat_budget_s:
+    while len(samples) < cfg.repeats_for(engine) and sum(samples) < cfg.repeat_budget_s:
         samples.append(wall_of(running.run_setting(scene, engine, method, setting, cfg)))
     return samples
 
