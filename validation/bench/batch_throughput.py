@@ -93,16 +93,18 @@ def batch_scenes(
     """``count`` scenes of ``base``'s structure at MuJoCo step ``dt``: scene 0 is ``base`` itself,
     each other one its initial spin scaled per axis by ``U(0.5, 1.5)``, the masses' initial rates
     shifted by ``U(-0.2, 0.2)`` m/s and its spin targets scaled by ``U(0.8, 1.2)`` (seeded by
-    ``seed``); named ``<base>_batch<i>``."""
+    ``seed``); named ``<base>_batch<i>``, ``i`` zero-padded to one width (a name is part of a
+    twin: MJX stacks only models whose name tables have one layout)."""
     if isinstance(count, bool) or not isinstance(count, int) or count < 1:
         raise ValueError(f"count: must be a whole number ≥ 1 (got {count!r})")
     data = scene_to_dict(resolve_scene(base))
     data["mujoco"]["timestep"] = float(dt)
     rng = np.random.default_rng(seed)
+    width = len(str(count - 1))
     out = []
     for i in range(count):
         d = copy.deepcopy(data)
-        d["scene"]["name"] = f"{base}_batch{i}"
+        d["scene"]["name"] = f"{base}_batch{i:0{width}d}"  # one length: the twins' name tables
         if i:
             init = d["initial"]
             init["omega"] = [float(w * rng.uniform(0.5, 1.5)) for w in init["omega"]]

@@ -36,7 +36,8 @@ def test_the_scenes_share_one_structure_and_differ():
     assert len({(s.n, s.effects) for s in scenes}) == 1
     assert len({tuple(s.initial.omega) for s in scenes}) == 4
     assert {s.mujoco.timestep for s in scenes} == {1e-3}
-    assert scenes[0].name == f"{bt.BASE_SCENE}_batch0"
+    assert [s.name for s in scenes] == [f"{bt.BASE_SCENE}_batch{i}" for i in range(4)]
+    assert [s.name[-3:] for s in bt.batch_scenes(11)][9:] == ["h09", "h10"]  # one length
     with pytest.raises(ValueError, match=r"^count: "):
         bt.batch_scenes(0)
 

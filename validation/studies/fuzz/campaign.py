@@ -12,7 +12,8 @@
    to the executor as one task per plant (:func:`submit_scene`, :func:`scene_plant_task`), at
    most :data:`SCENE_WINDOW` per worker ahead, until the budget (scenes) or the time (minutes) is
    spent (a plant that runs batches natively gets a block's scenes of one structure as one task
-   instead: :mod:`validation.studies.fuzz.campaign_batches`), and the scenes are taken back **in index order** whatever order they finish in
+   instead: :mod:`validation.studies.fuzz.campaign_batches`), and the scenes are taken back
+   **in index order** whatever order they finish in
    (:func:`validation.runs.ordered.in_index_order`; where the executor comes from and how it is
    shut down: :func:`validation.studies.sweep.running.executor_for`);
 3. **comparison**: each scene's runs judged (:meth:`Pending.outcome`) and written at once to
