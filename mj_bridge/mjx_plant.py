@@ -111,6 +111,11 @@ def mjx_field_names() -> tuple[set[str], set[str]]:
     return fields, set(re.findall(r"\.([a-z_][a-z0-9_]*)\b", text))
 
 
+NOT_READ = ("key_", "name", "nnames", "path", "npaths")
+"""Prefixes of ``mjx.Model`` fields no forward evaluation reads (keyframes, names and their
+addresses, paths): a batch's scenes may differ in them."""
+
+
 class _Engine:
     """Scenes of one structure as MJX models (stacked where they differ) and their stages."""
 
@@ -158,10 +163,11 @@ class _Engine:
         """One model pytree for the batch: each leaf stacked over the scenes where they differ
         (vmapped, axis 0), else the first scene's (axis None)."""
         jax = self.jax
-        # The keyframes (the twin records each scene's initial state as one) are static numpy
-        # fields of mjx.Model, so they would make the scenes' trees differ; forward dynamics
-        # never reads them: the batch's model carries the first scene's.
-        keys = [f.name for f in dataclasses.fields(models[0]) if f.name.startswith("key_")]
+        # The keyframes (the twin records each scene's initial state as one) and the names (the
+        # twin is named after its scene) are static numpy fields of mjx.Model, so they would make
+        # the scenes' trees differ; forward dynamics never reads them: the batch's model carries
+        # the first scene's.
+        keys = [f.name for f in dataclasses.fields(models[0]) if f.name.startswith(NOT_READ)]
         models = [models[0]] + [
             mx.replace(**{k: getattr(models[0], k) for k in keys}) for mx in models[1:]
         ]
