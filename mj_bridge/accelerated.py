@@ -17,12 +17,14 @@ the process they run it in, and what they silently leave out of it.
   returned, else the child is killed and the interrupt raised here.
 * :func:`accelerated_trajectory`: the record of a run from MuJoCo's state at the samples.
 * :func:`dropped_fields`: the fields of an ``MjModel`` with a value other than MuJoCo's default
-  that an engine's model type has no field for (MJX 3.17's ``mjx.Model`` lacks
-  ``tendon_stiffnesspoly``, MuJoCo 4's cubic tendon stiffness), i.e. what that engine drops
-  without a word: reports name it as the cause of a difference.
+  that an engine's model type has no field for, or carries but never reads (MJX 3.17's
+  ``mjx.Model`` carries ``tendon_stiffnesspoly``, MuJoCo 4's cubic tendon stiffness, and its
+  passive forces never read it), i.e. what that engine drops without a word: reports name it as
+  the cause of a difference.
 
-The scheme both plants integrate with (MuJoCo's RK4, the controller in every stage) is
-:mod:`mj_bridge.accelerated_scheme`.
+The MJX plant integrates with MuJoCo's RK4 written out around ``mjx.forward``
+(:mod:`mj_bridge.accelerated_scheme`, the controller in every stage); the MuJoCo Warp plant with
+Warp's own RK4, the controller in Warp's control callback (:mod:`mj_bridge.warp_plant`).
 """
 
 from __future__ import annotations
@@ -140,7 +142,7 @@ def accelerated_trajectory(
 ) -> Trajectory:
     """The :class:`Trajectory` of an accelerated plant's N samples (MuJoCo's state of the twin
     ``tm``: ``qpos (N, n+7)``, ``qvel``, ``qacc (N, n+6)``, any float dtype; ``aux`` (N, 7) the
-    quadratures ``[W, I_L, I_P]`` of :func:`mj_bridge.accelerated_scheme.rk4_step`), in the
+    quadratures ``[W, I_L, I_P]`` the plant summed over its stages), in the
     paper's coordinates (:meth:`TwinModel.to_paper_batch`), float64. The controller's output at
     each sample is the compiled controller's at the sample's paper state (``fast``, an
     ``analytic.fast.FastModel`` of the scene, built when None), as the C plant records it; ``D``

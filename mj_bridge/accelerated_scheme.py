@@ -1,5 +1,7 @@
-"""MuJoCo's RK4 step, written out so that an engine without physics callbacks (MJX, MuJoCo Warp)
-runs the controller in every stage, as the C plant does inside ``mj_step``.
+"""MuJoCo's RK4 step, written out so that an engine without physics callbacks (MJX) runs the
+controller in every stage, as the C plant does inside ``mj_step``. MuJoCo Warp has callbacks and
+steps with its own RK4 (:mod:`mj_bridge.warp_plant`); it shares only this module's state map
+(:func:`paper_state`), constants and quadrature rates (:mod:`mj_bridge.warp_control`).
 
 Generic over an array namespace ``xp`` (``numpy`` or ``jax.numpy``: only elementwise arithmetic,
 ``sqrt``, ``sin``, ``cos``, ``where``, ``concatenate``, ``stack``, ``@`` and ``[..., k]``
