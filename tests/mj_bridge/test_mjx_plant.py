@@ -244,11 +244,16 @@ def test_float32_within_its_roundoff_floor():
 @needs_mjx
 @pytest.mark.slow
 def test_batch_is_the_loop():
-    """Two controlled scenes of one structure (other masses and initial spin) as one vmapped
-    batch give what each gives alone."""
+    """Two controlled scenes of one structure (other masses, initial spin and name) as one
+    vmapped batch give what each gives alone."""
     a = linear_only("paper_example1_controlled", SHORT)
     b = modified_scene(
-        a, {"masses": {"mass": [4.0e5, 5.0e5]}, "initial": {"omega": [0.5, 1.0, -1.0]}}
+        a,
+        {
+            "scene": {"name": "another_name_of_other_length"},
+            "masses": {"mass": [4.0e5, 5.0e5]},
+            "initial": {"omega": [0.5, 1.0, -1.0]},
+        },
     )
     batch, loop = run_isolated(batch_and_loop, [a, b], MjxSettings(), None)
     assert _max_position_error(batch[0], batch[1]) > 1e-3  # the scenes do differ
