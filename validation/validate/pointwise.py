@@ -36,7 +36,7 @@ import time
 import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -48,7 +48,6 @@ from analytic.scene import Scene
 from analytic.scene.dump import modified_scene
 from mj_bridge.mujoco_settings import ControllerSource
 from mj_bridge.plants import plant
-from mj_bridge.twin import Twin
 from validation.compare.pointwise import (
     Case,
     CaseDifferences,
@@ -59,6 +58,10 @@ from validation.compare.pointwise import (
     state_bounds,
 )
 from validation.compare.thresholds import pointwise_threshold
+
+if TYPE_CHECKING:
+    from mj_bridge.twin import Twin
+
 
 POINTWISE_STATES = 3
 """Random states beside the initial one: four states in all, one ``pointwise`` call per case."""
@@ -169,6 +172,8 @@ class References:
     def _models(self, scene: Scene) -> tuple[Twin, TumblingModel]:
         got = self._models_of.get(id(scene))
         if got is None or got[0] is not scene:
+            from mj_bridge.twin import Twin  # here: MuJoCo and the kernels load on first use
+
             twin = Twin(scene, controller=ControllerSource.ANALYTIC, native_callback=False)
             got = self._models_of[id(scene)] = (scene, twin, TumblingModel(scene))
         return got[1], got[2]
