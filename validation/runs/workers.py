@@ -382,6 +382,13 @@ def start_served(
     job.started = time.monotonic()
     if not can_serve():
         return job
+    # numba's cache checked (or its check inherited from this process's parent) here, before the
+    # server starts: the server, a child of this process, then trusts that check instead of
+    # making its own, which would delete the kernels compiled since the check as unknown ones
+    # (a Dask worker never imports the kernels itself: its server would be the first to check)
+    from analytic.runtime import cache_check
+
+    cache_check.ensure_checked()
     ctx = mp.get_context("forkserver")
     ctx.set_forkserver_preload([SERVER_WATCH, *preload, *_main_module(), SERVER_SETUP])
     conn, child_conn = ctx.Pipe(duplex=False)
