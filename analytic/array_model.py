@@ -30,6 +30,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from analytic import fundamental
+from analytic.array_ops import matvec, vecdot, vecmat
 from analytic.effects import Effect, Weighting
 from analytic.effects.declaration import SpringLaw
 from analytic.effects.registry import SPRING_LAWS, spring_law
@@ -193,7 +194,7 @@ def _bc(xp, x, shape):
 def _linear_map(xp, T, u):
     """``X(u) = T u`` for a tensor T (..., 3, 4, 4) of a map linear in u (``H``, ``L_a``, ``L_d``;
     :mod:`analytic.kinematics`): (..., 4) -> (..., 3, 4), one matrix-vector product."""
-    X = xp.matvec(T.reshape((*T.shape[:-3], 12, 4)), u)
+    X = matvec(T.reshape((*T.shape[:-3], 12, 4)), u)
     return X.reshape((*X.shape[:-1], 3, 4))
 
 
@@ -224,7 +225,7 @@ def S_of(xp, u):
     """``S(u)``, Eq. (11), in the paper's form ``2u0² - 1 + 2ui²`` (a rotation only for unit u;
     docs/errata.md C2), body -> inertial, (..., 4) -> (..., 3, 3)."""
     uu = _outer(u, u)
-    S9 = xp.matvec(xp.asarray(_C_S, dtype=u.dtype), uu.reshape((*uu.shape[:-2], 16)))
+    S9 = matvec(xp.asarray(_C_S, dtype=u.dtype), uu.reshape((*uu.shape[:-2], 16)))
     S9 = S9 - xp.asarray(_I9, dtype=u.dtype)
     return S9.reshape((*S9.shape[:-1], 3, 3))
 
@@ -287,22 +288,22 @@ def kinematics(xp, structure: Structure, params: Params, q, qdot=None) -> Kinema
     m = params["m"]
     La = _linear_map(xp, params["T_a"], u)  # Eq. (29)
     Ld = _linear_map(xp, params["T_d"], u)  # Eq. (34)
-    mu1 = xp.vecdot(m, p)
+    mu1 = vecdot(m, p)
     kin = dict(
         u=u,
         p=p,
-        Sa=xp.matvec(Sm, params["a"]),
-        Sd=xp.matvec(Sm, params["d"]),
+        Sa=matvec(Sm, params["a"]),
+        Sd=matvec(Sm, params["d"]),
         Hm=Hm,
         La=La,
         Ld=Ld,
         mu1=mu1,
-        mu2=xp.vecdot(m * p, p),
+        mu2=vecdot(m * p, p),
         B=mu1[..., None, None] * La + params["mu0"][..., None, None] * Ld,  # {mᵀp}L_a + {mᵀ1}L_d
     )
     if qdot is not None:
         ud = qdot[..., 3:7]
-        kin.update(ud=ud, pd=qdot[..., 7:], omega=xp.matvec(Hm, ud), Hd=H_of(xp, ud))
+        kin.update(ud=ud, pd=qdot[..., 7:], omega=matvec(Hm, ud), Hd=H_of(xp, ud))
     return Kinematics(**kin)
 
 
@@ -340,10 +341,8 @@ def mass_matrix(xp, structure: Structure, params: Params, k: Kinematics):
             [xp.concatenate(rows_R, axis=-1), xp.concatenate(rows_u, axis=-1)], axis=-2
         )
     MRp = _outer(Sa, m)  # (Sa)mᵀ
-    Mup = _outer(xp.vecmat(Sa, La), k.p * m) + _outer(
-        xp.vecmat(Sa, Ld), m
-    )  # L_aᵀSa(p∘m)ᵀ + L_dᵀSa mᵀ
-    Mpp = (xp.vecdot(Sa, Sa)[..., None] * m)[..., :, None] * xp.eye(
+    Mup = _outer(vecmat(Sa, La), k.p * m) + _outer(vecmat(Sa, Ld), m)  # L_aᵀSa(p∘m)ᵀ + L_dᵀSa mᵀ
+    Mpp = (vecdot(Sa, Sa)[..., None] * m)[..., :, None] * xp.eye(
         n, dtype=mu0.dtype
     )  # {(Sa)ᵀSa}diag(m)
     rows_R.append(bc(MRp, 3, n))
@@ -370,32 +369,32 @@ def generalized_force(xp, structure: Structure, params: Params, t, k: Kinematics
     ud, pd, p = k.ud, k.pd, k.p
     mu1, mu2 = k.mu1[..., None], k.mu2[..., None]
     mu0_ = mu0[..., None]
-    Lau = xp.matvec(k.La, ud)  # L_a u̇ = Ṡa
-    Lad_u = xp.matvec(_linear_map(xp, T_a, ud), ud)  # L̇_a u̇
-    Ldd_u = xp.matvec(_linear_map(xp, T_d, ud), ud)  # L̇_d u̇
-    mpd = xp.vecdot(m, pd)[..., None]  # mᵀṗ
-    mppd = xp.vecdot(m * p, pd)[..., None]  # (p∘m)ᵀṗ
+    Lau = matvec(k.La, ud)  # L_a u̇ = Ṡa
+    Lad_u = matvec(_linear_map(xp, T_a, ud), ud)  # L̇_a u̇
+    Ldd_u = matvec(_linear_map(xp, T_d, ud), ud)  # L̇_d u̇
+    mpd = vecdot(m, pd)[..., None]  # mᵀṗ
+    mppd = vecdot(m * p, pd)[..., None]  # (p∘m)ᵀṗ
     sum_m_kappa = (2.0 * mpd) * Lau + mu1 * Lad_u + mu0_ * Ldd_u  # Σ m_i κ_i
     sum_mp_kappa = (2.0 * mppd) * Lau + mu2 * Lad_u + mu1 * Ldd_u  # Σ m_i p_i κ_i
     Q_R = -sum_m_kappa
     # -2ḢᵀJHu̇ - L_aᵀ Σ m_i p_i κ_i - L_dᵀ Σ m_i κ_i  (Eq. 52 second row with B_d)
     Q_u = (
-        -2.0 * xp.vecmat(xp.matvec(params["J"], k.omega), k.Hd)
-        - xp.vecmat(sum_mp_kappa, k.La)
-        - xp.vecmat(sum_m_kappa, k.Ld)
+        -2.0 * vecmat(matvec(params["J"], k.omega), k.Hd)
+        - vecmat(sum_mp_kappa, k.La)
+        - vecmat(sum_m_kappa, k.Ld)
     )
     Sa = k.Sa
     # -{(Sa)ᵀL̇_a u̇}(p∘m) - 2{(Sa)ᵀL_a u̇}(m∘ṗ) - {(Sa)ᵀL̇_d u̇}m, Eq. (52) third row
     Q_p = -m * (
-        (2.0 * xp.vecdot(Sa, Lau))[..., None] * pd
-        + xp.vecdot(Sa, Lad_u)[..., None] * p
-        + xp.vecdot(Sa, Ldd_u)[..., None]
+        (2.0 * vecdot(Sa, Lau))[..., None] * pd
+        + vecdot(Sa, Lad_u)[..., None] * p
+        + vecdot(Sa, Ldd_u)[..., None]
     )
     if structure.has(Effect.GRAVITY):
         g = params["g"]  # inertial acceleration vector (paper: -g e3)
         Q_R = Q_R + params["m_T"][..., None] * g
-        Q_u = Q_u + xp.vecmat(g, k.B)
-        Q_p = Q_p + xp.vecdot(Sa, g)[..., None] * m
+        Q_u = Q_u + vecmat(g, k.B)
+        Q_p = Q_p + vecdot(Sa, g)[..., None] * m
     if structure.laws:
         # Each law's tensions f = c φ(e, ė) on the n + 1 elements, Q_i = f_{i+1} - f_i
         # (F^S = -∂U_s/∂p for a conservative law; Eq. 53 corrected, docs/errata.md item 2).
@@ -405,7 +404,7 @@ def generalized_force(xp, structure: Structure, params: Params, t, k: Kinematics
             f = params[law.key.key] * law.force(e, ed if law.dissipation is not None else None)
             Q_p = Q_p + (f[..., 1:] - f[..., :-1])
     if structure.has(Effect.EXTERNAL_TORQUE):
-        Q_u = Q_u + xp.vecmat(given_torque(xp, structure, params, t), k.Hm)  # Q_τ = Hᵀτ, Eq. (61)
+        Q_u = Q_u + vecmat(given_torque(xp, structure, params, t), k.Hm)  # Q_τ = Hᵀτ, Eq. (61)
     batch = _batch(xp, Q_R.shape[:-1], Q_u.shape[:-1], Q_p.shape[:-1])
     parts = [_bc(xp, x, (*batch, x.shape[-1])) for x in (Q_R, Q_u, Q_p)]
     return xp.concatenate(parts if n else parts[:2], axis=-1)
@@ -418,9 +417,9 @@ def modeling_constraint(xp, structure: Structure, params: Params, q, qdot):
     z3 = xp.zeros_like(q[..., :3])
     a_m = xp.concatenate([z3, u, xp.zeros_like(q[..., 7:])], axis=-1)
     b_m = (
-        -params["delta1"] * xp.vecdot(u, ud)
-        - 0.5 * params["delta2"] * (xp.vecdot(u, u) - 1.0)
-        - xp.vecdot(ud, ud)
+        -params["delta1"] * vecdot(u, ud)
+        - 0.5 * params["delta2"] * (vecdot(u, u) - 1.0)
+        - vecdot(ud, ud)
     )
     return a_m, b_m
 
@@ -456,7 +455,7 @@ def control_constraints(xp, structure: Structure, params: Params, t, k: Kinemati
     if structure.omega_components:
         A_rows.append(k.Hm[..., c, :] @ xp.asarray(P, dtype=dtype))  # [0, H_c, 0] = H_c P
         e = k.omega[..., c] - req["omega_bar"]
-        b_rows.append(req["omega_bar_dot"] - xp.matvec(params["omega_gain"], e))
+        b_rows.append(req["omega_bar_dot"] - matvec(params["omega_gain"], e))
     if structure.mass_indices:
         A_rows.append(xp.asarray(E, dtype=dtype))
         b_rows.append(
@@ -518,7 +517,7 @@ def control_of(xp, kin: Kinematics, sol) -> ArrayControl:
     return ArrayControl(
         qddot=sol.qddot,
         QC=sol.constraint_force,
-        torque=0.25 * xp.matvec(kin.Hm, Qc[..., 3:7]),  # τ = ¼ H Q^C_u (docs/errata.md C4)
+        torque=0.25 * matvec(kin.Hm, Qc[..., 3:7]),  # τ = ¼ H Q^C_u (docs/errata.md C4)
         rod_forces=Qc[..., 7:],
         force_at_C=Qc[..., :3],
         residual=sol.residual,

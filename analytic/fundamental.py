@@ -36,6 +36,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from analytic.array_ops import matvec, vecdot, vecmat
 from analytic.effects import Weighting
 
 # Relative eigenvalue cut-off of the Moore-Penrose inverse of the (symmetric PSD) constraint Gram
@@ -211,8 +212,8 @@ def solve_array(
         A_cT = xp.broadcast_to(A_cT, (*batch, nq, k))
     X = solve_Ma(xp.concatenate([Qa[..., None], a_m[..., None], A_cT], axis=-1))
     a0, y, Y = X[..., 0], X[..., 1], X[..., 2:]
-    s = xp.vecdot(a_m, y)
-    lambda_m = (b_m - xp.vecdot(a_m, a0)) / s
+    s = vecdot(a_m, y)
+    lambda_m = (b_m - vecdot(a_m, a0)) / s
     acc = a0 + lambda_m[..., None] * y  # Eq. (60): the uncontrolled, norm-constrained acceleration
     if k == 0:
         zeros = xp.zeros_like(acc)
@@ -220,25 +221,25 @@ def solve_array(
             acc, lambda_m[..., None] * a_m, zeros, lambda_m, zeros[..., :0], xp.zeros(batch, int)
         )
 
-    Ay = xp.matvec(A_c, y)
+    Ay = matvec(A_c, y)
     Z = Y - y[..., :, None] * (Ay / s[..., None])[..., None, :]  # K A_cᵀ, shape (..., nq, k)
-    r = b_c - xp.matvec(A_c, acc)
+    r = b_c - matvec(A_c, acc)
     if weighting is Weighting.M_INV:
         G = A_c @ Z  # A_c K A_cᵀ = Zᵀ M Z
         Ginv, rank = pinv(0.5 * (G + G.mT))
-        mu = xp.matvec(Ginv, r)
-        qddot = acc + xp.matvec(Z, mu)
-        Q_ctl = xp.vecmat(mu, A_c)  # A_cᵀμ; M K Q_ctl differs only along a_m
+        mu = matvec(Ginv, r)
+        qddot = acc + matvec(Z, mu)
+        Q_ctl = vecmat(mu, A_c)  # A_cᵀμ; M K Q_ctl differs only along a_m
     else:
         WZ = M @ (M @ Z) if weighting is Weighting.M_INV2 else Z  # W = N⁻¹: M² or I
         G = Z.mT @ WZ
         Ginv, rank = pinv(0.5 * (G + G.mT))
-        Q_ctl = xp.matvec(WZ, xp.matvec(Ginv, r))
+        Q_ctl = matvec(WZ, matvec(Ginv, r))
         v = solve_Ma(Q_ctl[..., None])[..., 0]
-        qddot = acc + v - y * (xp.vecdot(a_m, v) / s)[..., None]  # q̈ = a + K Q_ctl
+        qddot = acc + v - y * (vecdot(a_m, v) / s)[..., None]  # q̈ = a + K Q_ctl
     # Q^C = M q̈ - Q = a_m λ_m + (I - a_m yᵀ/s) Q_ctl, assembled without cancellation.
-    Q_C = Q_ctl + a_m * (lambda_m - xp.vecdot(y, Q_ctl) / s)[..., None]
-    residual = xp.matvec(A_c, qddot) - b_c
+    Q_C = Q_ctl + a_m * (lambda_m - vecdot(y, Q_ctl) / s)[..., None]
+    residual = matvec(A_c, qddot) - b_c
     return ArraySolution(qddot, Q_C, Q_ctl, lambda_m, residual, rank)
 
 
