@@ -22,7 +22,7 @@ from analytic.scene import Scene
 from analytic.trajectory import Trajectory
 from mj_bridge.mjx_settings import MjxController, MjxSettings, mjx_unavailable
 from mj_bridge.plan import plan_steps
-from model_xml.tendon_terms import TENDON_TERMS
+from model_xml.tendon_terms import TWIN_EFFECTS
 
 
 def mjx_version() -> str:
@@ -41,16 +41,7 @@ class MjxPlant(Plant):
     label = "MJX"
     default = False
     batched = True
-    effects = frozenset(
-        {
-            Effect.GRAVITY,
-            Effect.MASS_INERTIA,
-            Effect.EXTERNAL_TORQUE,
-            Effect.CONTROL_OMEGA,
-            Effect.CONTROL_MASSES,
-            *TENDON_TERMS,  # the twin's tendons carry each spring law, as for the C plant
-        }
-    )
+    effects = TWIN_EFFECTS  # the C plant's twin and control channels
     """What the C plant's twin holds and the stages apply (the same list as the MuJoCo plant's):
     a law MJX then leaves out (its cubic tendon stiffness) is a difference of the engine, found
     by the comparison and named in the run's ``info["dropped_fields"]``, never hidden."""

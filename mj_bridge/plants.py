@@ -37,7 +37,7 @@ from mj_bridge.pinocchio_settings import (
 )
 from mj_bridge.registry import NAME_PATTERN, RESERVED, entry_points, report_order
 from mj_bridge.scipy_loop_plant import ScipyLoopPlant
-from model_xml.tendon_terms import TENDON_TERMS
+from model_xml.tendon_terms import TWIN_EFFECTS
 
 
 class MujocoPlant(Plant):
@@ -45,16 +45,7 @@ class MujocoPlant(Plant):
 
     engine = Engine.MUJOCO.value
     label = "MuJoCo"
-    effects = frozenset(
-        {
-            Effect.GRAVITY,  # the model's gravity
-            Effect.MASS_INERTIA,  # the masses' bodies' inertia
-            Effect.EXTERNAL_TORQUE,  # applied with the control, inside every stage
-            Effect.CONTROL_OMEGA,
-            Effect.CONTROL_MASSES,
-            *TENDON_TERMS,  # each spring law the twin's tendons (or spring actuators) carry
-        }
-    )
+    effects = TWIN_EFFECTS
     """The effects the twin (:func:`model_xml.builder.build_spec`, its spring laws
     :data:`model_xml.tendon_terms.TENDON_TERMS`) and its callbacks (:mod:`mj_bridge.stages`)
     implement."""

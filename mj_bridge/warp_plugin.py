@@ -20,7 +20,7 @@ import math
 
 import numpy as np
 
-from analytic.effects import Effect, Precision
+from analytic.effects import Precision
 from analytic.plant import TIGHTER_STEP, Plant
 from analytic.scene import Scene
 from analytic.trajectory import Trajectory
@@ -31,7 +31,7 @@ from mj_bridge.warp_settings import (
     warp_unavailable,
     warp_version,
 )
-from model_xml.tendon_terms import TENDON_TERMS
+from model_xml.tendon_terms import TWIN_EFFECTS
 
 
 class WarpPlant(Plant):
@@ -42,16 +42,7 @@ class WarpPlant(Plant):
     label = "MuJoCo Warp"
     default = False
     batched = True
-    effects = frozenset(
-        {
-            Effect.GRAVITY,
-            Effect.MASS_INERTIA,
-            Effect.EXTERNAL_TORQUE,
-            Effect.CONTROL_OMEGA,
-            Effect.CONTROL_MASSES,
-            *TENDON_TERMS,
-        }
-    )
+    effects = TWIN_EFFECTS  # the C plant's twin and control channels
     """The C plant's effects: the same twin (its spring laws :data:`TENDON_TERMS`, as tendons or
     as spring actuators, whose cubic term Warp's ``act_bias`` callback computes as the C plant's
     ``mjcb_act_bias`` does) and the same control channels, applied by Warp's control callback."""

@@ -33,4 +33,19 @@ TENDON_TERMS: Mapping[Effect, TendonTerm] = {
 """Each spring law's place in the MJCF twin, by its effect: MuJoCo integrates every one itself."""
 
 
-__all__ = ["TENDON_TERMS", "TendonTerm"]
+TWIN_EFFECTS: frozenset[Effect] = frozenset(
+    {
+        Effect.GRAVITY,  # the model's gravity
+        Effect.MASS_INERTIA,  # the masses' bodies' inertia
+        Effect.EXTERNAL_TORQUE,  # applied with the control, inside every stage
+        Effect.CONTROL_OMEGA,  # the torque actuators
+        Effect.CONTROL_MASSES,  # the rod-force actuators
+        *TENDON_TERMS,  # each spring law the twin's tendons (or spring actuators) carry
+    }
+)
+"""The effects the MJCF twin (:func:`model_xml.builder.build_spec`) and its control channels
+carry: what every plant that runs the twin under the controller claims (MuJoCo's C engine, MJX,
+MuJoCo Warp)."""
+
+
+__all__ = ["TENDON_TERMS", "TWIN_EFFECTS", "TendonTerm"]
