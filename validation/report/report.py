@@ -1,4 +1,5 @@
-"""Reports of a validation run: ``report.md`` for people, ``report.json`` for machines, figures.
+"""Reports of a validation run: ``report.md`` and ``report.html`` for people, ``report.json`` for
+machines, figures.
 
 :func:`write_report` writes them all. Every file is written atomically (a temporary file in the same
 directory, then :func:`os.replace`), so an interrupted run never leaves a half-written report. A
@@ -7,7 +8,8 @@ a signal stopped is ``INTERRUPTED``, said the same way (:class:`RunVerdict`). A 
 written (a full disk) is an :class:`validation.runs.atomic.OutputError`, never a verdict.
 
 What each file says is built elsewhere, one job each: ``report.md``'s sections in
-:mod:`validation.report.markdown`, ``report.json``'s fields in :mod:`validation.report.document`,
+:mod:`validation.report.markdown`, ``report.html`` from the same records in
+:mod:`validation.report.html_report`, ``report.json``'s fields in :mod:`validation.report.document`,
 the figures in :mod:`validation.report.figures` (drawn by :func:`draw_figures`, in each format asked
 for: PNG by default; SVG or PDF for papers; a figure that was not drawn, as an uncontrolled scene's
 control figure, is named in ``report.md`` with the reason).
@@ -39,7 +41,8 @@ from validation.report.figures import (
     figure_invariants,
     figure_tracking,
 )
-from validation.report.markdown import render_markdown
+from validation.report.html_report import HTML_NAME, figure_images, render_html
+from validation.report.markdown import Page, render_markdown
 from validation.report.md_text import md_literal as _md  # noqa: F401  # escaping's name in the fault tests
 from validation.report.provenance import FileKind, code_origin, dumps, provenance
 from validation.report.records import FigureEntry, RunVerdict
@@ -90,6 +93,7 @@ class ReportFiles:
     entries: tuple[FigureEntry, ...] = ()
     verdict: RunVerdict = RunVerdict.FAILED
     failure: str = ""
+    html: Path | None = None
 
 
 def draw_figures(
@@ -152,8 +156,10 @@ def write_report(
     scene: Any = None,
     figures: tuple[Sequence[Path], Sequence[FigureEntry], Sequence[str]] | None = None,
     interrupted: bool = False,
+    recording: str | None = None,
 ) -> ReportFiles:
-    """Write ``report.md``, ``report.json`` and the figures into ``out_dir`` (atomically).
+    """Write ``report.md``, ``report.html``, ``report.json`` and the figures into ``out_dir``
+    (atomically).
 
     Args:
         out_dir: output directory (created).
@@ -171,6 +177,8 @@ def write_report(
             not be drawn makes the run FAILED (its error joins ``failure``).
         interrupted: a signal stopped the run: the verdict is INTERRUPTED (``failure`` says
             where it stopped).
+        recording: the recording's file name beside the report (``run.rrd``), linked from
+            ``report.html``; None when the run wrote none.
 
     Raises:
         OutputError: a file could not be written (a full disk ...): no verdict is given.
@@ -197,7 +205,11 @@ def write_report(
         out / "report.md",
         render_markdown(cmp, verdict, failure, entries, meta, verdicts, origin.sentence()),
     )
-    return ReportFiles(md, js, tuple(figs), tuple(entries), verdict, failure)
+    page = Page(cmp, verdict, failure, entries, meta, verdicts, origin.sentence())
+    html = write_atomic(
+        out / HTML_NAME, render_html(page, figure_images(out, entries), recording)
+    )
+    return ReportFiles(md, js, tuple(figs), tuple(entries), verdict, failure, html)
 
 
 def _format(f: FigureFormat | str) -> FigureFormat:

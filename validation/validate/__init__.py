@@ -77,6 +77,7 @@ from validation.runs.stages import StagePool
 from validation.scenes import DEFAULT_SCENE  # re-exported: the one default of every command
 from validation.validate.evidence import (
     EVIDENCE_HELPERS,
+    RECORDING,
     Evidence,
     make_evidence,
     prepare_comparison,
@@ -284,6 +285,7 @@ def _validate_into(
             scene=sc,
             figures=evidence.figures,
             interrupted=interrupted,
+            recording=RECORDING if RECORDING in files else None,
         )
 
     # A signal while the report is written is not allowed to leave a report that says PASSED in
@@ -291,6 +293,8 @@ def _validate_into(
     with signals_held(raise_after=False) as caught:
         rep = report(failure, interrupted)
         files.update({"report.md": rep.markdown, "report.json": rep.json})
+        if rep.html is not None:
+            files["report.html"] = rep.html
         files.update({f.name: f for f in rep.figures})
         run.keep_only(files)
         if caught and not interrupted:
