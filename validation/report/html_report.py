@@ -33,7 +33,6 @@ from validation.report.html_page import (
     num,
     page,
     para,
-    raw,
     recording,
     relative_link,
     section,
@@ -264,7 +263,9 @@ def summaries(p: Page) -> str:
         Column("final", True),
         "unit",
     ]
-    return section("Summaries over time", table("summaries", cols, rows), section_id="series-summaries")
+    return section(
+        "Summaries over time", table("summaries", cols, rows), section_id="series-summaries"
+    )
 
 
 def shown_file(f: FigureEntry) -> str | None:

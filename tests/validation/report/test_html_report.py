@@ -29,9 +29,7 @@ def _comparison() -> Comparison:
     checks = (
         Check("position_C", PAIR, 5e-5, 1.2e-6, "m", False, "a reason " + HOSTILE, t_max=0.8),
         Check("attitude", PAIR, 2.6e-13, 1e-6, "rad", True, "r", t_max=0.4),
-        Check(
-            "control_torque", PAIR, math.nan, 1e-6, "1", True, "no torque", applicable=False
-        ),
+        Check("control_torque", PAIR, math.nan, 1e-6, "1", True, "no torque", applicable=False),
         Check("energy", Subject("mujoco"), 8.2e-11, 1e-8, "1", True, "r", t_max=1.0),
     )
     series = (
