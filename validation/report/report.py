@@ -206,9 +206,7 @@ def write_report(
         render_markdown(cmp, verdict, failure, entries, meta, verdicts, origin.sentence()),
     )
     page = Page(cmp, verdict, failure, entries, meta, verdicts, origin.sentence())
-    html = write_atomic(
-        out / HTML_NAME, render_html(page, figure_images(out, entries), recording)
-    )
+    html = write_atomic(out / HTML_NAME, render_html(page, figure_images(out, entries), recording))
     return ReportFiles(md, js, tuple(figs), tuple(entries), verdict, failure, html)
 
 
