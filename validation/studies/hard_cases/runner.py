@@ -31,6 +31,7 @@ from validation.runs.outputs import output_run
 from validation.scenes import HARD_DIR
 from validation.studies.hard_cases.catalogue import MEASURES, Applies, Measure, Reference
 from validation.studies.hard_cases.criterion import CheckSpec, Criterion, parse_criterion
+from validation.studies.hard_cases.html_report import write_all
 from validation.studies.hard_cases.judgeable import NotJudgeable, assess
 from validation.studies.hard_cases.measures import ANALYTIC, CaseRuns, finite, label, measure
 from validation.studies.hard_cases.references.pinv_law import ENGINE_LAW_PLANTS
@@ -40,7 +41,6 @@ from validation.studies.hard_cases.table import (
     HardCaseTable,
     Reported,
     Verdict,
-    write_table,
 )
 from validation.studies.roundoff import precision_of
 
@@ -334,15 +334,15 @@ def _run_into(
             if ki is None:
                 raise
             current = table(False, f"interrupted during {name}")
-            write_table(current, out)
+            write_all(current, out)
             if ki is exc:
                 raise
             raise ki from exc
         done = i + 1 == len(selected)
         current = table(done, "" if done else f"{len(selected) - i - 1} cases still to run")
-        write_table(current, out)
+        write_all(current, out)
     if not selected:
-        write_table(current, out)
+        write_all(current, out)
     return current
 
 
@@ -353,7 +353,7 @@ def run_hard_cases(
     progress: Callable[[str, int, int], None] | None = None,
     plants: Iterable[str] | None = None,
 ) -> HardCaseTable:
-    """Run the hard cases and write ``hard_cases.md`` / ``hard_cases.json`` to ``out_dir``.
+    """Run the hard cases and write ``hard_cases.md`` / ``.html`` / ``.json`` to ``out_dir``.
 
     Args:
         out_dir: output directory (created).

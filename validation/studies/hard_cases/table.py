@@ -1,5 +1,6 @@
 """The hard-case table: one row per case, a column per plant; written as ``hard_cases.md`` and
-``hard_cases.json`` (each atomically, :mod:`validation.runs.atomic`).
+``hard_cases.json`` (each atomically, :mod:`validation.runs.atomic`; ``hard_cases.html`` beside
+them: :mod:`validation.studies.hard_cases.html_report`).
 
 A row's checks are the comparison's :class:`validation.compare.checks.Check` records: a check about one
 plant has that plant as its subject, a check against the analytic plant the pair (it belongs to
