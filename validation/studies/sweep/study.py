@@ -8,7 +8,7 @@ Order of work (each item a task of the executor, a local process pool by default
 3. the series, the most expensive first (so that the pool ends together), then the rows of the
    stabilisation study;
 4. the cheapest setting per level, and ``sweep.csv``, ``sweep.json``, ``sweep.md``,
-   ``work_precision.png`` and ``sweep.rrd`` as one output run (:mod:`validation.runs.outputs`).
+   ``work_precision.png``, ``sweep.rrd`` and ``sweep.html`` as one output run (:mod:`validation.runs.outputs`).
 """
 
 from __future__ import annotations
@@ -36,6 +36,7 @@ from validation.studies.sweep.config import (
 )
 from validation.studies.sweep.csv_rows import to_csv
 from validation.studies.sweep.figure import figure_data, render_png
+from validation.studies.sweep.html_report import HTML_NAME, sweep_html
 from validation.studies.sweep.json_doc import sweep_json
 from validation.studies.sweep.markdown import FIGURE_FILE, skipped_note, sweep_markdown
 from validation.studies.sweep.reference import obtain_reference
@@ -237,12 +238,14 @@ def _grid(
 def _write_files(
     res: SweepResult, sc: Scene, cfg: SweepConfig, out: Path, floor: float, run_id: str | None
 ) -> dict[str, Path]:
-    """``sweep.csv``, ``sweep.md``, the figure and ``sweep.rrd`` written into ``out`` (``sweep.json``,
-    which holds the wall times, is written last, by the caller); every file's path by key."""
+    """``sweep.csv``, ``sweep.md``, the figure, ``sweep.rrd`` and ``sweep.html`` written into
+    ``out`` (``sweep.json``, which holds the wall times, is written last, by the caller); every
+    file's path by key."""
     files = {
         "csv": out / "sweep.csv",
         "json": out / "sweep.json",
         "md": out / "sweep.md",
+        "html": out / HTML_NAME,
         "png": out / FIGURE_FILE,
         "rrd": out / "sweep.rrd",
     }
@@ -252,6 +255,7 @@ def _write_files(
     write_text(files["md"], sweep_markdown(res, cfg))
     write_bytes(files["png"], png)
     write_rrd(files["rrd"], data, png, sweep_markdown(res, cfg, image=None), recording_id=run_id)
+    write_text(files["html"], sweep_html(res, cfg, png, files["rrd"].name))
     return files
 
 
