@@ -48,6 +48,7 @@ from validation.studies.fuzz.campaign_batches import CampaignBatches, batched_pl
 from validation.studies.fuzz.campaign_records import json_bytes, load_scene_record, scene_rel
 from validation.studies.fuzz.directory import CONFIG_FILE, CampaignDir, open_campaign
 from validation.studies.fuzz.findings import Findings
+from validation.studies.fuzz.html_report import HTML_NAME, campaign_html
 from validation.studies.fuzz.judge import (
     RUN_BUDGET_S,
     Outcome,
@@ -323,13 +324,16 @@ def _judged(cd: CampaignDir, cfg: FuzzConfig, index: int, got: Pending) -> Scene
 
 
 def _write_report(cd: CampaignDir, res: CampaignResult) -> CampaignResult:
-    """``campaign.md``, ``campaign.json``, ``campaign.png`` (:mod:`validation.studies.fuzz.report`),
-    each listed in the campaign's manifest; the result with ``files`` set."""
+    """``campaign.md``, ``campaign.json``, ``campaign.png`` (:mod:`validation.studies.fuzz.report`)
+    and ``campaign.html`` (:mod:`validation.studies.fuzz.html_report`), each listed in the
+    campaign's manifest; the result with ``files`` set."""
     doc = campaign_doc(res)
+    png = campaign_png(doc)
     files = {
-        "png": cd.write(FIGURE, campaign_png(doc)),
+        "png": cd.write(FIGURE, png),
         "md": cd.write("campaign.md", campaign_markdown(res, doc).encode("utf-8")),
         "json": cd.write("campaign.json", dumps(doc).encode("utf-8")),
+        "html": cd.write(HTML_NAME, campaign_html(res, doc, png).encode("utf-8")),
     }
     return replace(res, files=files)
 

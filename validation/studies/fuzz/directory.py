@@ -8,7 +8,7 @@ same ownership rule holds all the same:
 * ``OUT`` may be new, empty, or a campaign's: its ``manifest.json`` of schema
   :data:`CAMPAIGN_SCHEMA` names the campaign (its configuration, a run id) and lists every file the
   campaign wrote (``campaign_config.json``, ``scenes/<i>.json``, ``counterexamples/<key>.toml`` /
-  ``.json``, ``campaign.md`` / ``.json`` / ``.png``) with its size and SHA-256. Anything else there
+  ``.json``, ``campaign.md`` / ``.json`` / ``.png`` / ``.html``) with its size and SHA-256. Anything else there
   (a user's file, a subdirectory, a link, a FIFO, an older campaign without a manifest, a run of
   another command) is refused in one line naming it, before any work (:class:`NotOurs`, a
   ``ValueError``: exit 2). ``OUT`` itself must not be a symbolic link.
@@ -65,7 +65,9 @@ CONFIG_FILE = "campaign_config.json"
 SCENES_DIR = "scenes"
 COUNTEREXAMPLES_DIR = "counterexamples"
 SUBDIRS = (SCENES_DIR, COUNTEREXAMPLES_DIR)
-CAMPAIGN_FILES = frozenset({CONFIG_FILE, "campaign.md", "campaign.json", "campaign.png"})
+CAMPAIGN_FILES = frozenset(
+    {CONFIG_FILE, "campaign.md", "campaign.json", "campaign.png", "campaign.html"}
+)
 """The campaign's own files at the top of ``OUT`` (they only choose a refusal's words)."""
 MANIFEST_MAX_BYTES = 64 << 20
 """A campaign's manifest larger than this (64 MiB, some 400,000 files) is not read."""

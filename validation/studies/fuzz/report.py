@@ -138,6 +138,38 @@ def reproduce(ex: Any, res: CampaignResult) -> str:
     )
 
 
+def cause(e: dict[str, Any]) -> str:
+    """A counterexample's settled cause (``campaign.json``'s ``settlement.cause``), else
+    ``unsettled``."""
+    return e["settlement"]["cause"] if e["settlement"] else "unsettled"
+
+
+SECTIONS = (
+    ("New findings", "not known, and neither tightened settings, a singular or "
+     "ill-conditioned motion nor an engine's range explain them",
+     lambda e: not e["known"]
+     and cause(e) not in ("settings", "scene", "range", "conditioning")),
+    ("Numerical limits of the settings", "gone at tightened settings, or within the plants' "
+     "own error estimates at their default settings: the settings, not the model",
+     lambda e: not e["known"] and cause(e) == "settings"),
+    ("Singular motions", "a plant stops, and every other plant stops or stalls at the same "
+     "time: the controlled motion itself ends there (or a disagreement with that plant's "
+     "run up to its stop)",
+     lambda e: not e["known"] and cause(e) == "scene"),
+    ("Beyond an engine's range", "a plant stops where the motion passes the largest value it "
+     "carries on with (MuJoCo's mjMAXVAL), while every other plant finishes (or a "
+     "disagreement with that plant's run up to its stop)",
+     lambda e: not e["known"] and cause(e) == "range"),
+    ("Ill-conditioned motions", "the motion amplifies a round-off-sized change of its "
+     "initial state into a tenth of the disagreement or more, or a plant stops round-off "
+     "limited at its default and tightened settings (a one-ulp change of its state moves a "
+     "step by its whole tolerance): beyond what double precision can judge, no two engines "
+     "can agree closer", lambda e: not e["known"] and cause(e) == "conditioning"),
+    ("Known findings", "", lambda e: bool(e["known"])),
+)
+"""The sections of the counterexamples, in order: title, what they hold, which belong."""
+
+
 def campaign_markdown(res: CampaignResult, doc: dict[str, Any]) -> str:
     """``campaign.md``."""
     c = res.config
@@ -177,33 +209,7 @@ def campaign_markdown(res: CampaignResult, doc: dict[str, Any]) -> str:
         lines.append("none")
     lines += ["", "## Pass rate per check", "", "| check | passed / run |", "|---|---|"]
     lines += [f"| `{k}` | {v['passed']} / {v['run']} |" for k, v in doc["pass_rates"].items()]
-    def cause(e: dict[str, Any]) -> str:
-        return e["settlement"]["cause"] if e["settlement"] else "unsettled"
-
-    sections = (
-        ("New findings", "not known, and neither tightened settings, a singular or "
-         "ill-conditioned motion nor an engine's range explain them",
-         lambda e: not e["known"]
-         and cause(e) not in ("settings", "scene", "range", "conditioning")),
-        ("Numerical limits of the settings", "gone at tightened settings, or within the plants' "
-         "own error estimates at their default settings: the settings, not the model",
-         lambda e: not e["known"] and cause(e) == "settings"),
-        ("Singular motions", "a plant stops, and every other plant stops or stalls at the same "
-         "time: the controlled motion itself ends there (or a disagreement with that plant's "
-         "run up to its stop)",
-         lambda e: not e["known"] and cause(e) == "scene"),
-        ("Beyond an engine's range", "a plant stops where the motion passes the largest value it "
-         "carries on with (MuJoCo's mjMAXVAL), while every other plant finishes (or a "
-         "disagreement with that plant's run up to its stop)",
-         lambda e: not e["known"] and cause(e) == "range"),
-        ("Ill-conditioned motions", "the motion amplifies a round-off-sized change of its "
-         "initial state into a tenth of the disagreement or more, or a plant stops round-off "
-         "limited at its default and tightened settings (a one-ulp change of its state moves a "
-         "step by its whole tolerance): beyond what double precision can judge, no two engines "
-         "can agree closer", lambda e: not e["known"] and cause(e) == "conditioning"),
-        ("Known findings", "", lambda e: bool(e["known"])),
-    )
-    for title, what, keep in sections:
+    for title, what, keep in SECTIONS:
         lines += ["", f"## {title}", ""]
         if what:
             lines += [f"{what[0].upper()}{what[1:]}.", ""]
@@ -271,5 +277,5 @@ def write_campaign(res: CampaignResult) -> CampaignResult:
     return dataclasses.replace(res, files=files)
 
 
-__all__ = ["campaign_doc", "campaign_markdown", "campaign_png", "pass_rates", "refusals",
-           "timeouts", "worst_ratio", "write_campaign"]
+__all__ = ["SECTIONS", "campaign_doc", "campaign_markdown", "campaign_png", "cause", "pass_rates",
+           "refusals", "timeouts", "worst_ratio", "write_campaign"]
