@@ -24,7 +24,7 @@ DESCRIPTION = (
     "Draw seeded random scenes across the whole scene format, run each on every chosen plant "
     "under the same controller, judge it with the comparison's checks and the referee, and "
     "shrink every new disagreement to a minimal scene file (OUT/counterexamples/*.toml); write "
-    "OUT/campaign.md, campaign.json, campaign.png. Run again with the same --out to resume. "
+    "OUT/campaign.md, campaign.html, campaign.json, campaign.png. Run again with the same --out to resume. "
     "Exits 1 when a new (not known) disagreement was found that tightened settings do not "
     "explain (docs/fuzzing.md)."
 )

@@ -16,7 +16,8 @@ DESCRIPTION = (
     "Run the hard cases (validation/scenes/hard/*.toml: a rigid body alone, stiff springs, "
     "extreme mass ratios, fast spin, long horizons, many masses, off-manifold and conflicting "
     "requirements ...) on every installed plant against the criterion each file states in its "
-    "[hard_case] table (docs/hard_cases.md); write OUT/hard_cases.md and OUT/hard_cases.json. "
+    "[hard_case] table (docs/hard_cases.md); write OUT/hard_cases.md, OUT/hard_cases.html and "
+    "OUT/hard_cases.json. "
     "Exits 1 when a case fails."
 )
 CHOOSES_PLANTS = True

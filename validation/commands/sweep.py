@@ -13,9 +13,10 @@ NAME = "sweep"
 HELP = "what accuracy costs in time: work-precision study over both engines"
 DESCRIPTION = (
     "Compute a reference solution, run the analytic engine over scipy solvers and tolerances and "
-    "MuJoCo over integrators and timesteps, and write OUT/sweep.csv, sweep.json, sweep.md (the "
-    "cheapest setting per accuracy level marked), work_precision.png and sweep.rrd; also the cost "
-    "of each effect and the effect of the quaternion stabilisation (delta1, delta2)."
+    "MuJoCo over integrators and timesteps, and write OUT/sweep.csv, sweep.json, sweep.md, "
+    "sweep.html (the cheapest setting per accuracy level marked), work_precision.png and "
+    "sweep.rrd; also the cost of each effect and the effect of the quaternion stabilisation "
+    "(delta1, delta2)."
 )
 CHOOSES_PLANTS = True
 

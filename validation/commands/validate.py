@@ -22,7 +22,8 @@ HELP = "run a scene on the analytic plant and on MuJoCo under one controller; co
 DESCRIPTION = (
     "Run the scene on the analytic model and on its MuJoCo twin, both driven by the same "
     "analytic controller, compare trajectories, invariants and control forces, and write "
-    "OUT/report.md, OUT/report.json, figures and OUT/run.rrd. Exits 1 when a check fails."
+    "OUT/report.md, OUT/report.html, OUT/report.json, figures and OUT/run.rrd. Exits 1 when a "
+    "check fails."
 )
 CHOOSES_PLANTS = True
 
