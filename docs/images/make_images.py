@@ -1,13 +1,14 @@
-"""Make the README's pictures: Rerun's web viewer with a validation run's ``run.rrd`` open, and
-one figure of the report of the same run.
+"""Make the README's pictures: Rerun's web viewer with a validation run's ``run.rrd`` open, one
+figure of the report of the same run, and its ``report.html`` in a browser.
 
     python docs/images/make_images.py
 
 runs ``tumble validate`` on the default scene into a temporary directory, serves ``run.rrd``
 with ``rerun --web-viewer`` on the loopback interface, opens it in headless Chromium (Debian's
 ``chromium`` package; no network, a new empty profile), saves the screenshot as
-``docs/images/viewer.png`` and copies ``tracking.png`` of the report as
-``docs/images/tracking.png``, both reduced below :data:`MAX_BYTES`.
+``docs/images/viewer.png``, copies ``tracking.png`` of the report as
+``docs/images/tracking.png`` and saves the top of ``report.html`` in Chromium as
+``docs/images/report.png`` (:func:`report_screenshot`), all reduced below :data:`MAX_BYTES`.
 
 :func:`viewer_screenshot` drives Chromium over its DevTools protocol on a pipe (standard library
 only); ``tests/cross/test_viewer.py`` uses it to check that a recording opens in its designed layout.
@@ -204,6 +205,24 @@ def shrink_png(src: Path, dst: Path, max_bytes: int = MAX_BYTES) -> Path:
         scale *= 0.85
 
 
+REPORT_WINDOW = (1280, 1100)
+"""px: the browser window of ``report.png``: the verdict, the recording's link, the referee and
+the first checks."""
+
+
+def report_screenshot(html: Path, out: Path, window: tuple[int, int] = REPORT_WINDOW) -> Path:
+    """Open the report ``html`` (a self-contained file: nothing to serve) in headless Chromium (a
+    new empty profile, no network) and save the window as the PNG ``out``."""
+    exe = chromium()
+    if exe is None:
+        raise RuntimeError("Chromium is not installed (Debian: apt-get install chromium)")
+    with tempfile.TemporaryDirectory() as profile:
+        cmd = [exe, *CHROMIUM_FLAGS, f"--user-data-dir={profile}"]
+        cmd += [f"--window-size={window[0]},{window[1]}", f"--screenshot={out.resolve()}"]
+        subprocess.run([*cmd, html.resolve().as_uri()], check=True, capture_output=True, cwd=profile)
+    return out
+
+
 PICTURE_T_END_S = 5.0
 """Horizon of the run the viewer picture shows, s: a quarter of the default scene's, so the
 web viewer has the whole recording (about 1.5 MB) drawn before the screenshot."""
@@ -222,9 +241,12 @@ def main(argv: list[str] | None = None) -> int:
         short = Path(tmp) / "short"
         subprocess.run([*tumble[:-2], "--t-end", str(PICTURE_T_END_S), "--out", str(short)], check=True)
         shot = viewer_screenshot(short / "run.rrd", Path(tmp) / "viewer.png", wait_s=args.wait)
+        page = report_screenshot(run / "report.html", Path(tmp) / "report.png")
         for src, name in ((shot, "viewer.png"), (run / "tracking.png", "tracking.png")):
             dst = shrink_png(src, HERE / name)
             print(f"{dst.relative_to(HERE.parents[1])}: {dst.stat().st_size} bytes")
+        dst = shrink_png(page, HERE / "report.png")
+        print(f"{dst.relative_to(HERE.parents[1])}: {dst.stat().st_size} bytes")
     return 0
 
 

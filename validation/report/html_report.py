@@ -172,7 +172,8 @@ def referee(p: Page) -> str:
                 "" if agree else Tone.FAIL.value,
             )
         )
-    parts += [table("referee", cols, rows), para(rule_text(), "note")]
+    rule = rule_text().replace("`", "").replace("*", "")  # Markdown's marks, not text here
+    parts += [table("referee", cols, rows), para(rule, "note")]
     return section("Referee", *parts, section_id="referee-verdicts")
 
 

@@ -7,8 +7,8 @@ The verdict first: FAILED when a finding is new (not known, and neither the sett
 nor an engine's range explain it), each named with the plant the referee blames; PASSED
 otherwise; INTERRUPTED (amber) when the campaign stopped before its budget. Then every
 counterexample as a sortable table (its section, the plant blamed and why: the referee's
-rulings and the settled cause, where it occurred, its drivers, a link to its minimal scene and
-the command that reproduces it), the pass rate of each check, the refusals and time-outs, and the
+rulings and the settled cause, where it occurred, its drivers, a link to its minimal scene; then
+each one's settlement in words and the command that reproduces it), the pass rate of each check, the refusals and time-outs, and the
 figure embedded. Every string from a scene or a plant is escaped.
 """
 
@@ -48,24 +48,29 @@ def section_of(e: Mapping[str, Any]) -> str:
     return next(title for title, _what, keep in SECTIONS if keep(e))
 
 
-def referee_words(e: Mapping[str, Any]) -> list[str]:
-    """The referee's rulings other than agree: ``quantity: outlier mujoco``."""
-    return [
+def referee_words(e: Mapping[str, Any]) -> str:
+    """The referee's rulings other than agree (``quantity: outlier mujoco``), or why there are
+    none."""
+    if not e["verdicts"]:
+        return "no ruling (the referee rules on three plants or more)"
+    said = [
         f"{v['quantity']}: {v['verdict']} {v['outlier']}".strip()
         for v in e["verdicts"]
         if v["verdict"] != "agree"
     ]
+    return "; ".join(said) or "all agree"
 
 
 def blamed(e: Mapping[str, Any]) -> str:
-    """The plants blamed: the referee's outliers, and the culprit the settlement named."""
+    """The plants blamed: the referee's outliers, the culprit the settlement named, else the
+    plant the disagreement is about."""
     who = [v["outlier"] for v in e["verdicts"] if v["verdict"] != "agree" and v["outlier"]]
     st = e.get("settlement") or {}
     if st.get("culprit"):
         who.append(st["culprit"])
     if not who and e.get("plant"):
         who.append(e["plant"])
-    return ", ".join(dict.fromkeys(who)) or "no outlier"
+    return ", ".join(dict.fromkeys(who)) or "none named"
 
 
 def banner(res: CampaignResult, doc: Mapping[str, Any]) -> Banner:
@@ -84,7 +89,8 @@ def banner(res: CampaignResult, doc: Mapping[str, Any]) -> Banner:
         "Findings: " + "; ".join(f"{k} {title.lower()}" for title, k in per.items()) + ".",
     ]
     failed = [
-        f"{e['key']}: blamed {blamed(e)}; in {e['occurrences']} scene(s); cause {cause(e)}"
+        f"{e['key']}: blamed {blamed(e)}; referee: {referee_words(e)}; in {e['occurrences']} "
+        f"scene(s); cause {cause(e)}"
         for e in new
     ]
     if new:
@@ -109,7 +115,6 @@ FINDING_COLUMNS = (
     Column("stiffness 1/s²", True),
     Column("horizon s", True),
     Column("minimal scene"),
-    Column("reproduce"),
 )
 """The columns of the table of counterexamples."""
 
@@ -117,8 +122,6 @@ FINDING_COLUMNS = (
 def finding_row(e: Mapping[str, Any]) -> Row:
     """One counterexample: where it is listed, who is blamed and why, its drivers, its scene."""
     title = section_of(e)
-    st = e.get("settlement")
-    why = cause(e) + (f": {st['text']}" if st else "")
     dr = e["drivers"]
     tone = Tone.FAIL if title == NEW else Tone.IDLE
     known = f" ({e['known']})" if e["known"] else ""
@@ -127,8 +130,8 @@ def finding_row(e: Mapping[str, Any]) -> Row:
             text(e["key"] + known),
             state(title, tone),
             text(blamed(e)),
-            text("; ".join(referee_words(e)) or "no outlier"),
-            text(why),
+            text(referee_words(e)),
+            text(cause(e)),
             num(e["occurrences"]),
             num(dr["n"]),
             num(dr["spin"]),
@@ -136,10 +139,22 @@ def finding_row(e: Mapping[str, Any]) -> Row:
             num(dr["stiffness"]),
             num(e["horizon"], "s"),
             raw(relative_link(e["file"])),
-            raw(f"<code>{esc(e['command'])}</code>"),
         ],
         tone.value if title == NEW else "",
     )
+
+
+def details(doc: Mapping[str, Any]) -> str:
+    """Each counterexample's settlement in words and the command that reproduces it."""
+    items = []
+    for e in doc["counterexamples"]:
+        st = e.get("settlement")
+        why = f"{cause(e)}: {st['text']}" if st else cause(e)
+        items.append(
+            f"<li><b>{esc(e['key'])}</b> ({esc(section_of(e))}). Cause {esc(why)}. "
+            f"Reproduce: <code>{esc(e['command'])}</code></li>"
+        )
+    return '<ul class="details">' + "".join(items) + "</ul>" if items else ""
 
 
 def pass_rates(doc: Mapping[str, Any]) -> str:
@@ -188,6 +203,7 @@ def campaign_html(res: CampaignResult, doc: Mapping[str, Any], png: bytes | None
                 "note",
             ),
             table("findings", FINDING_COLUMNS, findings) if findings else para("none"),
+            details(doc),
             section_id="counterexamples",
         ),
         pass_rates(doc),

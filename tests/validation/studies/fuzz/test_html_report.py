@@ -71,8 +71,8 @@ def test_a_new_finding_fails_the_campaign_first_naming_the_plant_blamed():
     said = banner.text()
     assert said.startswith("FAILED") and "1 new findings" in said
     assert (
-        f"check:position_C{HOSTILE}: blamed shifted{HOSTILE}; in 2 scene(s); cause unsettled"
-        in said
+        f"check:position_C{HOSTILE}: blamed shifted{HOSTILE}; referee: position_C: outlier "
+        f"shifted{HOSTILE}; in 2 scene(s); cause unsettled" in said
     )
 
 
@@ -84,7 +84,9 @@ def test_every_counterexample_is_in_the_table_with_its_cause_and_scene():
     by = {r[0]: r for r in got}
     limit = by["check:rod_positions"]
     assert limit[1] == "Numerical limits of the settings" and limit[2] == "mujoco"
-    assert limit[4] == f"settings: gone at tightened settings {HOSTILE}"
+    assert limit[3] == "position_C: outlier mujoco" and limit[4] == "settings"
+    details = page.find("ul", **{"class": "details"})[0].text()
+    assert f"Cause settings: gone at tightened settings {HOSTILE}." in details
     assert by[f"check:energy (a known one {HOSTILE})"][1] == "Known findings"
     hrefs = [a.attrs["href"] for a in page.find("a")]
     assert hrefs == [e["file"] for e in doc["counterexamples"]]
@@ -92,6 +94,14 @@ def test_every_counterexample_is_in_the_table_with_its_cause_and_scene():
     assert page.find("img")[0].attrs["src"].startswith("data:image/png;base64,")
     rates = {r[0]: r for r in rows(page, "pass-rates")}
     assert rates["position_C"][1:] == ["0", "2", "0"]
+
+
+def test_without_a_referee_the_table_says_why():
+    res, doc = _campaign()
+    doc["counterexamples"][0]["verdicts"] = []
+    doc["counterexamples"][0]["plant"] = ""
+    row = rows(parse(campaign_html(res, doc, None)), "findings")[0]
+    assert row[2:4] == ["none named", "no ruling (the referee rules on three plants or more)"]
 
 
 def test_no_new_finding_passes_and_an_interrupted_campaign_says_so():
