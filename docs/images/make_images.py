@@ -205,7 +205,7 @@ def shrink_png(src: Path, dst: Path, max_bytes: int = MAX_BYTES) -> Path:
         scale *= 0.85
 
 
-REPORT_WINDOW = (1280, 1100)
+REPORT_WINDOW = (1280, 1350)
 """px: the browser window of ``report.png``: the verdict, the recording's link, the referee and
 the first checks."""
 

@@ -53,8 +53,9 @@ td.num{text-align:right;font-variant-numeric:tabular-nums;white-space:nowrap}
 tr.pass td.state,td.pass{background:#e9f7ec;color:#1e6b30;font-weight:600}
 tr.fail td{background:#fdecea}tr.fail td.state,td.fail{color:#b71c1c;font-weight:700}
 tr.idle td,td.idle{color:#777}
-td{max-width:42em;overflow-wrap:anywhere}
+td{max-width:42em;overflow-wrap:break-word}
 .details li{margin:.4em 0}.details code{overflow-wrap:anywhere}
+details{margin:.4em 0 1em}summary{cursor:pointer;color:#333}
 code,pre{font:.9em ui-monospace,SFMono-Regular,Menlo,Consolas,monospace;background:#f5f5f5}
 code{padding:0 .25em;border-radius:3px}pre{padding:.7em;overflow:auto;border-radius:4px}
 figure{margin:1em 0 1.6em}figure img{max-width:100%;border:1px solid #e3e3e3}

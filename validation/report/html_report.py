@@ -173,7 +173,10 @@ def referee(p: Page) -> str:
             )
         )
     rule = rule_text().replace("`", "").replace("*", "")  # Markdown's marks, not text here
-    parts += [table("referee", cols, rows), para(rule, "note")]
+    parts += [
+        table("referee", cols, rows),
+        f"<details><summary>The referee's rule</summary>{para(rule, 'note')}</details>",
+    ]
     return section("Referee", *parts, section_id="referee-verdicts")
 
 
