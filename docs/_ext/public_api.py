@@ -1,0 +1,84 @@
+"""The ``publicmodule`` directive: a public module's page, each object documented once.
+
+``.. publicmodule:: analytic.scene`` is ``automodule`` with ``:members:`` (the module's
+``__all__``, or what it defines), less the names that a deeper public module (one whose page is
+in ``docs/api/`` too, ``analytic.scene`` below ``analytic``) exports as the same object: a name
+re-exported up the package tree is documented where it is most specific and listed (in the
+package's docstring) where it is re-exported, so no object is described twice and every short
+reference has one target.
+
+:func:`public_modules` reads the list of public modules from the pages themselves (one
+``publicmodule`` line each): the pages are the one statement of the public API
+(``docs/api/index.rst``), and ``tests/cross/test_docs_site.py`` checks each named module exists.
+"""
+
+from __future__ import annotations
+
+import importlib
+import re
+from pathlib import Path
+from types import ModuleType
+from typing import Any
+
+from sphinx.application import Sphinx
+from sphinx.util.docutils import SphinxDirective
+
+API_DIR = Path(__file__).resolve().parent.parent / "api"
+DIRECTIVE = re.compile(r"^\.\. publicmodule:: (\S+)\s*$", re.MULTILINE)
+
+
+def public_modules(api_dir: Path = API_DIR) -> list[str]:
+    """Every module a page of ``api_dir`` documents, in page order (sorted by file name)."""
+    return [
+        name
+        for page in sorted(api_dir.glob("*.rst"))
+        for name in DIRECTIVE.findall(page.read_text(encoding="utf-8"))
+    ]
+
+
+def exported(module: ModuleType) -> dict[str, Any]:
+    """The names ``module`` exports and their objects: its ``__all__``, or else the public
+    names it defines itself (an object whose ``__module__`` is the module)."""
+    names = getattr(module, "__all__", None)
+    if names is not None:
+        return {name: getattr(module, name) for name in names}
+    return {
+        name: value
+        for name, value in vars(module).items()
+        if not name.startswith("_") and getattr(value, "__module__", None) == module.__name__
+    }
+
+
+def documented_deeper(name: str, modules: list[str]) -> list[str]:
+    """The names of module ``name`` that a deeper public module of ``modules`` exports as the
+    same object under the same name, sorted."""
+    module = importlib.import_module(name)
+    deeper = [
+        exported(importlib.import_module(other))
+        for other in modules
+        if other.startswith(name + ".")
+    ]
+    return sorted(
+        member
+        for member, value in exported(module).items()
+        if any(member in table and table[member] is value for table in deeper)
+    )
+
+
+class PublicModule(SphinxDirective):
+    """``automodule NAME :members:`` less the members documented on a deeper public page."""
+
+    required_arguments = 1
+
+    def run(self) -> list[Any]:
+        name = self.arguments[0]
+        lines = [f".. automodule:: {name}", "   :members:"]
+        skipped = documented_deeper(name, public_modules())
+        if skipped:
+            lines.append(f"   :exclude-members: {', '.join(skipped)}")
+        return self.parse_text_to_nodes("\n".join(lines))
+
+
+def setup(app: Sphinx) -> dict[str, Any]:
+    app.add_directive("publicmodule", PublicModule)
+    return {"parallel_read_safe": True, "parallel_write_safe": True}
