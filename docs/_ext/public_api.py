@@ -24,11 +24,14 @@ from sphinx.application import Sphinx
 from sphinx.util.docutils import SphinxDirective
 
 API_DIR = Path(__file__).resolve().parent.parent / "api"
-DIRECTIVE = re.compile(r"^\.\. publicmodule:: (\S+)\s*$", re.MULTILINE)
+DIRECTIVE = re.compile(r"^\.\. (?:publicmodule|automodule):: (\S+)\s*$", re.MULTILINE)
+"""A page's module: ``publicmodule`` (its members), or ``automodule`` alone (its docstring: the
+pytest plugin, whose interface is its options and items, not functions to call)."""
+PROJECT_PACKAGES = frozenset({"analytic", "model_xml", "mj_bridge", "validation"})
 
 
 def public_modules(api_dir: Path = API_DIR) -> list[str]:
-    """Every module a page of ``api_dir`` documents, in page order (sorted by file name)."""
+    """Every module a page of ``api_dir`` documents, sorted by page file name."""
     return [
         name
         for page in sorted(api_dir.glob("*.rst"))
@@ -79,6 +82,51 @@ class PublicModule(SphinxDirective):
         return self.parse_text_to_nodes("\n".join(lines))
 
 
+def _class_of(dotted: str) -> type | None:
+    """The class ``dotted`` names (a module path, then the class's qualified name), or None."""
+    parts = dotted.split(".")
+    for cut in range(len(parts) - 1, 0, -1):
+        try:
+            obj: Any = importlib.import_module(".".join(parts[:cut]))
+        except ImportError:
+            continue
+        for name in parts[cut:]:
+            obj = getattr(obj, name, None)
+        return obj if isinstance(obj, type) else None
+    return None
+
+
+def docstring_source(full_name: str) -> type | None:
+    """The class whose docstring ``help()`` shows for the class member ``full_name`` that has
+    none of its own (the first base, in MRO order, defining it with one), else None."""
+    owner, _, member = full_name.rpartition(".")
+    klass = _class_of(owner) if owner else None
+    if klass is None:
+        return None
+    own = klass.__dict__.get(member)
+    if own is None or getattr(own, "__doc__", None):
+        return None
+    for base in klass.__mro__[1:]:
+        if getattr(base.__dict__.get(member), "__doc__", None):
+            return base
+    return None
+
+
+def drop_foreign_docstrings(
+    app: Sphinx, what: str, name: str, obj: Any, options: Any, lines: list[str]
+) -> None:
+    """A member without a docstring of its own is shown without one when the docstring it
+    would inherit is another project's (pytest's, the standard library's): that text is written
+    for their site (their labels, their markup), and says nothing of this project's contract.
+    A docstring inherited from a class of this project is kept (a plugin's ``describe``)."""
+    if what not in {"method", "property", "attribute", "classmethod", "staticmethod"}:
+        return
+    base = docstring_source(name)
+    if base is not None and base.__module__.partition(".")[0] not in PROJECT_PACKAGES:
+        lines.clear()
+
+
 def setup(app: Sphinx) -> dict[str, Any]:
     app.add_directive("publicmodule", PublicModule)
+    app.connect("autodoc-process-docstring", drop_foreign_docstrings)
     return {"parallel_read_safe": True, "parallel_write_safe": True}

@@ -40,7 +40,7 @@ MISSING = object()
 def _module(name: str) -> Any:
     try:
         return importlib.import_module(name)
-    except ImportError:
+    except (ImportError, ValueError):  # ValueError: an empty name
         return MISSING
 
 
@@ -111,6 +111,16 @@ def docstring_owner(node: nodes.Node) -> str | None:
     return None
 
 
+def inherited_scopes(owner: str) -> list[str]:
+    """The scopes of an inherited docstring: a member of a class that has no docstring of its
+    own shows its base's, written in the base's class and module."""
+    klass = resolve(owner.rpartition(".")[0])
+    if not inspect.isclass(klass):
+        return []
+    bases = klass.__mro__[1:]
+    return [f"{b.__module__}.{b.__qualname__}" for b in bases] + [b.__module__ for b in bases]
+
+
 def _documented_by_identity(env: BuildEnvironment) -> dict[int, str]:
     """``id(object) -> the name it is documented under``, for every documented Python object
     that imports (built once per build, kept on the environment for this build only)."""
@@ -134,7 +144,10 @@ def on_missing_reference(
     target = node["reftarget"]
     module, klass = node.get("py:module"), node.get("py:class")
     domain = env.get_domain("py")
-    tried = candidates(target, module, klass, docstring_owner(node))
+    owner = docstring_owner(node)
+    tried = candidates(target, module, klass, owner)
+    if owner:
+        tried += [f"{scope}.{target}" for scope in inherited_scopes(owner)]
     for name in tried:
         obj = resolve(name)
         if obj is MISSING:
