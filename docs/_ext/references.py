@@ -121,18 +121,24 @@ def inherited_scopes(owner: str) -> list[str]:
     return [f"{b.__module__}.{b.__qualname__}" for b in bases] + [b.__module__ for b in bases]
 
 
+_BY_IDENTITY: dict[int, str] = {}
+"""``id(object) -> the name it is documented under``, built on the first unlinked reference of a
+build (every page read by then) and emptied when a build starts (:func:`forget`): kept in this
+process, never in Sphinx's pickled environment, where ids would outlive their objects."""
+
+
+def forget(app: Sphinx) -> None:
+    _BY_IDENTITY.clear()
+
+
 def _documented_by_identity(env: BuildEnvironment) -> dict[int, str]:
-    """``id(object) -> the name it is documented under``, for every documented Python object
-    that imports (built once per build, kept on the environment for this build only)."""
-    table = getattr(env, "_tumble_by_identity", None)
-    if table is None:
-        table = {}
-        for name, entry in env.get_domain("py").objects.items():
+    """:data:`_BY_IDENTITY`, built from every documented Python object that imports."""
+    if not _BY_IDENTITY:
+        for name in env.get_domain("py").objects:
             obj = resolve(name)
             if obj is not MISSING and not isinstance(obj, (bool, int, float, str, type(None))):
-                table.setdefault(id(obj), entry[0] and name)
-        env._tumble_by_identity = table
-    return table
+                _BY_IDENTITY.setdefault(id(obj), name)
+    return _BY_IDENTITY
 
 
 def on_missing_reference(
@@ -155,6 +161,11 @@ def on_missing_reference(
         documented = None
         if not isinstance(obj, (bool, int, float, str, type(None))):
             documented = _documented_by_identity(env).get(id(obj))
+        else:  # a constant: the documented name of the same last part bound to it
+            last = "." + name.rpartition(".")[2]
+            documented = next(
+                (d for d in domain.objects if d.endswith(last) and resolve(d) is obj), None
+            )
         if documented is None and name in domain.objects:
             documented = name
         if documented is None:
@@ -176,5 +187,6 @@ def on_missing_reference(
 
 
 def setup(app: Sphinx) -> dict[str, Any]:
+    app.connect("builder-inited", forget)
     app.connect("missing-reference", on_missing_reference)
     return {"parallel_read_safe": True, "parallel_write_safe": True}
