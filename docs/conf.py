@@ -5,8 +5,9 @@ Build (CI runs it, warnings as errors, so a broken reference or markup fails):
     python -m sphinx -W --keep-going -q -b html docs build/docs
 
 ``docs/api/`` holds the API pages (``docs/api/index.rst`` states what is public); the two local
-extensions in ``docs/_ext/`` document each public object once (``public_api``) and link, or
-refuse, the docstrings' Python references (``references``). No warning class is suppressed.
+extensions in ``docs/_ext/`` document each public object once (``public_api``), link or refuse
+the docstrings' Python references (``references``) and show the pages' links to repository files
+outside ``docs/`` as those files' paths (``repo_links``). No warning class is suppressed.
 """
 
 from __future__ import annotations
@@ -31,6 +32,7 @@ extensions = [
     "sphinx.ext.napoleon",  # the docstrings' Google sections (Args:, Returns:, Attributes:)
     "public_api",
     "references",
+    "repo_links",
 ]
 source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
 root_doc = "index"

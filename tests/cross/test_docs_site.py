@@ -136,3 +136,50 @@ def test_a_reference_that_names_nothing_fails_the_build(tmp_path, monkeypatch):
     assert len(lines) == 1 and "'planted_pkg.inner.gone' names nothing" in lines[0], lines
     page = (out / "index.html").read_text()
     assert 'href="#planted_pkg.thing"' in page  # the defining path, linked to the re-export
+
+
+@pytest.mark.filterwarnings(
+    # myst-parser 5.2's own use of a Sphinx API deprecated for Sphinx 11, not this project's
+    "ignore:.*myst_refs.MystReferenceResolver.app' is deprecated"
+)
+def test_a_link_to_a_repository_file_is_its_path_and_a_broken_one_fails(tmp_path, monkeypatch):
+    """The ``repo_links`` extension on a planted site (``docs/`` in a repository): a page's
+    Markdown links to a file, a Markdown file and a directory outside ``docs/`` are shown as their
+    paths from the root (or linked under ``repo_source_url``); a link to a path that does not
+    exist stays MyST's warning."""
+    from sphinx.cmd.build import build_main
+
+    monkeypatch.setattr(sys, "path", list(sys.path))
+    repo = tmp_path / "repo"
+    (repo / "docs").mkdir(parents=True)
+    (repo / "pkg").mkdir()
+    (repo / "pkg" / "mod.py").write_text("")
+    (repo / "NOTES.md").write_text("# Notes\n")
+    (repo / "docs" / "conf.py").write_text(
+        f"import sys\nsys.path.insert(0, {str(DOCS / '_ext')!r})\n"
+        'extensions = ["myst_parser", "repo_links"]\n'
+    )
+    page = (
+        "# Page\n\n[the module](../pkg/mod.py), [`NOTES.md`](../NOTES.md#notes), [a dir](../pkg/)\n"
+    )
+    (repo / "docs" / "index.md").write_text(page)
+    warnings, out = tmp_path / "w.txt", tmp_path / "out"
+    assert build_main(["-q", "-b", "html", "-w", str(warnings), str(repo / "docs"), str(out)]) == 0
+    assert warnings.read_text() == ""
+    html = (out / "index.html").read_text()
+    for path in ("pkg/mod.py", "NOTES.md", "pkg/"):
+        assert f'<span class="pre">{path}</span></code>' in html
+    assert "_downloads" not in html
+    linked = tmp_path / "linked"
+    args = ["-q", "-b", "html", "-D", "repo_source_url=https://example.invalid/blob/c0ffee/"]
+    assert build_main([*args, str(repo / "docs"), str(linked)]) == 0
+    assert (
+        'href="https://example.invalid/blob/c0ffee/NOTES.md#notes"'
+        in (linked / "index.html").read_text()
+    )
+    (repo / "docs" / "index.md").write_text(page + "\n[gone](../pkg/gone.py)\n")
+    assert (
+        build_main(["-q", "-E", "-b", "html", "-w", str(warnings), str(repo / "docs"), str(out)])
+        == 0
+    )
+    assert "'../pkg/gone.py'" in warnings.read_text()
