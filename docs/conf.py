@@ -48,7 +48,6 @@ myst_heading_anchors = 4
 
 autodoc_member_order = "bysource"
 autodoc_typehints = "signature"
-autodoc_default_options = {"show-inheritance": False}
 napoleon_google_docstring = True
 napoleon_numpy_docstring = False
 # the plant contract's own section (analytic.plant.Plant), laid out as Args: are
@@ -56,7 +55,8 @@ napoleon_custom_sections = [("Class attributes a subclass sets", "params_style")
 
 html_theme = "alabaster"
 html_title = "tumbling-testbed"
-html_static_path: list[str] = []
+html_static_path = ["_static"]
+html_css_files = ["site.css"]
 
 
 def setup(app):
