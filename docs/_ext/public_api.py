@@ -126,7 +126,17 @@ def drop_foreign_docstrings(
         lines.clear()
 
 
+def api_pages_outdated(
+    app: Sphinx, env: Any, added: set[str], changed: set[str], removed: set[str]
+) -> list[str]:
+    """Every API page, when one is added, changed or removed: what a page leaves out depends
+    on which modules the others document (an incremental build would keep a stale choice)."""
+    api = sorted(doc for doc in env.found_docs if doc.startswith("api/"))
+    return api if any(doc.startswith("api/") for doc in added | changed | removed) else []
+
+
 def setup(app: Sphinx) -> dict[str, Any]:
     app.add_directive("publicmodule", PublicModule)
+    app.connect("env-get-outdated", api_pages_outdated)
     app.connect("autodoc-process-docstring", drop_foreign_docstrings)
     return {"parallel_read_safe": True, "parallel_write_safe": True}

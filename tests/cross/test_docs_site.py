@@ -10,6 +10,7 @@ are looked up (as ``tests/cross/test_layers.py`` does).
 
 from __future__ import annotations
 
+import importlib.util
 import re
 import sys
 from pathlib import Path
@@ -19,8 +20,19 @@ import pytest
 ROOT = Path(__file__).resolve().parents[2]
 DOCS = ROOT / "docs"
 API = DOCS / "api"
-sys.path.insert(0, str(DOCS / "_ext"))
-from public_api import DIRECTIVE, public_modules  # noqa: E402
+
+
+def _load_public_api():
+    """``docs/_ext/public_api.py``, the build's reader of the API pages, loaded from its file
+    (the docs' extensions are not a package, and the session's ``sys.path`` stays as it is)."""
+    spec = importlib.util.spec_from_file_location("public_api", DOCS / "_ext" / "public_api.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+_PUBLIC_API = _load_public_api()
+DIRECTIVE, public_modules = _PUBLIC_API.DIRECTIVE, _PUBLIC_API.public_modules
 
 NOT_PAGES = frozenset({"index.md"})
 """``docs/*.md`` files that are not pages of a toctree: the root page holds the toctrees."""
