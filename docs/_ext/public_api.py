@@ -18,8 +18,9 @@ import importlib
 import re
 from pathlib import Path
 from types import ModuleType
-from typing import Any
+from typing import Any, ClassVar
 
+from docutils.parsers.rst import directives
 from sphinx.application import Sphinx
 from sphinx.util.docutils import SphinxDirective
 
@@ -69,14 +70,18 @@ def documented_deeper(name: str, modules: list[str]) -> list[str]:
 
 
 class PublicModule(SphinxDirective):
-    """``automodule NAME :members:`` less the members documented on a deeper public page."""
+    """``automodule NAME :members:`` less the members documented on a deeper public page, and
+    less those its ``:exclude-members:`` option names (an object two sibling modules export:
+    documented on one page, excluded, with the reason beside it, on the other)."""
 
     required_arguments = 1
+    option_spec: ClassVar[dict[str, Any]] = {"exclude-members": directives.unchanged_required}
 
     def run(self) -> list[Any]:
         name = self.arguments[0]
         lines = [f".. automodule:: {name}", "   :members:"]
-        skipped = documented_deeper(name, public_modules())
+        given = [m.strip() for m in self.options.get("exclude-members", "").split(",")]
+        skipped = sorted({*documented_deeper(name, public_modules()), *filter(None, given)})
         if skipped:
             lines.append(f"   :exclude-members: {', '.join(skipped)}")
         return self.parse_text_to_nodes("\n".join(lines))
