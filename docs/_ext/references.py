@@ -22,6 +22,7 @@ from __future__ import annotations
 import builtins
 import dataclasses
 import importlib
+import importlib.util
 import inspect
 from functools import cache
 from typing import Any
@@ -38,6 +39,11 @@ MISSING = object()
 
 @cache
 def _module(name: str) -> Any:
+    if name.rpartition(".")[2] == "__main__":  # a program: looked up, never run
+        try:
+            return importlib.util.find_spec(name) or MISSING
+        except (ImportError, ValueError):
+            return MISSING
     try:
         return importlib.import_module(name)
     except (ImportError, ValueError):  # ValueError: an empty name
