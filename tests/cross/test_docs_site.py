@@ -1,7 +1,7 @@
 """The docs site's structure, without building it: every ``docs/*.md`` page is in a toctree, and
 every module an API page names exists and is public.
 
-The build itself (``python -m sphinx -W --keep-going -q -b html docs build/docs``, ~15 s) is a
+The build itself (``python -m sphinx -W --keep-going -q -b html docs build/docs``, ~13 s of CPU) is a
 CI step of its own; these checks catch, in milliseconds, a page added without a place in the
 site and an API page left naming a module that was moved or renamed. The pages are read by the
 build's own reader (``docs/_ext/public_api.py``); the named modules are not imported, their files
