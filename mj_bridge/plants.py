@@ -212,7 +212,7 @@ def _load() -> tuple[dict[str, type[Plant]], tuple[PluginError, ...]]:
 
 def registered() -> dict[str, type[Plant]]:
     """Every plant by name, in report order: the built-ins, then the plugins that loaded (entry
-    points of :data:`mj_bridge.registry.GROUP`), by name; installed or not (:meth:`unavailable`)."""
+    points of :data:`mj_bridge.registry.GROUP`), by name; installed or not (:meth:`~analytic.plant.Plant.unavailable`)."""
     return dict(_load()[0])
 
 

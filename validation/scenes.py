@@ -74,7 +74,7 @@ def resolve_scene(
     Everything in it is checked here, before any work: its fields by the loader, and the names
     and values of its ``[thresholds]`` against :data:`validation.compare.thresholds.DEFAULTS`.
     Messages name a file as the user gave it. ``check_thresholds=False`` leaves the thresholds
-    to a caller that checks them itself, once (:func:`validation.preflight.validation_request`).
+    to a caller that checks them itself, once (:func:`validation.validate.request.validation_request`).
 
     Raises:
         ValueError: naming the field (``scene``, ``thresholds.<name>``, the loader's) and the value.

@@ -95,7 +95,7 @@ def drift_figures(tr: Trajectory) -> dict[str, float]:
     :mod:`validation.compare.thresholds`).
 
     Returns:
-        ``quat_norm_error_max`` (max |uᵀu − 1|) and, per balance, its :data:`DRIFT_KEYS` key.
+        ``quat_norm_error_max`` (max ``|uᵀu − 1|``) and, per balance, its :data:`DRIFT_KEYS` key.
     """
     iv = tr.invariants
     out = {"quat_norm_error_max": float(np.max(np.abs(iv.quat_norm_error)))}

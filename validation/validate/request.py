@@ -97,7 +97,7 @@ def validation_request(
     :func:`validation.scenes.resolve_scene`) with ``thresholds`` (overrides, name -> number or
     ``{value, reason}``) laid over its ``[thresholds]``, and those thresholds
     (:func:`validation.compare.thresholds.thresholds_for`); the plants
-    (:func:`validation_plants`); the overrides (:func:`check_validation_inputs`); the figure
+    (:func:`~validation.preflight.validation_plants`); the overrides (:func:`check_validation_inputs`); the figure
     formats; the time limit (:func:`check_time_limit`); and that every plant accepts the scene
     (its ``check_scene``; one that raises anything but ``ValueError`` is noted ``unusable``, to
     fail alone). Runs no plant; then the plants that offer ``pointwise`` (the accelerated

@@ -28,7 +28,7 @@ class Curves:
     Attributes:
         entity: the entity path below the plot's origin (``analytic``, ``energy/mujoco``).
         t: sample times, s, shape (N,).
-        values: shape (N, k): physical values, or log10 of magnitudes in a :data:`LOG_PLOTS` plot.
+        values: shape (N, k): physical values, or log10 of magnitudes in a :data:`~validation.studies.demo.plots.LOG_PLOTS` plot.
         names: the k legend names.
         colors: the k colours, RGBA.
         dashed: drawn dashed in the figure (a requirement, a threshold, another plant).
@@ -218,7 +218,7 @@ def _force_curves(run: StepRun, torque: bool) -> tuple[Curves, ...]:
 
 def step_curves(run: StepRun, plot: Plot) -> tuple[Curves, ...]:
     """What ``plot`` of ``run``'s tab draws: the recording's curves (logged by the demo for
-    :data:`DEMO_PLOTS`) and the figure's, one list for both."""
+    :data:`~validation.studies.demo.plots.DEMO_PLOTS`) and the figure's, one list for both."""
     if plot is Plot.OMEGA:
         return _omega_curves(run)
     if plot is Plot.MASS_POSITIONS:
