@@ -75,6 +75,8 @@ _AT_MOST = re.compile(rf"^at most {_NAME}( \S+)?$")
 _COUNT = re.compile(rf"^n ≤ {_NAME}$")
 _INDEX = re.compile(r"^in 1\.\.(\d+|n)$")
 
+WARNING_ONLY = "a repair with a warning, not a refusal"
+
 EXPRESSED: Mapping[str, str] = {
     "> 0": "exclusiveMinimum 0",
     "≥ 0": "minimum 0",
@@ -90,21 +92,22 @@ EXPRESSED: Mapping[str, str] = {
 """The bounds clauses the schema expresses, and as what."""
 
 LOADER_ONLY: Mapping[str, str] = {
-    "A + B ≥ C": "the triangle inequality of principal moments (a relation between entries)",
+    "A + B ≥ C": "the triangle inequality of principal moments, a relation between entries",
     "unit length within {AXIS_REFUSE_TOL}": "a vector's norm",
     "one off 1 by more than {AXIS_NORMALISE_TOL} is normalised with a one-line warning naming "
-    "its norm": "a warning, not a refusal",
+    "its norm": WARNING_ONLY,
     "within {ROTATION_REFUSE_TOL} of a rotation": "a matrix's singular values and determinant",
     "at most twice the transverse moment": "a relation between two keys",
     "symmetric": "a relation between a matrix's entries",
     "positive semidefinite": "a matrix's eigenvalues",
     "symmetric positive definite": "a matrix's eigenvalues",
-    "norm within {QUAT_REFUSE_TOL} of 1": "a vector's norm (and `allow_off_manifold` lifts it)",
+    "norm within {QUAT_REFUSE_TOL} of 1": "a vector's norm, a bound `allow_off_manifold` lifts",
     "at least one MuJoCo step": "a relation to `mujoco.timestep`",
     "≤ {MAX_OUTPUT_SAMPLES} samples": "a product with `output.rate`",
     "≤ {MAX_MUJOCO_STEPS} steps per run": "a quotient of `output.t_end`",
 }
-"""The bounds clauses only the loader checks, each with what makes it inexpressible in a schema."""
+"""The bounds clauses only the loader checks, each with what makes it inexpressible in a schema
+(or :data:`WARNING_ONLY`: what the loader repairs with a warning)."""
 
 
 def _constant(name: str) -> float:
@@ -123,8 +126,9 @@ def _fill(text: str) -> str:
     )
 
 
-def _clauses(bounds: str) -> list[str]:
-    return [c.strip() for part in bounds.split(";") for c in part.split(",") if c.strip()]
+def bound_clauses(key: Key) -> list[str]:
+    """The clauses of ``key``'s declared bounds (split at ``;`` and ``,``), unfilled."""
+    return [c.strip() for part in key.bounds.split(";") for c in part.split(",") if c.strip()]
 
 
 def bounds_keywords(key: Key) -> tuple[dict[str, Any], dict[str, Any]]:
@@ -136,7 +140,7 @@ def bounds_keywords(key: Key) -> tuple[dict[str, Any], dict[str, Any]]:
     """
     number: dict[str, Any] = {}
     array: dict[str, Any] = {}
-    for clause in _clauses(key.bounds):
+    for clause in bound_clauses(key):
         if clause in LOADER_ONLY or clause in ("finite", "a known name"):
             continue
         if clause == "> 0":
@@ -307,6 +311,8 @@ __all__ = [
     "LOADER_ONLY",
     "SHIPPED",
     "TOML_VERSION",
+    "WARNING_ONLY",
+    "bound_clauses",
     "bounds_keywords",
     "render_json",
     "scene_schema",
