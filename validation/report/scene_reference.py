@@ -254,6 +254,36 @@ def _limits() -> list[str]:
     return [_fill(line) for line in lines]
 
 
+DIRECTIVE_EXAMPLE = """\
+#:schema ./scene.schema.json
+
+[scene]
+name = "my_body"
+"""
+"""The top of a scene file that names the schema written beside it (``docs/scene-format.md``)."""
+
+TAPLO_CONFIG = """\
+[[rule]]
+include = ["scenes/**/*.toml"]
+
+[rule.schema]
+path = "./scene.schema.json"
+"""
+"""A ``.taplo.toml`` that gives every scene under ``scenes/`` the schema (Taplo, Even Better TOML)."""
+
+TOMBI_CONFIG = """\
+[[schemas]]
+path = "./scene.schema.json"
+include = ["scenes/**/*.toml"]
+"""
+"""A ``tombi.toml`` that gives every scene under ``scenes/`` the schema."""
+
+
+def _indented(text: str) -> list[str]:
+    """``text`` as a fenced block inside a list item (no language: not a scene)."""
+    return ["   ```", *(f"   {line}" if line else "" for line in text.splitlines()), "   ```"]
+
+
 def _editors() -> list[str]:
     """How editors pick up the scene format's JSON Schema, and what it leaves to the loader."""
     shipped = scene_schema.SHIPPED
@@ -279,31 +309,14 @@ def _editors() -> list[str]:
         "blank line (Tombi reads a directive only at the very top, set apart from what follows); "
         "a relative path is relative to the scene file:",
         "",
-        "   ```",
-        "   #:schema ./scene.schema.json",
-        "",
-        "   [scene]",
-        '   name = "my_body"',
-        "   ```",
+        *_indented(DIRECTIVE_EXAMPLE),
         "",
         "3. or give one rule for every scene in the editor's configuration at the project's root: "
         "Taplo's `.taplo.toml` (read by the `taplo` command and by Even Better TOML) and Tombi's "
         "`tombi.toml` (or `[tool.tombi]` in `pyproject.toml`); their `include` patterns are "
         "relative to the project's root:",
         "",
-        "   ```",
-        "   # .taplo.toml",
-        "   [[rule]]",
-        '   include = ["scenes/**/*.toml"]',
-        "",
-        "   [rule.schema]",
-        '   path = "./scene.schema.json"',
-        "",
-        "   # tombi.toml",
-        "   [[schemas]]",
-        '   path = "./scene.schema.json"',
-        '   include = ["scenes/**/*.toml"]',
-        "   ```",
+        *_indented(f"# .taplo.toml\n{TAPLO_CONFIG}\n# tombi.toml\n{TOMBI_CONFIG}"),
         "",
         "A directive in the file takes precedence over a configuration rule in both. The same "
         "schema checks the files in CI without an editor: `taplo check` or `tombi lint`.",
@@ -454,4 +467,11 @@ def render() -> str:
     return "\n".join(out).rstrip("\n") + "\n"
 
 
-__all__ = ["GENERATOR", "MINIMAL_SCENE", "render"]
+__all__ = [
+    "DIRECTIVE_EXAMPLE",
+    "GENERATOR",
+    "MINIMAL_SCENE",
+    "TAPLO_CONFIG",
+    "TOMBI_CONFIG",
+    "render",
+]

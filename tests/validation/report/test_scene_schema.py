@@ -19,7 +19,11 @@ from __future__ import annotations
 
 import copy
 import json
+import os
 import re
+import shutil
+import subprocess
+import sys
 import tomllib
 import warnings
 from collections.abc import Iterator
@@ -39,6 +43,7 @@ from analytic.scene.random_scenes import MassInertia, random_scene_dict, unit_sc
 from analytic.scene.schema import KEYS, VERBATIM_TABLES, Kind, Need
 from validation.cli import main
 from validation.compare.thresholds import DEFAULTS, SCALED, thresholds_for
+from validation.report.scene_reference import DIRECTIVE_EXAMPLE, TAPLO_CONFIG, TOMBI_CONFIG
 from validation.report.scene_schema import (
     DRAFT,
     LOADER_ONLY,
@@ -435,3 +440,66 @@ def test_every_refusal_the_schema_expresses_is_the_loaders(path, key):
         count += 1
     assert count >= 1  # (every key has a type to break)
     assert failures == [], f"{dotted}:\n" + "\n".join(failures)
+
+
+# ------------------------------------------------------------------------------------------------
+# The editors' own checkers read it as docs/scene-format.md says
+# ------------------------------------------------------------------------------------------------
+
+TOOLS = {
+    # the command that checks files against their schema, offline, with no user configuration
+    "taplo": ["check"],
+    "tombi": ["lint", "--offline"],
+}
+
+
+def _tool(name: str, args: list[str], cwd: Path, home: Path) -> subprocess.CompletedProcess:
+    exe = Path(sys.executable).with_name(name)
+    exe = str(exe) if exe.exists() else shutil.which(name)
+    if exe is None:
+        pytest.skip(f"{name} is not installed (pip install '.[test]' installs it)")
+    env = {**os.environ, "HOME": str(home), "XDG_CACHE_HOME": str(home / "cache"), "NO_COLOR": "1"}
+    return subprocess.run(
+        [exe, *TOOLS[name], *args], cwd=cwd, env=env, capture_output=True, text=True, timeout=60
+    )
+
+
+@pytest.mark.parametrize("name", list(TOOLS))
+def test_the_editors_checkers_read_the_builtin_scenes_directive(name, tmp_path):
+    """Taplo (Even Better TOML's engine) and Tombi find the shipped schema through each built-in
+    scene's and hard case's ``#:schema`` line, and accept every one of them."""
+    proc = _tool(name, [str(p) for p in SCENE_FILES], ROOT, tmp_path)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+
+
+@pytest.mark.parametrize("name", list(TOOLS))
+@pytest.mark.parametrize("setup", ["directive", "configuration"])
+def test_the_editors_checkers_refuse_what_the_schema_refuses(name, setup, tmp_path):
+    """A project set up as docs/scene-format.md says (the schema written by the command, then a
+    ``#:schema`` line or the tool's configuration file): a scene passes, and one with an unknown
+    key, a choice outside the enum and a value below its bound fails, naming each."""
+    assert (
+        main(["scene-reference", "--json-schema", "--out", str(tmp_path / "scene.schema.json")])
+        == 0
+    )
+    (tmp_path / "scenes").mkdir()
+    text = (BUILTIN_DIR / "paper_example2.toml").read_text(encoding="utf-8").split("\n", 2)[2]
+    bad = text.replace('integrator = "RK4"', 'integrator = "RK5"\nintegrater = "RK4"', 1)
+    bad = bad.replace("\ndelta1 = ", "\ndelta1 = -1.0 #", 1)
+    assert bad.count("RK5") == 1 and "delta1 = -1.0" in bad
+    header = ""
+    if setup == "directive":
+        header = DIRECTIVE_EXAMPLE.split("\n", 1)[0].replace("./", "../") + "\n\n"
+    else:
+        (tmp_path / ".taplo.toml").write_text(TAPLO_CONFIG, encoding="utf-8")
+        (tmp_path / "tombi.toml").write_text(TOMBI_CONFIG, encoding="utf-8")
+    (tmp_path / "scenes" / "good.toml").write_text(header + text, encoding="utf-8")
+    (tmp_path / "scenes" / "bad.toml").write_text(header + bad, encoding="utf-8")
+    home = tmp_path / "home"
+    good = _tool(name, ["scenes/good.toml"], tmp_path, home)
+    assert good.returncode == 0, good.stdout + good.stderr
+    proc = _tool(name, ["scenes/bad.toml"], tmp_path, home)
+    said = proc.stdout + proc.stderr
+    assert proc.returncode != 0, said
+    for needle in ("RK5", "integrater", "-1"):
+        assert needle in said, (needle, said)
