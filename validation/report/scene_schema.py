@@ -12,10 +12,11 @@ The draft is **draft-07**, the one JSON Schema version both TOML language server
 VS Code's Even Better TOML, built on it) reads draft-04/06/07, Tombi draft-07 and 2020-12. Nothing
 beyond draft-07 is used, and no ``$ref`` (Taplo ignores its ``x-taplo`` extension beside one).
 
-A declaration's ``bounds`` is prose; each of its clauses (split at ``;`` and ``,``) is either one the
-schema expresses (:data:`EXPRESSED`: ``> 0``, ``≥ 0``, ``{LO} … {HI}``, ``at most {HI}``, ``n ≤ {N}``,
-``distinct``, ``in 1..3``) or one only the loader can check, listed with the reason
-(:data:`LOADER_ONLY`: a norm, a rotation, a relation between entries or keys). A clause in neither
+A declaration's ``bounds`` is prose; each of its clauses (split at ``;`` and ``,``) is either one
+the schema expresses (``> 0``, ``≥ 0``, ``{LO} … {HI}``, ``at most {HI}``, ``n ≤ {N}``,
+``distinct``, ``in 1..3``; ``finite`` as a TOML number, ``a known name`` as the names of
+``[thresholds]``) or one only the loader can check, listed with the reason (:data:`LOADER_ONLY`: a
+norm, a rotation, a relation between entries or keys). A clause in neither
 stops the generator (``LookupError``), so a new bound is either expressed or said to be the
 loader's. The schema never refuses what the loader accepts (tested with the built-in scenes, the
 hard cases and random scenes); what it cannot express stays the loader's alone (:data:`LOADER_ONLY`,
@@ -77,20 +78,6 @@ _INDEX = re.compile(r"^in 1\.\.(\d+|n)$")
 
 WARNING_ONLY = "a repair with a warning, not a refusal"
 
-EXPRESSED: Mapping[str, str] = {
-    "> 0": "exclusiveMinimum 0",
-    "≥ 0": "minimum 0",
-    "{LO} … {HI}": "minimum and maximum (each entry: with `each`)",
-    "at most {HI}": "maximum",
-    "n ≤ {N}": "maxItems",
-    "distinct": "uniqueItems",
-    "in 1..N": "integer entries, minimum 1, maximum N (n: at most MAX_MASSES)",
-    "finite": "(a TOML number; `nan` is not refused by a schema: see LOADER_ONLY)",
-    "a number ≥ 0 or a string": "anyOf: number (minimum 0), string",
-    "a known name": "the properties of [thresholds] (additionalProperties: false)",
-}
-"""The bounds clauses the schema expresses, and as what."""
-
 LOADER_ONLY: Mapping[str, str] = {
     "A + B ≥ C": "the triangle inequality of principal moments, a relation between entries",
     "unit length within {AXIS_REFUSE_TOL}": "a vector's norm",
@@ -135,7 +122,7 @@ def bounds_keywords(key: Key) -> tuple[dict[str, Any], dict[str, Any]]:
     """The JSON Schema keywords of ``key``'s declared bounds: ``(on each number, on the list)``.
 
     Raises:
-        LookupError: a clause of the bounds that is neither in :data:`EXPRESSED` nor in
+        LookupError: a clause of the bounds that is neither expressed here nor in
             :data:`LOADER_ONLY`, naming the key and the clause.
     """
     number: dict[str, Any] = {}
@@ -171,7 +158,7 @@ def _description(key: Key) -> str:
     if key.unit and not key.unit.startswith("the "):
         parts.append(f"Unit: {key.unit}.")
     if key.need is Need.CONDITIONAL:
-        parts.append(f"Given: {_fill(key.when)}.")
+        parts.append(f"When: {_fill(key.when)}.")
     if key.bounds:
         parts.append(f"Refused unless: {_fill(key.bounds)}.")
     if key.default is NO_DEFAULT and key.default_text:
@@ -253,6 +240,7 @@ def _thresholds(key: Key) -> dict[str, Any]:
         schema = _property(entry)
         default = f"{t.value:g}" + (f" + {t.rtol:g} × scale" if t.rtol else "")
         schema["description"] = f"{t.unit}, default {default}: {t.reason}. {schema['description']}"
+        schema["default"] = t.value
         if name not in SCALED:  # no relative part: rtol may only be 0
             rtol = schema["anyOf"][1]["properties"]["rtol"]
             rtol["maximum"] = 0
@@ -306,7 +294,6 @@ def render_json() -> str:
 __all__ = [
     "AXES",
     "DRAFT",
-    "EXPRESSED",
     "GENERATOR",
     "LOADER_ONLY",
     "SHIPPED",
