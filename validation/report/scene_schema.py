@@ -180,10 +180,11 @@ def _number(bounds: Mapping[str, Any], integer: bool = False) -> dict[str, Any]:
 
 
 def _array(items: dict[str, Any], length: int | None = None, **more: Any) -> dict[str, Any]:
-    out: dict[str, Any] = {"type": "array", "items": items}
+    out: dict[str, Any] = {"type": "array"}
     if length is not None:
         out.update(minItems=length, maxItems=length)
     out.update(more)
+    out["items"] = items  # (after the lengths: a validator reports a wrong length first)
     return out
 
 

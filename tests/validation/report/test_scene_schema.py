@@ -386,9 +386,16 @@ def _refused(raw: dict, name: str) -> str:
 
 
 def _schema_refuses_at(raw: dict, path: Path_, needle: str = "") -> bool:
-    return any(
-        tuple(e.absolute_path)[: len(path)] == path and needle in e.message for e in _errors(raw)
-    )
+    """Whether the schema reports an error at ``path`` or inside it (``needle`` in its message);
+    stops at the first (the errors are generated lazily)."""
+    for top in VALIDATOR.iter_errors(raw):
+        todo = [top]
+        while todo:
+            e = todo.pop()
+            if tuple(e.absolute_path)[: len(path)] == path and needle in e.message:
+                return True
+            todo.extend(e.context or ())
+    return False
 
 
 def test_every_declared_key_has_a_base_scene_that_validates():
