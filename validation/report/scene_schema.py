@@ -13,8 +13,8 @@ VS Code's Even Better TOML, built on it) reads draft-04/06/07, Tombi draft-07 an
 beyond draft-07 is used, and no ``$ref`` (Taplo ignores its ``x-taplo`` extension beside one).
 
 A declaration's ``bounds`` is prose; each of its clauses (split at ``;`` and ``,``) is either one
-the schema expresses (``> 0``, ``≥ 0``, ``{LO} … {HI}``, ``at most {HI}``, ``n ≤ {N}``,
-``distinct``, ``in 1..3``; ``finite`` as a TOML number, ``a known name`` as the names of
+the schema expresses (``> 0``, ``≥ 0``, ``{LO} … {HI}``, ``at most {HI}``, ``entries at most {HI}
+in magnitude``, ``n ≤ {N}``, ``distinct``, ``in 1..3``; ``finite`` as a TOML number, ``a known name`` as the names of
 ``[thresholds]``) or one only the loader can check, listed with the reason (:data:`LOADER_ONLY`: a
 norm, a rotation, a relation between entries or keys). A clause in neither
 stops the generator (``LookupError``), so a new bound is either expressed or said to be the
@@ -73,6 +73,7 @@ _PER_MASS: Mapping[Kind, int] = {
 _NAME = r"\{([A-Z_]+)\}"
 _RANGE = re.compile(rf"^(each )?{_NAME} … {_NAME}( \S+)?$")
 _AT_MOST = re.compile(rf"^at most {_NAME}( \S+)?$")
+_MAGNITUDE = re.compile(rf"^entries at most {_NAME}( \S+)? in magnitude$")
 _COUNT = re.compile(rf"^n ≤ {_NAME}$")
 _INDEX = re.compile(r"^in 1\.\.(\d+|n)$")
 
@@ -140,6 +141,8 @@ def bounds_keywords(key: Key) -> tuple[dict[str, Any], dict[str, Any]]:
             number["minimum"], number["maximum"] = _constant(m.group(2)), _constant(m.group(3))
         elif m := _AT_MOST.match(clause):
             number["maximum"] = _constant(m.group(1))
+        elif m := _MAGNITUDE.match(clause):
+            number["minimum"], number["maximum"] = -_constant(m.group(1)), _constant(m.group(1))
         elif m := _COUNT.match(clause):
             array["maxItems"] = int(_constant(m.group(1)))
         elif m := _INDEX.match(clause):

@@ -355,7 +355,10 @@ def _violations(key: Any, value: Any, kind: Kind | None = None) -> Iterator[tupl
             yield "at the exclusive minimum", number["exclusiveMinimum"]
         if "minimum" in number:
             lo = number["minimum"]
-            yield "below the minimum", lo / 2 if lo > 0 and key.kind is not Kind.INDICES else lo - 1
+            if key.kind is Kind.INDICES:
+                yield "below the minimum", lo - 1
+            else:  # (halfway to 0 above it, twice as far from 0 below it)
+                yield "below the minimum", lo / 2 if lo > 0 else lo - max(abs(lo), 1)
         if "maximum" in number:
             hi = number["maximum"]
             yield "above the maximum", hi + max(abs(hi), 1)
@@ -510,3 +513,66 @@ def test_the_editors_checkers_refuse_what_the_schema_refuses(name, setup, tmp_pa
     assert proc.returncode != 0, said
     for needle in ("RK5", "integrater", "-1"):
         assert needle in said, (needle, said)
+
+
+_RANGE_REFUSALS = ("must be positive (got", "must be non-negative (got", "must be at least", "must be at most", "entries must be at most", "must be an integer in 1..")  # fmt: skip
+"""How the loader words a refusal of a number's range (``analytic/scene/values.py``, ``twin.py``,
+the parsers): what a schema's bounds express."""
+_PROBES = (0, 0.0, -0.5, -1e300, 1e-16, 1e300, 1e45)
+_INDEX_PROBES = (0, -1, 4, S.MAX_MASSES + 1)
+_NUMBERED = {
+    # kind: where its first number sits (a number, a list's first entry, a matrix's first entry)
+    Kind.NUMBER: (),
+    Kind.NUMBER_OR_VALUE_TABLE: (),
+    Kind.NUMBER_OR_STRING: (),
+    Kind.VECTOR3: (0,),
+    Kind.VECTOR4: (0,),
+    Kind.VECTOR_N: (0,),
+    Kind.VECTOR_N1: (0,),
+    Kind.VECTOR_K: (0,),
+    Kind.INDICES: (0,),
+    Kind.MATRIX3: (0, 0),
+    Kind.MATRIX_K: (0, 0),
+    Kind.MATRICES_N: (0, 0, 0),
+}
+NUMBERED = [(p, k) for p, k in INSTANCES if k.kind in _NUMBERED]
+
+
+@pytest.mark.parametrize(
+    ("path", "key"), NUMBERED, ids=[".".join(map(str, p)) for p, _ in NUMBERED]
+)
+def test_every_range_the_loader_refuses_the_schema_refuses(path, key):
+    """The loader as the oracle, independent of the declarations' prose: a number probed at
+    zero, negative, tiny and huge values in a key's first number; where the loader refuses its
+    range (naming the key), the schema refuses it there; where the loader accepts it, the schema
+    reports nothing there (never stricter at a bound)."""
+    base = _base_for(path)
+    dotted = ".".join(map(str, path))
+    where = _NUMBERED[key.kind]
+    failures = []
+    for probe in _INDEX_PROBES if key.kind is Kind.INDICES else _PROBES:
+        raw = copy.deepcopy(base)
+        node = _get(raw, path[:-1])
+        target, last = (node, path[-1])
+        for i in where:
+            target, last = target[last], i
+        if not isinstance(target[last], int | float) or isinstance(target[last], bool):
+            continue  # (a [thresholds] entry given as a table: its value is its own key)
+        target[last] = probe
+        at = (*path, *where)
+        try:
+            _load(raw)
+        except ValueError as exc:
+            message = str(exc)
+            n_bound = (
+                f"in 1..{len(_get(raw, ('masses', 'mass')))} " if "1..n" in key.bounds else "-"
+            )
+            if n_bound in message:
+                continue  # (indices up to n: a bound of this scene, not of every scene)
+            if message.startswith(dotted) and any(w in message for w in _RANGE_REFUSALS):
+                if not _schema_refuses_at(raw, at):
+                    failures.append(f"{probe!r}: refused by the loader ({message}), not the schema")
+            continue
+        if _schema_refuses_at(raw, at):
+            failures.append(f"{probe!r}: accepted by the loader, refused by the schema")
+    assert failures == [], f"{dotted}:\n" + "\n".join(failures)
