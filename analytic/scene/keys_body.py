@@ -262,7 +262,7 @@ BODY_KEYS: tuple[Key, ...] = (
         "given with `inertia_transverse`.",
         _C,
         when="optional, with inertia_transverse; not with the other inertia keys",
-        bounds="≥ 0, at most twice the transverse moment",
+        bounds="≥ 0, at most {MAX_INERTIA} kg·m², at most twice the transverse moment",
         effect=Effect.MASS_INERTIA,
     ),
     Key(
@@ -273,7 +273,7 @@ BODY_KEYS: tuple[Key, ...] = (
         "Each mass's moment of inertia about any axis perpendicular to the rod through its centre.",
         _C,
         when="optional, with inertia_axial; not with the other inertia keys",
-        bounds="≥ 0",
+        bounds="≥ 0, at most {MAX_INERTIA} kg·m²",
         effect=Effect.MASS_INERTIA,
     ),
     Key(
@@ -285,7 +285,8 @@ BODY_KEYS: tuple[Key, ...] = (
         "Remark 1, Eq. 54).",
         _C,
         when="optional; not with the other inertia keys",
-        bounds="symmetric, positive semidefinite, A + B ≥ C",
+        bounds="symmetric, positive semidefinite, A + B ≥ C; entries at most {MAX_INERTIA} kg·m² "
+        "in magnitude",
         effect=Effect.MASS_INERTIA,
     ),
     # ---- [springs] -----------------------------------------------------------------------------

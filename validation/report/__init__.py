@@ -4,7 +4,8 @@
 * :mod:`.figures`: the figures and their captions (PNG, SVG or PDF);
 * :mod:`.provenance`: the provenance block of every JSON file, ``dumps`` and the JSON Schemas in
   ``schemas/``;
-* :mod:`.scene_reference`: ``docs/scene-format.md`` rendered from the key declarations.
+* :mod:`.scene_reference`: ``docs/scene-format.md`` rendered from the key declarations;
+* :mod:`.scene_schema`: the scene format's JSON Schema for editors, from the same declarations.
 """
 
 from validation._lazy import lazy_exports

@@ -12,14 +12,17 @@ Layered here, not in ``analytic``, because the ``[thresholds]`` names belong to 
 
 from __future__ import annotations
 
+import os
 import tomllib
 from collections.abc import Iterable
+from pathlib import Path
 from typing import Any
 
 from analytic import scene as S
 from analytic.scene.builtin import BUILTIN_DIR, builtin_scene_names
 from analytic.scene.schema import CHOICE_MEANINGS, KEYS, NO_DEFAULT, Key, Kind, Need
 from validation.compare.thresholds import DEFAULTS, HARD_CASE_PREFIX, SCALED
+from validation.report import scene_schema
 
 GENERATOR = "python -m validation scene-reference > docs/scene-format.md"
 
@@ -251,6 +254,103 @@ def _limits() -> list[str]:
     return [_fill(line) for line in lines]
 
 
+DIRECTIVE_EXAMPLE = """\
+#:schema ./scene.schema.json
+
+[scene]
+name = "my_body"
+"""
+"""The top of a scene file that names the schema written beside it (``docs/scene-format.md``)."""
+
+TAPLO_CONFIG = """\
+[[rule]]
+include = ["scenes/**/*.toml"]
+
+[rule.schema]
+path = "./scene.schema.json"
+"""
+"""A ``.taplo.toml`` that gives every scene under ``scenes/`` the schema (Taplo, Even Better TOML)."""
+
+TOMBI_CONFIG = """\
+[[schemas]]
+path = "./scene.schema.json"
+include = ["scenes/**/*.toml"]
+"""
+"""A ``tombi.toml`` that gives every scene under ``scenes/`` the schema."""
+
+
+def _indented(text: str) -> list[str]:
+    """``text`` as a fenced block inside a list item (no language: not a scene)."""
+    return ["   ```", *(f"   {line}" if line else "" for line in text.splitlines()), "   ```"]
+
+
+def _editors() -> list[str]:
+    """How editors pick up the scene format's JSON Schema, and what it leaves to the loader."""
+    shipped = scene_schema.SHIPPED
+    root = shipped.parents[2]
+    relative = Path(os.path.relpath(shipped, BUILTIN_DIR)).as_posix()
+    out = [
+        f"`{shipped.relative_to(root).as_posix()}` is the scene format's JSON Schema, generated "
+        "from the same declarations as this page (`tumble scene-reference --json-schema` prints "
+        "it, `--out FILE` writes it; a test checks the shipped file is what the generator "
+        "produces). It is **draft-07**, the draft both TOML language servers read: Taplo (and VS "
+        "Code's Even Better TOML, which is Taplo) reads draft-04/06/07, Tombi draft-07 and "
+        "2020-12. Each key has its type, its choices, its fixed length, its bounds, its meaning "
+        "and its default, so an editor completes keys and values, shows the meaning on hover and "
+        "marks an unknown key, a wrong type or a value out of range as you type.",
+        "",
+        "The built-in scenes and the hard cases name it in their first line (relative to the "
+        f"file: `#:schema {relative}` in `analytic/scenes/`); the loader reads the line as the "
+        "comment it is. For the scenes of your own project:",
+        "",
+        "1. write the schema of the version you have installed into the project: "
+        "`tumble scene-reference --json-schema --out scene.schema.json`;",
+        "2. either make `#:schema <path or URL>` the first line of each scene file, followed by a "
+        "blank line (Tombi reads a directive only at the very top, set apart from what follows); "
+        "a relative path is relative to the scene file:",
+        "",
+        *_indented(DIRECTIVE_EXAMPLE),
+        "",
+        "3. or give one rule for every scene in the editor's configuration at the project's root: "
+        "Taplo's `.taplo.toml` (read by the `taplo` command and by Even Better TOML) and Tombi's "
+        "`tombi.toml` (or `[tool.tombi]` in `pyproject.toml`); their `include` patterns are "
+        "relative to the project's root:",
+        "",
+        *_indented(f"# .taplo.toml\n{TAPLO_CONFIG}\n# tombi.toml\n{TOMBI_CONFIG}"),
+        "",
+        "A directive in the file takes precedence over a configuration rule in both. The same "
+        "schema checks the files in CI without an editor: `taplo check` or `tombi lint`.",
+        "",
+        "Every table the loader checks is closed (`additionalProperties: false`), so an unknown "
+        "key is an error in the editor as it is at load; `[hard_case]` and `[mjx]` are open, as "
+        "the loader keeps them verbatim for the layers that check them. `[thresholds]` lists the "
+        "comparison's names (an unknown one is refused by every command that compares). A file "
+        "the schema accepts can still be refused by the loader, which checks what a JSON Schema "
+        "cannot express:",
+        "",
+    ]
+    for clause, why in scene_schema.LOADER_ONLY.items():
+        if why == scene_schema.WARNING_ONLY:
+            continue
+        keys = [k.dotted for k in KEYS if clause in scene_schema.bound_clauses(k)]
+        out.append(f"- {', '.join(f'`{k}`' for k in keys)}: {clause}, {why};")
+    out += [
+        "- the keys required or allowed only in a case (the *required* column: `box_half_sizes` "
+        "with a box, `angle` or `angle_deg`, `gamma` or `gain`, one of the inertia keys of "
+        "`[masses]`, `[initial]` with masses): refused as missing or `not used here`;",
+        "- lengths tied to n and k (the schema bounds them by {MAX_MASSES} masses only), and "
+        "indices beyond n;",
+        "- the rules across tables (`analytic/scene/rules.py`): an effect listed without its data "
+        "(`[control.omega]`, a per-spring key) is refused, data of an effect not listed is ignored "
+        "with a warning; BR's inertia as the MuJoCo twin compiles it; initial quantities whose "
+        "products would overflow;",
+        "- numbers that are not finite: TOML's `nan` passes any JSON Schema bound (and `inf` any "
+        "key without one); an index written `1.0` is an integer to draft-07, not to the loader.",
+        "",
+    ]
+    return [_fill(line) for line in out]
+
+
 def _builtins() -> list[str]:
     out = [
         "`analytic.load_scene(name)`, `tumble validate NAME` and every other command accept these "
@@ -360,8 +460,18 @@ def render() -> str:
         "## What the loader refuses and warns about",
         "",
         *_limits(),
+        "## Editors: the JSON Schema",
+        "",
+        *_editors(),
     ]
     return "\n".join(out).rstrip("\n") + "\n"
 
 
-__all__ = ["GENERATOR", "MINIMAL_SCENE", "render"]
+__all__ = [
+    "DIRECTIVE_EXAMPLE",
+    "GENERATOR",
+    "MINIMAL_SCENE",
+    "TAPLO_CONFIG",
+    "TOMBI_CONFIG",
+    "render",
+]
