@@ -14,7 +14,7 @@ Public names (imported on first use, so ``import validation`` stays cheap: the p
 * :class:`Check`: one verdict of a run.
 """
 
-from typing import TYPE_CHECKING, Any
+TYPE_CHECKING = False  # typing.TYPE_CHECKING without importing typing (mypy reads it as that)
 
 _LAZY = {
     "assert_agree": "validation.testing.agree",
@@ -29,6 +29,8 @@ _LAZY = {
 }
 
 if TYPE_CHECKING:  # the same names, typed for a type checker (never run: imports stay lazy)
+    from typing import Any
+
     from validation.compare.checks import Check as Check
     from validation.compare.thresholds import Threshold as Threshold
     from validation.compare.thresholds import thresholds_for as thresholds_for
@@ -42,7 +44,7 @@ if TYPE_CHECKING:  # the same names, typed for a type checker (never run: import
 __all__ = sorted(_LAZY)
 
 
-def __getattr__(name: str) -> Any:
+def __getattr__(name: str) -> "Any":
     if name in _LAZY:
         # deferred: `import validation` imports no submodule (the pytest plugin imports it in
         # every run; docs/performance.md, Import costs)
