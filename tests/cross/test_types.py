@@ -90,15 +90,26 @@ def test_every_lazy_name_is_typed():
     assert not bad, "\n".join(bad)
 
 
-def test_a_users_mypy_sees_the_types(tmp_path):
+def test_a_users_mypy_sees_the_types(tmp_path, request):
     """mypy, run as a user's would (outside the project, the packages found on the Python path as
     installed ones), takes the packages as typed (no ``import-untyped``) and gives the lazily
-    imported names their real types."""
+    imported names their real types. Its cache is kept in pytest's (a few seconds cold, as in CI;
+    under one warm)."""
+    cache = getattr(request.config, "cache", None)  # None under -p no:cacheprovider
+    cache_dir = cache.mkdir("mypy_user") if cache is not None else tmp_path / ".cache"
     (tmp_path / "user.py").write_text(USER_CODE, encoding="utf-8")
     (tmp_path / "mypy.ini").write_text(USER_CONFIG, encoding="utf-8")
     env = {k: v for k, v in os.environ.items() if not k.startswith("MYPY")}
     env["PYTHONPATH"] = str(ROOT)  # the tree under test, ahead of an installed copy
-    mypy = [sys.executable, "-m", "mypy", "--config-file", "mypy.ini", "--cache-dir", ".cache"]
+    mypy = [
+        sys.executable,
+        "-m",
+        "mypy",
+        "--config-file",
+        "mypy.ini",
+        "--cache-dir",
+        str(cache_dir),
+    ]
     proc = subprocess.run(
         [*mypy, "--python-executable", sys.executable, "user.py"],
         cwd=tmp_path,
