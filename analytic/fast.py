@@ -50,6 +50,8 @@ user's cache directory, said once; with none writable the kernel is compiled in 
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from analytic.effects import Effect, Weighting
@@ -70,6 +72,11 @@ _empty = np.empty
 def available() -> bool:
     """True when numba is importable, i.e. the compiled kernel can run."""
     return HAVE_NUMBA
+
+
+def _not_compiled(*args: object) -> int:
+    """The kernel's place where numba is absent; never called (``FastModel.compiled`` is False)."""
+    raise RuntimeError("the compiled kernel needs numba, which is not installed")
 
 
 def pack(model: TumblingModel) -> tuple[np.ndarray, np.ndarray]:
@@ -98,6 +105,7 @@ def pack(model: TumblingModel) -> tuple[np.ndarray, np.ndarray]:
     fp[L.F_G : L.F_G + 3] = model.g
     if sc.has(Effect.EXTERNAL_TORQUE):
         et = sc.external_torque
+        assert et is not None  # the loader requires its table with the effect
         fp[L.F_TFREQ] = et.frequency
         fp[L.F_TC : L.F_TC + 3] = et.constant
         fp[L.F_TA : L.F_TA + 3] = et.amplitude
@@ -171,8 +179,11 @@ class FastModel:
         self.fallbacks = 0
         self._nout = L.output_length(self.n, self.k)
         self.solver = solver_of(self._ip)
+        # the kernel's entry points: (t, q, qdot, fp, ip, out) -> status
+        self._evaluate: Callable[..., int]
+        self._qddot_into: Callable[..., int]
         if not available():
-            self._evaluate = self._qddot_into = None
+            self._evaluate = self._qddot_into = _not_compiled
         elif self.solver is Solver.MINV2:
             self._evaluate, self._qddot_into = minv2.evaluate, minv2.qddot_into
         elif self.solver is Solver.IDENTITY:
@@ -207,7 +218,7 @@ class FastModel:
         status = self._evaluate(float(t), q, qdot, self.fp, self.ip, out)
         return out if status == L.STATUS_OK else None
 
-    def _numpy(self, t, q, qdot) -> tuple[np.ndarray, ControlOutput]:
+    def _numpy(self, t: float, q: np.ndarray, qdot: np.ndarray) -> tuple[np.ndarray, ControlOutput]:
         self.fallbacks += 1
         return self.model.acceleration(t, q, qdot)
 

@@ -30,6 +30,7 @@ import dataclasses
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from enum import Enum
 from typing import TYPE_CHECKING, Any, ClassVar
 
 from analytic.effects import Backend, Effect, SolverMethod, Stepper
@@ -82,7 +83,7 @@ def check_horizon(t_end: Any, field: str = "t_end") -> float | None:
     return t
 
 
-def coerce_enum(record: Any, name: str, enum: type) -> None:
+def coerce_enum(record: Any, name: str, enum: type[Enum]) -> None:
     """Set the field ``name`` of a frozen settings ``record`` to its ``enum`` member, or raise
     ``ValueError`` naming the field and listing the choices."""
     value = getattr(record, name)
@@ -307,10 +308,10 @@ class Plant(abc.ABC):
         longest, count = max(horizons), len(scenes)
         out = []
         for i, (scene, horizon) in enumerate(zip(scenes, horizons, strict=True)):
-            inner = None
+            inner: Progress | None = None
             if progress is not None:
 
-                def inner(t, i=i, horizon=horizon):
+                def inner(t: float, i: int = i, horizon: float = horizon) -> None:
                     progress(longest * (i + min(t / horizon, 1.0)) / count)
 
             out.append(self._simulate(scene, settings, t_end, inner))
@@ -390,7 +391,13 @@ class AnalyticPlant(Plant):
             return None
         return dataclasses.replace(settings, rtol=tight[0], atol=tight[1])
 
-    def _simulate(self, scene, settings, t_end, progress):
+    def _simulate(
+        self,
+        scene: Scene,
+        settings: AnalyticSettings,
+        t_end: float | None,
+        progress: Progress | None,
+    ) -> Trajectory:
         from analytic.simulate import simulate
 
         return simulate(

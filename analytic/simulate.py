@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Protocol, cast
 
 import numpy as np
 
@@ -28,7 +28,7 @@ if TYPE_CHECKING:  # imported where they are used: ``import analytic`` stays che
     from analytic.scene import Scene
 
 
-def evaluator(model: TumblingModel, backend: Backend) -> Callable:
+def evaluator(model: TumblingModel, backend: Backend | str) -> Callable:
     """``accel(t, q, qdot) -> (q̈, ControlOutput)`` for the chosen backend."""
     try:
         backend = Backend(backend)
@@ -46,7 +46,15 @@ def evaluator(model: TumblingModel, backend: Backend) -> Callable:
     return fast.FastModel(model.scene, model).acceleration
 
 
-def _rhs(model: TumblingModel, accel: Callable) -> Callable[[float, np.ndarray], np.ndarray]:
+class CountedRhs(Protocol):
+    """The right-hand side ``ẏ = f(t, y)``; ``counter["nfev"]`` counts its evaluations."""
+
+    counter: dict[str, int]
+
+    def __call__(self, t: float, y: np.ndarray, /) -> np.ndarray: ...
+
+
+def _rhs(model: TumblingModel, accel: Callable) -> CountedRhs:
     from analytic.assemble import aux_count
     from analytic.aux_rates import aux_rates
     from analytic.model import dissipated_power, dissipates
@@ -77,8 +85,8 @@ def _rhs(model: TumblingModel, accel: Callable) -> Callable[[float, np.ndarray],
 
     fm = getattr(accel, "__self__", None)
     if fm is None or not getattr(fm, "compiled", False):
-        f.counter = counter  # type: ignore[attr-defined]
-        return f
+        f.counter = counter  # type: ignore[attr-defined]  # a function's own attribute
+        return cast(CountedRhs, f)
 
     # The compiled path: the same lines in one numba call (analytic.fast_rhs); f answers where the
     # kernel declines (the numpy model then, as in FastModel).
@@ -99,8 +107,8 @@ def _rhs(model: TumblingModel, accel: Callable) -> Callable[[float, np.ndarray],
             raise NonFinite(f"non-finite acceleration at t = {t:.6g} s")
         return out
 
-    g.counter = counter  # type: ignore[attr-defined]
-    return g
+    g.counter = counter  # type: ignore[attr-defined]  # a function's own attribute
+    return cast(CountedRhs, g)
 
 
 def _solver_method(method: SolverMethod | str) -> SolverMethod:

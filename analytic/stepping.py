@@ -170,7 +170,12 @@ def step_and_sample(
                 i_next = j
                 if progress is not None:
                     progress(float(solver.t))
-            if groups is not None and solver.status == "running" and nsteps % RESCALE_STEPS == 0:
+            if (
+                groups is not None
+                and scales is not None  # None exactly when groups is
+                and solver.status == "running"
+                and nsteps % RESCALE_STEPS == 0
+            ):
                 if nsteps % PROBE_STEPS == 0:
                     why = watch.check(solver.t, solver.y, solver.step_size, atol_vec, nsteps)
                     if why:

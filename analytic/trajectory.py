@@ -220,7 +220,7 @@ class Trajectory:
         arrays = self.to_arrays()
         arrays["meta_json"] = np.array(json.dumps(meta, default=str))
         buf = io.BytesIO()
-        np.savez(buf, **arrays)
+        np.savez(buf, **arrays)  # type: ignore[arg-type]  # numpy's stub: a ** mapping might hold allow_pickle (bool)
         return buf.getvalue()
 
     def save_npz(self, path: str | Path) -> Path:

@@ -9,6 +9,8 @@
 * :class:`Twin`: a compiled model with all of the above and the in-integrator controller.
 """
 
+from typing import TYPE_CHECKING
+
 from analytic.runtime.lazy import lazy_exports
 from mj_bridge.simulate import simulate  # bound here: the function, not its module's name (light)
 
@@ -28,6 +30,20 @@ _LAZY = {
 }
 """Public names imported on first use: importing this package (or :mod:`mj_bridge.plants`, to
 choose plants) costs neither MuJoCo nor numba."""
+
+if TYPE_CHECKING:  # the same names, typed for a type checker (never run: imports stay lazy)
+    from mj_bridge.callbacks import installed as installed
+    from mj_bridge.mujoco_settings import ControllerSource as ControllerSource
+    from mj_bridge.twin import MjControl as MjControl
+    from mj_bridge.twin import Twin as Twin
+    from mj_bridge.twin import acceleration as acceleration
+    from mj_bridge.twin import mujoco_control as mujoco_control
+    from mj_bridge.twin_model import to_mujoco as to_mujoco
+    from mj_bridge.twin_model import to_paper as to_paper
+    from mj_bridge.twin_model import to_paper_acc as to_paper_acc
+    from model_xml.coordinates import mujoco_to_paper_acc as mujoco_to_paper_acc
+    from model_xml.coordinates import mujoco_to_paper_state as mujoco_to_paper_state
+    from model_xml.coordinates import paper_to_mujoco_state as paper_to_mujoco_state
 
 __getattr__, __dir__ = lazy_exports(__name__, _LAZY, globals())
 

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from analytic.effects import Effect
-from analytic.plant import TIGHTER_STEP, AnalyticPlant, AnalyticSettings, Plant
+from analytic.plant import TIGHTER_STEP, AnalyticPlant, AnalyticSettings, Plant, Progress
 from analytic.scene import Scene
 from analytic.trajectory import Engine, Trajectory
 from mj_bridge.mujoco_settings import MujocoRunSettings
@@ -64,7 +64,13 @@ class MujocoPlant(Plant):
     def tightened(self, scene: Scene, settings: MujocoRunSettings) -> MujocoRunSettings:
         return dataclasses.replace(settings, dt=settings.dt / TIGHTER_STEP)
 
-    def _simulate(self, scene, settings, t_end, progress) -> Trajectory:
+    def _simulate(
+        self,
+        scene: Scene,
+        settings: MujocoRunSettings,
+        t_end: float | None,
+        progress: Progress | None,
+    ) -> Trajectory:
         from mj_bridge.simulate import simulate
 
         return simulate(

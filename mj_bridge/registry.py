@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import functools
 import re
+from collections.abc import Iterable
 from importlib import metadata
 
 from analytic.trajectory import Engine
@@ -59,7 +60,7 @@ def order_key(name: str) -> tuple[int, int, str]:
     return (1 if name in plugin_names() else 2, 0, name)
 
 
-def report_order(names) -> tuple[str, ...]:
+def report_order(names: Iterable[object]) -> tuple[str, ...]:
     """``names`` as plain strings, duplicates dropped, in report order (:func:`order_key`)."""
     return tuple(sorted(dict.fromkeys(str(n) for n in names), key=order_key))
 

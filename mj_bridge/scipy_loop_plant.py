@@ -26,7 +26,7 @@ from collections.abc import Collection
 from typing import Any, ClassVar
 
 from analytic.effects import CONTROL_EFFECTS, Effect
-from analytic.plant import Plant
+from analytic.plant import Plant, Progress
 from analytic.scene import Scene
 from analytic.trajectory import Trajectory
 from mj_bridge.scipy_forces import FORCE_EFFECTS
@@ -76,7 +76,13 @@ class ScipyLoopPlant(Plant):
     def tightened(self, scene: Scene, settings: ScipyLoopSettings) -> ScipyLoopSettings | None:
         return tightened_scipy_loop(scene, settings)
 
-    def _simulate(self, scene, settings, t_end, progress) -> Trajectory:
+    def _simulate(
+        self,
+        scene: Scene,
+        settings: ScipyLoopSettings,
+        t_end: float | None,
+        progress: Progress | None,
+    ) -> Trajectory:
         run = importlib.import_module(self.integration).simulate
         return run(scene, settings, t_end=t_end, progress=progress)
 

@@ -82,7 +82,9 @@ def simulate(
     d = tw.d
     tw.set_state(0.0, scene.initial.q0(), scene.initial.qdot0())
     tw.d.time = float(times[0])
-    rec = {k: [] for k in ("t", "qpos", "qvel", "qacc", "control", "aux", "energy_mj")}
+    rec: dict[str, list] = {
+        k: [] for k in ("t", "qpos", "qvel", "qacc", "control", "aux", "energy_mj")
+    }
     status, message = RunStatus.OK, ""
     acc = tw.acc
     stages = len(acc.weights)

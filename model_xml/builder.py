@@ -27,7 +27,7 @@ stiffness, no spring effect -> no tendons; no control and no given torque -> no 
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import mujoco
@@ -109,7 +109,7 @@ class BodyFrame:
     pos: np.ndarray = field(default_factory=lambda: np.zeros(3))
     quat: np.ndarray = field(default_factory=lambda: np.array([1.0, 0.0, 0.0, 0.0]))
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         pos = np.asarray(self.pos, float)
         quat = np.asarray(self.quat, float)
         if pos.shape != (3,) or not np.all(np.isfinite(pos)):
@@ -217,7 +217,7 @@ def mass_inertias(scene: Scene) -> tuple[np.ndarray, float]:
     return out, pad
 
 
-def _visual(geom: mujoco.MjsGeom, rgba) -> None:
+def _visual(geom: mujoco.MjsGeom, rgba: Sequence[float]) -> None:
     geom.density = 0.0
     geom.contype = 0
     geom.conaffinity = 0
@@ -240,13 +240,15 @@ def build_spec(scene: Scene, body_frame: BodyFrame | None = None) -> mujoco.MjSp
     Rf = quat_to_mat(bf.quat)  # frame -> paper body axes
     Rt = Rf.T  # paper body axes -> frame
 
-    def pt(x):  # a point given in paper body coordinates, in frame coordinates
+    # a point given in paper body coordinates, in frame coordinates
+    def pt(x: Sequence[float] | np.ndarray) -> np.ndarray:
         return Rt @ (np.asarray(x, float) - bf.pos)
 
-    def vec(v):
+    def vec(v: Sequence[float] | np.ndarray) -> np.ndarray:
         return Rt @ np.asarray(v, float)
 
-    def rot(q):  # an orientation given relative to paper body axes, relative to the frame
+    # an orientation given relative to paper body axes, relative to the frame
+    def rot(q: np.ndarray) -> np.ndarray:
         return quat_mul(quat_conj(bf.quat), q)
 
     spec = mujoco.MjSpec()

@@ -10,19 +10,24 @@ explicit inertial is written in full.
 from __future__ import annotations
 
 import xml.etree.ElementTree as ET
+from collections.abc import Iterable
+from typing import TYPE_CHECKING, Any
 
 import mujoco
 import numpy as np
 
 from analytic.scene import Scene
 
+if TYPE_CHECKING:
+    from model_xml.builder import BodyFrame
 
-def _num(values) -> str:
+
+def _num(values: Any) -> str:
     arr = np.atleast_1d(np.asarray(values, dtype=float))
     return " ".join(repr(float(x)) for x in arr)
 
 
-def _named(spec_items) -> dict[str, object]:
+def _named(spec_items: Iterable[Any]) -> dict[str, Any]:
     return {it.name: it for it in spec_items if it.name}
 
 
@@ -44,7 +49,7 @@ def spec_to_mjcf(spec: mujoco.MjSpec) -> str:
     keys = _named(spec.keys)
 
     for el in root.iter("body"):
-        b = bodies[el.get("name")]
+        b = bodies[el.attrib["name"]]
         el.set("pos", _num(b.pos))
         el.set("quat", _num(b.quat))
         if b.explicitinertial:
@@ -62,20 +67,20 @@ def spec_to_mjcf(spec: mujoco.MjSpec) -> str:
         if name in joints and el.get("type") != "free":
             el.set("axis", _num(joints[name].axis))
     for el in root.iter("geom"):
-        g = geoms[el.get("name")]
+        g = geoms[el.attrib["name"]]
         el.set("size", _num(g.size[: _geom_nsize(g.type)]))
         el.set("pos", _num(g.pos))
         el.set("quat", _num(g.quat))
     tend = root.find("tendon")
     if tend is not None:
         for el in tend.iter("fixed"):
-            t = tendons[el.get("name")]
+            t = tendons[el.attrib["name"]]
             el.set("stiffness", _num(t.stiffness))
             el.set("springlength", _num(t.springlength))
     act = root.find("actuator")
     if act is not None:
         for el in act:
-            a = actuators[el.get("name")]
+            a = actuators[el.attrib["name"]]
             el.set("gear", _num(a.gear))
             if a.biastype != mujoco.mjtBias.mjBIAS_NONE:
                 el.set("biasprm", _num(a.biasprm))
@@ -83,14 +88,14 @@ def spec_to_mjcf(spec: mujoco.MjSpec) -> str:
     kf = root.find("keyframe")
     if kf is not None:
         for el in kf.iter("key"):
-            k = keys[el.get("name")]
+            k = keys[el.attrib["name"]]
             el.set("qpos", _num(k.qpos))
             el.set("qvel", _num(k.qvel))
     ET.indent(root, space="  ")
     return ET.tostring(root, encoding="unicode") + "\n"
 
 
-def _geom_nsize(gtype) -> int:
+def _geom_nsize(gtype: Any) -> int:
     return {
         mujoco.mjtGeom.mjGEOM_SPHERE: 1,
         mujoco.mjtGeom.mjGEOM_CYLINDER: 2,
@@ -98,8 +103,8 @@ def _geom_nsize(gtype) -> int:
     }.get(gtype, 3)
 
 
-def to_mjcf(scene: Scene, **kwargs) -> str:
-    """The scene's MuJoCo twin as full-precision MJCF text (``kwargs`` go to ``build_spec``)."""
+def to_mjcf(scene: Scene, body_frame: BodyFrame | None = None) -> str:
+    """The scene's MuJoCo twin as full-precision MJCF text (``body_frame`` as in ``build_spec``)."""
     from model_xml.builder import build_spec
 
-    return spec_to_mjcf(build_spec(scene, **kwargs))
+    return spec_to_mjcf(build_spec(scene, body_frame))

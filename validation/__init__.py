@@ -14,6 +14,8 @@ Public names (imported on first use, so ``import validation`` stays cheap: the p
 * :class:`Check`: one verdict of a run.
 """
 
+TYPE_CHECKING = False  # typing.TYPE_CHECKING without importing typing (mypy reads it as that)
+
 _LAZY = {
     "assert_agree": "validation.testing.agree",
     "Check": "validation.compare.checks",
@@ -26,10 +28,23 @@ _LAZY = {
     "ValidationResult": "validation.validate",
 }
 
+if TYPE_CHECKING:  # the same names, typed for a type checker (never run: imports stay lazy)
+    from typing import Any
+
+    from validation.compare.checks import Check as Check
+    from validation.compare.thresholds import Threshold as Threshold
+    from validation.compare.thresholds import thresholds_for as thresholds_for
+    from validation.external.judge import judge as judge
+    from validation.scenes import resolve_scene as resolve_scene
+    from validation.studies.fuzz.campaign import fuzz as fuzz
+    from validation.testing.agree import assert_agree as assert_agree
+    from validation.validate import ValidationResult as ValidationResult
+    from validation.validate import run_validation as run_validation
+
 __all__ = sorted(_LAZY)
 
 
-def __getattr__(name: str):
+def __getattr__(name: str) -> "Any":
     if name in _LAZY:
         # deferred: `import validation` imports no submodule (the pytest plugin imports it in
         # every run; docs/performance.md, Import costs)

@@ -211,6 +211,19 @@ def _failed(exc: BaseException) -> int:
     raise exc
 
 
+def unsupported_platform(platform: str | None = None) -> str | None:
+    """Why the tool cannot run on ``platform`` (default ``sys.platform``), in one line; None on
+    Linux, the one system it supports: its output directories, caches and worker processes rely on
+    fcntl file locks, ``/proc`` and Linux's ``renameat2`` and ``prctl``."""
+    platform = sys.platform if platform is None else platform
+    if platform == "linux":
+        return None
+    return (
+        f"tumble runs on Linux only (fcntl locks, /proc, renameat2, prctl); this system is "
+        f"{platform!r}"
+    )
+
+
 def run(argv: list[str] | None = None) -> None:
     """The ``tumble`` program: :func:`main`, then the process ends at once with its status.
 
@@ -221,7 +234,13 @@ def run(argv: list[str] | None = None) -> None:
 
     The program's process is the tool's own: its numerical environment (BLAS on one thread,
     ``NO_COLOR``) is set here, before numpy is imported
-    (:func:`validation.runs.environment.set_process_env`), not on ``import validation``."""
+    (:func:`validation.runs.environment.set_process_env`), not on ``import validation``.
+    On a system other than Linux it prints one line and exits with 2, before any work
+    (:func:`unsupported_platform`)."""
+    refusal = unsupported_platform()
+    if refusal is not None:
+        print(f"tumble: error: {refusal}", file=sys.stderr)
+        raise SystemExit(EXIT_USAGE)
     from validation.runs.environment import set_process_env
 
     set_process_env()

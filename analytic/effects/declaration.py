@@ -19,11 +19,12 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 from analytic.effects import Effect
 from analytic.scene.key import Key
 
-Shape = Callable[..., object]
+Shape = Callable[..., Any]
 """``φ(e, ed)``: one spring element's tension per unit coefficient, from its extension ``e`` (m)
 and extension rate ``ed`` (m/s); arrays or scalars alike."""
 

@@ -28,6 +28,8 @@ Units are SI; *body* vectors in BR's principal axes at C, *inertial* ones in XYZ
 quaternions w-first; mass and axis indices 1-based in files, 0-based in the records.
 """
 
+from typing import TYPE_CHECKING
+
 from analytic.runtime.lazy import lazy_exports
 
 _PUBLIC = {
@@ -79,6 +81,53 @@ _PUBLIC = {
 }
 """Public name -> the module it lives in: imported on first use, so that a module of the package
 (``analytic.scene.key``, which the effect declarations read) is imported without the loader."""
+
+if TYPE_CHECKING:  # the same names, typed for a type checker (never run: imports stay lazy)
+    from analytic.scene.builtin import BUILTIN_DIR as BUILTIN_DIR
+    from analytic.scene.builtin import builtin_scene_names as builtin_scene_names
+    from analytic.scene.builtin import builtin_scene_path as builtin_scene_path
+    from analytic.scene.dump import modified_scene as modified_scene
+    from analytic.scene.limits import AXIS_NORMALISE_TOL as AXIS_NORMALISE_TOL
+    from analytic.scene.limits import AXIS_REFUSE_TOL as AXIS_REFUSE_TOL
+    from analytic.scene.limits import GRID_RTOL as GRID_RTOL
+    from analytic.scene.limits import MAX_INERTIA as MAX_INERTIA
+    from analytic.scene.limits import MAX_MASS as MAX_MASS
+    from analytic.scene.limits import MAX_MASSES as MAX_MASSES
+    from analytic.scene.limits import MAX_MUJOCO_STEPS as MAX_MUJOCO_STEPS
+    from analytic.scene.limits import MAX_OUTPUT_SAMPLES as MAX_OUTPUT_SAMPLES
+    from analytic.scene.limits import MAX_SCENE_BYTES as MAX_SCENE_BYTES
+    from analytic.scene.limits import MAX_SCENE_NESTING as MAX_SCENE_NESTING
+    from analytic.scene.limits import QUAT_NORMALISE_TOL as QUAT_NORMALISE_TOL
+    from analytic.scene.limits import QUAT_REFUSE_TOL as QUAT_REFUSE_TOL
+    from analytic.scene.limits import ROTATION_EXACT_TOL as ROTATION_EXACT_TOL
+    from analytic.scene.limits import ROTATION_REFUSE_TOL as ROTATION_REFUSE_TOL
+    from analytic.scene.loading import Scene as Scene
+    from analytic.scene.loading import scene_from_dict as scene_from_dict
+    from analytic.scene.parsers import IDENTITY_QUATERNION as IDENTITY_QUATERNION
+    from analytic.scene.reading import load_scene as load_scene
+    from analytic.scene.records import Body as Body
+    from analytic.scene.records import BodyShape as BodyShape
+    from analytic.scene.records import Control as Control
+    from analytic.scene.records import ExternalTorque as ExternalTorque
+    from analytic.scene.records import InitialState as InitialState
+    from analytic.scene.records import Masses as Masses
+    from analytic.scene.records import MassTrack as MassTrack
+    from analytic.scene.records import MujocoSettings as MujocoSettings
+    from analytic.scene.records import OmegaTrack as OmegaTrack
+    from analytic.scene.records import OutputSettings as OutputSettings
+    from analytic.scene.records import Rod as Rod
+    from analytic.scene.records import SceneRecord as SceneRecord
+    from analytic.scene.records import SolverSettings as SolverSettings
+    from analytic.scene.records import Springs as Springs
+    from analytic.scene.records import Stabilization as Stabilization
+    from analytic.scene.records import output_times as output_times
+    from analytic.scene.twin import MJ_MINVAL as MJ_MINVAL
+    from analytic.scene.twin import POINT_INERTIA_MIN as POINT_INERTIA_MIN
+    from analytic.scene.twin import POINT_INERTIA_REL as POINT_INERTIA_REL
+    from analytic.scene.twin import TRIANGLE_RTOL as TRIANGLE_RTOL
+    from analytic.scene.twin import twin_point_inertia as twin_point_inertia
+    from analytic.scene.values import SceneText as SceneText
+    from analytic.scene.values import as_enum as as_enum
 
 __getattr__, __dir__ = lazy_exports(__name__, _PUBLIC, globals())
 

@@ -75,7 +75,7 @@ def scene_from_dict(data: Mapping[str, Any], source: str = "") -> Scene:
     refuse_unknown_keys(data)
     top = Table(data, "")
 
-    meta = top.table("scene")
+    meta = top.required_table("scene")
     name = meta.string("name")
     description = meta.string("description")
     effects_raw = meta.raw("effects", kinds=(Kind.CHOICES,))
@@ -94,8 +94,8 @@ def scene_from_dict(data: Mapping[str, Any], source: str = "") -> Scene:
             ) from None
     meta.finish()
 
-    body = parse_body(top.table("body"))
-    rod = parse_rod(top.table("rod"))
+    body = parse_body(top.required_table("body"))
+    rod = parse_rod(top.required_table("rod"))
     masses = parse_masses(top.table("masses"), rod.axis)
     n = masses.n
     springs = parse_springs(top.table("springs"), n)

@@ -13,7 +13,7 @@ import dataclasses
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Self
 
 import numpy as np
 
@@ -352,7 +352,7 @@ class SceneRecord:
     def controlled(self) -> bool:
         return bool(self.effects & CONTROL_EFFECTS)
 
-    def replace(self, **changes: Any) -> SceneRecord:
+    def replace(self, **changes: Any) -> Self:
         """A copy with top-level fields replaced (e.g. ``output=OutputSettings(t_end=60)``),
         checked by nothing: a modified *valid* scene is :func:`analytic.scene.modified_scene`."""
         return dataclasses.replace(self, **changes)

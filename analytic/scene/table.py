@@ -85,6 +85,13 @@ class Table:
             return None
         return Table(self.raw(key), self.name(key), generic_table(self.schema, key))
 
+    def required_table(self, key: str) -> Table:
+        """The sub-table ``key`` that the format requires: refused when it is absent."""
+        t = self.table(key)
+        if t is None:
+            raise ValueError(f"{self.name(key)}: missing required table")
+        return t
+
     def table_or_empty(self, key: str) -> Table:
         """The sub-table ``key``, or an empty one (every key at its default) when it is absent."""
         t = self.table(key)

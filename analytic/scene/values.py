@@ -14,6 +14,7 @@ import warnings
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from analytic.scene.limits import (
     AXIS_NORMALISE_TOL,
@@ -23,7 +24,7 @@ from analytic.scene.limits import (
 )
 
 
-def frozen(a: np.ndarray) -> np.ndarray:
+def frozen(a: ArrayLike) -> np.ndarray:
     a = np.array(a, dtype=float)
     a.setflags(write=False)
     return a

@@ -285,3 +285,26 @@ def test_every_command_module_declares_its_command():
     assert list(sub.choices) == names
     for module in COMMANDS:
         assert sub.choices[module.NAME].get_default("func") is module.run
+
+
+@pytest.mark.parametrize("platform", ["darwin", "win32", "freebsd14"])
+def test_an_unsupported_system_is_refused_in_one_line(platform, monkeypatch, capsys):
+    """``tumble`` on a system other than Linux: one line naming the system, exit 2, before any
+    work."""
+    from validation import cli
+
+    monkeypatch.setattr(sys, "platform", platform)
+    with pytest.raises(SystemExit) as exc:
+        cli.run(["--version"])
+    assert exc.value.code == EXIT_USAGE
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("tumble: error: ")
+    assert "Linux only" in err and repr(platform) in err
+
+
+def test_linux_is_supported():
+    from validation.cli import unsupported_platform
+
+    assert unsupported_platform("linux") is None
+    assert unsupported_platform() is None  # the system this suite runs on
+    assert unsupported_platform("darwin") is not None

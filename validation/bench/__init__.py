@@ -9,6 +9,8 @@
 * :mod:`.mujoco_steps`: MuJoCo RK4's per-step cost with and without the controller.
 """
 
+from typing import TYPE_CHECKING
+
 from validation._lazy import lazy_exports
 
 _PUBLIC = {
@@ -20,6 +22,15 @@ _PUBLIC = {
     "chain_scene": "validation.bench.timing",
     "time_call": "validation.bench.timing",
 }
+
+if TYPE_CHECKING:  # the same names, typed for a type checker (never run: imports stay lazy)
+    from validation.bench.goal import Goal as Goal
+    from validation.bench.timing import CpuMeter as CpuMeter
+    from validation.bench.timing import chain_scene as chain_scene
+    from validation.bench.timing import time_call as time_call
+    from validation.bench.verdicts import SPREAD_BOUND as SPREAD_BOUND
+    from validation.bench.verdicts import Spread as Spread
+    from validation.bench.verdicts import Verdict as Verdict
 
 __all__ = sorted(_PUBLIC)
 __getattr__, __dir__ = lazy_exports(__name__, _PUBLIC, globals())

@@ -14,6 +14,8 @@ closed-form tracking laws and its balances, the named thresholds, and the refere
 * :mod:`.summary`: one-line sentences and drift figures for reports and the console.
 """
 
+from typing import TYPE_CHECKING
+
 from validation._lazy import lazy_exports
 
 _PUBLIC = {
@@ -29,6 +31,19 @@ _PUBLIC = {
     "drift_figures": "validation.compare.summary",
     "summary_table": "validation.compare.summary",
 }
+
+if TYPE_CHECKING:  # the same names, typed for a type checker (never run: imports stay lazy)
+    from validation.compare.checks import Check as Check
+    from validation.compare.checks import CheckState as CheckState
+    from validation.compare.checks import Comparison as Comparison
+    from validation.compare.checks import compare_plants as compare_plants
+    from validation.compare.referee import Verdict as Verdict
+    from validation.compare.referee import VerdictKind as VerdictKind
+    from validation.compare.summary import check_sentence as check_sentence
+    from validation.compare.summary import drift_figures as drift_figures
+    from validation.compare.summary import summary_table as summary_table
+    from validation.compare.thresholds import Threshold as Threshold
+    from validation.compare.thresholds import thresholds_for as thresholds_for
 
 __all__ = sorted(_PUBLIC)
 __getattr__, __dir__ = lazy_exports(__name__, _PUBLIC, globals())

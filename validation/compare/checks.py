@@ -313,7 +313,7 @@ def plant_series(traj: Trajectory, scene: Any = None) -> tuple[Series, ...]:
     t = traj.t
     out: list[Series] = []
 
-    def add(name, label, unit, group, values):
+    def add(name: str, label: str, unit: str, group: Group, values: np.ndarray) -> None:
         out.append(Series(f"{subj.value}.{name}", label, unit, group, subj, t, values))
 
     T, I, C = Group.TRACKING, Group.INVARIANT, Group.CONTROL
@@ -517,8 +517,8 @@ def compare(
         checks.append(_bound_check(th["quat_norm"], subj, by["quat_norm"]))
         terms = BalanceTerms.of(p.invariants)
         for b in BALANCES:  # relative to the balanced quantity (validation.compare.balances)
-            name = b.balance.value
-            checks.append(_bound_check(th[name], subj, by[name], b.scale(terms)))
+            balance = b.balance.value
+            checks.append(_bound_check(th[balance], subj, by[balance], b.scale(terms)))
 
     t = series[0].t if series else analytic.t
     return Comparison(

@@ -15,6 +15,8 @@ The format is documented for people writing such files in ``docs/trajectory-form
 
 """
 
+from typing import TYPE_CHECKING
+
 from validation._lazy import lazy_exports
 
 _PUBLIC = {
@@ -33,6 +35,20 @@ _PUBLIC = {
     "QUAT_NORM_TOL": "validation.external.table",
 }
 
+if TYPE_CHECKING:  # the same names, typed for a type checker (never run: imports stay lazy)
+    from validation.external.columns import COLUMNS as COLUMNS
+    from validation.external.columns import ColumnGroup as ColumnGroup
+    from validation.external.columns import TrajectoryFormat as TrajectoryFormat
+    from validation.external.errors import TrajectoryFileError as TrajectoryFileError
+    from validation.external.judge import judge_request as judge_request
+    from validation.external.judge import run_judge as run_judge
+    from validation.external.read import read_trajectory as read_trajectory
+    from validation.external.record import ExternalTrajectory as ExternalTrajectory
+    from validation.external.reference_pack import read_pack as read_pack
+    from validation.external.reference_pack import write_pack as write_pack
+    from validation.external.table import GRID_TOL as GRID_TOL
+    from validation.external.table import QUAT_NORM_TOL as QUAT_NORM_TOL
+    from validation.external.write import write_trajectory as write_trajectory
+
 __all__ = sorted(_PUBLIC)
 __getattr__, __dir__ = lazy_exports(__name__, _PUBLIC, globals())
-

@@ -305,7 +305,7 @@ def run_judge(
         )
         for f in request.files
     }
-    meta = {
+    meta: dict[str, Any] = {
         "judged_files": [
             {
                 "plant": str(f.trajectory.engine),

@@ -8,12 +8,18 @@
 * :mod:`.style`: colours, application ids and viewer text.
 """
 
+from typing import TYPE_CHECKING
+
 from validation._lazy import lazy_exports
 
 _PUBLIC = {
     "write_recording": "validation.recording.recording",
     "RecordingInfo": "validation.recording.recording",
 }
+
+if TYPE_CHECKING:  # the same names, typed for a type checker (never run: imports stay lazy)
+    from validation.recording.recording import RecordingInfo as RecordingInfo
+    from validation.recording.recording import write_recording as write_recording
 
 __all__ = sorted(_PUBLIC)
 __getattr__, __dir__ = lazy_exports(__name__, _PUBLIC, globals())

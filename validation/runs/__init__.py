@@ -13,6 +13,8 @@
 * :mod:`.warmup`: the one-time numba compile (``tumble warmup``).
 """
 
+from typing import TYPE_CHECKING
+
 from validation._lazy import lazy_exports
 
 _PUBLIC = {
@@ -26,6 +28,17 @@ _PUBLIC = {
     "warm_up": "validation.runs.warmup",
     "warming": "validation.runs.warmup",
 }
+
+if TYPE_CHECKING:  # the same names, typed for a type checker (never run: imports stay lazy)
+    from validation.runs.atomic import OutputError as OutputError
+    from validation.runs.atomic import write_bytes as write_bytes
+    from validation.runs.atomic import write_text as write_text
+    from validation.runs.outputs import default_out_dir as default_out_dir
+    from validation.runs.outputs import output_run as output_run
+    from validation.runs.progress import Progress as Progress
+    from validation.runs.progress import StageProgress as StageProgress
+    from validation.runs.warmup import warm_up as warm_up
+    from validation.runs.warmup import warming as warming
 
 __all__ = sorted(_PUBLIC)
 __getattr__, __dir__ = lazy_exports(__name__, _PUBLIC, globals())

@@ -6,11 +6,16 @@
   workers) and :mod:`.plugin_bench` (what the plugin costs a pytest run, measured by hand).
 """
 
+from typing import TYPE_CHECKING
+
 from validation._lazy import lazy_exports
 
 _PUBLIC = {
     "assert_agree": "validation.testing.agree",
 }
+
+if TYPE_CHECKING:  # the same names, typed for a type checker (never run: imports stay lazy)
+    from validation.testing.agree import assert_agree as assert_agree
 
 __all__ = sorted(_PUBLIC)
 __getattr__, __dir__ = lazy_exports(__name__, _PUBLIC, globals())

@@ -38,7 +38,7 @@ import os
 import re
 import secrets
 import sys
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -261,7 +261,7 @@ class CheckItem(pytest.Item):
         if not check.passed:
             raise CheckFailed(f"{describe_check(check, result)}\n  {where}")
 
-    def repr_failure(self, excinfo: pytest.ExceptionInfo[BaseException], style=None) -> Any:
+    def repr_failure(self, excinfo: pytest.ExceptionInfo[BaseException], style: Any = None) -> Any:
         if isinstance(excinfo.value, CheckFailed):
             return str(excinfo.value.args[0])
         return super().repr_failure(excinfo, style=style)
@@ -310,7 +310,7 @@ _SESSION = pytest.StashKey[SessionRuns]()
 
 
 @pytest.fixture
-def tumble_validation(request: pytest.FixtureRequest):
+def tumble_validation(request: pytest.FixtureRequest) -> Callable[..., Any]:
     """A function ``(scene, plants=None, t_end=None) -> ValidationResult``: the session's cached
     run of ``scene`` (a scene file, a built-in name or a Scene) on ``plants`` (default
     ``--tumble-plants``, else every installed plant). A scene file that is also collected as test

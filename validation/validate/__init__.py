@@ -393,7 +393,7 @@ def _meta(
     # the plants of the default set or of `--plants all` that refused the scene, each once
     told = [str(x) for x in left_out if not (referee_note and x.engine == Engine.PINOCCHIO)]
     referee_note = "; ".join([*told, *([referee_note] if referee_note else [])])
-    meta = {
+    meta: dict[str, Any] = {
         "run_id": run.run_id,
         "scene": {
             "name": sc.name,

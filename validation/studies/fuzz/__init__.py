@@ -9,6 +9,8 @@ minimal scene (:mod:`~validation.studies.fuzz.shrink`) written as a scene file
 :func:`fuzz` is the campaign (:mod:`~validation.studies.fuzz.campaign`). See ``docs/fuzzing.md``.
 """
 
+from typing import TYPE_CHECKING
+
 from validation._lazy import lazy_exports
 
 _TABLE = {
@@ -21,5 +23,15 @@ _TABLE = {
     "judge_scene": "validation.studies.fuzz.judge",
     "shrink": "validation.studies.fuzz.shrink",
 }
+
+if TYPE_CHECKING:  # the same names, typed for a type checker (never run: imports stay lazy)
+    from validation.studies.fuzz.campaign import CampaignResult as CampaignResult
+    from validation.studies.fuzz.campaign import Counterexample as Counterexample
+    from validation.studies.fuzz.campaign import SerialExecutor as SerialExecutor
+    from validation.studies.fuzz.campaign import fuzz as fuzz
+    from validation.studies.fuzz.judge import Disagreement as Disagreement
+    from validation.studies.fuzz.judge import judge_scene as judge_scene
+    from validation.studies.fuzz.shrink import shrink as shrink
+    from validation.studies.fuzz.space import draw_scene_dict as draw_scene_dict
 __getattr__, __dir__ = lazy_exports(__name__, _TABLE, globals())
 __all__ = sorted(_TABLE)
