@@ -4,7 +4,6 @@ the criterion its file states; its table written. Exits 1 when a case fails."""
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
 from validation.commands import EXIT_FAILED
@@ -43,13 +42,26 @@ def run(args: argparse.Namespace) -> int:
 
         plants = list(parse_plants(args.plants))
 
-    def progress(case: str, i: int, total: int) -> None:
-        if sys.stderr.isatty():
-            print(f"hard case {i + 1}/{total}: {case}", file=sys.stderr)
+    from validation.runs.progress import counter
 
-    table = run_hard_cases(
-        out, names=args.case or None, fast_only=args.fast, progress=progress, plants=plants
-    )
+    cases = None
+
+    def progress(case: str, i: int, total: int) -> None:  # before each case
+        nonlocal cases
+        if cases is None:
+            cases = counter("hard cases", total, "cases")
+        cases.set(i)
+        cases.relabel(f"hard cases [{case}]")
+
+    try:
+        table = run_hard_cases(
+            out, names=args.case or None, fast_only=args.fast, progress=progress, plants=plants
+        )
+        if cases is not None:
+            cases.set(len(table.rows))
+    finally:
+        if cases is not None:
+            cases.close()
     for r in table.rows:
         per_plant = ", ".join(f"{e} {r.plant_verdict(e)}" for e in table.plants)
         print(f"  {'PASS' if r.passed else 'FAIL'}  {r.case}  ({per_plant})")
