@@ -132,8 +132,8 @@ def showing(display: Display) -> Iterator[Display]:
     _STACK.append(display)
     try:
         yield display
-    finally:
-        _STACK.remove(display)
+    finally:  # this block's entry (by identity: another policy may equal it)
+        del _STACK[max(i for i, d in enumerate(_STACK) if d is display)]
 
 
 _LOCK = threading.Lock()
