@@ -117,6 +117,8 @@ class Counter:
         self._lock = threading.Lock()
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
+        if self.display.mode is Mode.PLAIN:
+            self._start_ticker()  # from the start: a first item that takes long still shows
 
     # reports -------------------------------------------------------------------------------
 

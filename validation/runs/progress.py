@@ -179,7 +179,7 @@ class StageProgress:
         self.t_end = t_end
         self.stages = stages
         self.display = _display(stream, delay)
-        self.counter = self._counter(stages or 1)
+        self.counter: Counter | None = None  # made at the first report (its clock starts then)
         self.walls: dict[str, float] = {}
         self._started: dict[str, float] = {}
         self._reached: dict[str, float] = {}
@@ -203,6 +203,8 @@ class StageProgress:
         reports interleave), each is announced once."""
         raise_pending()
         now = self.display.clock()
+        if self.counter is None:
+            self.counter = self._counter(self.stages or 1)
         if stage not in self._started:
             self._started[stage] = now
             if self.display.mode is Mode.PLAIN:
@@ -231,7 +233,9 @@ class StageProgress:
         stage's first to its last report; but when the run ``stopped`` (an interrupt, a full
         disk) or a stage fell short of the horizon, the simulated time each stage reached
         instead of a wall time."""
-        self.counter.close(final_line=False)  # the line below says more
+        if self.counter is not None:
+            self.counter.close(final_line=False)  # the line below says more
+            self.counter = None
         if self.walls and self.display.mode is Mode.PLAIN:
             short = any(t < self.t_end for t in self._reached.values())
             if not (stopped or short):
@@ -247,7 +251,6 @@ class StageProgress:
         self._started = {}
         self._reached = {}
         self._last = None
-        self.counter = self._counter(self.stages or 1)
 
 
 class Status:

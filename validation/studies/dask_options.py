@@ -13,7 +13,7 @@ checked before anything is started or written.
 * ``dashboard`` (``--dashboard``): the ``LocalCluster`` of ``dask_workers`` serves Dask's
   dashboard on 127.0.0.1 only (:data:`DASHBOARD_ADDRESS`; another free port when that one is
   taken, as Dask does); with ``scheduler`` the scheduler's own dashboard is the one linked. It
-  needs ``bokeh`` (``pip install "tumbling-testbed[dashboard]"``) and one of the two options:
+  needs ``bokeh`` (``pip install "tumbling-testbed[dask]"``) and one of the two options:
   otherwise a ``ValueError`` naming ``dashboard``. Without it the cluster has no dashboard.
 """
 
@@ -125,7 +125,7 @@ def check_dashboard(dashboard: bool, scheduler: str | None, dask_workers: int | 
 
     if find_spec("bokeh") is None:
         raise ValueError(
-            'dashboard: Dask\'s dashboard needs bokeh (pip install "tumbling-testbed[dashboard]")'
+            'dashboard: Dask\'s dashboard needs bokeh (pip install "tumbling-testbed[dask]")'
         )
 
 

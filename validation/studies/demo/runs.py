@@ -78,7 +78,7 @@ def _baselines(steps: Sequence[DemoStep]) -> int:
     n = 0
     for i, step in enumerate(steps):
         earlier = any(s.scene == step.scene and not s.switched_off for s in steps[:i])
-        n += step.switched_off and not earlier
+        n += bool(step.switched_off) and not earlier
     return n
 
 
