@@ -191,7 +191,7 @@ class StageProgress:
 
         c = Counter(self.label, n * self.t_end if self.t_end > 0 else None, display=self.display)
         c.fmt = fmt
-        c.bar_format = "{desc}: {percentage:3.0f}%|{bar}| {postfix} [{elapsed}<{remaining}]"
+        c.bar_format = "{desc}: {percentage:3.0f}%|{bar}| [{elapsed}<{remaining}{postfix}]"
         return c
 
     @property
@@ -218,7 +218,7 @@ class StageProgress:
         self._last = stage
         running = [s for s, r in self._reached.items() if r < self.t_end]
         self.counter.relabel(f"{self.label} [{', '.join(running or [stage])}]")
-        self.counter.describe(", ".join(f"{s} t = {r:.3g} s" for s, r in self._reached.items()))
+        self.counter.describe(", ".join(f"{s} {r:.3g} s" for s, r in self._reached.items()))
         self.counter.set(sum(min(r, self.t_end) for r in self._reached.values()))
 
     @property

@@ -43,7 +43,7 @@ def test_stages_side_by_side_count_together_with_an_eta():
     assert all(line.startswith("tumble: validate x") for line in lines), lines
     # at 10 s the analytic plant reports first: 19 of the 40 plant-seconds are done
     at_10 = next(line for line in lines if ", 10 s elapsed" in line)
-    assert "19 of 40 plant-seconds (48 %; analytic t = 10 s, mujoco t = 9 s)" in at_10, at_10
+    assert "19 of 40 plant-seconds (48 %; analytic 10 s, mujoco 9 s)" in at_10, at_10
     assert at_10.endswith(f", ETA {duration(10.0 * (40 - 19) / 19)}"), at_10  # linear advance
     assert lines[-1].startswith("tumble: validate x: stages done (analytic 20 s, mujoco 20 s")
 
