@@ -10,26 +10,23 @@ Contract:
 * ``BAR`` (:class:`validation.runs.display.Mode`): one tqdm bar on the display's stream, drawn
   after the display's delay, with the count (``3/12 series``, or ``t = 5.00/20 s`` for simulated
   time), the elapsed time and tqdm's ETA; kept on screen at the end.
-* ``PLAIN``: after the delay, one line at the first report, then one per interval
-  (:data:`validation.runs.display.PLAIN_INTERVAL_S`; a thread writes it between reports too, see
-  ``Display.ticker``), each ``tumble: <label>: <count> (<percent>), <elapsed> elapsed, ETA
-  <eta>``; at :meth:`~Counter.close` one last line (``done in`` or ``stopped at``) when any line
-  was written. The ETA assumes the rate so far holds: ``elapsed × (total - done) / done``; with
+* ``PLAIN``: after the delay, one line at the first report, then one at the first report after
+  each interval (:data:`validation.runs.display.PLAIN_INTERVAL_S`), each ``tumble: <label>:
+  <count> (<percent>), <elapsed> elapsed, ETA <eta>``; at :meth:`~Counter.close` one last line
+  (``done in`` or ``stopped at``) when any line was written. A caller that waits for work in a
+  loop calls :meth:`~Counter.tick` while it waits, so a long item still shows time passing. No
+  thread is started: the tool forks its workers only from a single-threaded process
+  (:func:`validation.runs.workers.can_fork`), and a progress thread would make it run them here. The ETA assumes the rate so far holds: ``elapsed × (total - done) / done``; with
   a ``deadline_s`` (a campaign given minutes), the time left before it when that comes sooner.
 * ``OFF``: nothing is written.
 """
 
 from __future__ import annotations
 
-import threading
 from collections.abc import Callable
 
 from validation.runs.display import Display, Mode, current, write_line
 from validation.runs.interrupts import raise_pending
-
-TICK_FRACTION = 0.25
-"""The plain-line thread wakes every this fraction of the interval: a line is at most a quarter
-interval late."""
 
 
 def duration(seconds: float) -> str:
@@ -114,11 +111,6 @@ class Counter:
         self._last_line: float | None = None
         self._bar = None
         self._closed = False
-        self._lock = threading.Lock()
-        self._stop = threading.Event()
-        self._thread: threading.Thread | None = None
-        if self.display.mode is Mode.PLAIN:
-            self._start_ticker()  # from the start: a first item that takes long still shows
 
     # reports -------------------------------------------------------------------------------
 
@@ -132,7 +124,13 @@ class Counter:
         if mode is Mode.BAR:
             self._draw()
         elif mode is Mode.PLAIN:
-            self._start_ticker()
+            self._maybe_line()
+
+    def tick(self) -> None:
+        """No advance, but time has passed: the plain line when one is due (a caller waiting for
+        a long item calls it while it waits)."""
+        raise_pending()
+        if not self._closed and self.display.mode is Mode.PLAIN:
             self._maybe_line()
 
     def advance(self, n: float = 1) -> None:
@@ -182,39 +180,26 @@ class Counter:
         return f"{self.label}: " + ", ".join(parts)
 
     def _maybe_line(self, final: bool = False) -> None:
-        with self._lock:
-            now = self.display.clock()
-            if now - self.start < self.display.delay_s and not (final and self.lines):
-                return
-            if final:
-                if not self.lines:
-                    return
-                count, took = self.fmt(self.done, self.total), duration(now - self.start)
-                if self.total is None or self.done >= self.total:
-                    text = f"{self.label}: {count}, done in {took}"
-                else:
-                    text = f"{self.label}: stopped at {count} after {took}"
-            elif self.total is not None and self.done >= self.total:
-                return  # the end: said by the closing line
-            elif self._last_line is None or now - self._last_line >= self.display.interval_s:
-                text = self.line()
-            else:
-                return
-            self._last_line = now
-            self.lines += 1
-        write_line(f"{self.display.prefix}{text}", self.display)
-
-    def _start_ticker(self) -> None:
-        if self._thread is not None or not self.display.ticker:
+        now = self.display.clock()
+        if now - self.start < self.display.delay_s and not (final and self.lines):
             return
-        period = self.display.interval_s * TICK_FRACTION
-
-        def tick() -> None:
-            while not self._stop.wait(period):
-                self._maybe_line()
-
-        self._thread = threading.Thread(target=tick, name=f"progress {self.label}", daemon=True)
-        self._thread.start()
+        if final:
+            if not self.lines:
+                return
+            count, took = self.fmt(self.done, self.total), duration(now - self.start)
+            if self.total is None or self.done >= self.total:
+                text = f"{self.label}: {count}, done in {took}"
+            else:
+                text = f"{self.label}: stopped at {count} after {took}"
+        elif self.total is not None and self.done >= self.total:
+            return  # the end: said by the closing line
+        elif self._last_line is None or now - self._last_line >= self.display.interval_s:
+            text = self.line()
+        else:
+            return
+        self._last_line = now
+        self.lines += 1
+        write_line(f"{self.display.prefix}{text}", self.display)
 
     def _draw(self) -> None:
         if self._bar is None:
@@ -231,9 +216,6 @@ class Counter:
         if self._closed:
             return
         self._closed = True
-        self._stop.set()
-        if self._thread is not None:
-            self._thread.join()
         if self._bar is not None:
             self._bar.close()
         elif self.display.mode is Mode.PLAIN and final_line:
@@ -250,7 +232,7 @@ def _tqdm_bar(c: Counter):
     """The tqdm bar of ``c`` on its display's stream, drawn after its delay."""
     import tqdm  # deferred: ~60 ms, and only a terminal draws a bar
 
-    tqdm.tqdm.monitor_interval = 0  # no monitor thread: nothing writes while a worker forks
+    tqdm.tqdm.monitor_interval = 0  # no monitor thread: workers fork from one thread only
     if c.bar_format is not None:
         fmt = c.bar_format
     elif c.simulated_time:

@@ -14,8 +14,8 @@ Contract:
   unless asked.
 * :func:`write_line` writes one whole line to the display's stream under one lock, through tqdm
   when bars are on that stream (the bars are cleared and drawn again below the line); the lock is
-  held across ``fork`` (:func:`os.register_at_fork`), so a worker forked while a progress thread
-  writes never inherits a held stream lock.
+  held across ``fork`` (:func:`os.register_at_fork`), so a worker forked while another thread
+  writes never inherits a held stream lock. Nothing here starts a thread.
 """
 
 from __future__ import annotations
@@ -61,8 +61,6 @@ class Display:
         interval_s: between two plain lines, s (> 0).
         delay_s: before the first line or bar, s (≥ 0).
         clock: monotonic seconds (``time.monotonic``; a test's fake clock).
-        ticker: in plain mode, a thread writes a line at each interval even between reports (a
-            long stage in CI still shows the time passing); tests with a fake clock turn it off.
     """
 
     mode: Mode = Mode.OFF
@@ -70,7 +68,6 @@ class Display:
     interval_s: float = PLAIN_INTERVAL_S
     delay_s: float = START_DELAY_S
     clock: Callable[[], float] = field(default=time.monotonic, compare=False)
-    ticker: bool = True
 
     def __post_init__(self) -> None:
         if not isinstance(self.mode, Mode):
@@ -137,7 +134,7 @@ def showing(display: Display) -> Iterator[Display]:
 
 
 _LOCK = threading.Lock()
-"""Held while a line is written: the progress threads and the main thread never interleave."""
+"""Held while a line is written: lines from two threads never interleave."""
 
 
 def _reset_lock_in_child() -> None:

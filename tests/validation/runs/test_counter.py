@@ -31,7 +31,7 @@ class Tty(io.StringIO):
 
 
 def plain(buf, clock) -> Display:
-    return Display(Mode.PLAIN, buf, INTERVAL_S, DELAY_S, clock, ticker=False)
+    return Display(Mode.PLAIN, buf, INTERVAL_S, DELAY_S, clock)
 
 
 def test_plain_lines_arrive_at_the_interval_with_count_elapsed_and_eta():
@@ -92,18 +92,30 @@ def test_stopped_work_says_where_it_stopped():
     assert buf.getvalue().splitlines()[-1] == "tumble: hard cases: stopped at 3/8 cases after 6.0 s"
 
 
-def test_the_ticker_writes_lines_between_reports():
-    """A long stage without reports still shows time passing in a log (a real clock, a short
-    interval)."""
-    import time
-
-    buf = io.StringIO()
-    d = Display(Mode.PLAIN, buf, interval_s=0.05, delay_s=0.0)
-    c = Counter("x", 10, display=d)
+def test_ticks_write_the_line_due_between_reports():
+    """A caller waiting for a long item ticks: the line is written when the interval is due,
+    the count unchanged, the time passing."""
+    buf, clock = io.StringIO(), FakeClock()
+    c = Counter("sweep x", 4, unit="series", display=plain(buf, clock))
+    clock.now += DELAY_S
     c.set(1)
-    time.sleep(0.4)
+    for _ in range(30):  # 30 s without an advance, a tick a second
+        clock.now += 1.0
+        c.tick()
+    lines = buf.getvalue().splitlines()
+    assert len(lines) == 4 and all("1/4 series" in line for line in lines), lines
+    assert ", 32 s elapsed, " in lines[-1], lines
+
+
+def test_no_thread_is_started(monkeypatch):
+    """The tool forks its workers only from a single-threaded process: a count starts none."""
+    import threading
+
+    before = threading.active_count()
+    c = Counter("x", 10, display=Display(Mode.PLAIN, io.StringIO(), delay_s=0.0))
+    c.set(1)
+    assert threading.active_count() == before
     c.close()
-    assert len(buf.getvalue().splitlines()) >= 3, buf.getvalue()
 
 
 def test_off_prints_nothing():

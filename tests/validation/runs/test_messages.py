@@ -81,7 +81,7 @@ def _fast_display(monkeypatch):
     monkeypatch.setattr(
         messages,
         "for_stream",
-        lambda s, quiet: display.for_stream(s, quiet=quiet, delay_s=0.0, ticker=False),
+        lambda s, quiet: display.for_stream(s, quiet=quiet, delay_s=0.0),
     )
 
 

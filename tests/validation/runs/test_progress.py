@@ -21,7 +21,7 @@ class FakeClock:
 
 
 def _plain(buf, clock) -> Display:
-    return Display(Mode.PLAIN, buf, INTERVAL_S, 0.0, clock, ticker=False)
+    return Display(Mode.PLAIN, buf, INTERVAL_S, 0.0, clock)
 
 
 def test_stages_side_by_side_count_together_with_an_eta():

@@ -16,7 +16,7 @@ from __future__ import annotations
 import dataclasses
 import time
 from collections.abc import Callable
-from concurrent.futures import Executor, as_completed
+from concurrent.futures import FIRST_COMPLETED, Executor, wait
 from pathlib import Path
 from typing import Any
 
@@ -48,6 +48,10 @@ from validation.studies.sweep.series import run_series
 from validation.studies.sweep.stabilization import stabilization_row
 
 log = get_logger(__name__)
+
+TICK_S = 1.0
+"""How long the grid waits for a series before it ticks its count (a plain progress line is then
+written if one is due: a long series still shows time passing in a log)."""
 
 EXPENSIVE_FIRST = {"Radau": 0, "implicit": 1, "RK45": 2, "Euler": 3, "implicitfast": 3, "RK4": 4}
 """Submission order of the series (lower first; others last): the implicit solver and the
@@ -232,13 +236,16 @@ def _grid(
         for off in (0.0, cfg.delta_norm_offset)
         for d1, d2 in cfg.deltas
     ]
-    which = {f: i for i, f in futs.items()}
+    pending = {f: i for i, f in futs.items()}
     with counter(f"sweep {sc.name}", len(series) or None, "series") as done:
-        for f in as_completed(which):  # counted as they end; the rows kept in series' order
-            e, m = series[which[f]]
-            rows = f.result()
-            say(f"  {e} {m}: {sum(r['status'] == 'ok' for r in rows)}/{len(rows)} ok")
-            done.advance()
+        while pending:  # counted as they end (a tick while none does); rows in series' order
+            ended, _ = wait(pending, timeout=TICK_S, return_when=FIRST_COMPLETED)
+            done.tick()
+            for f in ended:
+                e, m = series[pending.pop(f)]
+                rows = f.result()
+                say(f"  {e} {m}: {sum(r['status'] == 'ok' for r in rows)}/{len(rows)} ok")
+                done.advance()
     runs: list[dict[str, Any]] = []
     for i in range(len(series)):
         runs.extend(futs[i].result())
