@@ -13,17 +13,19 @@ Contract:
 * ``PLAIN``: after the delay, one line at the first report, then one at the first report after
   each interval (:data:`validation.runs.display.PLAIN_INTERVAL_S`), each ``tumble: <label>:
   <count> (<percent>), <elapsed> elapsed, ETA <eta>``; at :meth:`~Counter.close` one last line
-  (``done in`` or ``stopped at``) when any line was written. A caller that waits for work in a
-  loop calls :meth:`~Counter.tick` while it waits, so a long item still shows time passing. No
-  thread is started: the tool forks its workers only from a single-threaded process
-  (:func:`validation.runs.workers.can_fork`), and a progress thread would make it run them here. The ETA assumes the rate so far holds: ``elapsed × (total - done) / done``; with
-  a ``deadline_s`` (a campaign given minutes), the time left before it when that comes sooner.
+  (``done in`` or ``stopped at``) when any line was written. The ETA assumes the rate so far
+  holds, ``elapsed × (total - done) / done`` (a run's simulated time: from its first report on);
+  with a ``deadline_s`` (a campaign given minutes), the time left before it when that comes
+  sooner. A caller that waits for work in a loop calls :meth:`~Counter.tick` while it waits, so
+  a long item still shows time passing. No thread is started: the tool forks its workers only from a single-threaded process
+  (:func:`validation.runs.workers.can_fork`), and a progress thread would make it run them here.
 * ``OFF``: nothing is written.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import Any
 
 from validation.runs.display import Display, Mode, current, write_line
 from validation.runs.interrupts import raise_pending
@@ -78,6 +80,9 @@ class Counter:
         display: the policy (default: :func:`validation.runs.display.current`).
         deadline_s: the work stops this many seconds after the start (``--minutes``).
         simulated_time: the bar shows ``t = done/total s`` (a run's simulated time).
+        from_first_report: the ETA's rate is measured from the first report on, not from the
+            start (a run's first report comes once its kernels are loaded and its worker has
+            started, which is no simulation); before a second report the ETA is unknown.
 
     Raises:
         ValueError: a total that is not a positive number.
@@ -93,6 +98,7 @@ class Counter:
         display: Display | None = None,
         deadline_s: float | None = None,
         simulated_time: bool = False,
+        from_first_report: bool = False,
     ):
         if total is not None and not (isinstance(total, int | float) and total > 0):
             raise ValueError(f"total: must be a positive number or None (got {total!r})")
@@ -109,8 +115,10 @@ class Counter:
         self.start = self.display.clock()
         self.lines = 0
         self._last_line: float | None = None
-        self._bar = None
+        self._bar: Any = None  # the tqdm bar, made at the first report on a terminal
         self._closed = False
+        self.from_first_report = from_first_report
+        self._first: tuple[float, float] | None = None  # (clock, done) at the first report
 
     # reports -------------------------------------------------------------------------------
 
@@ -120,6 +128,8 @@ class Counter:
         if self._closed:
             return
         self.done = float(done)
+        if self._first is None:
+            self._first = (self.display.clock(), self.done)
         mode = self.display.mode
         if mode is Mode.BAR:
             self._draw()
@@ -163,7 +173,14 @@ class Counter:
     def eta(self) -> float | None:
         """Seconds left (module docstring)."""
         elapsed = self.elapsed()
-        left = eta(elapsed, self.done, self.total)
+        if not self.from_first_report:
+            left = eta(elapsed, self.done, self.total)
+        elif self._first is None:
+            left = None
+        else:
+            t0, d0 = self._first
+            total = None if self.total is None else self.total - d0
+            left = eta(self.display.clock() - t0, self.done - d0, total)
         if self.deadline_s is not None:
             by_deadline = max(0.0, self.deadline_s - elapsed)
             left = by_deadline if left is None else min(left, by_deadline)

@@ -73,6 +73,7 @@ class Progress:
             t_end if t_end > 0 else None,
             display=_display(stream, delay),
             simulated_time=True,
+            from_first_report=True,
         )
 
     @property
@@ -122,7 +123,13 @@ class RunsProgress:
             k = min(int(done // self.t_end), runs - 1)
             return f"run {k + 1}/{runs}, t = {done - k * self.t_end:.3f} / {self.t_end:g} s"
 
-        self.counter = Counter(label, runs * self.t_end, fmt=fmt, display=_display(stream, None))
+        self.counter = Counter(
+            label,
+            runs * self.t_end,
+            fmt=fmt,
+            display=_display(stream, None),
+            from_first_report=True,
+        )
 
     def next(self):
         """The next run's ``progress(t)`` (the first call: run 0's)."""
@@ -189,7 +196,8 @@ class StageProgress:
         def fmt(done: float, total: float | None) -> str:
             return f"{done:.3g} of {total:g} plant-seconds"
 
-        c = Counter(self.label, n * self.t_end if self.t_end > 0 else None, display=self.display)
+        total = n * self.t_end if self.t_end > 0 else None
+        c = Counter(self.label, total, display=self.display, from_first_report=True)
         c.fmt = fmt
         c.bar_format = "{desc}: {percentage:3.0f}%|{bar}| [{elapsed}<{remaining}{postfix}]"
         return c
