@@ -13,8 +13,9 @@ checked before anything is started or written.
 * ``dashboard`` (``--dashboard``): the ``LocalCluster`` of ``dask_workers`` serves Dask's
   dashboard on 127.0.0.1 only (:data:`DASHBOARD_ADDRESS`; another free port when that one is
   taken, as Dask does); with ``scheduler`` the scheduler's own dashboard is the one linked. It
-  needs ``bokeh`` (``pip install "tumbling-testbed[dask]"``) and one of the two options:
-  otherwise a ``ValueError`` naming ``dashboard``. Without it the cluster has no dashboard.
+  needs one of the two options, and for the local cluster ``bokeh`` (``pip install
+  "tumbling-testbed[dask]"``): otherwise a ``ValueError`` naming ``dashboard``. Without it the
+  cluster has no dashboard.
 """
 
 from __future__ import annotations
@@ -123,7 +124,7 @@ def check_dashboard(dashboard: bool, scheduler: str | None, dask_workers: int | 
         )
     from importlib.util import find_spec
 
-    if find_spec("bokeh") is None:
+    if dask_workers is not None and find_spec("bokeh") is None:  # a scheduler serves its own
         raise ValueError(
             'dashboard: Dask\'s dashboard needs bokeh (pip install "tumbling-testbed[dask]")'
         )
