@@ -50,8 +50,8 @@ def run(args: argparse.Namespace) -> int:
         nonlocal cases
         if cases is None:
             cases = counter("hard cases", total, "cases")
-        cases.set(i)
         cases.relabel(f"hard cases [{case}]")
+        cases.set(i)
 
     try:
         table = run_hard_cases(
