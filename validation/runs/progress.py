@@ -31,7 +31,7 @@ from typing import TextIO
 
 from validation.runs.counter import Counter
 from validation.runs.display import PREFIX, Display, Mode, current, for_stream, write_line
-from validation.runs.interrupts import raise_pending
+from validation.runs.interrupts import checkpoint, raise_pending
 
 
 def _display(stream: TextIO | None, delay: float | None) -> Display:
@@ -105,7 +105,8 @@ def plant_title(stage: str) -> str:
 class RunsProgress:
     """Several runs of one horizon one after the other (a reference pack's two runs, the demo's
     steps), counted together: :meth:`run` ``(k)`` is run ``k``'s ``progress(t)``, :meth:`next` the
-    next run's; the count reads
+    next run's, each also :func:`validation.runs.interrupts.checkpoint` (a run started after a
+    signal that code caught and went on from stops at its first report); the count reads
     ``run 2/5, t = 3.000 / 10 s``; use it as a context manager.
 
     Raises:
@@ -140,6 +141,7 @@ class RunsProgress:
         """Run ``k``'s (from 0) ``progress(t)``."""
 
         def progress(t: float) -> None:
+            checkpoint()  # these runs report to nobody else: a received signal stops them here
             self.counter.set(k * self.t_end + min(max(float(t), 0.0), self.t_end))
 
         return progress
