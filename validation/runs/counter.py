@@ -137,11 +137,15 @@ class Counter:
             self._maybe_line()
 
     def tick(self) -> None:
-        """No advance, but time has passed: the plain line when one is due (a caller waiting for
-        a long item calls it while it waits)."""
+        """No advance, but time has passed: the plain line when one is due, the bar redrawn (a
+        caller waiting for a long item calls it while it waits)."""
         raise_pending()
-        if not self._closed and self.display.mode is Mode.PLAIN:
+        if self._closed:
+            return
+        if self.display.mode is Mode.PLAIN:
             self._maybe_line()
+        elif self.display.mode is Mode.BAR:
+            self._draw()  # the bar's elapsed time and ETA move on
 
     def advance(self, n: float = 1) -> None:
         """``n`` more done."""
