@@ -42,26 +42,16 @@ def run(args: argparse.Namespace) -> int:
 
         plants = list(parse_plants(args.plants))
 
-    from validation.runs.progress import counter
+    from validation.runs.progress import ItemsProgress
 
-    cases = None
-
-    def progress(case: str, i: int, total: int) -> None:  # before each case
-        nonlocal cases
-        if cases is None:
-            cases = counter("hard cases", total, "cases")
-        cases.relabel(f"hard cases [{case}]")
-        cases.set(i)
-
+    progress, done = ItemsProgress("hard cases", "cases"), None
     try:
         table = run_hard_cases(
             out, names=args.case or None, fast_only=args.fast, progress=progress, plants=plants
         )
-        if cases is not None:
-            cases.set(len(table.rows))
+        done = len(table.rows)
     finally:
-        if cases is not None:
-            cases.close()
+        progress.close(done)
     for r in table.rows:
         per_plant = ", ".join(f"{e} {r.plant_verdict(e)}" for e in table.plants)
         print(f"  {'PASS' if r.passed else 'FAIL'}  {r.case}  ({per_plant})")

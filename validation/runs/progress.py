@@ -8,6 +8,8 @@
   ``tumble demo``'s steps), counted together.
 * :class:`Status`: free-text events (the kernels' compilation, :mod:`validation.runs.warmup`),
   one line each.
+* :class:`ItemsProgress`: ``progress(item, i, total)`` before each item (``tumble
+  hard-cases``' cases).
 * :func:`counter`: any other counted work (a study's series, a campaign's scenes, the hard
   cases): a :class:`validation.runs.counter.Counter` under the display in force.
 
@@ -51,6 +53,34 @@ def counter(
     """A :class:`~validation.runs.counter.Counter` of ``total`` ``unit`` (``series``, ``scenes``)
     under the display in force (silent unless a caller set one); use it as a context manager."""
     return Counter(label, total, unit=unit, deadline_s=deadline_s, simulated_time=simulated_time)
+
+
+class ItemsProgress:
+    """Callable ``progress(item, i, total)`` before each of ``total`` items (the hard cases): the
+    items done counted (``3/14 cases``), the one running named; :meth:`close` ``(done)`` at the
+    end, the count's last line.
+
+    Args:
+        label: what runs (``hard cases``).
+        unit: what is counted (``cases``).
+    """
+
+    def __init__(self, label: str, unit: str):
+        self.label, self.unit = label, unit
+        self.counter: Counter | None = None  # made before the first item (its total known)
+
+    def __call__(self, item: str, i: int, total: int) -> None:
+        if self.counter is None:
+            self.counter = counter(self.label, total, self.unit)
+        self.counter.relabel(f"{self.label} [{item}]")
+        self.counter.set(i)
+
+    def close(self, done: int | None = None) -> None:
+        """End the display; ``done``: the items done by then (default: as last reported)."""
+        if self.counter is not None:
+            if done is not None:
+                self.counter.set(done)
+            self.counter.close()
 
 
 class Progress:
@@ -288,4 +318,12 @@ class Status:
         """Nothing to finish (kept for symmetry with the other reporters)."""
 
 
-__all__ = ["Progress", "RunsProgress", "StageProgress", "Status", "counter", "plant_title"]
+__all__ = [
+    "ItemsProgress",
+    "Progress",
+    "RunsProgress",
+    "StageProgress",
+    "Status",
+    "counter",
+    "plant_title",
+]
