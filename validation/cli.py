@@ -44,6 +44,7 @@ from validation.commands import (
     validate,
     warmup,
 )
+from validation.commands.options import add_quiet
 from validation.runs import interrupts
 
 COMMANDS: tuple[Command, ...] = (
@@ -100,6 +101,7 @@ def build_parser() -> argparse.ArgumentParser:
     for command in COMMANDS:
         p = sub.add_parser(command.NAME, help=command.HELP, description=command.DESCRIPTION)
         command.add_arguments(p)
+        add_quiet(p)
         p.set_defaults(func=command.run)
     return parser
 
@@ -107,7 +109,12 @@ def build_parser() -> argparse.ArgumentParser:
 def _one_line_warning(message, category, filename, lineno, file=None, line=None):
     """Warnings as one line each (``tumble: warning: ...``), without the source line."""
     text = str(message).splitlines()[0] if str(message) else category.__name__
-    print(f"tumble: warning: {text}", file=file or sys.stderr)
+    if file is not None:
+        print(f"tumble: warning: {text}", file=file)
+        return
+    from validation.runs.display import write_line  # below a progress bar, which is redrawn
+
+    write_line(f"tumble: warning: {text}")
 
 
 @contextlib.contextmanager
@@ -158,9 +165,12 @@ def main(argv: list[str] | None = None) -> int:
             with user_warnings():
                 parser = build_parser()
                 args = parser.parse_args(argv)
-                if getattr(args, "command", None) in _PLANT_COMMANDS:
-                    warn_skipped_plugins()
-                status = args.func(args)
+                from validation.runs.messages import command_output  # after the handlers: numpy
+
+                with command_output(quiet=args.quiet):  # progress, --quiet, the log's lines
+                    if getattr(args, "command", None) in _PLANT_COMMANDS:
+                        warn_skipped_plugins()
+                    status = args.func(args)
         except BaseException as exc:
             return _failed(exc)
         if interrupts.pending():  # swallowed by compiled code after the last progress report

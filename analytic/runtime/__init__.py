@@ -9,5 +9,6 @@ rest of ``analytic`` (``tests/cross/test_layers.py``), and any module may import
 * :mod:`~analytic.runtime.cache_check`: numba's cache files checked against their recorded hashes;
 * :mod:`~analytic.runtime.compile_lock`: one process compiles a kernel, the others wait for it;
 * :mod:`~analytic.runtime.safe_files`: reading a file that must be a regular file, never blocking;
-* :mod:`~analytic.runtime.lazy`: a package's public names imported on first use.
+* :mod:`~analytic.runtime.lazy`: a package's public names imported on first use;
+* :mod:`~analytic.runtime.log`: the project's loggers, one root (``tumbling_testbed``).
 """

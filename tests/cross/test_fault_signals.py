@@ -60,12 +60,16 @@ def _cut(module: str, sig: str, *args: str, after: Path | None = None, cwd: Path
     return proc, took, rest
 
 
+ENDINGS = ("tumble: error", "tumble: terminated", "tumble: interrupted")
+"""How the lines start that say how a command ended; any other ``tumble: `` line off a terminal
+is a warning, a progress line or a notice (``docs/cli.md``, *Progress and messages*)."""
+
+
 def _said(lines: list[str]) -> list[str]:
-    """The lines other than warnings and the one-time compile report (a cold numba cache)."""
+    """The lines other than warnings, progress and notices: how the command ended, and anything
+    that is not the tool's own line (a traceback)."""
     return [
-        x
-        for x in lines
-        if x.strip() and not x.startswith(("tumble: warning:", "tumble: compiling", "tumble:   "))
+        x for x in lines if x.strip() and (x.startswith(ENDINGS) or not x.startswith("tumble: "))
     ]
 
 

@@ -5,11 +5,11 @@ disagreement was found that tightened settings do not explain (``docs/fuzzing.md
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
 from validation.commands import EXIT_FAILED
 from validation.commands.options import (
+    add_dashboard,
     add_out,
     add_plants,
     add_time_limit,
@@ -51,6 +51,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "(default 30)",
     )
     add_workers(p)
+    add_dashboard(p)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -61,10 +62,6 @@ def run(args: argparse.Namespace) -> int:
     )
     out = Path(args.out) if args.out else Path("out") / f"fuzz_seed{args.seed}"
 
-    def progress(line: str) -> None:
-        if sys.stderr.isatty():
-            print(line, file=sys.stderr)
-
     res = fuzz(
         out,
         budget=args.budget,
@@ -74,7 +71,7 @@ def run(args: argparse.Namespace) -> int:
         horizon=args.horizon,
         scheduler=args.scheduler,
         dask_workers=args.dask_workers,
-        progress=progress,
+        dashboard=args.dashboard,
         **({"time_limit_s": args.time_limit} if args.time_limit else {}),
     )
     new = sum(not e.known for e in res.counterexamples)

@@ -4,7 +4,6 @@ the criterion its file states; its table written. Exits 1 when a case fails."""
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
 from validation.commands import EXIT_FAILED
@@ -44,13 +43,16 @@ def run(args: argparse.Namespace) -> int:
 
         plants = list(parse_plants(args.plants))
 
-    def progress(case: str, i: int, total: int) -> None:
-        if sys.stderr.isatty():
-            print(f"hard case {i + 1}/{total}: {case}", file=sys.stderr)
+    from validation.runs.progress import ItemsProgress
 
-    table = run_hard_cases(
-        out, names=args.case or None, fast_only=args.fast, progress=progress, plants=plants
-    )
+    progress, done = ItemsProgress("hard cases", "cases"), None
+    try:
+        table = run_hard_cases(
+            out, names=args.case or None, fast_only=args.fast, progress=progress, plants=plants
+        )
+        done = len(table.rows)
+    finally:
+        progress.close(done)
     for r in table.rows:
         per_plant = ", ".join(f"{e} {r.plant_verdict(e)}" for e in table.plants)
         print(f"  {'PASS' if r.passed else 'FAIL'}  {r.case}  ({per_plant})")

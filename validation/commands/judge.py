@@ -82,7 +82,9 @@ def run(args: argparse.Namespace) -> int:
     res = None
     with warming(scene, request.validation.plants, Status()):
         progress = StageProgress(
-            f"judge {request.label} on {scene.name}", request.validation.horizon
+            f"judge {request.label} on {scene.name}",
+            request.validation.horizon,
+            stages=len(request.validation.plants) or None,
         )
         try:
             res = run_judge(request, out, progress=progress)

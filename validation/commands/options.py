@@ -93,3 +93,25 @@ def add_workers(p: argparse.ArgumentParser) -> None:
         type=positive_int,
         help="run on a local Dask cluster of N single-threaded worker processes",
     )
+
+
+def add_quiet(p: argparse.ArgumentParser) -> None:
+    """``--quiet`` / ``-q``: no progress and no notices; warnings and errors still show
+    (:func:`validation.runs.messages.command_output`). Every command has it."""
+    p.add_argument(
+        "-q",
+        "--quiet",
+        action="store_true",
+        help="show no progress and no notices (warnings and errors still show)",
+    )
+
+
+def add_dashboard(p: argparse.ArgumentParser) -> None:
+    """``--dashboard``: the local Dask cluster a command starts (``--dask-workers``) serves its
+    dashboard on 127.0.0.1, its link logged once (:mod:`validation.studies.dask_options`)."""
+    p.add_argument(
+        "--dashboard",
+        action="store_true",
+        help="with --dask-workers: serve the local Dask cluster's dashboard on 127.0.0.1 and "
+        "print its link",
+    )

@@ -4,10 +4,9 @@ engines' solvers and settings, on this machine's processes or a Dask cluster."""
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
-from validation.commands.options import add_out, add_scene, add_t_end, add_workers
+from validation.commands.options import add_dashboard, add_out, add_scene, add_t_end, add_workers
 
 NAME = "sweep"
 HELP = "what accuracy costs in time: work-precision study over both engines"
@@ -31,6 +30,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
     add_t_end(p, "horizon in seconds (default 20)")
     add_workers(p)
+    add_dashboard(p)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -40,20 +40,15 @@ def run(args: argparse.Namespace) -> int:
 
     scene = resolve_scene(args.scene)
     out = Path(args.out) if args.out else default_out_dir("sweep_", scene.name)
-
-    def progress(line: str) -> None:
-        if sys.stderr.isatty():
-            print(line, file=sys.stderr)
-
-    if args.scheduler is None and args.dask_workers is None:
-        res = run_sweep(scene, out, quick=args.quick, progress=progress, t_end=args.t_end)
+    # progress: the series counted and each stage's line logged (validation.runs.progress)
+    if args.scheduler is None and args.dask_workers is None and not args.dashboard:
+        res = run_sweep(scene, out, quick=args.quick, t_end=args.t_end)
     else:  # a Dask cluster's executor (validation.studies.sweep.running.executor_for)
         from validation.studies.sweep.running import executor_for
 
-        with executor_for(None, args.scheduler, args.dask_workers) as (ex, _width):
-            res = run_sweep(
-                scene, out, quick=args.quick, progress=progress, t_end=args.t_end, executor=ex
-            )
+        cluster = executor_for(None, args.scheduler, args.dask_workers, dashboard=args.dashboard)
+        with cluster as (ex, _width):
+            res = run_sweep(scene, out, quick=args.quick, t_end=args.t_end, executor=ex)
     print(f"sweep of {scene.name}: {len(res.runs)} runs in {res.wall_time_s:.1f} s")
     by_id = {r["run_id"]: r for r in res.runs}
     print("  cheapest setting reaching each accuracy level:")

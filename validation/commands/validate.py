@@ -79,7 +79,9 @@ def run(args: argparse.Namespace) -> int:
     res = None
     # the analytic plant's last kernels may still compile while the plants start (warming)
     with warming(scene, request.plants, Status()):
-        progress = StageProgress(f"validate {scene.name}", request.horizon)
+        progress = StageProgress(
+            f"validate {scene.name}", request.horizon, stages=len(request.plants) or None
+        )
         try:
             res = run_request(request, out, progress=progress)
         finally:

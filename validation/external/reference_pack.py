@@ -50,8 +50,8 @@ from validation.external.read import read_trajectory, size_limit
 from validation.external.record import ExternalTrajectory
 from validation.external.write import write_trajectory
 from validation.runs.atomic import write_text
-from validation.runs.interrupts import checkpoint
 from validation.runs.outputs import output_run
+from validation.runs.progress import RunsProgress
 from validation.scenes import resolve_scene
 
 SCENE_FILE = "scene.toml"
@@ -138,10 +138,14 @@ def estimate_accuracy(scene: Scene) -> tuple[Any, tuple[Accuracy, ...]]:
         RuntimeError: a run did not reach the scene's horizon.
     """
     analytic = plant("analytic")
-    # an interrupted run stops the pack (its partial samples are no reference); checkpoint: a
-    # signal compiled code swallowed stops the run at its next report
-    ref = analytic.simulate(scene, REFERENCE_SETTINGS, progress=checkpoint).raise_if_interrupted()
-    tight = analytic.simulate(scene, CHECK_SETTINGS, progress=checkpoint).raise_if_interrupted()
+    # an interrupted run stops the pack (its partial samples are no reference); a code swallowed stops the run at its next report
+    # signal compiled code swallowed stops the run at its next report (RunsProgress's, shown
+    # under the progress display in force)
+    with RunsProgress(f"reference {scene.name}", scene.output.t_end, 2) as shown:
+        ref = analytic.simulate(scene, REFERENCE_SETTINGS, progress=shown.run(0))
+        ref = ref.raise_if_interrupted()
+        tight = analytic.simulate(scene, CHECK_SETTINGS, progress=shown.run(1))
+        tight = tight.raise_if_interrupted()
     for tr, s in ((ref, REFERENCE_SETTINGS), (tight, CHECK_SETTINGS)):
         if tr.status is not RunStatus.OK:
             raise RuntimeError(f"the analytic plant at rtol {s.rtol:g} stopped: {tr.message}")

@@ -9,7 +9,9 @@
   :mod:`.priority`, :mod:`.time_limit`) or here;
 * :mod:`.ordered`: work submitted ahead to an executor and taken back in index order;
 * :mod:`.interrupts`: Ctrl-C and SIGTERM, kept until a safe point;
-* :mod:`.progress`: progress lines;
+* :mod:`.progress`: progress with counts and an ETA (:mod:`.counter`), shown as the display
+  policy says (:mod:`.display`: bars, plain lines or nothing); :mod:`.messages`: the command
+  line's log handler and ``--quiet``;
 * :mod:`.warmup`: the one-time numba compile (``tumble warmup``).
 """
 

@@ -10,6 +10,12 @@ checked before anything is started or written.
   handshake as soon as a connection opens; Dask's own client would wait forever on a port that
   listens but says nothing); otherwise a ``ValueError`` names the address: a cluster that is not
   there is said at once, not after Dask's 30 s connect timeout. Other schemes are left to Dask.
+* ``dashboard`` (``--dashboard``): the ``LocalCluster`` of ``dask_workers`` serves Dask's
+  dashboard on 127.0.0.1 only (:data:`DASHBOARD_ADDRESS`; another free port when that one is
+  taken, as Dask does); with ``scheduler`` the scheduler's own dashboard is the one linked. It
+  needs one of the two options, and for the local cluster ``bokeh`` (``pip install
+  "tumbling-testbed[dask]"``): otherwise a ``ValueError`` naming ``dashboard``. Without it the
+  cluster has no dashboard.
 """
 
 from __future__ import annotations
@@ -23,6 +29,9 @@ WORKERS_PER_CORE = 4
 SCHEDULER_PROBE_S = 5.0
 """How long a scheduler's address may take to accept a TCP connection, s."""
 DEFAULT_SCHEDULER_PORT = 8786
+DASHBOARD_ADDRESS = "127.0.0.1:8787"
+"""Where ``--dashboard`` serves the local cluster's dashboard: Dask's usual port, on the loopback
+interface only (the dashboard shows the runs and has no authentication)."""
 _TCP_SCHEMES = ("", "tcp", "tls", "ws", "wss")
 
 
@@ -67,7 +76,9 @@ def _host_port(address: str) -> tuple[str, int] | None:
     except ValueError:
         port = -1
     if not parts.hostname or port == -1 or parts.path not in ("", "/"):
-        raise ValueError(f"scheduler: not a Dask scheduler's address like tcp://host:8786 (got {address!r})")
+        raise ValueError(
+            f"scheduler: not a Dask scheduler's address like tcp://host:8786 (got {address!r})"
+        )
     return parts.hostname, port or DEFAULT_SCHEDULER_PORT
 
 
@@ -102,11 +113,37 @@ def check_dask_options(scheduler: str | None, dask_workers: int | None) -> None:
         probe_scheduler(scheduler)
 
 
+def check_dashboard(dashboard: bool, scheduler: str | None, dask_workers: int | None) -> None:
+    """``ValueError`` naming ``dashboard`` when it is asked for without a Dask cluster or
+    without ``bokeh`` (module docstring)."""
+    if not dashboard:
+        return
+    if scheduler is None and dask_workers is None:
+        raise ValueError(
+            "dashboard: shows a Dask cluster's work; give --dask-workers N or --scheduler too"
+        )
+    from importlib.util import find_spec
+
+    if dask_workers is not None and find_spec("bokeh") is None:  # a scheduler serves its own
+        raise ValueError(
+            'dashboard: Dask\'s dashboard needs bokeh (pip install "tumbling-testbed[dask]")'
+        )
+
+
+def dashboard_address(dashboard: bool) -> str | None:
+    """The ``dashboard_address`` of a ``LocalCluster``: :data:`DASHBOARD_ADDRESS` with
+    ``dashboard``, else None (no dashboard)."""
+    return DASHBOARD_ADDRESS if dashboard else None
+
+
 __all__ = [
+    "DASHBOARD_ADDRESS",
     "SCHEDULER_PROBE_S",
     "WORKERS_PER_CORE",
+    "check_dashboard",
     "check_dask_options",
     "check_dask_workers",
+    "dashboard_address",
     "max_dask_workers",
     "probe_scheduler",
 ]

@@ -242,12 +242,15 @@ class _Tty(io.StringIO):
 
 
 def test_stage_progress_on_a_terminal_is_one_updating_line():
+    """A terminal: one tqdm bar, redrawn in place (carriage returns), named after the stages
+    running, with the share of the stages' simulated time done, kept on screen at the end."""
     buf = _Tty()
-    p = StageProgress("validate x", 2.0, stream=buf, delay=0.0)
+    p = StageProgress("validate x", 2.0, stream=buf, delay=0.0, stages=1)
     p("analytic", 1.0)
     p.close()
     text = buf.getvalue()
-    assert text.startswith("\rvalidate x [analytic]: t =") and text.endswith("%)\n")
+    assert text.startswith("\rvalidate x [analytic]: ") and text.endswith("\n")
+    assert " 50%|" in text and "analytic 1 s" in text
     assert text.count("\n") == 1
 
 
@@ -258,12 +261,17 @@ def test_status_lines():
     assert log.getvalue() == "tumble: compiling\n" and tty.getvalue() == "compiling\n"
 
 
-def test_progress_stays_silent_in_a_log():
+def test_progress_in_a_log_is_plain_lines():
+    """Not a terminal: plain ``tumble: `` lines, no carriage return (the interval and the ETA:
+    tests/validation/runs/test_progress.py)."""
     buf = io.StringIO()
     p = Progress("simulate x", 1.0, delay=0.0, stream=buf)
     p(0.5)
     p.close()
-    assert buf.getvalue() == ""
+    lines = buf.getvalue().splitlines()
+    assert "\r" not in buf.getvalue() and len(lines) == 2, lines
+    assert lines[0].startswith("tumble: simulate x: t = 0.500 / 1 s (50 %), ")
+    assert lines[1].startswith("tumble: simulate x: stopped at t = 0.500 / 1 s after ")
 
 
 def _validate(tmp_path: Path, env: dict[str, str], timeout: float):

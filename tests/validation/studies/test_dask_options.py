@@ -51,3 +51,18 @@ def test_a_port_that_listens_but_says_nothing_is_refused_after_the_timeout():
         address = f"tcp://127.0.0.1:{s.getsockname()[1]}"
         with pytest.raises(ValueError, match=r"^scheduler: no Dask scheduler answers at tcp://"):
             probe_scheduler(address, timeout_s=0.5)
+
+
+def test_the_dashboard_needs_a_cluster_and_bokeh(monkeypatch):
+    from importlib import util
+
+    from validation.studies.dask_options import check_dashboard, dashboard_address
+
+    check_dashboard(False, None, None)  # not asked for: nothing to check
+    assert dashboard_address(False) is None  # as before: no dashboard
+    assert dashboard_address(True).startswith("127.0.0.1:")  # the loopback interface only
+    with pytest.raises(ValueError, match=r"^dashboard: .*--dask-workers"):
+        check_dashboard(True, None, None)
+    monkeypatch.setattr(util, "find_spec", lambda name: None)
+    with pytest.raises(ValueError, match=r"^dashboard: .*needs bokeh"):
+        check_dashboard(True, None, 2)

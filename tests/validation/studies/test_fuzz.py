@@ -227,6 +227,26 @@ def test_dask_local_cluster_gives_the_serial_verdicts(tmp_path):
     ]
 
 
+def test_dashboard_served_on_the_loopback_and_its_link_logged_once(caplog):
+    """--dashboard: the local cluster serves Dask's dashboard on 127.0.0.1, the link logged once
+    at INFO; the page answers there."""
+    pytest.importorskip("distributed")
+    pytest.importorskip("bokeh")
+    import logging
+    import urllib.request
+
+    with caplog.at_level(logging.INFO, logger="tumbling_testbed"):
+        with executor_for(None, None, 1, dashboard=True) as (ex, width):
+            ours = [r for r in caplog.records if r.name.startswith("tumbling_testbed.")]
+            links = [r.getMessage() for r in ours if "dashboard" in r.getMessage()]
+            assert len(links) == 1, links
+            link = links[0].split(": ", 1)[1]
+            assert link.startswith("http://127.0.0.1:"), link
+            with urllib.request.urlopen(link, timeout=30) as page:
+                assert page.status == 200
+            assert ex.submit(sum, (1, 2)).result() == 3 and width == 1
+
+
 def test_executor_for_refuses_both_and_bad_counts():
     with pytest.raises(ValueError, match=r"^scheduler: "), executor_for(None, "tcp://x:1", 2):
         pass

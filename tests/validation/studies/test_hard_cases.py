@@ -371,3 +371,38 @@ def test_a_plugin_no_check_applies_to_is_not_applicable_not_an_error():
     assert list(na) == ["some_plugin"] and "no check of this case applies" in na["some_plugin"]
     assert _unjudged_plugins(cases["negative_w"], chosen, {}) == {}
     assert _unjudged_plugins(cases["conflicting_requirements"], ("analytic", "mujoco"), {}) == {}
+
+
+def test_the_command_counts_the_cases(tmp_path, monkeypatch, capsys):
+    """``tumble hard-cases`` off a terminal: plain lines counting the cases (``i/N cases``), the
+    case running named; nothing of it with ``--quiet``. The suite itself is a fake here."""
+    import validation.studies.hard_cases as hc
+    from validation.cli import main
+    from validation.runs import display, messages
+    from validation.studies.hard_cases.table import HardCaseTable
+
+    class Row:  # what the command prints of a row
+        passed = True
+
+        def __init__(self, case):
+            self.case = case
+
+        def plant_verdict(self, _plant):
+            return "PASS"
+
+    def fake(out, names=None, fast_only=False, progress=None, plants=None):
+        for i, name in enumerate(("a", "b", "c")):
+            progress(name, i, 3)
+        return HardCaseTable(tuple(map(Row, "abc")), True, "", ("analytic",), {})
+
+    monkeypatch.setattr(hc, "run_hard_cases", fake)
+    monkeypatch.setattr(
+        messages, "for_stream", lambda s, quiet: display.for_stream(s, quiet=quiet, delay_s=0.0)
+    )
+    assert main(["hard-cases", "--out", str(tmp_path)]) == 0
+    err = capsys.readouterr().err.splitlines()
+    assert err[0].startswith("tumble: hard cases [a]: 0/3 cases (0 %), "), err
+    assert err[-1].startswith("tumble: hard cases [c]: 3/3 cases, done in "), err
+    assert len(err) == 2, err  # the interval (10 s) between them has not passed
+    assert main(["hard-cases", "--out", str(tmp_path), "--quiet"]) == 0
+    assert capsys.readouterr().err == ""

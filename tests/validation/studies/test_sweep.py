@@ -1114,3 +1114,34 @@ def test_effect_costs_claim_no_ratio_the_spread_does_not_support(result):
             bool(r[f"{c}_resolved"]) for c in ("analytic_numpy", "analytic_fast", "mj_forward",
                                                 "mj_forward_ctrl")
         )  # fmt: skip
+
+
+def test_the_grid_counts_its_series_and_logs_each(monkeypatch, scene, caplog):
+    """Under a plain display the series done are counted (``2/2 series``) and each series' line
+    is logged at INFO (the command line prints it as ``tumble: ...``); fast fakes for the runs."""
+    import io
+    import logging
+
+    from validation.runs.display import Display, Mode, showing
+    from validation.studies.sweep import study
+
+    def fake_series(sc, e, m, cfg, samples, floor):
+        return [{"status": "ok", "engine": e, "method": m}]
+
+    monkeypatch.setattr(study, "run_series", fake_series)
+    monkeypatch.setattr(study, "stabilization_row", lambda *a: {})
+    cfg = dataclasses.replace(_tiny(), deltas=(), delta_rtols=())
+    buf = io.StringIO()
+    series = [("analytic", "DOP853"), ("mujoco", "RK4")]
+    with (
+        ThreadPoolExecutor(max_workers=2) as ex,
+        showing(Display(Mode.PLAIN, buf, delay_s=0.0)),
+        caplog.at_level(logging.INFO, logger="tumbling_testbed"),
+    ):
+        runs, _ = study._grid(ex, scene, cfg, series, None, 0.0, study.log.info)
+    assert [r["method"] for r in runs] == ["DOP853", "RK4"]  # rows in the series' order
+    lines = buf.getvalue().splitlines()
+    assert lines[0].startswith(f"tumble: sweep {scene.name}: ") and "/2 series" in lines[0]
+    assert lines[-1].startswith(f"tumble: sweep {scene.name}: 2/2 series, done in ")
+    said = [r.getMessage() for r in caplog.records if r.name == study.log.name]
+    assert "  analytic DOP853: 1/1 ok" in said and "  mujoco RK4: 1/1 ok" in said

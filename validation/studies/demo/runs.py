@@ -12,6 +12,7 @@ from analytic.simulate import simulate
 from analytic.trajectory import RunStatus, Trajectory
 from validation.compare.checks import Comparison, compare
 from validation.runs import interrupts
+from validation.runs.progress import RunsProgress
 from validation.scenes import resolve_scene
 from validation.studies.demo.chapters import STEPS
 from validation.studies.demo.step import DemoStep, step_scene
@@ -64,31 +65,60 @@ def run_steps(
             mj_simulate = None
     walls: dict[str, float] = {}
     runs: list[StepRun] = []
-    for step in steps:
-        sc = step_scene(step)
-        t0 = time.perf_counter()
-        # checkpoint: a signal compiled code swallowed stops the run at its next report
-        tr = simulate(sc, t_end=t_end, rtol=rtol, progress=interrupts.checkpoint)
-        tr = tr.raise_if_interrupted()
-        walls[step.prefix] = time.perf_counter() - t0
-        if tr.status is not RunStatus.OK:
-            raise RuntimeError(f"demo step {step.title!r} failed: {tr.message}")
-        plants = [tr]
-        if mj_simulate is not None:
-            t0 = time.perf_counter()
-            tm = mj_simulate(sc, t_end=t_end, progress=interrupts.checkpoint).raise_if_interrupted()
-            walls[f"{step.prefix}_mujoco"] = time.perf_counter() - t0
-            if tm.status is not RunStatus.OK:
-                raise RuntimeError(f"demo step {step.title!r} failed on MuJoCo: {tm.message}")
-            plants.append(tm)
-        cmp = compare(tr, plants[1] if len(plants) > 1 else None, sc, t_end=t_end)
-        base = _baseline(step, runs, t_end, rtol, walls) if step.switched_off else None
-        runs.append(StepRun(step, sc, tuple(plants), cmp, base))
+    per_step = 2 if mj_simulate is not None else 1
+    total = max(1, per_step * len(steps) + _baselines(steps))
+    with RunsProgress("demo", t_end, total) as shown:
+        for step in steps:
+            runs.append(_step_run(step, runs, t_end, rtol, mj_simulate, walls, shown))
     return tuple(runs), walls
 
 
+def _baselines(steps: Sequence[DemoStep]) -> int:
+    """How many full-scene runs :func:`_baseline` will make (no earlier step to take it from)."""
+    n = 0
+    for i, step in enumerate(steps):
+        earlier = any(s.scene == step.scene and not s.switched_off for s in steps[:i])
+        n += bool(step.switched_off) and not earlier
+    return n
+
+
+def _step_run(
+    step: DemoStep,
+    runs: Sequence[StepRun],
+    t_end: float,
+    rtol: float,
+    mj_simulate,
+    walls: dict[str, float],
+    shown: RunsProgress,
+) -> StepRun:
+    """One step's runs, each reporting to ``shown`` (every report is a point where a signal
+    compiled code swallowed stops the run)."""
+    sc = step_scene(step)
+    t0 = time.perf_counter()
+    tr = simulate(sc, t_end=t_end, rtol=rtol, progress=shown.next()).raise_if_interrupted()
+    walls[step.prefix] = time.perf_counter() - t0
+    if tr.status is not RunStatus.OK:
+        raise RuntimeError(f"demo step {step.title!r} failed: {tr.message}")
+    plants = [tr]
+    if mj_simulate is not None:
+        t0 = time.perf_counter()
+        tm = mj_simulate(sc, t_end=t_end, progress=shown.next()).raise_if_interrupted()
+        walls[f"{step.prefix}_mujoco"] = time.perf_counter() - t0
+        if tm.status is not RunStatus.OK:
+            raise RuntimeError(f"demo step {step.title!r} failed on MuJoCo: {tm.message}")
+        plants.append(tm)
+    cmp = compare(tr, plants[1] if len(plants) > 1 else None, sc, t_end=t_end)
+    base = _baseline(step, runs, t_end, rtol, walls, shown) if step.switched_off else None
+    return StepRun(step, sc, tuple(plants), cmp, base)
+
+
 def _baseline(
-    step: DemoStep, runs: Sequence[StepRun], t_end: float, rtol: float, walls: dict[str, float]
+    step: DemoStep,
+    runs: Sequence[StepRun],
+    t_end: float,
+    rtol: float,
+    walls: dict[str, float],
+    shown: RunsProgress,
 ) -> Trajectory:
     """The analytic run of ``step``'s scene with every effect: an earlier step's, or run now."""
     earlier = next(
@@ -97,7 +127,7 @@ def _baseline(
     if earlier is not None:
         return earlier.plants[0]
     t0 = time.perf_counter()
-    tr = simulate(resolve_scene(step.scene), t_end=t_end, rtol=rtol, progress=interrupts.checkpoint)
+    tr = simulate(resolve_scene(step.scene), t_end=t_end, rtol=rtol, progress=shown.next())
     tr = tr.raise_if_interrupted()
     walls[f"{step.prefix}_baseline"] = time.perf_counter() - t0
     if tr.status is not RunStatus.OK:

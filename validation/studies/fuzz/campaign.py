@@ -40,10 +40,12 @@ from pathlib import Path
 from typing import Any
 
 from analytic.plant import Plant
+from analytic.runtime.log import get_logger
 from mj_bridge.plants import installed_plants, plant
 from validation.report.provenance import dumps
 from validation.runs.ordered import SerialExecutor, in_index_order
-from validation.studies.dask_options import check_dask_options
+from validation.runs.progress import counter
+from validation.studies.dask_options import check_dashboard, check_dask_options
 from validation.studies.fuzz.campaign_batches import CampaignBatches, batched_plants
 from validation.studies.fuzz.campaign_records import json_bytes, load_scene_record, scene_rel
 from validation.studies.fuzz.directory import CONFIG_FILE, CampaignDir, open_campaign
@@ -68,6 +70,8 @@ from validation.studies.fuzz.report import FIGURE, campaign_doc, campaign_markdo
 from validation.studies.fuzz.shrink import MAX_EVALUATIONS
 from validation.studies.fuzz.space import draw_scene_dict
 from validation.studies.sweep.running import executor_for
+
+log = get_logger(__name__)
 
 DEFAULT_BUDGET = 40
 """Scenes of a campaign given neither a budget nor minutes."""
@@ -171,6 +175,7 @@ def fuzz(
     progress: Callable[[str], None] | None = None,
     report: bool = True,
     time_limit_s: float = RUN_BUDGET_S,
+    dashboard: bool = False,
 ) -> CampaignResult:
     """Run a differential fuzzing campaign into ``out_dir`` (module docstring).
 
@@ -186,10 +191,15 @@ def fuzz(
             cluster at ``scheduler`` or a local one of ``dask_workers`` workers, else a local
             process pool (:func:`validation.studies.sweep.running.executor_for`).
         shrink_evaluations: most scene evaluations per shrink.
-        progress: called with one line per finding.
+        progress: called with one line per finding (default: each line logged at ``INFO`` on
+            this module's logger, :mod:`analytic.runtime.log`); the scenes judged are counted
+            (``12/40 scenes``, with an ETA) under the progress display in force
+            (:func:`validation.runs.progress.counter`).
         report: write campaign.md / campaign.json / campaign.png at the end.
         time_limit_s: wall-time limit of one plant's run, s (:data:`judge.RUN_BUDGET_S`): a run
             past it is stopped and counted as a timeout (:mod:`validation.studies.fuzz.judge`).
+        dashboard: the local Dask cluster of ``dask_workers`` serves its dashboard on 127.0.0.1,
+            its link logged (:mod:`validation.studies.dask_options`).
 
     Raises:
         ValueError: naming the argument for a bad budget, minutes, horizon, plants or ``out``.
@@ -197,7 +207,8 @@ def fuzz(
     cfg, chosen, budget = _checked(budget, minutes, seed, plants, horizon, time_limit_s)
     if executor is None:  # before anything is created: a bound on the count, the scheduler answers
         check_dask_options(scheduler, dask_workers)
-    say = progress or (lambda _m: None)
+        check_dashboard(dashboard, scheduler, dask_workers)
+    say = progress or log.info
     with open_campaign(Path(out_dir), cfg.to_dict()) as cd:
         if cd.read(CONFIG_FILE) is None:
             cd.write(CONFIG_FILE, json_bytes(cfg.to_dict()))
@@ -209,7 +220,8 @@ def fuzz(
                 return False
             return deadline is None or time.perf_counter() < deadline
 
-        with executor_for(executor, scheduler, dask_workers) as (ex, workers):
+        cluster = executor_for(executor, scheduler, dask_workers, dashboard=dashboard)
+        with cluster as (ex, workers):
             findings = Findings(
                 cd,
                 cfg,
@@ -232,12 +244,15 @@ def fuzz(
                 return batches.start(i, Pending, scene_plant_task)
 
             scenes = in_index_order(start, more, SCENE_WINDOW * max(1, workers), _cancel)
+            label = f"fuzz seed {cfg.seed}"
+            for_s = None if minutes is None else 60.0 * minutes
             try:
-                with scenes as taken:
+                with scenes as taken, counter(label, budget, "scenes", deadline_s=for_s) as c:
                     for index, got in taken:  # the plants' runs, in index order
                         findings.take(
                             got if isinstance(got, SceneRecord) else _judged(cd, cfg, index, got)
                         )
+                        c.advance()
             finally:
                 if batches is not None:
                     batches.close()

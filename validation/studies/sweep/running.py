@@ -24,11 +24,14 @@ from typing import Any
 import analytic
 import mj_bridge
 from analytic.effects import Precision
+from analytic.runtime.log import get_logger
 from analytic.scene import Scene
 from mj_bridge.plants import PinocchioPlant, PinocchioSettings, plant, registered
-from validation.studies.dask_options import check_dask_options
+from validation.studies.dask_options import check_dashboard, check_dask_options, dashboard_address
 from validation.studies.roundoff import precision_of
 from validation.studies.sweep.config import ACCELERATED, PINOCCHIO, RTOL_ENGINES, SweepConfig
+
+log = get_logger(__name__)
 
 MAX_WORKERS = 4
 """Most processes of the default pool (each run is single-threaded; BLAS is pinned to one thread)."""
@@ -237,6 +240,7 @@ def executor_for(
     executor: Executor | None = None,
     scheduler: str | None = None,
     dask_workers: int | None = None,
+    dashboard: bool = False,
 ) -> Iterator[tuple[Executor, int]]:
     """The executor a study's runs go to, and how many run at once; shut down on exit when made
     here.
@@ -247,9 +251,12 @@ def executor_for(
     pool of :func:`default_executor`. Dask is imported only when asked for (``pip install
     "dask[distributed]"``); ``ValueError`` naming ``scheduler`` / ``dask_workers`` for both given,
     a bad count (:mod:`validation.studies.dask_options`), a scheduler that does not answer, or
-    Dask not installed.
+    Dask not installed. With ``dashboard``, the ``LocalCluster`` serves Dask's dashboard on
+    127.0.0.1 (a free port) and its link is logged once at ``INFO``
+    (:func:`validation.studies.dask_options.dashboard_address`); without, it has none.
     """
     check_dask_options(scheduler, dask_workers)  # a bound on the count, the scheduler answers
+    check_dashboard(dashboard and executor is None, scheduler, dask_workers)
     if executor is not None:
         yield executor, default_workers()
         return
@@ -281,7 +288,10 @@ def executor_for(
         scoped.enter_context(dask.config.set({"distributed.worker.daemon": False}))
         try:
             cluster = LocalCluster(
-                n_workers=dask_workers, threads_per_worker=1, processes=True, dashboard_address=None
+                n_workers=dask_workers,
+                threads_per_worker=1,
+                processes=True,
+                dashboard_address=dashboard_address(dashboard),
             )
             client = Client(cluster)
         except BaseException:
@@ -289,6 +299,8 @@ def executor_for(
             raise
     else:
         client = Client(scheduler)
+    if dashboard:
+        log.info(f"Dask dashboard: {client.dashboard_link}")
     try:
         width = sum(w.get("nthreads", 1) for w in client.scheduler_info()["workers"].values())
         # pure=False: Dask would otherwise give two submissions of one call (a shrink candidate

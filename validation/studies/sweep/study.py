@@ -16,13 +16,15 @@ from __future__ import annotations
 import dataclasses
 import time
 from collections.abc import Callable
-from concurrent.futures import Executor
+from concurrent.futures import FIRST_COMPLETED, Executor, wait
 from pathlib import Path
 from typing import Any
 
+from analytic.runtime.log import get_logger
 from analytic.scene import Scene
 from validation.runs.atomic import write_bytes, write_text
 from validation.runs.outputs import output_run
+from validation.runs.progress import counter
 from validation.scenes import resolve_scene
 from validation.studies.effects_cost import effects_cost
 from validation.studies.sweep import running
@@ -45,6 +47,12 @@ from validation.studies.sweep.rrd import write_rrd
 from validation.studies.sweep.selection import cheapest_settings
 from validation.studies.sweep.series import run_series
 from validation.studies.sweep.stabilization import stabilization_row
+
+log = get_logger(__name__)
+
+TICK_S = 1.0
+"""How long the grid waits for a series before it ticks its count (a plain progress line is then
+written if one is due: a long series still shows time passing in a log)."""
 
 EXPENSIVE_FIRST = {"Radau": 0, "implicit": 1, "RK45": 2, "Euler": 3, "implicitfast": 3, "RK4": 4}
 """Submission order of the series (lower first; others last): the implicit solver and the
@@ -83,7 +91,10 @@ def run_sweep(
         quick: the small grid of :meth:`SweepConfig.quick` (ignored when ``config`` is given).
         executor: where every run goes (any ``concurrent.futures.Executor``); default a local
             process pool, shut down at the end.
-        progress: called with one line of text per stage.
+        progress: called with one line of text per stage (default: each line logged at
+            ``INFO`` on this module's logger, :mod:`analytic.runtime.log`); the series done are
+            counted (``3/12 series``) under the progress display in force
+            (:func:`validation.runs.progress.counter`).
         config: the grid and limits (default :class:`SweepConfig`).
         t_end: the horizon, s, instead of the configuration's.
         cache_dir: the reference cache's directory (default
@@ -104,8 +115,7 @@ def run_sweep(
             cache_dir=cache_dir,
             run_id=run.run_id,
         )
-    if progress is not None:
-        progress(f"wrote {', '.join(sorted(res.files))} to {run.target}")
+    (progress or log.info)(f"wrote {', '.join(sorted(res.files))} to {run.target}")
     return dataclasses.replace(
         res, out_dir=run.target, files={k: run.final(p.name) for k, p in res.files.items()}
     )
@@ -155,7 +165,7 @@ def _sweep_into(
         stages[name] = now - since
         return now
 
-    say = progress or (lambda _msg: None)
+    say = progress or log.info
     skipped: dict[str, str] = {}
     _skip_unavailable(cfg, skipped, say)
     # Compile once, here, before any run that is timed or has a wall-time budget (numba's cache).
@@ -227,11 +237,19 @@ def _grid(
         for off in (0.0, cfg.delta_norm_offset)
         for d1, d2 in cfg.deltas
     ]
+    pending = {f: i for i, f in futs.items()}
+    with counter(f"sweep {sc.name}", len(series) or None, "series") as done:
+        while pending:  # counted as they end (a tick while none does); rows in series' order
+            ended, _ = wait(pending, timeout=TICK_S, return_when=FIRST_COMPLETED)
+            done.tick()
+            for f in ended:
+                e, m = series[pending.pop(f)]
+                rows = f.result()
+                say(f"  {e} {m}: {sum(r['status'] == 'ok' for r in rows)}/{len(rows)} ok")
+                done.advance()
     runs: list[dict[str, Any]] = []
-    for i, (e, m) in enumerate(series):
-        rows = futs[i].result()
-        say(f"  {e} {m}: {sum(r['status'] == 'ok' for r in rows)}/{len(rows)} ok")
-        runs.extend(rows)
+    for i in range(len(series)):
+        runs.extend(futs[i].result())
     return runs, stab_futs
 
 
