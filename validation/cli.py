@@ -160,7 +160,10 @@ def main(argv: list[str] | None = None) -> int:
                 args = parser.parse_args(argv)
                 if getattr(args, "command", None) in _PLANT_COMMANDS:
                     warn_skipped_plugins()
-                status = args.func(args)
+                from validation.recording.live import from_args  # stdlib only; after the handlers
+
+                with from_args(args):  # --spawn, --connect, --serve (commands.options.add_viewer)
+                    status = args.func(args)
         except BaseException as exc:
             return _failed(exc)
         if interrupts.pending():  # swallowed by compiled code after the last progress report

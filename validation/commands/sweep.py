@@ -7,7 +7,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from validation.commands.options import add_out, add_scene, add_t_end, add_workers
+from validation.commands.options import add_out, add_scene, add_t_end, add_viewer, add_workers
 
 NAME = "sweep"
 HELP = "what accuracy costs in time: work-precision study over both engines"
@@ -30,6 +30,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
     add_t_end(p, "horizon in seconds (default 20)")
     add_workers(p)
+    add_viewer(p)
 
 
 def run(args: argparse.Namespace) -> int:
