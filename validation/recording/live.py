@@ -37,6 +37,7 @@ import signal
 import socket
 import subprocess
 import sys
+import tempfile
 import time
 import warnings
 from collections.abc import Callable, Iterator
@@ -339,12 +340,20 @@ def spawn_viewer(port: int = DEFAULT_PORT) -> LiveViewer:
     Rerun's own ``--spawn``; one already listening on ``port`` is used instead), in a helper
     process so that this one never imports rerun."""
     url = proxy_url(str(port))
-    code = f"import rerun; rerun.spawn(port={int(port)}, connect=False)"
-    done = subprocess.run(
-        [sys.executable, "-c", code], capture_output=True, text=True, timeout=START_TIMEOUT_S
-    )
+    # rerun.spawn is a no-op without an enabled recording: rerun.init first (nothing is logged)
+    code = f"import rerun; rerun.init('tumbling-testbed'); rerun.spawn(port={int(port)}, connect=False)"
+    # the viewer inherits the helper's output: a file, not a pipe it would hold open
+    with tempfile.TemporaryFile("w+") as said:
+        done = subprocess.run(
+            [sys.executable, "-c", code],
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.DEVNULL,
+            stderr=said,
+            timeout=START_TIMEOUT_S,
+        )
+        said.seek(0)
+        last = (said.read().strip().splitlines() or ["no message"])[-1]
     if done.returncode != 0:
-        last = (done.stderr.strip().splitlines() or ["no message"])[-1]
         raise ValueError(f"--spawn: the viewer could not be started ({last})")
     _wait_listening(url)
     return LiveViewer(url, LiveMode.SPAWN)

@@ -1,0 +1,268 @@
+"""The live viewer (``--spawn``, ``--connect [URL]``, ``--serve [PORT]``) against Rerun's own gRPC
+server started here on 127.0.0.1: what each plant's worker streamed arrives (its entities, one row
+per output sample of its run), under the recording's ids, beside the whole recording; a viewer
+that is not there fails only the stream; without a flag nothing connects anywhere."""
+
+from __future__ import annotations
+
+import collections
+import contextlib
+import json
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+from rerun.chunk import RrdReader
+
+from validation.cli import main
+from validation.commands import EXIT_USAGE
+from validation.recording import live
+from validation.recording.live import LiveViewer, live_plant_task, proxy_url, watching
+from validation.recording.stream import AppId, atomic_stream
+
+ROOT = Path(__file__).resolve().parents[3]
+PLANTS = ("analytic", "mujoco")
+RUN = ("--plants", ",".join(PLANTS), "--t-end", "0.1", "--figure-format", "png")
+ARRIVE_TIMEOUT_S = 60.0
+"""Longest wait for a stream to arrive at the test's server (it arrives in about a second)."""
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _rows(path: Path) -> tuple[dict[str, int], list]:
+    """``({entity: rows of temporal data}, [the file's stores])`` of an ``.rrd``, footer or not."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # a file still being written has no footer
+        reader = RrdReader(str(path))
+        store = reader.stream().collect()
+    rows: collections.Counter[str] = collections.Counter()
+    for chunk in store.stream().filter(is_static=False).to_chunks():
+        rows[str(chunk.entity_path)] += chunk.num_rows
+    return dict(rows), [*reader.recordings(), *reader.blueprints()]
+
+
+@contextlib.contextmanager
+def _saving_server(tmp_path: Path, connect_to: str | None = None):
+    """Rerun's gRPC server on 127.0.0.1 saving what it receives (``rerun --serve-grpc --save``),
+    or, with ``connect_to``, a client of that server saving what it is sent: ``(url, file)``."""
+    port = _free_port()
+    saved = tmp_path / f"received_{port}.rrd"
+    cmd = [str(live.rerun_executable()), "--bind", "127.0.0.1", "--port", str(port)]
+    cmd += ["--save", str(saved)]
+    cmd += [connect_to] if connect_to else ["--serve-grpc"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    url = proxy_url(str(port))
+    try:
+        deadline = time.monotonic() + ARRIVE_TIMEOUT_S
+        while not live.reachable(url, 0.2):
+            assert proc.poll() is None and time.monotonic() < deadline, "the server did not start"
+            time.sleep(0.1)
+        yield url, saved
+    finally:
+        proc.terminate()
+        proc.wait(timeout=10)
+
+
+def _wait_rows(saved: Path, wanted: set[str]) -> dict[str, int]:
+    """The rows received once every entity of ``wanted`` is in the file and no more arrives."""
+    deadline, last = time.monotonic() + ARRIVE_TIMEOUT_S, None
+    while time.monotonic() < deadline:
+        time.sleep(0.5)
+        if not saved.exists():
+            continue
+        try:
+            rows, _ = _rows(saved)
+        except Exception:  # a chunk half written
+            continue
+        if wanted <= set(rows) and rows == last:
+            return rows
+        last = rows
+    raise AssertionError(
+        f"not received in {ARRIVE_TIMEOUT_S:g} s: {sorted(wanted - set(last or {}))}"
+    )
+
+
+def _tumble(*args: str, **kw) -> subprocess.Popen:
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    return subprocess.Popen(
+        [sys.executable, "-m", "validation", *args], cwd=ROOT, env=env, text=True, **kw
+    )
+
+
+def _expected(out: Path) -> tuple[str, dict[str, int]]:
+    """The run id of the output set and each plant's output samples, read from ``run.rrd``
+    (the body of each plant has one row per sample)."""
+    run_id = json.loads((out / "manifest.json").read_text())["run_id"]
+    rows, _ = _rows(out / "run.rrd")
+    return run_id, {p: rows[f"/world/{p}/body"] for p in PLANTS}
+
+
+def _check_arrived(rows: dict[str, int], stores: list, run_id: str, samples: dict[str, int]):
+    for plant, n in samples.items():
+        assert n > 1
+        assert rows[f"/live/{plant}/state"] == n, (plant, rows)  # q of every sample, live
+        assert rows[f"/live/{plant}/body"] == n, (plant, rows)
+        assert rows[f"/live/{plant}/wall_s"] >= 1  # its progress while it ran
+        assert rows[f"/world/{plant}/body"] == n  # and the recording, sent whole
+    assert {s.recording_id for s in stores if s.kind == "recording"} == {run_id}  # one recording
+    assert {s.application_id for s in stores} == {AppId.VALIDATE}
+    assert any(s.kind == "blueprint" for s in stores)  # the designed layout too
+
+
+def test_connect_streams_each_plant_and_the_recording(tmp_path):
+    """``tumble validate --connect URL``: each plant's states (q and the body's pose, one row per
+    output sample), its progress and the whole recording arrive at the server as one recording,
+    the run's; the files are those of a run without a viewer."""
+    out = tmp_path / "run"
+    with _saving_server(tmp_path) as (url, saved):
+        proc = _tumble("validate", *RUN, "--out", str(out), f"--connect={url}")
+        assert proc.wait(timeout=300) == 0
+        run_id, samples = _expected(out)
+        rows = _wait_rows(
+            saved, {f"/live/{p}/state" for p in PLANTS} | {f"/world/{p}/body" for p in PLANTS}
+        )
+    _check_arrived(rows, _rows(saved)[1], run_id, samples)
+    assert set(json.loads((out / "manifest.json").read_text())["files"]) >= {"run.rrd"}
+
+
+def test_serve_hosts_a_server_a_client_receives_from(tmp_path):
+    """``tumble validate --serve PORT``: after the run the command keeps serving; a client that
+    connects then receives every plant's stream and the recording; Ctrl-C ends the server and the
+    command with the run's own status."""
+    out, port = tmp_path / "run", _free_port()
+    proc = _tumble(
+        "validate", *RUN, "--out", str(out), "--serve", str(port), stderr=subprocess.PIPE
+    )
+    try:
+        for line in proc.stderr:
+            if line.startswith("serving the recording at"):
+                break
+        else:
+            pytest.fail(f"never served (exit {proc.wait()})")
+        url = proxy_url(str(port))
+        assert url in line
+        run_id, samples = _expected(out)
+        with _saving_server(tmp_path, connect_to=url) as (_, saved):
+            rows = _wait_rows(
+                saved, {f"/live/{p}/state" for p in PLANTS} | {f"/world/{p}/body" for p in PLANTS}
+            )
+        _check_arrived(rows, _rows(saved)[1], run_id, samples)
+        proc.send_signal(signal.SIGINT)
+        assert proc.wait(timeout=30) == 0
+        assert not live.reachable(url, 0.2)  # the server ended with the command
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+
+
+def test_spawn_starts_rerun_spawns_viewer(tmp_path, monkeypatch):
+    """``--spawn`` asks ``rerun.spawn`` for a viewer on Rerun's port and connects to it: a stand-in
+    ``rerun`` first on PATH records how it was started and serves gRPC in the viewer's place."""
+    fake, log = tmp_path / "bin" / "rerun", tmp_path / "spawned.txt"
+    fake.parent.mkdir()
+    fake.write_text(
+        "#!/bin/sh\n"
+        f'real="{live.rerun_executable()}"\n'
+        'if [ "$1" = "--version" ]; then exec "$real" --version; fi\n'
+        f'echo "$$ $*" >> "{log}"\n'
+        "port=9876\n"
+        'for a in "$@"; do case "$a" in --port=*) port="${a#--port=}";; esac; done\n'
+        'exec "$real" --serve-grpc --bind 127.0.0.1 --port "$port"\n'
+    )
+    fake.chmod(0o755)
+    monkeypatch.setenv("PATH", f"{fake.parent}{os.pathsep}{os.environ['PATH']}")
+    monkeypatch.delenv("_RERUN_TEST_FORCE_SAVE", raising=False)
+    port = _free_port()
+    viewer = live.spawn_viewer(port)
+    pid, *argv = log.read_text().split()
+    try:
+        assert viewer == LiveViewer(proxy_url(str(port)), live.LiveMode.SPAWN)
+        assert f"--port={port}" in argv
+        assert live.reachable(viewer.url)
+    finally:
+        os.kill(int(pid), signal.SIGTERM)
+
+
+class _Plant:
+    engine = "analytic"
+
+
+class _Run:
+    t = np.linspace(0.0, 1.0, 11)
+    q = np.tile([0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0], (11, 1))
+
+
+def _task(pl, settings, sc, horizon, *, report):
+    report(0.5)
+    return _Run(), 0.1
+
+
+def test_a_viewer_not_there_fails_only_its_stream(tmp_path):
+    """A plant's run and a recording's file are made whole when nothing listens at the viewer's
+    address: one warning each, no error, no wait beyond the connection attempt."""
+    viewer = LiveViewer(proxy_url(str(_free_port())))
+    heard: list[float] = []
+    with watching(viewer), pytest.warns(UserWarning, match="nothing listens"):
+        t0 = time.monotonic()
+        tr, wall = live_plant_task(_task, "rid")(_Plant(), None, None, 1.0, report=heard.append)
+        with atomic_stream(tmp_path / "x.rrd", AppId.VALIDATE, recording_id="rid") as rec:
+            rec.log("a", __import__("rerun").TextDocument("x"), static=True)
+    assert isinstance(tr, _Run) and wall == 0.1 and heard == [0.5]
+    assert time.monotonic() - t0 < 10 * live.REACH_TIMEOUT_S
+    assert "/a" in RrdReader(str(tmp_path / "x.rrd")).store().schema().entity_paths()
+
+
+def test_without_a_flag_nothing_connects(tmp_path, monkeypatch):
+    """No viewer option: the plants' task is the one given, and writing a recording tries no
+    connection at all."""
+
+    def refuse(*args, **kw):
+        raise AssertionError("tried to connect")
+
+    monkeypatch.setattr(live, "reachable", refuse)
+    monkeypatch.setattr(socket, "create_connection", refuse)
+    assert live.current() is None
+    assert live_plant_task(_task, "rid") is _task
+    with atomic_stream(tmp_path / "x.rrd", AppId.VALIDATE) as rec:
+        rec.log("a", __import__("rerun").TextDocument("x"), static=True)
+    assert (tmp_path / "x.rrd").stat().st_size > 0
+
+
+@pytest.mark.parametrize(
+    ("value", "url"),
+    [
+        (None, "rerun+http://127.0.0.1:9876/proxy"),
+        ("9877", "rerun+http://127.0.0.1:9877/proxy"),
+        ("rerun+http://10.0.0.2:9000/proxy", "rerun+http://10.0.0.2:9000/proxy"),
+        ("rerun://host:1/proxy", "rerun://host:1/proxy"),
+    ],
+)
+def test_connect_takes_a_url_or_a_port_as_rerun_does(value, url):
+    assert proxy_url(value) == url
+
+
+def test_a_bad_connect_url_is_one_line_before_any_work(tmp_path, capsys):
+    rc = main(["validate", "--connect=http://host:9876", "--out", str(tmp_path / "v")])
+    assert rc == EXIT_USAGE
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("tumble: error: --connect:") and "\n" not in err
+    assert not (tmp_path / "v").exists()
+
+
+def test_viewer_options_are_exclusive(tmp_path, capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["validate", "--spawn", "--serve", "--out", str(tmp_path)])
+    assert exc.value.code == EXIT_USAGE
+    assert "not allowed with" in capsys.readouterr().err
