@@ -256,15 +256,15 @@ def live_root(engine: str) -> str:
     return f"live/{slug(engine)}"
 
 
-def live_plant_task(task: Callable[..., Any], recording_id: str, app_id: str | None = None):
+def live_plant_task(task: Callable[..., Any], app_id: str, recording_id: str):
     """``task`` (a plant's run: ``task(plant, settings, scene, horizon, report=...)``) that also
-    streams the plant to the current viewer; ``task`` itself when there is none."""
+    streams the plant to the current viewer under ``app_id`` (the recording's
+    :class:`~validation.recording.stream.AppId`) and ``recording_id``; ``task`` itself when there
+    is no viewer."""
     viewer = current()
     if viewer is None:
         return task
-    from validation.recording.stream import AppId
-
-    return functools.partial(_streamed_run, task, viewer, app_id or AppId.VALIDATE, recording_id)
+    return functools.partial(_streamed_run, task, viewer, app_id, recording_id)
 
 
 def _streamed_run(task, viewer, app_id, recording_id, pl, settings, sc, horizon, *, report):

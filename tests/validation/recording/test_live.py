@@ -216,7 +216,9 @@ def test_a_viewer_not_there_fails_only_its_stream(tmp_path):
     heard: list[float] = []
     with watching(viewer), pytest.warns(UserWarning, match="nothing listens"):
         t0 = time.monotonic()
-        tr, wall = live_plant_task(_task, "rid")(_Plant(), None, None, 1.0, report=heard.append)
+        tr, wall = live_plant_task(_task, AppId.VALIDATE, "rid")(
+            _Plant(), None, None, 1.0, report=heard.append
+        )
         with atomic_stream(tmp_path / "x.rrd", AppId.VALIDATE, recording_id="rid") as rec:
             rec.log("a", __import__("rerun").TextDocument("x"), static=True)
     assert isinstance(tr, _Run) and wall == 0.1 and heard == [0.5]
@@ -234,7 +236,7 @@ def test_without_a_flag_nothing_connects(tmp_path, monkeypatch):
     monkeypatch.setattr(live, "reachable", refuse)
     monkeypatch.setattr(socket, "create_connection", refuse)
     assert live.current() is None
-    assert live_plant_task(_task, "rid") is _task
+    assert live_plant_task(_task, AppId.VALIDATE, "rid") is _task
     with atomic_stream(tmp_path / "x.rrd", AppId.VALIDATE) as rec:
         rec.log("a", __import__("rerun").TextDocument("x"), static=True)
     assert (tmp_path / "x.rrd").stat().st_size > 0
