@@ -398,15 +398,20 @@ def serving(port: int = DEFAULT_PORT, web_port: int | None = None) -> Iterator[L
             proc.wait()
 
 
-def wait_for_stop() -> None:
-    """Block until SIGINT or SIGTERM, taken here (blocked and waited for), so the command that
-    served ends with its own status, not as interrupted."""
-    stops = {signal.SIGINT, signal.SIGTERM}
-    old = signal.pthread_sigmask(signal.SIG_BLOCK, stops)
+def wait_for_stop(poll_s: float = 0.2) -> None:
+    """Block until SIGINT or SIGTERM, taken here by handlers of its own (restored after), so the
+    command that served ends with its own status, not as interrupted. Python runs a handler in
+    the main thread whichever thread the signal lands on (rerun's threads included); the wait
+    polls for it every ``poll_s`` seconds."""
+    got: list[int] = []
+    stops = (signal.SIGINT, signal.SIGTERM)
+    before = {s: signal.signal(s, lambda signum, frame: got.append(signum)) for s in stops}
     try:
-        signal.sigwait(stops)
+        while not got:
+            time.sleep(poll_s)
     finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+        for s, handler in before.items():
+            signal.signal(s, handler)
 
 
 def _free_port() -> int:

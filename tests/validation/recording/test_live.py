@@ -13,12 +13,14 @@ import signal
 import socket
 import subprocess
 import sys
+import threading
 import time
 import warnings
 from pathlib import Path
 
 import numpy as np
 import pytest
+import rerun as rr
 from rerun.chunk import RrdReader
 
 from validation.cli import main
@@ -136,6 +138,7 @@ def test_connect_streams_each_plant_and_the_recording(tmp_path):
     assert set(json.loads((out / "manifest.json").read_text())["files"]) >= {"run.rrd"}
 
 
+@pytest.mark.slow
 def test_serve_hosts_a_server_a_client_receives_from(tmp_path):
     """``tumble validate --serve PORT``: after the run the command keeps serving; a client that
     connects then receives every plant's stream and the recording; Ctrl-C ends the server and the
@@ -209,6 +212,42 @@ def _task(pl, settings, sc, horizon, *, report):
     return _Run(), 0.1
 
 
+def test_served_streams_reach_a_client_that_connects_later(tmp_path):
+    """``serving``: Rerun's server on 127.0.0.1 keeps what a plant's stream and a recording sent
+    for a client that connects afterwards, serves until SIGINT, then ends (the command line's
+    ``--serve``; end to end in the slow test above)."""
+    port = _free_port()
+    url = proxy_url(str(port))
+    got: dict = {}
+
+    def client() -> None:  # connects once the streams are sent, then stops the server
+        try:
+            with _saving_server(tmp_path, connect_to=url) as (_, saved):
+                got["rows"] = _wait_rows(saved, {"/live/analytic/state", "/file/x"})
+            got["stores"] = _rows(saved)[1]
+        finally:
+            os.kill(os.getpid(), signal.SIGINT)
+
+    thread = threading.Thread(target=client)
+    with live.serving(port) as viewer, watching(viewer):
+        live_plant_task(_task, AppId.VALIDATE, "rid")(_Plant(), None, None, 1.0, report=[].append)
+        with atomic_stream(tmp_path / "x.rrd", AppId.VALIDATE, recording_id="rid") as rec:
+            rec.send_columns(
+                "file/x",
+                indexes=[rr.TimeColumn("sim_time", duration=_Run.t)],
+                columns=rr.Scalars.columns(scalars=_Run.t),
+            )
+        thread.start()
+    thread.join(timeout=ARRIVE_TIMEOUT_S)
+    rows = got["rows"]
+    assert rows["/live/analytic/state"] == rows["/live/analytic/body"] == _Run.t.size
+    assert rows["/live/analytic/wall_s"] == 1 and rows["/file/x"] == _Run.t.size
+    assert {(s.application_id, s.recording_id) for s in got["stores"] if s.kind == "recording"} == {
+        (AppId.VALIDATE, "rid")
+    }
+    assert not live.reachable(url, 0.2)  # the server ended with the block
+
+
 def test_a_viewer_not_there_fails_only_its_stream(tmp_path):
     """A plant's run and a recording's file are made whole when nothing listens at the viewer's
     address: one warning each, no error, no wait beyond the connection attempt."""
@@ -220,7 +259,7 @@ def test_a_viewer_not_there_fails_only_its_stream(tmp_path):
             _Plant(), None, None, 1.0, report=heard.append
         )
         with atomic_stream(tmp_path / "x.rrd", AppId.VALIDATE, recording_id="rid") as rec:
-            rec.log("a", __import__("rerun").TextDocument("x"), static=True)
+            rec.log("a", rr.TextDocument("x"), static=True)
     assert isinstance(tr, _Run) and wall == 0.1 and heard == [0.5]
     assert time.monotonic() - t0 < 10 * live.REACH_TIMEOUT_S
     assert "/a" in RrdReader(str(tmp_path / "x.rrd")).store().schema().entity_paths()
@@ -238,7 +277,7 @@ def test_without_a_flag_nothing_connects(tmp_path, monkeypatch):
     assert live.current() is None
     assert live_plant_task(_task, AppId.VALIDATE, "rid") is _task
     with atomic_stream(tmp_path / "x.rrd", AppId.VALIDATE) as rec:
-        rec.log("a", __import__("rerun").TextDocument("x"), static=True)
+        rec.log("a", rr.TextDocument("x"), static=True)
     assert (tmp_path / "x.rrd").stat().st_size > 0
 
 
