@@ -338,7 +338,8 @@ def _wait_listening(url: str, proc: subprocess.Popen | None = None) -> None:
 def spawn_viewer(port: int = DEFAULT_PORT) -> LiveViewer:
     """A viewer spawned by ``rerun.spawn`` (a detached process that outlives the command, as
     Rerun's own ``--spawn``; one already listening on ``port`` is used instead), in a helper
-    process so that this one never imports rerun."""
+    process so that this one never imports rerun. A viewer that does not listen once
+    ``rerun.spawn`` returns (no display) is a warning, as Rerun's own: the streams then fail."""
     url = proxy_url(str(port))
     # rerun.spawn is a no-op without an enabled recording: rerun.init first (nothing is logged)
     code = f"import rerun; rerun.init('tumbling-testbed'); rerun.spawn(port={int(port)}, connect=False)"
@@ -355,7 +356,8 @@ def spawn_viewer(port: int = DEFAULT_PORT) -> LiveViewer:
         last = (said.read().strip().splitlines() or ["no message"])[-1]
     if done.returncode != 0:
         raise ValueError(f"--spawn: the viewer could not be started ({last})")
-    _wait_listening(url)
+    if not reachable(url):  # rerun.spawn waited for it already (a viewer without a display)
+        warn(f"the spawned viewer does not listen at {url}; the run goes on, streaming when it can")
     return LiveViewer(url, LiveMode.SPAWN)
 
 
