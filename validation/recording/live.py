@@ -369,6 +369,10 @@ def serving(port: int = DEFAULT_PORT, web_port: int | None = None) -> Iterator[L
     from validation.runs.lifetime import die_with_parent
 
     url = proxy_url(str(port), "--serve")
+    if reachable(url, 0.2):  # otherwise its server would be taken for the one started here
+        raise ValueError(
+            f"--serve: port {port} is in use on {LOOPBACK} (give another: --serve PORT)"
+        )
     web_port = web_port or _free_port()
     parent = os.getpid()
     cmd = [str(rerun_executable()), "--serve-web", "--bind", LOOPBACK, "--port", str(port)]

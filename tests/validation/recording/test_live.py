@@ -248,6 +248,16 @@ def test_served_streams_reach_a_client_that_connects_later(tmp_path):
     assert not live.reachable(url, 0.2)  # the server ended with the block
 
 
+def test_serve_refuses_a_port_in_use(tmp_path):
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        port = taken.getsockname()[1]
+        with pytest.raises(ValueError, match=f"--serve: port {port} is in use"):
+            with live.serving(port):
+                pass
+
+
 def test_a_viewer_not_there_fails_only_its_stream(tmp_path):
     """A plant's run and a recording's file are made whole when nothing listens at the viewer's
     address: one warning each, no error, no wait beyond the connection attempt."""
