@@ -284,9 +284,11 @@ def _streamed_run(task, viewer, app_id, recording_id, pl, settings, sc, horizon,
 
     try:
         tr, wall = task(pl, settings, sc, horizon, report=heard)
-        stream.do(lambda rec: log_states(rec, root, tr))
-    finally:
-        stream.close()
+    except BaseException:  # an interrupt or the run's error: no wait for the viewer
+        stream.close(flush=False)
+        raise
+    stream.do(lambda rec: log_states(rec, root, tr))
+    stream.close()
     return tr, wall
 
 
