@@ -15,6 +15,8 @@ from validation._lazy import lazy_exports
 _PUBLIC = {
     "write_recording": "validation.recording.recording",
     "RecordingInfo": "validation.recording.recording",
+    "LiveViewer": "validation.recording.live",
+    "watching": "validation.recording.live",
 }
 
 __all__ = sorted(_PUBLIC)
