@@ -5,9 +5,12 @@ anywhere. With one (``with watching(viewer):``, or :func:`from_args` on the comm
 stream this tool opens connects to one gRPC address, ``viewer.url``, under the application id and
 the recording id of the file the command writes, so the viewer shows them as one recording:
 
-* each plant's worker streams its own run (:func:`live_plant_task`): under ``live/{plant}/``, the
-  wall time it took to reach each simulated time while it runs (``wall_s``), then its states as soon
-  as its run returns (``state``: q = [R, u, p] per output sample, ``body``: the base's pose);
+* each plant's worker streams its own run (:func:`live_plant_task`) while it runs: the wall time it
+  took to reach each simulated time (``live/{plant}/wall_s``) and the states its progress carries
+  (``progress(t, q)``, :mod:`analytic.progress`), at most :data:`LIVE_RATE_HZ` per wall second:
+  q = [R, u, p] (``live/{plant}/state``) and the body where the recording's 3D view draws it
+  (``world/{plant}/body``, its shape logged first), so the designed layout's 3D view moves as the
+  plants run; a plant whose progress carries no state has its states sent when its run returns;
 * the recording (``run.rrd``, ``demo.rrd``, ``sweep.rrd``) is sent whole, blueprint included, once
   its file is written (:func:`send_file`); the file itself is written exactly as without a viewer.
 
@@ -220,13 +223,26 @@ def log_reached(rec: Any, entity: str, t: float, wall_s: float) -> None:
     rec.log(entity, rr.Scalars(float(wall_s)))
 
 
-def log_states(rec: Any, root: str, tr: Any) -> None:
-    """A finished trajectory's states in columns: ``{root}/state`` (q per sample) and
-    ``{root}/body`` (the base's position R and attitude u as a transform)."""
+def log_state(rec: Any, root: str, engine: str, scene: Any, t: float, q: Any) -> None:
+    """One state of a running plant at simulated time ``t``: ``{root}/state`` (q) and its body
+    where the recording's 3D view draws it (:func:`validation.recording.world.log_pose`)."""
+    import rerun as rr
+
+    from validation.recording.world import log_pose
+
+    log_pose(rec, engine, scene, t, q)  # sets the time too
+    rec.log(f"{root}/state", rr.Scalars(q))
+
+
+def log_states(rec: Any, root: str, tr: Any, engine: str | None = None) -> None:
+    """A finished trajectory's states in columns (a plant whose progress carried none):
+    ``{root}/state`` (q per sample) and the body's pose where the recording's 3D view draws it
+    (``world/{engine}/body``; default ``tr.engine``)."""
     import numpy as np
     import rerun as rr
 
     from validation.recording.style import TIMELINE
+    from validation.recording.world import body_entity
 
     t = np.asarray(tr.t, float)
     q = np.asarray(tr.q, float)
@@ -236,12 +252,44 @@ def log_states(rec: Any, root: str, tr: Any) -> None:
     per_row = q.shape[1]
     col = rr.Scalars.columns(scalars=q.ravel()).partition([per_row] * t.size)
     rec.send_columns(f"{root}/state", indexes=index, columns=col)
-    xyzw = q[:, [4, 5, 6, 3]]  # the paper's u is w first, rerun's quaternions x, y, z, w
+    u = q[:, 3:7] / np.linalg.norm(q[:, 3:7], axis=1, keepdims=True)
+    xyzw = u[:, [1, 2, 3, 0]]  # the paper's u is w first, rerun's quaternions x, y, z, w
     rec.send_columns(
-        f"{root}/body",
+        body_entity(engine or tr.engine),
         indexes=index,
         columns=rr.Transform3D.columns(translation=q[:, 0:3], quaternion=xyzw),
     )
+
+
+LIVE_RATE_HZ = 30.0
+"""At most this many states of each plant per wall second go to the viewer while it runs (its
+first and its last always): a motion that reads as smooth, at a cost the run does not feel (a
+state is logged in some 50 µs: at most 0.2 % of the plant's wall time; docs/cli.md, Watching
+live, gives the measured overhead)."""
+
+
+class _Watcher:
+    """``watch(t, q)`` of one plant's run: at most :data:`LIVE_RATE_HZ` states per wall second to
+    its stream (:func:`log_state`), the horizon's always; ``rows`` counts those sent."""
+
+    def __init__(self, stream: LiveStream, root: str, engine: str, scene: Any, horizon: float):
+        self.stream, self.root, self.engine, self.scene = stream, root, engine, scene
+        self.horizon = float(horizon)
+        self.every_s = 1.0 / LIVE_RATE_HZ
+        self.last = -float("inf")
+        self.rows = 0
+
+    def __call__(self, t: float, q: Any) -> None:
+        now = time.perf_counter()
+        if now - self.last < self.every_s and t < self.horizon:
+            return
+        self.last = now
+        import numpy as np
+
+        row = np.array(q, dtype=float).ravel()
+        t = float(t)
+        self.stream.do(lambda rec: log_state(rec, self.root, self.engine, self.scene, t, row))
+        self.rows += 1
 
 
 # ----------------------------------------------------------------------------------------------
@@ -256,20 +304,36 @@ def live_root(engine: str) -> str:
     return f"live/{slug(engine)}"
 
 
-def live_plant_task(task: Callable[..., Any], app_id: str, recording_id: str):
-    """``task`` (a plant's run: ``task(plant, settings, scene, horizon, report=...)``) that also
+def live_plant_task(
+    task: Callable[..., Any], app_id: str, recording_id: str, reference: str | None = None
+):
+    """``task`` (a plant's run: ``task(plant, settings, scene, horizon, report=...)``, and
+    ``watch=`` where it takes it, as :func:`validation.runs.plant_runs.plant_task` does) that also
     streams the plant to the current viewer under ``app_id`` (the recording's
     :class:`~validation.recording.stream.AppId`) and ``recording_id``; ``task`` itself when there
-    is no viewer."""
+    is no viewer. ``reference``: the plant the recording draws solid (the first one compared)."""
     viewer = current()
     if viewer is None:
         return task
-    return functools.partial(_streamed_run, task, viewer, app_id, recording_id)
+    return functools.partial(_streamed_run, task, viewer, app_id, recording_id, reference)
 
 
-def _streamed_run(task, viewer, app_id, recording_id, pl, settings, sc, horizon, *, report):
-    """One plant's run (in its worker) with its live stream: progress while it runs, states when
-    it returns; the run's result is ``task``'s whatever happens to the stream."""
+def _takes_watch(task: Callable[..., Any]) -> bool:
+    import inspect
+
+    try:
+        params = inspect.signature(task).parameters
+    except (TypeError, ValueError):
+        return False
+    return "watch" in params or any(p.kind is p.VAR_KEYWORD for p in params.values())
+
+
+def _streamed_run(
+    task, viewer, app_id, recording_id, reference, pl, settings, sc, horizon, *, report
+):
+    """One plant's run (in its worker) with its live stream: its progress and, as they come, the
+    states its progress carries (:class:`_Watcher`); a plant that passed none has its states
+    sent when it returns. The run's result is ``task``'s whatever happens to the stream."""
     engine = pl.engine
     stream = LiveStream.open(viewer, app_id, recording_id, f"{engine} plant")
     if stream is None:
@@ -282,12 +346,20 @@ def _streamed_run(task, viewer, app_id, recording_id, pl, settings, sc, horizon,
         if isinstance(t, int | float):
             stream.do(lambda rec: log_reached(rec, f"{root}/wall_s", t, time.perf_counter() - t0))
 
+    watch = _Watcher(stream, root, engine, sc, horizon)
+    if sc is not None:
+        from validation.recording.world import log_body_look
+
+        solid = reference is None or reference == engine
+        stream.do(lambda rec: log_body_look(rec, engine, sc, solid))
+    extra = {"watch": watch} if _takes_watch(task) else {}
     try:
-        tr, wall = task(pl, settings, sc, horizon, report=heard)
+        tr, wall = task(pl, settings, sc, horizon, report=heard, **extra)
     except BaseException:  # an interrupt or the run's error: no wait for the viewer
         stream.close(flush=False)
         raise
-    stream.do(lambda rec: log_states(rec, root, tr))
+    if watch.rows == 0:
+        stream.do(lambda rec: log_states(rec, root, tr, engine))
     stream.close()
     return tr, wall
 
@@ -452,6 +524,7 @@ def from_args(args: Any) -> Iterator[LiveViewer | None]:
 __all__ = [
     "DEFAULT_PORT",
     "FLUSH_TIMEOUT_S",
+    "LIVE_RATE_HZ",
     "REACH_TIMEOUT_S",
     "LiveMode",
     "LiveStream",
@@ -460,6 +533,7 @@ __all__ = [
     "from_args",
     "live_plant_task",
     "live_root",
+    "log_state",
     "log_states",
     "proxy_url",
     "reachable",

@@ -225,7 +225,8 @@ def _validate_into(
     interrupted = False
     with StagePool(concurrent, EVIDENCE_HELPERS, prepare_here=prepare_comparison) as pool:
         try:  # the plants, then the comparison
-            task = live_plant_task(_plant_task, AppId.VALIDATE, run.run_id)  # looked up now
+            reference = runs[0].plant.engine if runs else None  # drawn solid, as the recording
+            task = live_plant_task(_plant_task, AppId.VALIDATE, run.run_id, reference)  # now
             got = pool.run_plants(runs, sc, horizon, progress, task=task)
             walls.update(got.walls)
             failures += got.failures
