@@ -19,15 +19,19 @@ import warnings
 from pathlib import Path
 
 import numpy as np
+import pyarrow as pa
 import pytest
 import rerun as rr
 from rerun.chunk import RrdReader
 
+from tests.support.tolerances import LIVE_STATE_F32_REL
 from validation.cli import main
 from validation.commands import EXIT_USAGE
 from validation.recording import live
 from validation.recording.live import LiveViewer, live_plant_task, proxy_url, watching
 from validation.recording.stream import AppId, atomic_stream
+from validation.recording.style import TIMELINE
+from validation.runs.plant_runs import plant_task
 
 ROOT = Path(__file__).resolve().parents[3]
 PLANTS = ("analytic", "mujoco")
@@ -52,6 +56,25 @@ def _rows(path: Path) -> tuple[dict[str, int], list]:
     for chunk in store.stream().filter(is_static=False).to_chunks():
         rows[str(chunk.entity_path)] += chunk.num_rows
     return dict(rows), [*reader.recordings(), *reader.blueprints()]
+
+
+def _values(path: Path, entity: str, component: str) -> dict[int, np.ndarray]:
+    """``{time in ns: the component's values}`` of an entity's temporal rows in an ``.rrd``."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        store = RrdReader(str(path)).stream().collect()
+    out: dict[int, np.ndarray] = {}
+    for chunk in store.stream().filter(is_static=False).to_chunks():
+        if str(chunk.entity_path) != entity:
+            continue
+        batch = chunk.to_record_batch()
+        if component not in batch.schema.names:
+            continue
+        times = batch.column(TIMELINE).cast(pa.int64()).to_numpy()
+        for t, v in zip(times, batch.column(component), strict=True):
+            if v.is_valid:
+                out[int(t)] = np.asarray(v.as_py(), float).ravel()
+    return out
 
 
 @contextlib.contextmanager
@@ -110,22 +133,43 @@ def _expected(out: Path) -> tuple[str, dict[str, int]]:
     return run_id, {p: rows[f"/world/{p}/body"] for p in PLANTS}
 
 
-def _check_arrived(rows: dict[str, int], stores: list, run_id: str, samples: dict[str, int]):
+def _check_arrived(
+    rows: dict[str, int], stores: list, run_id: str, samples: dict[str, int], saved: Path, out: Path
+):
     for plant, n in samples.items():
         assert n > 1
-        assert rows[f"/live/{plant}/state"] == n, (plant, rows)  # q of every sample, live
-        assert rows[f"/live/{plant}/body"] == n, (plant, rows)
+        live_rows = rows[f"/live/{plant}/state"]
+        assert 1 <= live_rows <= n, (plant, rows)  # its states while it ran, throttled
+        # each moved the recording's body; then the recording itself, sent whole, drew every one
+        assert rows[f"/world/{plant}/body"] == n + live_rows, (plant, rows)
         assert rows[f"/live/{plant}/wall_s"] >= 1  # its progress while it ran
-        assert rows[f"/world/{plant}/body"] == n  # and the recording, sent whole
+        _check_states_are_the_recordings(saved, out / "run.rrd", plant)
     assert {s.recording_id for s in stores if s.kind == "recording"} == {run_id}  # one recording
     assert {s.application_id for s in stores} == {AppId.VALIDATE}
     assert any(s.kind == "blueprint" for s in stores)  # the designed layout too
 
 
+def _check_states_are_the_recordings(saved: Path, recording: Path, plant: str) -> None:
+    """Every state streamed live at a sample time is the recording's body there (to float32:
+    Rerun stores poses as float32): position R and attitude u (w first, normalised)."""
+    streamed = _values(saved, f"/live/{plant}/state", "Scalars:scalars")
+    moved = _values(recording, f"/world/{plant}/body", "Transform3D:translation")
+    turned = _values(recording, f"/world/{plant}/body", "Transform3D:quaternion")
+    common = sorted(set(streamed) & set(moved))
+    assert common, (plant, sorted(streamed)[:3], sorted(moved)[:3])
+    for t in common:
+        q = streamed[t]
+        u = q[3:7] / np.linalg.norm(q[3:7])
+        for got, want in ((q[:3], moved[t]), (u[[1, 2, 3, 0]], turned[t])):
+            scale = np.maximum(1.0, np.abs(want))
+            assert np.all(np.abs(got - want) <= LIVE_STATE_F32_REL.value * scale), (plant, t)
+
+
 def test_connect_streams_each_plant_and_the_recording(tmp_path):
-    """``tumble validate --connect URL``: each plant's states (q and the body's pose, one row per
-    output sample), its progress and the whole recording arrive at the server as one recording,
-    the run's; the files are those of a run without a viewer."""
+    """``tumble validate --connect URL``: each plant's states while it runs (q, and the body's pose
+    on the recording's own entity, equal to the recording's), its progress and the whole
+    recording arrive at the server as one recording, the run's; the files are those of a run
+    without a viewer."""
     out = tmp_path / "run"
     with _saving_server(tmp_path) as (url, saved):
         proc = _tumble("validate", *RUN, "--out", str(out), f"--connect={url}")
@@ -134,7 +178,7 @@ def test_connect_streams_each_plant_and_the_recording(tmp_path):
         rows = _wait_rows(
             saved, {f"/live/{p}/state" for p in PLANTS} | {f"/world/{p}/body" for p in PLANTS}
         )
-    _check_arrived(rows, _rows(saved)[1], run_id, samples)
+    _check_arrived(rows, _rows(saved)[1], run_id, samples, saved, out)
     assert set(json.loads((out / "manifest.json").read_text())["files"]) >= {"run.rrd"}
 
 
@@ -160,7 +204,7 @@ def test_serve_hosts_a_server_a_client_receives_from(tmp_path):
             rows = _wait_rows(
                 saved, {f"/live/{p}/state" for p in PLANTS} | {f"/world/{p}/body" for p in PLANTS}
             )
-        _check_arrived(rows, _rows(saved)[1], run_id, samples)
+        _check_arrived(rows, _rows(saved)[1], run_id, samples, saved, out)
         proc.send_signal(signal.SIGINT)
         assert proc.wait(timeout=30) == 0
         assert not live.reachable(url, 0.2)  # the server ended with the command
@@ -240,12 +284,77 @@ def test_served_streams_reach_a_client_that_connects_later(tmp_path):
         thread.start()
     thread.join(timeout=ARRIVE_TIMEOUT_S)
     rows = got["rows"]
-    assert rows["/live/analytic/state"] == rows["/live/analytic/body"] == _Run.t.size
+    # a task that takes no watch: the states are sent when the run returns, every one
+    assert rows["/live/analytic/state"] == rows["/world/analytic/body"] == _Run.t.size
     assert rows["/live/analytic/wall_s"] == 1 and rows["/file/x"] == _Run.t.size
     assert {(s.application_id, s.recording_id) for s in got["stores"] if s.kind == "recording"} == {
         (AppId.VALIDATE, "rid")
     }
     assert not live.reachable(url, 0.2)  # the server ended with the block
+
+
+class _HeldPlant:
+    """A plant whose run passes its states to its progress and then waits, part way, until the
+    test lets it go on: what the server holds meanwhile was streamed during the run."""
+
+    engine = "analytic"
+
+    def __init__(self, states: bool = True):
+        self.go_on = threading.Event()
+        self.states = states
+
+    def simulate(self, sc, settings, t_end, progress):
+        half = _Run.t.size // 2
+        for k, t in enumerate(_Run.t):
+            if k == half:
+                assert self.go_on.wait(ARRIVE_TIMEOUT_S), "the test never let the run go on"
+            if self.states:
+                progress(float(t), _Run.q[k] + [float(t), 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+            else:
+                progress(float(t))  # a plugin written for progress(t) alone
+        return _Run()
+
+
+def _held_run(tmp_path, pl: _HeldPlant) -> tuple[dict[str, int], dict[str, int], list[float]]:
+    """``pl`` run by the plants' task with a live stream to a server on 127.0.0.1: ``(rows the
+    server held while the run waited, rows once it returned, the progress reported)``."""
+    heard: list[float] = []
+    with _saving_server(tmp_path) as (url, saved), watching(LiveViewer(url)):
+        task = live_plant_task(plant_task, AppId.VALIDATE, "rid")
+        run = threading.Thread(target=lambda: task(pl, None, None, 1.0, report=heard.append))
+        run.start()
+        try:
+            wanted = {"/live/analytic/state", "/world/analytic/body"} if pl.states else set()
+            during = _wait_rows(saved, wanted | {"/live/analytic/wall_s"})
+            assert run.is_alive()  # the run has not returned: it waits for go_on
+        finally:
+            pl.go_on.set()
+            run.join(timeout=ARRIVE_TIMEOUT_S)
+        after = _wait_rows(saved, {"/live/analytic/state"})
+    return during, after, heard
+
+
+def test_a_plants_states_arrive_while_it_runs(tmp_path):
+    """The states a plant passes its progress reach the viewer while its run goes on (the run
+    waits half way until they are there), on the recording's body too, at most
+    ``LIVE_RATE_HZ`` a wall second: the first one at once, the horizon's always; the parent's
+    progress gets times only."""
+    during, after, heard = _held_run(tmp_path, _HeldPlant())
+    assert during["/live/analytic/state"] == during["/world/analytic/body"] >= 1
+    assert after["/live/analytic/state"] == after["/world/analytic/body"]
+    # the run's states came in well under a wall second each side of the wait: the first and the
+    # last of each burst at most, not one per sample
+    assert during["/live/analytic/state"] < after["/live/analytic/state"] < _Run.t.size
+    assert heard and all(isinstance(t, float) for t in heard) and heard[-1] == 1.0
+
+
+def test_a_plant_that_passes_no_state_still_runs_and_is_sent_when_it_returns(tmp_path):
+    """A plugin that calls ``progress(t)`` alone runs as before: its times stream while it runs,
+    its states (one per sample) arrive once its run returns."""
+    during, after, heard = _held_run(tmp_path, _HeldPlant(states=False))
+    assert "/live/analytic/state" not in during and during["/live/analytic/wall_s"] >= 1
+    assert after["/live/analytic/state"] == after["/world/analytic/body"] == _Run.t.size
+    assert heard[-1] == 1.0
 
 
 def test_serve_refuses_a_port_in_use(tmp_path):
