@@ -7,7 +7,8 @@ the recording id of the file the command writes, so the viewer shows them as one
 
 * each plant's worker streams its own run (:func:`live_plant_task`) while it runs: the wall time it
   took to reach each simulated time (``live/{plant}/wall_s``) and the states its progress carries
-  (``progress(t, q)``, :mod:`analytic.progress`), at most :data:`LIVE_RATE_HZ` per wall second:
+  (``progress(t, q)``, :mod:`analytic.progress`), at most :data:`LIVE_RATE_HZ` per wall second,
+  sent every :data:`SEND_EVERY_S`:
   q = [R, u, p] (``live/{plant}/state``) and the body where the recording's 3D view draws it
   (``world/{plant}/body``, its shape logged first), so the designed layout's 3D view moves as the
   plants run; a plant whose progress carries no state has its states sent when its run returns;
@@ -213,83 +214,102 @@ def _one_line(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {exc}".splitlines()[0]
 
 
-def log_reached(rec: Any, entity: str, t: float, wall_s: float) -> None:
-    """One point of a plant's progress: the wall time ``wall_s`` it took to reach ``t``."""
-    import rerun as rr
-
-    from validation.recording.style import TIMELINE
-
-    rec.set_time(TIMELINE, duration=float(t))
-    rec.log(entity, rr.Scalars(float(wall_s)))
-
-
-def log_state(rec: Any, root: str, engine: str, scene: Any, t: float, q: Any) -> None:
-    """One state of a running plant at simulated time ``t``: ``{root}/state`` (q) and its body
-    where the recording's 3D view draws it (:func:`validation.recording.world.log_pose`)."""
-    import rerun as rr
-
-    from validation.recording.world import log_pose
-
-    log_pose(rec, engine, scene, t, q)  # sets the time too
-    rec.log(f"{root}/state", rr.Scalars(q))
-
-
-def log_states(rec: Any, root: str, tr: Any, engine: str | None = None) -> None:
-    """A finished trajectory's states in columns (a plant whose progress carried none):
-    ``{root}/state`` (q per sample) and the body's pose where the recording's 3D view draws it
-    (``world/{engine}/body``; default ``tr.engine``)."""
+def log_reached(rec: Any, entity: str, reached: Any) -> None:
+    """A plant's progress in columns: ``reached`` ``[(t, wall_s)]``, the wall time ``wall_s`` it
+    took to reach each simulated time ``t``, s."""
     import numpy as np
     import rerun as rr
 
     from validation.recording.style import TIMELINE
-    from validation.recording.world import body_entity
 
-    t = np.asarray(tr.t, float)
-    q = np.asarray(tr.q, float)
-    if t.size == 0:
-        return
-    index = [rr.TimeColumn(TIMELINE, duration=t)]
-    per_row = q.shape[1]
-    col = rr.Scalars.columns(scalars=q.ravel()).partition([per_row] * t.size)
-    rec.send_columns(f"{root}/state", indexes=index, columns=col)
-    u = q[:, 3:7] / np.linalg.norm(q[:, 3:7], axis=1, keepdims=True)
-    xyzw = u[:, [1, 2, 3, 0]]  # the paper's u is w first, rerun's quaternions x, y, z, w
+    t, wall = np.asarray(reached, float).reshape(-1, 2).T
     rec.send_columns(
-        body_entity(engine or tr.engine),
-        indexes=index,
-        columns=rr.Transform3D.columns(translation=q[:, 0:3], quaternion=xyzw),
+        entity,
+        indexes=[rr.TimeColumn(TIMELINE, duration=t)],
+        columns=rr.Scalars.columns(scalars=wall),
     )
 
 
+def log_states(rec: Any, root: str, engine: str, t: Any, q: Any, scene: Any = None) -> None:
+    """States of a plant in columns: ``{root}/state`` (q per time) and the body where the
+    recording's 3D view draws it (:func:`validation.recording.world.send_poses`: its pose, its
+    masses when ``scene`` is given). ``t`` (N,) s, ``q`` (N, n+7)."""
+    import numpy as np
+    import rerun as rr
+
+    from validation.recording.style import TIMELINE
+    from validation.recording.world import send_poses
+
+    t = np.asarray(t, float)
+    q = np.asarray(q, float)
+    if t.size == 0:
+        return
+    col = rr.Scalars.columns(scalars=q.ravel()).partition([q.shape[1]] * t.size)
+    rec.send_columns(f"{root}/state", indexes=[rr.TimeColumn(TIMELINE, duration=t)], columns=col)
+    send_poses(rec, engine, scene, t, q)
+
+
 LIVE_RATE_HZ = 30.0
-"""At most this many states of each plant per wall second go to the viewer while it runs (its
-first and its last always): a motion that reads as smooth, at a cost the run does not feel (a
-state is logged in some 50 µs: at most 0.2 % of the plant's wall time; docs/cli.md, Watching
-live, gives the measured overhead)."""
+"""At most this many states of each plant per wall second are kept for the viewer while it runs
+(its first and its last always): a motion that reads as smooth."""
+
+SEND_EVERY_S = 0.5
+"""What a plant's stream keeps (its states, its progress) is sent in columns at most this often
+(and at the horizon, and when the run returns): one call per entity for half a second of them
+instead of one per row, which keeps the stream's cost in the plant's run near a few thousandths
+of it (docs/cli.md, Watching live, gives the measured overhead), a delay a viewer does not
+notice."""
 
 
 class _Watcher:
-    """``watch(t, q)`` of one plant's run: at most :data:`LIVE_RATE_HZ` states per wall second to
-    its stream (:func:`log_state`), the horizon's always; ``rows`` counts those sent."""
+    """One plant's run as its stream sees it: ``watch(t, q)`` keeps at most :data:`LIVE_RATE_HZ`
+    states per wall second (the horizon's always), :meth:`reached` each progress with its wall
+    time; what is kept is sent every :data:`SEND_EVERY_S` (:func:`log_states`, ``wall_s``), the
+    rest by :meth:`flush`. ``rows`` counts the states kept."""
 
     def __init__(self, stream: LiveStream, root: str, engine: str, scene: Any, horizon: float):
         self.stream, self.root, self.engine, self.scene = stream, root, engine, scene
         self.horizon = float(horizon)
         self.every_s = 1.0 / LIVE_RATE_HZ
-        self.last = -float("inf")
+        self.t0 = time.perf_counter()
+        self.last = self.sent = -float("inf")
         self.rows = 0
+        self._t: list[float] = []
+        self._q: list[Any] = []
+        self._reached: list[tuple[float, float]] = []
 
     def __call__(self, t: float, q: Any) -> None:
         now = time.perf_counter()
-        if now - self.last < self.every_s and t < self.horizon:
+        end = t >= self.horizon
+        if now - self.last < self.every_s and not end:
             return
-        self.last = now
         import numpy as np
 
-        row = np.array(q, dtype=float).ravel()
-        t = float(t)
-        self.stream.do(lambda rec: log_state(rec, self.root, self.engine, self.scene, t, row))
+        self.last = now
+        self._t.append(float(t))
+        self._q.append(np.array(q, dtype=float).ravel())
         self.rows += 1
+        self._send(now, end)
+
+    def reached(self, t: float) -> None:
+        """The run's progress: it reached ``t`` (s) now."""
+        now = time.perf_counter()
+        self._reached.append((float(t), now - self.t0))
+        self._send(now, t >= self.horizon)
+
+    def _send(self, now: float, end: bool) -> None:
+        if end or now - self.sent >= SEND_EVERY_S:
+            self.sent = now
+            self.flush()
+
+    def flush(self) -> None:
+        """Send what is kept and not sent yet."""
+        t, q, self._t, self._q = self._t, self._q, [], []
+        reached, self._reached = self._reached, []
+        if t:
+            self.stream.do(lambda rec: log_states(rec, self.root, self.engine, t, q, self.scene))
+        if reached:
+            self.stream.do(lambda rec: log_reached(rec, f"{self.root}/wall_s", reached))
 
 
 # ----------------------------------------------------------------------------------------------
@@ -315,6 +335,11 @@ def live_plant_task(
     viewer = current()
     if viewer is None:
         return task
+    # here, before the workers fork: the first state a worker logs then imports nothing (0.4 s);
+    # the recording is drawn with it anyway, and it starts no thread (rerun is imported in the
+    # workers only)
+    import validation.recording.world  # noqa: F401
+
     return functools.partial(_streamed_run, task, viewer, app_id, recording_id, reference)
 
 
@@ -339,14 +364,13 @@ def _streamed_run(
     if stream is None:
         return task(pl, settings, sc, horizon, report=report)
     root = live_root(engine)
-    t0 = time.perf_counter()
+    watch = _Watcher(stream, root, engine, sc, horizon)
 
     def heard(t: Any) -> None:
         report(t)
         if isinstance(t, int | float):
-            stream.do(lambda rec: log_reached(rec, f"{root}/wall_s", t, time.perf_counter() - t0))
+            watch.reached(t)
 
-    watch = _Watcher(stream, root, engine, sc, horizon)
     if sc is not None:
         from validation.recording.world import log_body_look
 
@@ -358,8 +382,9 @@ def _streamed_run(
     except BaseException:  # an interrupt or the run's error: no wait for the viewer
         stream.close(flush=False)
         raise
-    if watch.rows == 0:
-        stream.do(lambda rec: log_states(rec, root, tr, engine))
+    watch.flush()
+    if not watch.rows:  # its progress carried no state: its trajectory's
+        stream.do(lambda rec: log_states(rec, root, engine, tr.t, tr.q, sc))
     stream.close()
     return tr, wall
 
@@ -526,6 +551,7 @@ __all__ = [
     "FLUSH_TIMEOUT_S",
     "LIVE_RATE_HZ",
     "REACH_TIMEOUT_S",
+    "SEND_EVERY_S",
     "LiveMode",
     "LiveStream",
     "LiveViewer",
@@ -533,7 +559,6 @@ __all__ = [
     "from_args",
     "live_plant_task",
     "live_root",
-    "log_state",
     "log_states",
     "proxy_url",
     "reachable",

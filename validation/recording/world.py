@@ -393,7 +393,7 @@ def body_entity(engine: str, p0: str = "") -> str:
 def log_body_look(rec, engine: str, scene: Any, solid: bool, p0: str = "") -> None:
     """The static parts of plant ``engine``'s body as :func:`log_world` draws them (``solid``:
     the reference plant's look): the view's axes, the shape, the rod and the masses' look, so
-    that :func:`log_pose` moves a body a viewer can see."""
+    that :func:`send_poses` moves a body a viewer can see."""
     import rerun as rr
 
     look = _Look(plant_color(engine), solid=solid)
@@ -404,16 +404,25 @@ def log_body_look(rec, engine: str, scene: Any, solid: bool, p0: str = "") -> No
         _log_masses_look(rec, body, scene, look)
 
 
-def log_pose(rec, engine: str, scene: Any, t: float, q: np.ndarray, p0: str = "") -> None:
-    """Plant ``engine``'s body at coordinates ``q`` (n+7,) at simulated time ``t``, s, on the
-    entities of :func:`log_world` (its pose, and its masses when ``scene`` is given)."""
+def send_poses(rec, engine: str, scene: Any, t: np.ndarray, q: np.ndarray, p0: str = "") -> None:
+    """Plant ``engine``'s body at coordinates ``q`` (N, n+7) at simulated times ``t`` (N,), s, in
+    columns on the entities of :func:`log_world`: its pose, and its masses when ``scene`` is
+    given."""
     import rerun as rr
 
-    body = body_entity(engine, p0)
-    rec.set_time(TIMELINE, duration=float(t))
-    rec.log(body, rr.Transform3D(translation=q[:3], quaternion=rr.Quaternion(xyzw=_xyzw(q[3:7]))))
-    if scene is not None and q.shape[0] > 7:
-        rec.log(f"{body}/masses", rr.Points3D(_mass_positions(scene, q[None, :])[0]))
+    t, q = np.asarray(t, float), np.asarray(q, float)
+    body, N = body_entity(engine, p0), t.shape[0]
+    index = [rr.TimeColumn(TIMELINE, duration=t)]
+    pose = rr.Transform3D.columns(translation=q[:, :3], quaternion=_xyzw(q[:, 3:7]))
+    rec.send_columns(body, indexes=index, columns=pose)
+    n = q.shape[1] - 7
+    if scene is not None and n > 0:
+        pos = _mass_positions(scene, q).reshape(-1, 3)
+        rec.send_columns(
+            f"{body}/masses",
+            indexes=index,
+            columns=rr.Points3D.columns(positions=pos).partition([n] * N),
+        )
 
 
 def _log_arrows(send: _Sender, body: str, tr: Trajectory, scales: ArrowScales, look: _Look) -> None:
@@ -521,7 +530,7 @@ __all__ = [
     "largest_difference",
     "largest_differences",
     "log_body_look",
-    "log_pose",
     "log_world",
     "plant_order",
+    "send_poses",
 ]

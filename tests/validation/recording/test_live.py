@@ -324,8 +324,9 @@ def _held_run(tmp_path, pl: _HeldPlant) -> tuple[dict[str, int], dict[str, int],
         run = threading.Thread(target=lambda: task(pl, None, None, 1.0, report=heard.append))
         run.start()
         try:
-            wanted = {"/live/analytic/state", "/world/analytic/body"} if pl.states else set()
-            during = _wait_rows(saved, wanted | {"/live/analytic/wall_s"})
+            # the first state, or without states the first progress, is sent at once
+            wanted = {"/live/analytic/state", "/world/analytic/body"}
+            during = _wait_rows(saved, wanted if pl.states else {"/live/analytic/wall_s"})
             assert run.is_alive()  # the run has not returned: it waits for go_on
         finally:
             pl.go_on.set()
