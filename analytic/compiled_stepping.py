@@ -38,7 +38,8 @@ accepted steps exactly, as in scipy's loop.
 Calls: the run is integrated in calls of at most :data:`CHUNK_STEPS` steps (CyRK's
 ``max_num_steps``) that also end at each whole multiple of :data:`PROGRESS_S` (1 s) of simulated
 time, each from the state where the one before stopped, with the size of its last full step as the
-first step. Between calls ``progress(t)`` is called and a ``KeyboardInterrupt`` (Ctrl-C) takes
+first step. Between calls ``progress(t)`` is called (``progress(t, q)`` with the state there, for
+a callback that takes it: :mod:`analytic.progress`) and a ``KeyboardInterrupt`` (Ctrl-C) takes
 effect, ending the run ``interrupted`` with the samples reached: the granularity is ``CHUNK_STEPS``
 steps or 1 s of simulated time, whichever comes first. Against one unbroken run a call costs one
 more evaluation (the derivative at its start) and, when it ends on a whole second, a step cut short
@@ -97,6 +98,7 @@ from analytic.error_scale import (
     follow_scales,
     group_scales,
 )
+from analytic.progress import takes_state
 from analytic.stepping import Stepped, step_and_sample
 from analytic.trajectory import RunStatus
 
@@ -437,15 +439,17 @@ def integrate(
     stepper: Stepper | str = Stepper.AUTO,
     fast: Any = None,
     groups: ErrorGroups | None = None,
+    state: Callable[[np.ndarray], np.ndarray] | None = None,
 ) -> Stepped:
     """Integrate and sample as :func:`analytic.stepping.step_and_sample`, on the loop
     :func:`choose` picks.
 
     Args:
         f: the Python right-hand side (scipy's loop, and the compiled loop's hand-over).
-        t_eval, y0, method, rtol, atol, n_motion, max_step, progress, linalg_failure, groups: as
-            for :func:`~analytic.stepping.step_and_sample` (here the ``atol`` vector follows the
-            groups' scales at the start of each call).
+        t_eval, y0, method, rtol, atol, n_motion, max_step, progress, linalg_failure, groups,
+            state: as for :func:`~analytic.stepping.step_and_sample` (here the ``atol`` vector
+            follows the groups' scales at the start of each call, and ``progress`` is called
+            between calls, with the state where the call stopped).
         stepper: ``auto``, ``compiled`` or ``scipy``.
         fast: the :class:`analytic.fast.FastModel` whose packed constants ``f`` evaluates with
             :func:`analytic.fast_rhs.rhs_into` (None: the numpy model answers; scipy's loop). With
@@ -464,6 +468,7 @@ def integrate(
         progress=progress,
         linalg_failure=linalg_failure,
         groups=groups,
+        state=state,
     )
     if choose(stepper, method, fast) is Stepper.SCIPY:
         return step_and_sample(f, t_eval, y0, **kw)
@@ -494,6 +499,7 @@ def _compiled(f: Callable, t_eval: np.ndarray, y0: np.ndarray, fast: Any, kw: di
     watch = RoundoffWatch(f, float(kw["rtol"]), kw["n_motion"], t_eval[0], t_eval[-1])
     max_step = float(kw["max_step"])
     progress = kw["progress"]
+    state = kw["state"] if takes_state(progress) else None
     t_end = float(t_eval[-1])
     period = PROGRESS_S
     ts: list[np.ndarray] = [t_eval[:1]]
@@ -536,7 +542,9 @@ def _compiled(f: Callable, t_eval: np.ndarray, y0: np.ndarray, fast: Any, kw: di
                 first = c.h_last
             nsteps += c.steps
             norm_err = max(norm_err, c.quat_err)
-            if progress is not None:
+            if state is not None:
+                progress(t_now, state(y_now))
+            elif progress is not None:
                 progress(t_now)
             if groups is not None and nsteps >= probe_at and t_now < t_end:
                 probe_at = nsteps + PROBE_STEPS

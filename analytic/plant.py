@@ -35,14 +35,17 @@ from typing import TYPE_CHECKING, Any, ClassVar
 
 from analytic.effects import Backend, Effect, SolverMethod, Stepper
 from analytic.model import MODEL_EFFECTS
+from analytic.progress import with_state
 from analytic.scene import Scene
 from analytic.trajectory import Engine, Trajectory
 
 if TYPE_CHECKING:
     import numpy as np
 
-Progress = Callable[[float], None]
-"""``progress(t)``: the simulated time reached, s."""
+Progress = Callable[..., None]
+"""``progress(t)`` or ``progress(t, q)``: the simulated time reached, s, and optionally the state
+there (:mod:`analytic.progress`). :meth:`Plant.simulate` hands ``_simulate`` a callback that takes
+both, whichever the caller gave."""
 
 TIGHTER_RTOL = 100.0
 """:meth:`Plant.tightened` of a tolerance-driven plant divides its tolerances by this: an adaptive
@@ -194,7 +197,9 @@ class Plant(abc.ABC):
             scene: a validated scene.
             settings: an instance of :attr:`settings_type` (default :meth:`default_settings`).
             t_end: horizon, s (default the scene's ``[output] t_end``).
-            progress: called with the simulated time reached, s.
+            progress: called with the simulated time reached, s, and, where the plant gives
+                it and the callback takes it, the state there (``progress(t, q)``:
+                :mod:`analytic.progress`).
 
         Raises:
             ValueError: the scene needs an effect this plant lacks, bad settings or ``t_end``,
@@ -208,7 +213,7 @@ class Plant(abc.ABC):
         t = check_horizon(t_end)
         settings = self._checked_settings(settings, scene)
         try:
-            return self._simulate(scene, settings, t, progress)
+            return self._simulate(scene, settings, t, with_state(progress))
         except MemoryError as exc:  # numpy's and C++'s (bad_alloc) often carry no message
             detail = f": {exc}" if str(exc) else ""
             raise MemoryError(
@@ -282,7 +287,7 @@ class Plant(abc.ABC):
                 )
         settings = self._checked_settings(settings, first)
         try:
-            return list(self._simulate_batch(scenes, settings, t, progress))
+            return list(self._simulate_batch(scenes, settings, t, with_state(progress)))
         except MemoryError as exc:
             detail = f": {exc}" if str(exc) else ""
             raise MemoryError(
@@ -314,7 +319,8 @@ class Plant(abc.ABC):
                 def inner(t: float, i: int = i, horizon: float = horizon) -> None:
                     progress(longest * (i + min(t / horizon, 1.0)) / count)
 
-            out.append(self._simulate(scene, settings, t_end, inner))
+            # one scene's state is not the batch's: with_state drops it
+            out.append(self._simulate(scene, settings, t_end, with_state(inner)))
         return out
 
     def pointwise(

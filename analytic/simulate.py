@@ -197,6 +197,7 @@ def simulate(
         stepper=stepper,
         fast=getattr(accel, "__self__", None),
         groups=error_groups(nq) if scale_atol else None,
+        state=lambda y: y[:nq].copy(),  # y = [q, q̇, quadratures]: q as the trajectory's rows
     )
     return _assemble(
         model,

@@ -39,6 +39,7 @@ from analytic.error_scale import (
     follow_scales,
     group_scales,
 )
+from analytic.progress import takes_state
 from analytic.trajectory import RunStatus
 
 SOLVERS: dict[SolverMethod, str] = {
@@ -122,6 +123,7 @@ def step_and_sample(
     progress: Callable[[float], None] | None = None,
     linalg_failure: str = "linear algebra failed",
     groups: ErrorGroups | None = None,
+    state: Callable[[np.ndarray], np.ndarray] | None = None,
 ) -> Stepped:
     """Integrate ``y' = f(t, y)`` from ``y0`` at ``t_eval[0]`` and sample it at ``t_eval``.
 
@@ -131,12 +133,18 @@ def step_and_sample(
         y0: the state at ``t_eval[0]``: ``n_motion`` components under error control, then the
             quadratures.
         method, rtol, max_step (s): passed to the solver; atol: of the motion components.
-        progress: called with the time reached, s, after each step that passes a sample.
+        progress: called with the time reached, s, after each step that passes a sample; with
+            the state there too, ``progress(t, state(y))``, when ``state`` is given and the
+            callback takes it (:func:`analytic.progress.takes_state`).
         linalg_failure: what the message says when ``f`` raises ``LinAlgError``.
         groups: the coupled groups of the motion components whose ``atol`` follows their
             magnitude (:mod:`analytic.error_scale`), with the round-off probe; None: ``atol`` on
             every one, fixed, and no probe.
+        state: the plant's ``q`` (the trajectory's coordinates, a copy) of a state ``y``, for
+            ``progress``; None: the progress carries no state.
     """
+    if state is None or not takes_state(progress):
+        state = None
     scales = None if groups is None else group_scales(y0, groups)
     atol_vec = atol_vector(atol, len(y0), n_motion, groups, scales)
     rescales = 0
@@ -168,7 +176,9 @@ def step_and_sample(
                     ys.append(dense(tt))
                     ts.append(tt)
                 i_next = j
-                if progress is not None:
+                if state is not None:
+                    progress(float(solver.t), state(solver.y))
+                elif progress is not None:
                     progress(float(solver.t))
             if (
                 groups is not None

@@ -257,6 +257,11 @@ class DrakeDynamics(ScipyDynamics):
         q_d, v_d = paper_to_drake(np.asarray(q, dtype=float), np.asarray(qdot, dtype=float))
         return np.concatenate([q_d[4:7], q_d[:4], q_d[7:], v_d, np.zeros(N_AUX)])
 
+    def paper_q(self, y: np.ndarray) -> np.ndarray:
+        """The paper's q of a state ``y`` (its progress's state): ``[R, u, p]`` as integrated,
+        as :meth:`to_paper` makes it."""
+        return y[: self.nq].copy()
+
     def control_state(self) -> tuple[np.ndarray, np.ndarray]:
         return self._qc, self._qdc
 

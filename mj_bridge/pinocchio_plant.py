@@ -153,6 +153,12 @@ class PinocchioDynamics(ScipyDynamics):
         ``[q_pin, Ṙ, ω, ṗ, 0]`` (u normalised, ``ω = H(u) u̇``)."""
         return np.concatenate([paper_to_pinocchio_plant(q, qdot), np.zeros(N_AUX)])
 
+    def paper_q(self, y: np.ndarray) -> np.ndarray:
+        """The paper's q of a state ``y`` (its progress's state): ``q_pin`` with its quaternion
+        w first, as :meth:`to_paper` makes it."""
+        q_pin = y[: self.nq]
+        return np.concatenate([q_pin[:3], q_pin[6:7], q_pin[3:6], q_pin[7:]])
+
     def control_state(self) -> tuple[np.ndarray, np.ndarray]:
         return self._q, self._qd
 

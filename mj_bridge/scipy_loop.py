@@ -30,6 +30,8 @@ class LoopDynamics(Protocol):
 
     def initial_state(self) -> np.ndarray: ...
 
+    # optional: ``paper_q(y)``, the paper's q of a state y (a new array), for the progress's state
+
 
 def check_t_end(t_end: float | None) -> None:
     """``ValueError`` naming ``t_end`` unless it is None or a positive finite time (s)."""
@@ -62,6 +64,7 @@ def integrate(
         max_step=max_step,
         progress=progress,
         groups=plant.error_groups,
+        state=getattr(plant, "paper_q", None),  # q of y for a progress that takes it
     )
     info = {
         "method": settings.method.value,

@@ -10,6 +10,8 @@ An engine's plant subclasses :class:`ScipyDynamics` and provides its engine only
   coordinates);
 * its right-hand side :meth:`~ScipyDynamics._make_rhs` (the engine's accelerations: its mass matrix
   and dynamics), :meth:`~ScipyDynamics.compile` and :meth:`~ScipyDynamics.sample`.
+* optionally ``paper_q(y)``: the paper's q of a state, which its progress then carries
+  (:mod:`analytic.progress`; without it the progress carries the time only).
 
 The base holds the rest: the scene's analytic and compiled models, the work array of the shared
 compiled stage (:mod:`mj_bridge.scipy_stage`: the map to the paper state, the controller, the force

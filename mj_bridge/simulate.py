@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from analytic.effects import MjIntegrator, SpringModel
+from analytic.progress import takes_state
 from analytic.scene import Scene
 from analytic.trajectory import Engine, RunStatus, Trajectory
 from mj_bridge.mujoco_settings import ControllerSource
@@ -50,7 +51,9 @@ def simulate(
         controller: the analytic controller, compiled (default; the numpy model answers where the
             kernel does not apply), or numpy (``analytic``), or the same law from MuJoCo's matrices.
         body_frame: BR's MuJoCo body frame relative to C (default at C).
-        progress: called with the simulated time reached after each output sample, s.
+        progress: called with the simulated time reached after each output sample, s, and the
+            sample's ``q`` for a callback that takes it (``progress(t, q)``:
+            :mod:`analytic.progress`).
         native_callback: run the compiled controller as a native ``mjcb_control`` where it applies
             (:mod:`mj_bridge.native`; same kernel, same numbers, no Python per stage); False keeps
             the Python callback.
@@ -100,6 +103,7 @@ def simulate(
         rec["aux"].append(acc.v.copy())  # W, I_L, I_P
         rec["energy_mj"].append(float(d.energy[0] + d.energy[1]))
 
+    q_of = tw.tm.paper_q_of() if takes_state(progress) else None
     wall0 = time.perf_counter()
     nsteps = 0
     with tw.callbacks():
@@ -125,7 +129,9 @@ def simulate(
                     )
                 d.time = float(times[i])
                 sample(float(times[i]))
-                if progress is not None:
+                if q_of is not None:  # the sample just recorded, as the trajectory's row
+                    progress(float(times[i]), q_of(d.qpos))
+                elif progress is not None:
                     progress(float(times[i]))
         except KeyboardInterrupt:
             status, message = RunStatus.INTERRUPTED, f"interrupted at t = {rec['t'][-1]:.6g} s"

@@ -129,6 +129,18 @@ class TwinModel:
         """``(qpos, qvel)`` -> paper ``(q, q̇)``."""
         return mujoco_to_paper_state(qpos, qvel, self.ipos, self.iquat)
 
+    def paper_q_of(self):
+        """``q_of(qpos)``: the paper's ``q`` of one ``qpos`` (a new array), as
+        :meth:`to_paper_batch` makes it: a copy of ``qpos`` for a body frame at C."""
+        if self.frame_at_C:
+            return lambda qpos: np.array(qpos, dtype=float)
+
+        def q_of(qpos: np.ndarray) -> np.ndarray:
+            qvel = np.zeros(len(qpos) - 1)  # nv = nq - 1 (a free joint, then slides); q ignores it
+            return mujoco_to_paper_state(qpos, qvel, self.ipos, self.iquat)[0]
+
+        return q_of
+
     def to_paper_acc(self, qpos: np.ndarray, qvel: np.ndarray, qacc: np.ndarray) -> np.ndarray:
         """``qacc`` at ``(qpos, qvel)`` -> paper ``q̈``."""
         return mujoco_to_paper_acc(qpos, qvel, qacc, self.ipos, self.iquat)

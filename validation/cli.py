@@ -166,11 +166,13 @@ def main(argv: list[str] | None = None) -> int:
                 parser = build_parser()
                 args = parser.parse_args(argv)
                 from validation.runs.messages import command_output  # after the handlers: numpy
+                from validation.recording.live import from_args  # stdlib only; after the handlers
 
                 with command_output(quiet=args.quiet):  # progress, --quiet, the log's lines
                     if getattr(args, "command", None) in _PLANT_COMMANDS:
                         warn_skipped_plugins()
-                    status = args.func(args)
+                    with from_args(args):  # --spawn, --connect, --serve (options.add_viewer)
+                        status = args.func(args)
         except BaseException as exc:
             return _failed(exc)
         if interrupts.pending():  # swallowed by compiled code after the last progress report

@@ -1,6 +1,8 @@
 """The recordings in a real viewer: run.rrd and demo.rrd opened in Rerun's web viewer in headless
 Chromium show their designed layout (its view and tab titles, read off the screenshot with
-Tesseract), and the characters recordings may use are in the fonts the viewer bundles.
+Tesseract), no legend covers the plots' curves (the words only a legend shows are absent, the
+curves' colours are on screen), and the characters recordings may use are in the fonts the viewer
+bundles.
 
 Slow (a viewer drawn on the CPU per file); skipped without Chromium or Tesseract (Debian:
 ``apt-get install chromium tesseract-ocr``).
@@ -67,6 +69,51 @@ def test_run_rrd_opens_in_its_designed_layout(images, tmp_path):
     assert "what this is" in words, words
     assert "tracking errors" in words, words
     assert "analytic plant" in words, words
+
+
+MIN_CURVE_PIXELS = 2000
+"""Pixels in the colours of the pairs' curves (within :data:`CURVE_COLOUR_DISTANCE`) the plot
+column must show: six difference plots about 180 px wide, three pairs each, are well over this
+when their curves are drawn; the legend dots and key words alone are a few hundred."""
+
+CURVE_COLOUR_DISTANCE = 40.0
+"""How far (RGB, 0-255 each) a pixel may be from a curve's colour: the anti-aliased line on the
+plot's dark background."""
+
+
+def _curve_pixels(png: Path, colours) -> int:
+    """The pixels of the plot column (the right half of the window, left of the selection panel)
+    within :data:`CURVE_COLOUR_DISTANCE` of one of ``colours``."""
+    import numpy as np
+    from PIL import Image
+
+    rgb = np.asarray(Image.open(png).convert("RGB"), float)
+    width = rgb.shape[1]
+    column = rgb[:, width // 2 : int(0.8 * width)]
+    ref = np.array([c[:3] for c in colours], float)
+    dist = np.linalg.norm(column[:, :, None, :] - ref[None, None], axis=3).min(axis=2)
+    return int((dist < CURVE_COLOUR_DISTANCE).sum())
+
+
+def test_difference_plots_show_their_curves_not_legends(images, tmp_path):
+    """Three plants' run.rrd at the designed size: no legend covers the difference plots (the
+    words only a legend shows are absent: each difference plot's legend lists "threshold of
+    <quantity>" and "<pair>: <quantity>" per curve; the tab's key names each pair once), and the
+    plot column shows the pairs' curves, in their colours."""
+    import re
+
+    from validation.recording.style import plant_color, shade
+    from validation.validate import run_validation
+
+    res = run_validation("paper_example1_controlled", tmp_path / "v", t_end=2.0)
+    shot = images.viewer_screenshot(res.files["run.rrd"], tmp_path / "plots.png")
+    words = _words(shot)
+    pairs = ("analytic vs mujoco", "analytic vs pinocchio", "mujoco vs pinocchio")
+    assert "colours" in words and "shades, darkest first" in words, words  # the key is shown
+    assert "threshold of" not in words, words
+    assert len(re.findall(r"\bvs\b", words)) <= len(pairs), words  # the key's, once per pair
+    colours = [shade(plant_color(p), j) for p in pairs for j in range(3)]
+    assert _curve_pixels(shot, colours) >= MIN_CURVE_PIXELS
 
 
 def test_demo_rrd_opens_in_its_designed_layout(images, tmp_path):

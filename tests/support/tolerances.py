@@ -573,6 +573,31 @@ WARP_DRIFT_REL_PER_SQRT_STEP = Threshold(
     "there is ~1e-11 m, so the whole difference is Warp's float32.",
 )
 
+# =================================================================================================
+# The state a plant's progress carries (tests/analytic/test_progress.py,
+# tests/mj_bridge/test_plants.py, tests/validation/recording/test_live.py)
+# =================================================================================================
+
+PROGRESS_STATE_REL = Threshold(
+    "PROGRESS_STATE_REL",
+    1e-13,
+    "1",
+    "Relative to max(1, max|q|): the compiled loop's state where a call stops against its sample at "
+    "that time, the same point once as the step's end and once through the dense output at its end "
+    "(about ten terms h b_i k_i summed again): a few ulps of the state per term, 1e-13 leaving a "
+    "decade above the ~1e-14 that ten terms at 2.2e-16 can reach. scipy's loop and MuJoCo hand over "
+    "the sample itself (zero).",
+)
+LIVE_STATE_F32_REL = Threshold(
+    "LIVE_STATE_F32_REL",
+    2 * EPS32,
+    "1",
+    "Relative to max(1, |x|): a streamed state (float64 scalars) against the recording's pose of the "
+    "body at the same time, which Rerun stores as float32 (translation; the normalised quaternion): "
+    "one rounding to float32 is eps32/2 of the value, the normalisation before it a few ulps of "
+    "float64; 2 eps32 bounds both with a factor 4 to spare.",
+)
+
 
 TOLERANCES: Mapping[str, Threshold] = {
     t.name: t for t in list(globals().values()) if isinstance(t, Threshold)

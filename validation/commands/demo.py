@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from validation.commands.options import add_out
+from validation.commands.options import add_out, add_viewer
 
 NAME = "demo"
 HELP = "write a narrated teaching demo (.rrd + markdown)"
@@ -19,6 +19,7 @@ CHOOSES_PLANTS = False
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     add_out(p, "output directory (default: out/demo)")
+    add_viewer(p)
 
 
 def run(args: argparse.Namespace) -> int:

@@ -7,7 +7,14 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from validation.commands.options import add_figure_format, add_out, add_plants, add_scene, add_t_end
+from validation.commands.options import (
+    add_figure_format,
+    add_out,
+    add_plants,
+    add_scene,
+    add_t_end,
+    add_viewer,
+)
 from validation.commands.outcome import print_outcome
 
 NAME = "judge"
@@ -57,6 +64,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
     add_out(p, "output directory (default: out/judge_<scene slug>)")
     add_figure_format(p, "comma-separated figure formats: png, svg, pdf (default: png)")
+    add_viewer(p)
 
 
 def run(args: argparse.Namespace) -> int:

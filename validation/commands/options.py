@@ -114,4 +114,42 @@ def add_dashboard(p: argparse.ArgumentParser) -> None:
         action="store_true",
         help="with --dask-workers: serve the local Dask cluster's dashboard on 127.0.0.1 and "
         "print its link",
+def viewer_port(s: str) -> int:
+    """A TCP port (1 to 65535) given on the command line; ``ArgumentTypeError`` quoting it."""
+    try:
+        v = int(s)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a port number (got {s!r})") from None
+    if not 0 < v < 65536:
+        raise argparse.ArgumentTypeError(f"must be a port 1 to 65535 (got {s!r})")
+    return v
+
+
+def add_viewer(p: argparse.ArgumentParser) -> None:
+    """A live Rerun viewer, Rerun's options (:mod:`validation.recording.live`), at most one:
+    ``--spawn``, ``--connect [URL]``, ``--serve [PORT]``; none: nothing connects anywhere."""
+    from validation.recording.live import DEFAULT_PORT
+
+    g = p.add_mutually_exclusive_group()
+    g.add_argument(
+        "--spawn",
+        action="store_true",
+        help="spawn a Rerun viewer and stream the run to it live (the files are written as ever)",
+    )
+    g.add_argument(
+        "--connect",
+        nargs="?",
+        const="",
+        metavar="URL",
+        help="stream the run live to a running Rerun viewer or server at URL or port (default: "
+        f"rerun+http://127.0.0.1:{DEFAULT_PORT}/proxy)",
+    )
+    g.add_argument(
+        "--serve",
+        nargs="?",
+        const=DEFAULT_PORT,
+        type=viewer_port,
+        metavar="PORT",
+        help=f"host Rerun's gRPC server and web viewer on 127.0.0.1:PORT (default {DEFAULT_PORT}) "
+        "and stream the run to it; it keeps serving after the run until Ctrl-C",
     )

@@ -6,7 +6,14 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from validation.commands.options import add_dashboard, add_out, add_scene, add_t_end, add_workers
+from validation.commands.options import (
+    add_dashboard,
+    add_out,
+    add_scene,
+    add_t_end,
+    add_viewer,
+    add_workers,
+)
 
 NAME = "sweep"
 HELP = "what accuracy costs in time: work-precision study over both engines"
@@ -31,6 +38,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add_t_end(p, "horizon in seconds (default 20)")
     add_workers(p)
     add_dashboard(p)
+    add_viewer(p)
 
 
 def run(args: argparse.Namespace) -> int:

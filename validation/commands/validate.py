@@ -13,6 +13,7 @@ from validation.commands.options import (
     add_scene,
     add_t_end,
     add_time_limit,
+    add_viewer,
     positive_float,
 )
 from validation.commands.outcome import print_outcome
@@ -56,6 +57,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "wall-time limit of each plant's run: a run over it is stopped and fails that plant, "
         "the others are compared (default: none for the built-in plants, 600 s for a plugin)",
     )
+    add_viewer(p)
 
 
 def run(args: argparse.Namespace) -> int:

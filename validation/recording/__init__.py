@@ -5,7 +5,9 @@
 * :mod:`.world`: the 3D entities, trails and exaggerated differences;
 * :mod:`.plots`: the time series;
 * :mod:`.layout`: the blueprint, narrative and legend;
-* :mod:`.style`: colours, application ids and viewer text.
+* :mod:`.style`: colours, application ids and viewer text;
+* :mod:`.live`: the live viewer (``--spawn``, ``--connect``, ``--serve``): each plant's stream and
+  the recording sent to it.
 """
 
 from typing import TYPE_CHECKING
@@ -15,6 +17,8 @@ from validation._lazy import lazy_exports
 _PUBLIC = {
     "write_recording": "validation.recording.recording",
     "RecordingInfo": "validation.recording.recording",
+    "LiveViewer": "validation.recording.live",
+    "watching": "validation.recording.live",
 }
 
 if TYPE_CHECKING:  # the same names, typed for a type checker (never run: imports stay lazy)

@@ -26,7 +26,7 @@ from typing import Any
 from analytic.trajectory import Trajectory
 from validation.compare.checks import Comparison
 from validation.compare.summary import check_sentence
-from validation.recording.plots import Plot, Tab, plots_for
+from validation.recording.plots import Plot, Tab, key_path, plots_for
 from validation.recording.style import (
     TIMELINE,
     entity_root,
@@ -291,20 +291,38 @@ def views_3d(p0: str, names: Sequence[str], factors: Mapping[str, float]):
     return rrb.Horizontal(overlay, side, column_shares=[2, 1])
 
 
-def _plot_tabs(plots: Sequence[Plot]):
-    """One tab per :class:`Tab` that has plots: its plots in a grid (one column up to two)."""
+KEY_SHARE = (1, 4)
+"""Heights of a plot tab's key and of its plots: the key's few lines above a grid of plots."""
+
+
+def _plot_tabs(prefix: str, plots: Sequence[Plot]):
+    """One tab per :class:`Tab` that has plots: its key (what each colour and shade is,
+    :func:`validation.recording.plots.plot_keys`) above its plots in a grid (one column up to
+    two). The plots' legends are hidden: at the designed size a legend covers most of a plot's
+    curves; the key and the viewer's tooltip name the series instead."""
     import rerun.blueprint as rrb
 
     tabs = []
     for tab in Tab:
         views = [
-            rrb.TimeSeriesView(origin=p.origin, name=viewer_text(p.title))
+            rrb.TimeSeriesView(
+                origin=p.origin,
+                name=viewer_text(p.title),
+                plot_legend=rrb.PlotLegend(visible=False),
+            )
             for p in plots
             if p.tab is tab
         ]
         if views:
             columns = 1 if len(views) < 3 else 2
-            tabs.append(rrb.Grid(*views, grid_columns=columns, name=viewer_text(tab.value)))
+            tabs.append(
+                rrb.Vertical(
+                    rrb.TextDocumentView(origin=key_path(prefix, tab), name="key"),
+                    rrb.Grid(*views, grid_columns=columns),
+                    row_shares=list(KEY_SHARE),
+                    name=viewer_text(tab.value),
+                )
+            )
     return rrb.Tabs(*tabs, active_tab=0)
 
 
@@ -349,7 +367,7 @@ def blueprint_for(
     )
     return rrb.Horizontal(
         left,
-        _plot_tabs(plots_for(prefix, scene, comparison)),
+        _plot_tabs(prefix, plots_for(prefix, scene, comparison)),
         column_shares=[3, 2],
         name=viewer_text(name or scene.name),
     )

@@ -19,6 +19,12 @@ Entity layout under ``{p0}``; ``{unit}`` is :func:`validation.recording.style.sl
                                                   one line each, …/threshold/{plant})
     {p0}/plots/control/torque/{plant}             τ_x, τ_y, τ_z (N·m, body axes)
     {p0}/plots/control/rod_forces/{plant}         F_1 … F_n (N)
+    {p0}/key/{tab}                                what each colour and shade of the tab's plots
+                                                  is (markdown, static; :func:`plot_keys`)
+
+The layout hides the plots' legends (at the designed size they cover the curves); the series are
+named by the tab's key instead (one colour per plant or pair, one shade per quantity, darkest
+first) and by the viewer's tooltip on a curve.
 
 :func:`plots_for` lists the plots (origin, title, tab) for the blueprint from the same rules, so the
 layout and the logged entities cannot disagree.
@@ -27,6 +33,7 @@ layout and the logged entities cannot disagree.
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 from enum import StrEnum
@@ -39,6 +46,7 @@ from validation.compare.checks import Comparison, Group, Series
 from validation.recording.style import (
     THRESHOLD_RGBA,
     TIMELINE,
+    color_word,
     entity_root,
     log10_nonzero,
     plant_color,
@@ -184,6 +192,70 @@ def _log_thresholds(rec, prefix: str, comparison: Comparison, logged: dict[str, 
             _send_scalars(rec, path, np.array([t[0], t[-1]]), np.full(2, math.log10(bound)))
 
 
+_FORMULA = re.compile(r"\s+(max_\w+\s*)?(\||conj\().*$")
+
+
+def _short(label: str) -> str:
+    """A series' label without its formula (``position of C |R_a − R_m|`` -> ``position of C``)."""
+    return _FORMULA.sub("", label) or label
+
+
+def key_path(prefix: str, tab: Tab) -> str:
+    """The entity of tab ``tab``'s key (:func:`plot_keys`)."""
+    return f"{entity_root(prefix)}/key/{slug(tab.name.lower())}"
+
+
+def _unique_add(items: list[str], item: str) -> None:
+    if item not in items:
+        items.append(item)
+
+
+def plot_keys(
+    prefix: str, plants: Sequence[Trajectory], comparison: Comparison | None
+) -> dict[Tab, str]:
+    """Per tab, the text that names its series in place of the plots' legends: the colour of each
+    plant or pair, the threshold's grey, and each plot's quantities in shade order (darkest first),
+    from the same rules as :func:`log_plots` draws them."""
+    colours: dict[Tab, list[str]] = {}
+    shades: dict[Tab, dict[str, list[str]]] = {}
+    for s in comparison.series if comparison is not None else ():
+        plot = plot_of(prefix, s)
+        if plot is None or s.t.size == 0:
+            continue
+        _unique_add(colours.setdefault(plot.tab, []), s.subject.value)
+        if s.group is not Group.INVARIANT:  # a balance plot is one quantity, named in its title
+            _unique_add(shades.setdefault(plot.tab, {}).setdefault(plot.title, []), _short(s.label))
+    n = plants[0].n if plants else 0
+    for plot in control_plots(prefix, n):
+        for tr in plants:
+            _unique_add(colours.setdefault(Tab.CONTROL, []), tr.engine)
+        comps = (
+            ["τ_x", "τ_y", "τ_z"]
+            if plot.origin.endswith("torque")
+            else [f"F_{i + 1}" for i in range(n)]
+        )
+        shades.setdefault(Tab.CONTROL, {})[plot.title] = comps
+    keys: dict[Tab, str] = {}
+    for tab, who in colours.items():
+        named = ", ".join(f"{color_word(plant_color(x))}: {x}" for x in who)
+        grey = "" if tab is Tab.CONTROL else "; grey: the threshold (a curve passes below it)"
+        lines = [f"Colours: {named}{grey}. Hover a curve for its name."]
+        per_plot = [(t, q) for t, q in shades.get(tab, {}).items() if len(q) > 1]
+        if per_plot:
+            lines.append("Shades, darkest first:")
+            lines += [f"- {title}: {', '.join(q)}" for title, q in per_plot]
+        keys[tab] = "\n".join(lines)
+    return keys
+
+
+def _log_keys(rec, prefix: str, plants: Sequence[Trajectory], comparison: Comparison | None):
+    import rerun as rr
+
+    for tab, text in plot_keys(prefix, plants, comparison).items():
+        doc = rr.TextDocument(viewer_text(text, newlines=True), media_type=rr.MediaType.MARKDOWN)
+        rec.log(key_path(prefix, tab), doc, static=True)
+
+
 def log_plots(
     rec, prefix: str, plants: Sequence[Trajectory], comparison: Comparison | None
 ) -> list[str]:
@@ -211,6 +283,7 @@ def log_plots(
             )
             if _send_scalars(rec, path, tr.t, values, per_row=len(comps)):
                 entities.append(path)
+    _log_keys(rec, prefix, plants, comparison)
     if comparison is None:
         return entities
 
@@ -237,7 +310,9 @@ __all__ = [
     "Plot",
     "Tab",
     "control_plots",
+    "key_path",
     "log_plots",
+    "plot_keys",
     "plot_of",
     "plots_for",
     "series_path",

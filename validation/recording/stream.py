@@ -94,8 +94,15 @@ def atomic_stream(
     ``rerun.blueprint.Blueprint``) is stored in the file as its active and default layout: the
     viewer opens the file in it, whatever layout it remembers for ``app_id``, and *Reset to
     default blueprint* returns to it.
+
+    With a live viewer (:func:`validation.recording.live.current`), the file, once written, is
+    also sent to it under the same ids (:func:`validation.recording.live.send_file`; a viewer
+    that cannot be reached is a warning, never this file's failure).
     """
+    from validation.recording.live import send_file
+
     path = Path(path)
+    recording_id = recording_id or str(uuid.uuid4())
     rec, sink = binary_stream(app_id, recording_id)
     if blueprint is not None:
         rec.send_blueprint(blueprint, make_active=True, make_default=True)
@@ -105,6 +112,7 @@ def atomic_stream(
         rec.disconnect()
         raise
     write_bytes(path, rrd_bytes(rec, sink), check=check_rrd)
+    send_file(path, app_id, recording_id, blueprint)
 
 
 __all__ = [

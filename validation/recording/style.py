@@ -97,6 +97,28 @@ def plant_color_name(name: str) -> str:
     return "grey" if subject.is_pair else _extra(subject)[0]
 
 
+COLOR_WORDS: tuple[tuple[str, tuple[int, int, int]], ...] = (
+    ("blue", (31, 119, 180)),
+    ("orange", (255, 127, 14)),
+    ("green", (44, 160, 44)),
+    ("red", (214, 39, 40)),
+    ("purple", (148, 103, 189)),
+    ("brown", (140, 86, 75)),
+    ("pink", (227, 119, 194)),
+    ("grey", (128, 128, 128)),
+    ("olive", (188, 189, 34)),
+    ("cyan", (23, 190, 207)),
+)
+"""matplotlib's tab10 by name: the colours of the plants and of the built-in pairs."""
+
+
+def color_word(rgba: RGBA) -> str:
+    """The name of the :data:`COLOR_WORDS` colour nearest ``rgba`` (a plant's or a pair's colour
+    as a plot key says it: ``"red"`` for analytic vs mujoco)."""
+    rgb = np.array(rgba[:3], float)
+    return min(COLOR_WORDS, key=lambda w: float(np.sum((np.array(w[1]) - rgb) ** 2)))[0]
+
+
 def shade(rgba: RGBA, j: int) -> RGBA:
     """The ``j``-th shade of a colour: component j of a vector, or quantity j in one plot."""
     base = np.array(rgba[:3], float)
@@ -274,6 +296,7 @@ def viewer_text(text: str, newlines: bool = False) -> str:
 
 
 __all__ = [
+    "COLOR_WORDS",
     "EXTRA_PLANT_COLORS",
     "GHOST_ALPHA",
     "MASS_RGBA",
@@ -286,6 +309,7 @@ __all__ = [
     "TIMELINE",
     "TORQUE_RGBA",
     "VIEWER_CHARACTERS",
+    "color_word",
     "entity_root",
     "log10_nonzero",
     "plant_color",

@@ -356,7 +356,15 @@ def _log_body(
     n = q.shape[1] - 7
     if not n:
         return
-    a, d = np.asarray(scene.rod.axis), np.asarray(scene.rod.offset)
+    _log_masses_look(rec, body, scene, look)
+    pos = _mass_positions(scene, q)
+    send(f"{body}/masses", t, rr.Points3D.columns(positions=pos.reshape(-1, 3)).partition([n] * N))
+
+
+def _log_masses_look(rec, body: str, scene: Any, look: _Look) -> None:
+    import rerun as rr
+
+    n = scene.n
     mass = np.asarray(scene.masses.mass, float)
     radii = 0.03 * body_size(scene) * (mass / max(float(np.max(mass)), 1e-300)) ** (1 / 3)
     rec.log(
@@ -369,8 +377,52 @@ def _log_body(
         ),
         static=True,
     )
-    pos = d[None, None, :] + q[:, 7:, None] * a[None, None, :]  # body axes, (N, n, 3)
-    send(f"{body}/masses", t, rr.Points3D.columns(positions=pos.reshape(-1, 3)).partition([n] * N))
+
+
+def _mass_positions(scene: Any, q: np.ndarray) -> np.ndarray:
+    """The masses at ``d + p_i a`` (body axes, m) of coordinates ``q`` (N, n+7): (N, n, 3)."""
+    a, d = np.asarray(scene.rod.axis), np.asarray(scene.rod.offset)
+    return d[None, None, :] + q[:, 7:, None] * a[None, None, :]
+
+
+def body_entity(engine: str, p0: str = "") -> str:
+    """The entity of plant ``engine``'s body (its pose), as :func:`log_world` logs it."""
+    return f"{p0}/world/{engine}/body"
+
+
+def log_body_look(rec, engine: str, scene: Any, solid: bool, p0: str = "") -> None:
+    """The static parts of plant ``engine``'s body as :func:`log_world` draws them (``solid``:
+    the reference plant's look): the view's axes, the shape, the rod and the masses' look, so
+    that :func:`send_poses` moves a body a viewer can see."""
+    import rerun as rr
+
+    look = _Look(plant_color(engine), solid=solid)
+    body = body_entity(engine, p0)
+    rec.log(f"{p0}/world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
+    _log_shape(rec, body, scene, look)
+    if scene.n:
+        _log_masses_look(rec, body, scene, look)
+
+
+def send_poses(rec, engine: str, scene: Any, t: np.ndarray, q: np.ndarray, p0: str = "") -> None:
+    """Plant ``engine``'s body at coordinates ``q`` (N, n+7) at simulated times ``t`` (N,), s, in
+    columns on the entities of :func:`log_world`: its pose, and its masses when ``scene`` is
+    given."""
+    import rerun as rr
+
+    t, q = np.asarray(t, float), np.asarray(q, float)
+    body, N = body_entity(engine, p0), t.shape[0]
+    index = [rr.TimeColumn(TIMELINE, duration=t)]
+    pose = rr.Transform3D.columns(translation=q[:, :3], quaternion=_xyzw(q[:, 3:7]))
+    rec.send_columns(body, indexes=index, columns=pose)
+    n = q.shape[1] - 7
+    if scene is not None and n > 0:
+        pos = _mass_positions(scene, q).reshape(-1, 3)
+        rec.send_columns(
+            f"{body}/masses",
+            indexes=index,
+            columns=rr.Points3D.columns(positions=pos).partition([n] * N),
+        )
 
 
 def _log_arrows(send: _Sender, body: str, tr: Trajectory, scales: ArrowScales, look: _Look) -> None:
@@ -470,12 +522,15 @@ __all__ = [
     "DIFFERENCE_TARGET",
     "ArrowScales",
     "arrow_scales",
+    "body_entity",
     "body_size",
     "difference_factor",
     "difference_factors",
     "exaggerate",
     "largest_difference",
     "largest_differences",
+    "log_body_look",
     "log_world",
     "plant_order",
+    "send_poses",
 ]

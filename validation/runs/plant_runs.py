@@ -86,10 +86,17 @@ def stage_progress(progress: Any, stage: str) -> Callable[[float], None] | None:
     return progress if stage == "analytic" else None
 
 
-def _throttled(report: Callable[[float], None], horizon: float, every_s: float = 0.1):
+def _throttled(
+    report: Callable[[float], None],
+    horizon: float,
+    every_s: float = 0.1,
+    watch: Callable[[float, Any], None] | None = None,
+):
     """``progress(t)`` passing at most one ``t`` per ``every_s`` seconds on, and the last one;
     every call is a point where an interrupt compiled code swallowed is raised again (a plant in
-    a worker process compiles or loads its kernels there)."""
+    a worker process compiles or loads its kernels there). With ``watch``, ``progress(t, q=None)``
+    that also hands every state the plant gives to ``watch(t, q)`` (unthrottled: the watcher
+    keeps what it wants; ``report`` never sees a state)."""
     last = [-math.inf]
 
     def progress(t: float) -> None:
@@ -99,13 +106,26 @@ def _throttled(report: Callable[[float], None], horizon: float, every_s: float =
             last[0] = now
             report(t)
 
-    return progress
+    if watch is None:
+        return progress  # a plant computes no state for it (analytic.progress.takes_state)
+
+    def watched(t: float, q: Any = None) -> None:
+        if q is not None:
+            watch(t, q)
+        progress(t)
+
+    return watched
 
 
-def plant_task(pl: Any, settings: Any, sc: Scene, horizon: float, *, report) -> tuple[Any, float]:
-    """One plant's run (in a worker or here): its trajectory and its own wall time, s."""
+def plant_task(
+    pl: Any, settings: Any, sc: Scene, horizon: float, *, report, watch=None
+) -> tuple[Any, float]:
+    """One plant's run (in a worker or here): its trajectory and its own wall time, s. ``report``
+    is told the simulated time reached (a few times a second); ``watch(t, q)``, when given, every
+    state the plant passes its progress (:mod:`analytic.progress`)."""
     t0 = time.perf_counter()
-    tr = pl.simulate(sc, settings, t_end=horizon, progress=_throttled(report, horizon))
+    progress = _throttled(report, horizon, watch=watch)
+    tr = pl.simulate(sc, settings, t_end=horizon, progress=progress)
     return tr, time.perf_counter() - t0
 
 

@@ -58,6 +58,8 @@ from validation.compare.checks import Comparison, compare_plants
 from validation.compare.pointwise import PointwiseCheck
 from validation.compare.referee import Verdict, referee
 from validation.preflight import LeftOut
+from validation.recording.live import live_plant_task
+from validation.recording.stream import AppId
 from validation.report.figures import DEFAULT_FORMATS, FigureFormat
 from validation.report.report import RunVerdict, versions, write_report
 from validation.runs.atomic import write_text
@@ -224,7 +226,9 @@ def _validate_into(
     interrupted = False
     with StagePool(concurrent, EVIDENCE_HELPERS, prepare_here=prepare_comparison) as pool:
         try:  # the plants, then the comparison
-            got = pool.run_plants(runs, sc, horizon, progress, task=_plant_task)  # looked up now
+            reference = runs[0].plant.engine if runs else None  # drawn solid, as the recording
+            task = live_plant_task(_plant_task, AppId.VALIDATE, run.run_id, reference)  # now
+            got = pool.run_plants(runs, sc, horizon, progress, task=task)
             walls.update(got.walls)
             failures += got.failures
             redone += got.redone

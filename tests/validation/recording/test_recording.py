@@ -27,7 +27,7 @@ from analytic.simulate import simulate
 from analytic.trajectory import Engine, Trajectory
 from validation.compare.checks import Group, compare
 from validation.recording.layout import difference_title, legend_markdown, overlay_title
-from validation.recording.plots import plot_of, series_path
+from validation.recording.plots import Tab, key_path, plot_of, series_path
 from validation.recording.recording import (
     TIMELINE,
     AppId,
@@ -36,7 +36,14 @@ from validation.recording.recording import (
     new_stream,
     write_recording,
 )
-from validation.recording.style import VIEWER_CHARACTERS, power_of_ten, unit_text, viewer_text
+from validation.recording.style import (
+    VIEWER_CHARACTERS,
+    color_word,
+    plant_color,
+    power_of_ten,
+    unit_text,
+    viewer_text,
+)
 from validation.recording.world import DIFFERENCE_TARGET, body_size, exaggerate
 from validation.studies.demo import write_demo
 from validation.studies.sweep.config import Outcome
@@ -245,6 +252,29 @@ def test_one_plot_per_unit_each_titled_with_its_unit(ex1):
     assert len({next(iter(u)) for o, u in units.items() if "/errors/" in o}) == len(
         [o for o in units if "/errors/" in o]
     )  # the differences: one plot per unit, no two plots of one unit
+
+
+def test_no_legend_covers_a_plot_and_each_tab_has_its_key(ex1):
+    """Every time-series view of the stored layout hides its legend (at the designed size a
+    legend covers most of a plot's curves); each plot tab has a key view above its plots, whose
+    text names every plant or pair with the colour its curves are drawn in, and every quantity of
+    a plot with several."""
+    _, _, cmp, info = ex1
+    views = blueprint_views(info.path)
+    plots = [e for e, v in views.items() if v["kind"] == "TimeSeries"]
+    hidden = blueprint_components(info.path, "PlotLegend:visible")
+    assert plots and all(hidden.get(f"{e}/PlotLegend") == [False] for e in plots), hidden
+    keys = {v["origin"] for v in views.values() if v["kind"] == "TextDocument"} - {"/narrative"}
+    assert keys == {
+        key_path("", tab)
+        for tab in {plot_of("", s).tab for s in cmp.series if plot_of("", s)} | {Tab.CONTROL}
+    }
+    store = RrdReader(info.path).store()
+    text = narrative(store, key_path("", Tab.DIFFERENCES))
+    for s in cmp.series:
+        if s.group is Group.DIFFERENCE:
+            assert f"{color_word(plant_color(s.subject.value))}: {s.subject.value}" in text
+    assert "position of C" in text and "rod positions" in text, text  # the shades of (m)
 
 
 def test_difference_view_exaggerates_by_the_stated_factor(ex1):
