@@ -114,6 +114,9 @@ def add_dashboard(p: argparse.ArgumentParser) -> None:
         action="store_true",
         help="with --dask-workers: serve the local Dask cluster's dashboard on 127.0.0.1 and "
         "print its link",
+    )
+
+
 def viewer_port(s: str) -> int:
     """A TCP port (1 to 65535) given on the command line; ``ArgumentTypeError`` quoting it."""
     try:
