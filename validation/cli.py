@@ -165,8 +165,8 @@ def main(argv: list[str] | None = None) -> int:
             with user_warnings():
                 parser = build_parser()
                 args = parser.parse_args(argv)
-                from validation.runs.messages import command_output  # after the handlers: numpy
                 from validation.recording.live import from_args  # stdlib only; after the handlers
+                from validation.runs.messages import command_output  # after the handlers: numpy
 
                 with command_output(quiet=args.quiet):  # progress, --quiet, the log's lines
                     if getattr(args, "command", None) in _PLANT_COMMANDS:
