@@ -191,7 +191,7 @@ job = workers.start_served("slow", os.getpid, preload=["tests.support.slow_prelo
 """
 
 
-def test_a_fork_server_whose_client_is_killed_during_its_preload_ends():
+def test_a_fork_server_whose_client_is_killed_during_its_preload_ends(tmp_path):
     """The fork server's client killed with SIGKILL while the server still imports its preload
     (a minute here, as compiling numba's kernels into a cold cache can take; the server watched
     nothing until its loop and ran on to the preload's end) -> the server ends within seconds."""
@@ -205,6 +205,6 @@ def test_a_fork_server_whose_client_is_killed_during_its_preload_ends():
     old = os.environ["PYTHONPATH"]
     os.environ["PYTHONPATH"] = env_path  # the script and the server import the tests' support
     try:
-        _kill_and_require_all_gone([sys.executable, "-c", SLOW_SERVER_SCRIPT], root, serving)
+        _kill_and_require_all_gone([sys.executable, "-c", SLOW_SERVER_SCRIPT], tmp_path, serving)
     finally:
         os.environ["PYTHONPATH"] = old
