@@ -120,7 +120,7 @@ def step_and_sample(
     atol: float,
     n_motion: int,
     max_step: float = np.inf,
-    progress: Callable[[float], None] | None = None,
+    progress: Callable[..., None] | None = None,
     linalg_failure: str = "linear algebra failed",
     groups: ErrorGroups | None = None,
     state: Callable[[np.ndarray], np.ndarray] | None = None,
@@ -176,7 +176,7 @@ def step_and_sample(
                     ys.append(dense(tt))
                     ts.append(tt)
                 i_next = j
-                if state is not None:
+                if state is not None and progress is not None:
                     progress(float(solver.t), state(solver.y))
                 elif progress is not None:
                     progress(float(solver.t))

@@ -37,7 +37,7 @@ def simulate(
     *,
     controller: ControllerSource | str = ControllerSource.ANALYTIC_FAST,
     body_frame: BodyFrame | None = None,
-    progress: Callable[[float], None] | None = None,
+    progress: Callable[..., None] | None = None,
     native_callback: bool = True,
 ) -> Trajectory:
     """Integrate ``scene`` in MuJoCo; samples at the scene's output rate.
@@ -129,7 +129,7 @@ def simulate(
                     )
                 d.time = float(times[i])
                 sample(float(times[i]))
-                if q_of is not None:  # the sample just recorded, as the trajectory's row
+                if q_of is not None and progress is not None:  # the sample, as the trajectory's row
                     progress(float(times[i]), q_of(d.qpos))
                 elif progress is not None:
                     progress(float(times[i]))

@@ -22,6 +22,8 @@ _PUBLIC = {
 }
 
 if TYPE_CHECKING:  # the same names, typed for a type checker (never run: imports stay lazy)
+    from validation.recording.live import LiveViewer as LiveViewer
+    from validation.recording.live import watching as watching
     from validation.recording.recording import RecordingInfo as RecordingInfo
     from validation.recording.recording import write_recording as write_recording
 
