@@ -35,7 +35,18 @@ from validation.scenes import builtin_names, scene_path
 
 ROOT = Path(__file__).resolve().parents[3]
 DOC = ROOT / "docs" / "scene-format.md"
-READERS = {"raw", "has", "number", "vector", "string", "boolean", "enum", "table", "table_or_empty"}
+READERS = {
+    "raw",
+    "has",
+    "number",
+    "vector",
+    "string",
+    "boolean",
+    "enum",
+    "table",
+    "table_or_empty",
+    "required_table",
+}
 WILDCARD = re.compile(r"<[a-z]+>")
 
 
