@@ -8,7 +8,7 @@ from typing import Any
 
 from validation.commands import EXIT_FAILED
 
-CLOSING_FILES = (("report", "report.md"), ("recording", "run.rrd"))
+CLOSING_FILES = (("report", "report.md"), ("in a browser", "report.html"), ("recording", "run.rrd"))
 """The files the closing line names, each only when the run wrote it."""
 
 
