@@ -15,7 +15,6 @@ from it. These tests close the loop:
 from __future__ import annotations
 
 import ast
-import copy
 import re
 import tomllib
 import warnings
@@ -29,6 +28,7 @@ from analytic.scene import loading, parsers
 from analytic.scene.builtin import builtin_scene_names
 from analytic.scene.schema import CHOICE_MEANINGS, KEYS, NO_DEFAULT, Kind, key_spec
 from analytic.scene.table import Table
+from tests.support.scene_variants import variant as scene_variant
 from validation.cli import main
 from validation.report.scene_reference import GENERATOR, LIMIT_NAMES, MINIMAL_SCENE, render
 from validation.scenes import builtin_names, scene_path
@@ -133,17 +133,7 @@ def _branch_corpus() -> list[dict]:
     base = _raw("paper_example1_controlled")
 
     def variant(**changes) -> dict:
-        raw = copy.deepcopy(base)
-        for dotted, value in changes.items():
-            node = raw
-            *head, last = dotted.split("__")
-            for key in head:
-                node = node.setdefault(key, {})
-            if value is None:
-                node.pop(last, None)
-            else:
-                node[last] = value
-        return raw
+        return scene_variant(base, **changes)
 
     J = [[2.0, 0.0, 0.0], [0.0, 2.0, 0.0], [0.0, 0.0, 3.0]]
     corpus += [

@@ -41,6 +41,7 @@ from analytic.scene.builtin import BUILTIN_DIR
 from analytic.scene.dump import scene_to_toml
 from analytic.scene.random_scenes import MassInertia, random_scene_dict, unit_scene_dict
 from analytic.scene.schema import KEYS, VERBATIM_TABLES, Kind, Need
+from tests.support.scene_variants import variant
 from validation.cli import main
 from validation.compare.thresholds import DEFAULTS, SCALED, thresholds_for
 from validation.report.scene_reference import DIRECTIVE_EXAMPLE, TAPLO_CONFIG, TOMBI_CONFIG
@@ -206,21 +207,6 @@ def test_random_unit_scenes_validate(seed, n):
 # ------------------------------------------------------------------------------------------------
 
 
-def _variant(base: dict, **changes: Any) -> dict:
-    """``base`` with ``a__b__c=value`` set (None: removed)."""
-    raw = copy.deepcopy(base)
-    for dotted, value in changes.items():
-        *head, last = dotted.split("__")
-        node = raw
-        for key in head:
-            node = node.setdefault(key, {})
-        if value is None:
-            node.pop(last, None)
-        else:
-            node[last] = value
-    return raw
-
-
 def _bases() -> list[dict]:
     """Scenes that together read every declared key: the built-in scenes, variants of the
     controlled Example 1 for the keys none of them gives, then the hard cases (``[hard_case]``)."""
@@ -233,17 +219,17 @@ def _bases() -> list[dict]:
         for name in DEFAULTS
     }
     variants = [
-        _variant(base, masses__ring_radius=None, masses__inertia_axial=[1.0] * n, masses__inertia_transverse=[1.0] * n),
-        _variant(base, masses__ring_radius=None, masses__inertia_body=[J] * n),
-        _variant(base, initial__attitude={"quaternion": [1.0, 0.0, 0.0, 0.0], "allow_off_manifold": False}),
-        _variant(base, initial__attitude={"axis": [0.0, 0.0, 1.0], "angle": 0.3}),
-        _variant(base, initial__pdot=[0.1] * n, control__masses__indices=list(range(1, n + 1))),
-        _variant(base, control__omega__gamma=None, control__omega__components=[1, 2, 3], control__omega__gain=J),
-        _variant(base, scene__effects=[*effects, "external_torque"], external_torque={"constant": [0.0, 0.0, 1.0], "amplitude": [1.0, 0.0, 0.0], "frequency": 2.0}),
-        _variant(base, scene__effects=[*effects, "springs.damping"], springs__c_damping=[0.1] * (n + 1)),
-        _variant(base, solver={"method": "RK45", "rtol": 1e-9, "atol": 1e-10, "max_step": 0.01}),
-        _variant(base, stabilization={"delta1": 1.0, "delta2": 4.0}, mujoco={"integrator": "RK4", "timestep": 2.5e-4, "spring_model": "tendon"}, output={"t_end": 1.0, "rate": 10.0}),
-        _variant(base, control__weighting="M^-2", thresholds={**every_threshold, HARD_NAME: 1.0}, mjx={"precision": "float64"}),
+        variant(base, masses__ring_radius=None, masses__inertia_axial=[1.0] * n, masses__inertia_transverse=[1.0] * n),
+        variant(base, masses__ring_radius=None, masses__inertia_body=[J] * n),
+        variant(base, initial__attitude={"quaternion": [1.0, 0.0, 0.0, 0.0], "allow_off_manifold": False}),
+        variant(base, initial__attitude={"axis": [0.0, 0.0, 1.0], "angle": 0.3}),
+        variant(base, initial__pdot=[0.1] * n, control__masses__indices=list(range(1, n + 1))),
+        variant(base, control__omega__gamma=None, control__omega__components=[1, 2, 3], control__omega__gain=J),
+        variant(base, scene__effects=[*effects, "external_torque"], external_torque={"constant": [0.0, 0.0, 1.0], "amplitude": [1.0, 0.0, 0.0], "frequency": 2.0}),
+        variant(base, scene__effects=[*effects, "springs.damping"], springs__c_damping=[0.1] * (n + 1)),
+        variant(base, solver={"method": "RK45", "rtol": 1e-9, "atol": 1e-10, "max_step": 0.01}),
+        variant(base, stabilization={"delta1": 1.0, "delta2": 4.0}, mujoco={"integrator": "RK4", "timestep": 2.5e-4, "spring_model": "tendon"}, output={"t_end": 1.0, "rate": 10.0}),
+        variant(base, control__weighting="M^-2", thresholds={**every_threshold, HARD_NAME: 1.0}, mjx={"precision": "float64"}),
     ]  # fmt: skip
     builtins = [_raw(p) for p in sorted(BUILTIN_DIR.glob("*.toml"))]
     return [*builtins, *variants, *(_raw(p) for p in sorted(HARD_DIR.glob("*.toml")))]
