@@ -153,3 +153,4 @@ def test_the_wheel_ships_the_marker_and_the_data(tmp_path):
     assert {f"{p}/py.typed" for p in PACKAGES} <= names
     for pattern in ("analytic/scenes/", "validation/scenes/hard/", "validation/report/schemas/"):
         assert any(n.startswith(pattern) for n in names), f"no {pattern}* in {wheel.name}"
+    assert "validation/scenes/scene.schema.json" in names  # the scene format's schema, for editors
